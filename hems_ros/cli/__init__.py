@@ -1,0 +1,1 @@
+"""The ``hems`` command: one module per verb, each exposing ``register(subparsers)``."""

@@ -1,0 +1,51 @@
+"""Entry point of the ``hems`` command.
+
+Verbs are discovered from the modules of :mod:`hems_ros.cli`: every module that defines
+``register(subparsers)`` adds one or more sub-commands, so a new verb is a new file and
+this module never needs editing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+
+import hems_ros
+import hems_ros.cli as cli_pkg
+from hems_ros.rosenv import apply_network_defaults
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="hems",
+        description="HEMS soft hand exoskeleton digital twin: simulate, control, record.",
+    )
+    parser.add_argument("--version", action="version", version=f"hems {hems_ros.__version__}")
+    subparsers = parser.add_subparsers(dest="verb", metavar="<verb>")
+    for info in sorted(pkgutil.iter_modules(cli_pkg.__path__), key=lambda m: m.name):
+        if info.name == "main":
+            continue
+        module = importlib.import_module(f"{cli_pkg.__name__}.{info.name}")
+        register = getattr(module, "register", None)
+        if register is not None:
+            register(subparsers)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    apply_network_defaults()
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.verb is None:
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
