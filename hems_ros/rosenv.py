@@ -1,21 +1,27 @@
-"""Network defaults every process of the project starts with.
+"""Environment defaults every process of the project starts with.
 
-Fast DDS multicasts discovery on every interface unless told otherwise; the project keeps
-all DDS traffic on the loopback interface unless the user explicitly chose a range.
+Fast DDS multicasts discovery on every interface unless told otherwise, so the project keeps
+all DDS traffic on the loopback interface unless the user explicitly chose a range. The
+venv is also made an ament prefix so that package lookups (``ros2 run``, share folders)
+find ``hems_ros`` and ``hems_msgs`` without sourcing anything.
 """
 
 from __future__ import annotations
 
 import os
+import sys
 
 DISCOVERY_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 DEFAULT_DISCOVERY_RANGE = "LOCALHOST"
 
 
-def apply_network_defaults(env: dict[str, str] | None = None) -> dict[str, str]:
-    """Set ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` unless already set; return the env."""
+def apply_network_defaults(env: dict[str, str] | os._Environ | None = None):
+    """Set ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (unless set) and the ament prefix."""
     target = os.environ if env is None else env
     target.setdefault(DISCOVERY_VARIABLE, DEFAULT_DISCOVERY_RANGE)
+    prefixes = [p for p in target.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
+    if sys.prefix not in prefixes:
+        target["AMENT_PREFIX_PATH"] = os.pathsep.join(prefixes + [sys.prefix])
     return target
 
 

@@ -1,0 +1,11 @@
+"""The package's executables: name -> console entry point.
+
+Read by setup.py (console scripts on PATH) and by tools/ament_install.py (the same
+executables in ``<prefix>/lib/hems_ros`` where ``ros2 run`` looks). Kept free of imports so
+that both can load it without importing rclpy.
+"""
+
+EXECUTABLES = {
+    "hems": "hems_ros.cli.main:main",
+    "ping_responder": "hems_ros.nodes.ping_responder:main",
+}
