@@ -1,0 +1,71 @@
+"""Discrete controllers of the SMA actuators (digest section 4), plain Python, no ROS.
+
+``make_controller`` is the entry point for the per-finger node and the lockstep
+experiments; :mod:`.metrics` and :mod:`.references` hold the figures of merit and the
+dissertation's test protocols.
+"""
+
+from __future__ import annotations
+
+from hems_ros.control.base import (
+    DEFAULT_N_FILTER,
+    DEFAULT_TRANSFER_TAU,
+    DEFAULT_TS,
+    DUTY_MAX,
+    DUTY_MIN,
+    MODES,
+    Controller,
+)
+from hems_ros.control.bpid import BPIDController
+from hems_ros.control.gains import MN_PER_N, TABLE_5_1, UM_PER_M, BPIDGains, PIDGains, PIPDGains
+from hems_ros.control.pid import PIDController
+from hems_ros.control.pipd import PIPDController
+
+CONTROLLERS = {cls.strategy: cls for cls in (BPIDController, PIDController, PIPDController)}
+STRATEGIES = tuple(CONTROLLERS)
+
+
+def make_controller(
+    strategy: str,
+    mode: str,
+    gains: BPIDGains | PIDGains | PIPDGains | None = None,
+    ts: float = DEFAULT_TS,
+    n_filter: float = DEFAULT_N_FILTER,
+    transfer_tau: float = DEFAULT_TRANSFER_TAU,
+) -> Controller:
+    """Controller ``strategy`` ("bpid", "pid", "pipd") in ``mode`` ("position", "force").
+
+    ``gains`` defaults to the Table 5.1 set of the strategy; ``ts`` is the sample period in
+    s, ``n_filter`` the derivative filter pole N in rad/s, ``transfer_tau`` the decay time
+    in s of the bumpless mode-switch term.
+    """
+    try:
+        cls = CONTROLLERS[strategy]
+    except KeyError:
+        raise ValueError(f"strategy must be one of {STRATEGIES}, got {strategy!r}") from None
+    if gains is None:
+        gains = TABLE_5_1[strategy]
+    return cls(gains, mode, ts=ts, n_filter=n_filter, transfer_tau=transfer_tau)
+
+
+__all__ = [
+    "BPIDController",
+    "BPIDGains",
+    "CONTROLLERS",
+    "Controller",
+    "DEFAULT_N_FILTER",
+    "DEFAULT_TRANSFER_TAU",
+    "DEFAULT_TS",
+    "DUTY_MAX",
+    "DUTY_MIN",
+    "MN_PER_N",
+    "MODES",
+    "PIDController",
+    "PIDGains",
+    "PIPDController",
+    "PIPDGains",
+    "STRATEGIES",
+    "TABLE_5_1",
+    "UM_PER_M",
+    "make_controller",
+]

@@ -1,0 +1,117 @@
+"""Typed gain sets of the three controllers and the Table 5.1 values (digest section 4).
+
+Unit convention
+---------------
+The controllers take SI inputs (metres of wire displacement, newtons of wire tension) but
+the gains act on a *scaled* error ``e = scale * (r - y)``, the scale depending on the mode:
+
+``position_scale`` (default :data:`UM_PER_M` = 1e6, error in micrometres)
+    Table 5.1 prints the gains without units. The digest deduces they fit an error in
+    micrometres: with Ki = 0 the wire needs roughly 7-10 % duty to hold a position against
+    the 40 N load, which at Kp = 0.8 %/unit is about 10 units of error, and the dissertation
+    reports steady-state errors of 0.01-0.02 mm = 10-20 um for PID and BPID. An error in mm
+    would leave 10 mm of steady-state error; an error in metres would never lift the wire.
+    Gains are then Kp in %/um, Ki in %/(um s), Kd in % s/um, Kb in 1/um.
+
+``force_scale`` (default :data:`MN_PER_N` = 1e3, error in millinewtons)
+    Chapter 6 runs BPID in force mode with no separate gain table. An error in mN keeps the
+    Table 5.1 gains at about the loop gain they have in position mode: the HEMS load (bias
+    spring, glove and tendon) takes roughly 20 N over the 27 mm stroke, about 0.75 N/mm, so
+    1 mN of force error corresponds to about 1.3 um of position error. The same argument
+    predicts the steady-state force error: 10-15 % holding duty at Kp = 0.8 %/mN is 12-19 mN,
+    well inside the 0.1 N of the issue. Gains are then Kp in %/mN etc., Kb in 1/mN.
+
+The scales are fields of every gain set so a tuned force set can change them explicitly.
+Validation rejects negative, NaN and infinite gains at construction, naming the gain.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from types import MappingProxyType
+
+UM_PER_M = 1e6
+MN_PER_N = 1e3
+
+
+def _check_gain(name: str, value: object) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"gain {name} must be a real number, got {value!r}")
+    if not math.isfinite(value):
+        raise ValueError(f"gain {name} must be finite, got {value!r}")
+    if value < 0:
+        raise ValueError(f"gain {name} must be non-negative, got {value!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Gains:
+    position_scale: float = UM_PER_M
+    force_scale: float = MN_PER_N
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            _check_gain(f.name, getattr(self, f.name))
+        for name in ("position_scale", "force_scale"):
+            if getattr(self, name) == 0:
+                raise ValueError(f"gain {name} must be positive, got 0")
+
+    def scale_for(self, mode: str) -> float:
+        """Error scale of ``mode``: scaled units per SI unit (see the module docstring)."""
+        if mode == "position":
+            return float(self.position_scale)
+        if mode == "force":
+            return float(self.force_scale)
+        raise ValueError(f"mode must be 'position' or 'force', got {mode!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class PIDGains(_Gains):
+    """PID with filtered derivative (eqs 5.5-5.10)."""
+
+    kp: float
+    ki: float
+    kd: float
+
+    @property
+    def has_integral(self) -> bool:
+        return self.ki != 0
+
+
+@dataclass(frozen=True, kw_only=True)
+class BPIDGains(_Gains):
+    """Four-term bilinear PID (eq 5.36): PID gains plus the bilinear gain Kb = rho0d / b0d."""
+
+    kp: float
+    ki: float
+    kd: float
+    kb: float
+
+    @property
+    def has_integral(self) -> bool:
+        return self.ki != 0
+
+
+@dataclass(frozen=True, kw_only=True)
+class PIPDGains(_Gains):
+    """PI-PD with commuted feed-forward (eqs 5.11-5.21); ``u_ff`` is in % duty."""
+
+    kp_pi: float
+    ki_pi: float
+    kp_pd: float
+    kd_pd: float
+    u_ff: float
+
+    @property
+    def has_integral(self) -> bool:
+        return self.ki_pi != 0
+
+
+TABLE_5_1 = MappingProxyType(
+    {
+        "bpid": BPIDGains(kp=0.8, ki=0.0, kd=0.05, kb=1.0),
+        "pid": PIDGains(kp=0.8, ki=0.0, kd=0.05),
+        "pipd": PIPDGains(kp_pi=0.8, ki_pi=0.25, kp_pd=0.08, kd_pd=0.003, u_ff=3.0),
+    }
+)
+"""Dissertation Table 5.1 gain sets by strategy name, in the units of the module docstring."""
