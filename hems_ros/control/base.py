@@ -9,15 +9,17 @@ Decisions documented here because every strategy shares them:
 Output clamp
     The drive is a PWM duty, so the output is limited to [0, 100] %.
 
-Anti-windup (only when the gain set has a non-zero integral gain)
-    The recursions are velocity (incremental) forms: the last output is the memory that
-    integrates. When the output saturates, the stored output history is shifted by the
-    excess, so the memory stays at the limit and only the increment (which also carries the
-    derivative-filter state) is kept. This is the standard anti-windup of the velocity
-    algorithm, equivalent to back-calculation with tracking time constant Ts. With Ki = 0
-    (PID and BPID of Table 5.1) there is no integrator to wind up; the recursion of
-    eq 5.5 then equals the position-form PD exactly, and shifting its memory would
-    instead leave a permanent offset, so the history is never touched.
+Anti-windup (acts through Ki, so only when Ki != 0)
+    Conditional integration, limited to the headroom: when the unclamped output is beyond
+    a limit, the part of this sample's integral increment Ki Ts e(k) that pushes it
+    further out is removed from the controller memory. Integration thus fills up to the
+    limit but never past it, and a proportional or derivative term that saturates the
+    output on its own (e.g. the derivative kick of a step) neither inflates nor drains the
+    integral. The recursions are velocity forms whose memory is the past output; the
+    weights of eq 5.5 on u(k-1) and u(k-2) sum to 1, so shifting both by the same amount
+    moves only the integral level and keeps the P and filtered-D states. Clamping the
+    memory itself (the textbook velocity-form scheme) was rejected: after a clipped
+    derivative kick the decaying kick would pull the duty to 0 while the error is large.
 
 Bumpless mode switch
     ``set_mode`` restarts the difference equation of the new mode at rest on the current
@@ -70,6 +72,18 @@ def check_positive(name: str, value: float) -> float:
     return value
 
 
+def integral_cut(out: float, inc: float) -> float:
+    """Part of the integral increment ``inc`` that drives the unclamped ``out`` past a limit.
+
+    Both in duty %; the caller subtracts the result from its output and memory.
+    """
+    if out > DUTY_MAX and inc > 0.0:
+        return min(out - DUTY_MAX, inc)
+    if out < DUTY_MIN and inc < 0.0:
+        return max(out - DUTY_MIN, inc)
+    return 0.0
+
+
 def check_mode(mode: str) -> str:
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
@@ -104,7 +118,6 @@ class Controller:
         self.transfer_tau = check_positive("transfer_tau", transfer_tau)
         self.mode = check_mode(mode)
         self._scale = gains.scale_for(mode)
-        self._antiwindup = gains.has_integral
         self._transfer_decay = math.exp(-self.ts / self.transfer_tau)
         self._setup()
         self.fault: str | None = None

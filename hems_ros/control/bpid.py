@@ -15,7 +15,7 @@ offset) would otherwise zero the denominator and flip the sign of the output.
 
 from __future__ import annotations
 
-from hems_ros.control.base import DUTY_MAX, DUTY_MIN
+from hems_ros.control.base import integral_cut
 from hems_ros.control.gains import BPIDGains
 from hems_ros.control.pid import PIDController
 
@@ -43,8 +43,13 @@ class BPIDController(PIDController):
         self._y1 = y
 
     def _step(self, r: float, y: float, bias: float) -> float:
+        e = r - y
         factor = bilinear_factor(self._kb, r, self._y1)
         self._y1 = y
-        # factor >= 1 / (1 + Kb y) > 0, so the duty limits map to limits on the PID memory.
-        u = self._advance(r - y, (DUTY_MIN - bias) / factor, (DUTY_MAX - bias) / factor)
-        return u * factor + bias
+        out = self._advance(e) * factor + bias
+        # factor > 0 (r, y clipped, Kb >= 0), so the cut maps back to the memory by division.
+        cut = integral_cut(out, self._ki_ts * e * factor)
+        if cut:
+            self._shift_memory(-cut / factor)
+            out -= cut
+        return out

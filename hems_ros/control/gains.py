@@ -73,10 +73,6 @@ class PIDGains(_Gains):
     ki: float
     kd: float
 
-    @property
-    def has_integral(self) -> bool:
-        return self.ki != 0
-
 
 @dataclass(frozen=True, kw_only=True)
 class BPIDGains(_Gains):
@@ -86,10 +82,6 @@ class BPIDGains(_Gains):
     ki: float
     kd: float
     kb: float
-
-    @property
-    def has_integral(self) -> bool:
-        return self.ki != 0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -101,10 +93,6 @@ class PIPDGains(_Gains):
     kp_pd: float
     kd_pd: float
     u_ff: float
-
-    @property
-    def has_integral(self) -> bool:
-        return self.ki_pi != 0
 
 
 TABLE_5_1 = MappingProxyType(

@@ -8,12 +8,12 @@ gives the recursion of eq 5.5
 
 with the coefficients of eq 5.8 (see :func:`pid_coefficients`). Its denominator is
 (1 - z^-1)(a0 - z^-1): a velocity form whose memory u(k-1) integrates, which is where the
-anti-windup of :mod:`hems_ros.control.base` acts when Ki != 0.
+anti-windup of :mod:`hems_ros.control.base` acts.
 """
 
 from __future__ import annotations
 
-from hems_ros.control.base import DUTY_MAX, DUTY_MIN, Controller
+from hems_ros.control.base import Controller, integral_cut
 from hems_ros.control.gains import PIDGains
 
 
@@ -46,6 +46,7 @@ class PIDController(Controller):
         self._d0 = b0 / a0
         self._d1 = b1 / a0
         self._d2 = b2 / a0
+        self._ki_ts = g.ki * self.ts
 
     def _reset_state(self) -> None:
         self._u1 = 0.0
@@ -53,23 +54,31 @@ class PIDController(Controller):
         self._e1 = 0.0
         self._e2 = 0.0
 
-    def _advance(self, e: float, lo: float, hi: float) -> float:
-        """Eq 5.5 for error ``e``; with anti-windup the memory is held inside [lo, hi]."""
-        u1 = self._u1
-        u = self._c1 * u1 + self._c2 * self._u2 + self._d0 * e + self._d1 * self._e1 + self._d2 * self._e2
-        if self._antiwindup:
-            # Shift both past outputs so u(k) - u(k-1), and with it the filter state, survives.
-            if u > hi:
-                u1 += hi - u
-                u = hi
-            elif u < lo:
-                u1 += lo - u
-                u = lo
-        self._u2 = u1
+    def _advance(self, e: float) -> float:
+        """Eq 5.5 for error ``e``; returns u(k) and shifts the history."""
+        u = (
+            self._c1 * self._u1
+            + self._c2 * self._u2
+            + self._d0 * e
+            + self._d1 * self._e1
+            + self._d2 * self._e2
+        )
+        self._u2 = self._u1
         self._u1 = u
         self._e2 = self._e1
         self._e1 = e
         return u
 
+    def _shift_memory(self, delta: float) -> None:
+        """Move the integral level by ``delta`` (both past outputs, see the base module)."""
+        self._u1 += delta
+        self._u2 += delta
+
     def _step(self, r: float, y: float, bias: float) -> float:
-        return self._advance(r - y, DUTY_MIN - bias, DUTY_MAX - bias) + bias
+        e = r - y
+        out = self._advance(e) + bias
+        cut = integral_cut(out, self._ki_ts * e)
+        if cut:
+            self._shift_memory(-cut)
+            out -= cut
+        return out

@@ -18,13 +18,14 @@ be carried over into later samples.
 
 The reference change is detected by exact comparison; the protocol generators of
 :mod:`hems_ros.control.references` hold constant segments exactly constant.
-Anti-windup (Ki != 0) clamps the PI memory so that memory + u_FF + transfer term stays in
-[0, 100]; the PD recursion has its pole at 1/a0 < 1, cannot wind up, and runs unclamped.
+Anti-windup (see :mod:`hems_ros.control.base`) cuts the PI's integral increment
+Ki Ts e(k) where memory + u_FF + transfer term would pass a limit; the PD recursion has its
+pole at 1/a0 < 1, cannot wind up, and runs unclamped.
 """
 
 from __future__ import annotations
 
-from hems_ros.control.base import DUTY_MAX, DUTY_MIN, Controller
+from hems_ros.control.base import Controller, integral_cut
 from hems_ros.control.gains import PIPDGains
 
 
@@ -56,6 +57,7 @@ class PIPDController(Controller):
         a0, a1, b0, b1 = self.pd_coefficients
         self._pd = (-a1 / a0, b0 / a0, b1 / a0)
         self._u_ff = float(g.u_ff)
+        self._ki_ts = g.ki_pi * self.ts
 
     def _reset_state(self) -> None:
         self._uc1 = 0.0
@@ -74,13 +76,8 @@ class PIPDController(Controller):
             uc = c * self._uc1 + d0 * e + d1 * self._e1
             if r > r1:
                 ff = self._u_ff
-            if self._antiwindup:
-                hi = DUTY_MAX - bias - ff
-                lo = DUTY_MIN - bias - ff
-                if uc > hi:
-                    uc = hi
-                elif uc < lo:
-                    uc = lo
+            cut = integral_cut(uc + ff + bias, self._ki_ts * e)
+            uc -= cut
         else:
             c, d0, d1 = self._pd
             uc = c * self._uc1 + d0 * e + d1 * self._e1
