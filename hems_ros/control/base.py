@@ -99,6 +99,7 @@ class Controller:
 
     strategy = ""
     gains_type: type = object
+    fault: str | None
 
     def __init__(
         self,
@@ -120,7 +121,6 @@ class Controller:
         self._scale = gains.scale_for(mode)
         self._transfer_decay = math.exp(-self.ts / self.transfer_tau)
         self._setup()
-        self.fault: str | None = None
         self.reset()
 
     def update(self, reference: float, measurement: float) -> float:
@@ -151,7 +151,10 @@ class Controller:
         self._reset_state()
 
     def set_mode(self, mode: str, measurement: float) -> None:
-        """Switch to ``mode`` without a jump in duty; ``measurement`` is in the new mode's SI unit."""
+        """Switch to ``mode`` without a jump in duty.
+
+        ``measurement`` is the current value in the new mode's SI unit.
+        """
         check_mode(mode)
         y = float(measurement)
         if not math.isfinite(y):

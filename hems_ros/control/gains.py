@@ -28,6 +28,7 @@ Validation rejects negative, NaN and infinite gains at construction, naming the 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, fields
 from types import MappingProxyType
 
@@ -36,7 +37,7 @@ MN_PER_N = 1e3
 
 
 def _check_gain(name: str, value: object) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"gain {name} must be a real number, got {value!r}")
     if not math.isfinite(value):
         raise ValueError(f"gain {name} must be finite, got {value!r}")

@@ -101,7 +101,7 @@ def step_segments(r) -> list[StepSegment]:
 
 
 def rise_time(t, y, seg: StepSegment, lo: float = 0.1, hi: float = 0.9) -> float:
-    """Time from reaching ``lo`` to reaching ``hi`` of the jump within ``seg``; nan if not reached."""
+    """Time from ``lo`` to ``hi`` of the jump within ``seg`` (fractions); nan if not reached."""
     t, y = _arrays(t, y)
     sign = 1.0 if seg.after >= seg.before else -1.0
     span = seg.after - seg.before

@@ -94,7 +94,7 @@ def staircase(
     duration: float = STEP_TEST_DURATION,
     base: float = 0.0,
 ):
-    """``n_steps`` steps of ``step`` up, then the same down, one every ``dwell`` s from ``first``."""
+    """``n_steps`` steps of ``step`` up, then down again, one every ``dwell`` s from ``first``."""
     t = time_base(duration, ts)
     r = np.full(t.size, base)
     for i in range(2 * n_steps):
@@ -166,7 +166,8 @@ def _protocols() -> dict[str, Protocol]:
             lambda ts: ramp(CH6_STROKE, CH6_RAMP_RATE, ts),
         ),
         Protocol(
-            "ch6_position_step", 6, "position", "stationary", "two 27 mm steps 5 s long, 30 s apart",
+            "ch6_position_step", 6, "position", "stationary",
+            "two 27 mm steps 5 s long, 30 s apart",
             lambda ts: step_pair(CH6_STROKE, ts),
         ),
         Protocol(
