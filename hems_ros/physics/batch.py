@@ -1,0 +1,137 @@
+"""Batch API: many parameter sets over whole input time series, for analysis and fitting.
+
+    res = simulate([p1, p2], dt=1e-3, current=np.array([...]))   # (n_steps,) or (n_sets, n_steps)
+    res.slider_position_m          # (n_sets, n_records) array; also res["wire_force_n"]
+    res.time                       # (n_records,) s, time at the end of each recorded step
+
+Parameter sets are packed into a (n_sets, N_P) float64 array and run in parallel by one
+numba loop (kernel.run_batch) around the same single-step kernel the stepping API uses.
+``record_every`` keeps every k-th step; ``channels`` limits what is stored (memory for big
+batches). Sensor channels (encoder, force reading with the seeded noise of each set) are
+derived from the recorded truth with the same functions and draws as the stepping API.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from hems_ros.physics import kernel, sensors
+from hems_ros.physics.electrical import DRIVE_NAMES
+from hems_ros.physics.params import UnitParams
+
+CHANNELS = kernel.STATE_NAMES + kernel.OUT_NAMES
+DERIVED = ("strain", "encoder_counts", "encoder_position_m", "force_reading_n", "force_saturated")
+
+
+@dataclass
+class SimResult:
+    """Recorded channels, each an array shaped (n_sets, n_records)."""
+
+    params: list[UnitParams]
+    dt: float
+    record_every: int
+    time: np.ndarray
+    data: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @property
+    def n_sets(self) -> int:
+        return len(self.params)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.data[name]
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        data = self.__dict__.get("data", {})
+        if name in data:
+            return data[name]
+        raise AttributeError(f"SimResult has no channel {name!r} (recorded: {', '.join(data)})")
+
+    def channels(self) -> list[str]:
+        return list(self.data)
+
+
+def _drive_array(kind: str, values, n_sets: int) -> np.ndarray:
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.ndim == 1:
+        arr = np.broadcast_to(arr, (n_sets, arr.shape[0]))
+    if arr.ndim != 2 or arr.shape[0] != n_sets:
+        raise ValueError(f"{kind}: expected shape (n_steps,) or ({n_sets}, n_steps), got {np.shape(values)}")
+    if arr.shape[1] == 0:
+        raise ValueError(f"{kind}: no steps")
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        i, k = np.argwhere(bad)[0]
+        raise ValueError(f"{kind}[{i}, {k}] = {arr[i, k]!r}: drive input must be finite")
+    if kind == "duty" and ((arr < 0).any() or (arr > 100).any()):
+        i, k = np.argwhere((arr < 0) | (arr > 100))[0]
+        raise ValueError(f"duty[{i}, {k}] = {arr[i, k]!r} %: must be within 0-100 %")
+    return np.ascontiguousarray(arr)
+
+
+def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
+             duty=None, current=None, voltage=None, record_every: int = 1,
+             channels: Iterable[str] | None = None) -> SimResult:
+    """Run one or many parameter sets from the initial state over one drive time series.
+
+    Exactly one of ``duty`` (%), ``current`` (A), ``voltage`` (V); arrays shaped (n_steps,)
+    (same input for every set) or (n_sets, n_steps).
+    """
+    plist = [params] if isinstance(params, UnitParams) else list(params)
+    if not plist or not all(isinstance(p, UnitParams) for p in plist):
+        raise TypeError("params must be a UnitParams or a non-empty sequence of UnitParams")
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt = {dt!r}: must be a finite step > 0 s")
+    given = [(k, v) for k, v in (("duty", duty), ("current", current), ("voltage", voltage)) if v is not None]
+    if len(given) != 1:
+        raise ValueError("give exactly one of duty, current, voltage arrays")
+    kind, values = given[0]
+    drives = _drive_array(kind, values, len(plist))
+    if not (isinstance(record_every, (int, np.integer)) and record_every >= 1):
+        raise ValueError(f"record_every = {record_every!r}: must be an integer >= 1")
+
+    wanted = list(CHANNELS) if channels is None else list(channels)
+    unknown = [c for c in wanted if c not in CHANNELS]
+    if unknown:
+        raise ValueError(f"unknown channel {unknown[0]!r} (known: {', '.join(CHANNELS)})")
+    index = np.array([CHANNELS.index(c) for c in wanted], dtype=np.int64)
+
+    n_sets, n_steps = drives.shape
+    n_rec = n_steps // record_every
+    packed = np.ascontiguousarray(np.stack([kernel.pack(p) for p in plist]))
+    states = np.ascontiguousarray(np.stack([kernel.initial_state(p) for p in plist]))
+    records = np.zeros((n_sets, n_rec, len(index)))
+    failed_at = np.zeros(n_sets, dtype=np.int64)
+    kernel.run_batch(packed, states, DRIVE_NAMES[kind], drives, float(dt), int(record_every),
+                     index, records, failed_at)
+    if (failed_at >= 0).any():
+        i = int(np.argmax(failed_at >= 0))
+        raise FloatingPointError(f"parameter set {i} ({plist[i].name}): state became non-finite "
+                                 f"at step {failed_at[i]} (t = {(failed_at[i] + 1) * dt:.6f} s)")
+
+    data = {name: records[:, :, j] for j, name in enumerate(wanted)}
+    _add_sensors(data, plist, n_steps, record_every)
+    time = (np.arange(n_rec) + 1) * record_every * dt
+    return SimResult(params=plist, dt=float(dt), record_every=int(record_every), time=time, data=data)
+
+
+def _add_sensors(data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: int, every: int) -> None:
+    if "slider_position_m" in data:
+        x = data["slider_position_m"]
+        data["strain"] = x / np.array([p.wire.length_m for p in plist])[:, None]
+        counts = np.stack([sensors.encoder_counts_array(x[i], p.encoder.resolution_m) for i, p in enumerate(plist)])
+        data["encoder_counts"] = counts
+        data["encoder_position_m"] = counts * np.array([p.encoder.resolution_m for p in plist])[:, None]
+    if "wire_force_n" in data:
+        readings, saturated = [], []
+        picks = np.arange(every - 1, (n_steps // every) * every, every)
+        for i, p in enumerate(plist):
+            fs = p.force_sensor
+            noise = sensors.noise_generator(fs.seed).standard_normal(n_steps)[picks] * fs.noise_std_n
+            r, s = sensors.force_reading_array(data["wire_force_n"][i], noise, fs.range_max_n, fs.resolution_n)
+            readings.append(r)
+            saturated.append(s)
+        data["force_reading_n"] = np.stack(readings)
+        data["force_saturated"] = np.stack(saturated)

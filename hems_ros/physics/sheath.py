@@ -1,0 +1,76 @@
+"""Bowden-sheath thermal model (beyond the dissertation's model; digest section 2, Table 3.1).
+
+The wire inside the PTFE tube exchanges heat with the sheath through the PTFE wall
+(ln(d_o/d_i) / (2 pi k L) = 0.4038 K/W) plus a contact/air-gap resistance (calibrated);
+the sheath (PTFE + steel helix) is one lumped heat capacity that loses heat to air through
+the steel wall (4.73e-3 K/W) and outer convection (1/(h A) = 7.48 K/W); the total
+wire-to-air path with perfect contact is 7.89 K/W, as in Table 3.1.
+
+A cold sheath is a heat sink: it slows heating (less displacement for the same energy)
+and speeds cooling; over repeated cycles it warms up (time constant C_s * 7.48 K/W, about
+two minutes) and both effects fade.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from numba import njit
+
+
+def cylinder_conduction_resistance(inner_d_m: float, outer_d_m: float, conductivity: float,
+                                   length_m: float) -> float:
+    """Radial conduction through a tube wall: ln(d_o/d_i) / (2 pi k L), K/W."""
+    return math.log(outer_d_m / inner_d_m) / (2.0 * math.pi * conductivity * length_m)
+
+
+def convection_resistance(h_w_m2_k: float, area_m2: float) -> float:
+    """1 / (h A), K/W."""
+    return 1.0 / (h_w_m2_k * area_m2)
+
+
+@dataclass(frozen=True)
+class SheathResistances:
+    """Thermal resistances of Table 3.1 for a sheath parameter group, K/W."""
+
+    ptfe_conduction: float
+    steel_conduction: float
+    outer_convection: float
+    gap: float
+
+    @property
+    def sheathed_total(self) -> float:
+        """Wire to air with perfect wire-PTFE contact (Table 3.1: 7.89 K/W)."""
+        return self.ptfe_conduction + self.steel_conduction + self.outer_convection
+
+    @property
+    def wire_to_sheath(self) -> float:
+        """Wire to the lumped sheath node: gap + PTFE wall."""
+        return self.gap + self.ptfe_conduction
+
+    @property
+    def sheath_to_air(self) -> float:
+        """Lumped sheath node to air: steel wall + outer convection."""
+        return self.steel_conduction + self.outer_convection
+
+
+def sheath_resistances(sheath, length_m: float) -> SheathResistances:
+    """Table 3.1 resistances from a :class:`~hems_ros.physics.params.Sheath` group."""
+    return SheathResistances(
+        ptfe_conduction=cylinder_conduction_resistance(
+            sheath.ptfe_inner_diameter_m, sheath.ptfe_outer_diameter_m,
+            sheath.ptfe_conductivity_w_per_m_k, length_m),
+        steel_conduction=cylinder_conduction_resistance(
+            sheath.steel_inner_diameter_m, sheath.steel_outer_diameter_m,
+            sheath.steel_conductivity_w_per_m_k, length_m),
+        outer_convection=convection_resistance(sheath.outer_convection_w_per_m2_k, sheath.outer_area_m2),
+        gap=sheath.gap_resistance_k_per_w,
+    )
+
+
+@njit(cache=True)
+def sheath_heat_flows(wire_c, sheath_c, ambient_c, wire_to_sheath_w_per_k, sheath_to_air_w_per_k):
+    """(wire -> sheath, sheath -> air) heat flows, W."""
+    return (wire_to_sheath_w_per_k * (wire_c - sheath_c),
+            sheath_to_air_w_per_k * (sheath_c - ambient_c))

@@ -1,0 +1,140 @@
+"""Stepping API: one actuation unit advanced at a fixed step (1 kHz default) by a node.
+
+    unit = ActuationUnit(load_params("sheathed_calibrated"), dt=1e-3)
+    r = unit.step(duty=35.0)          # or current=4.0 (A) or voltage=12.0 (V)
+    r.encoder_counts, r.force_reading, r.wire_temperature_c, r.slider_position_m ...
+
+Exactly one drive per step: ``duty`` in % (0-100) through the HEMS PWM stage (20 V, 4 A
+limit), ``current`` in A (the dissertation's current source) or ``voltage`` in V
+(constant-voltage drive). Out-of-range or non-finite inputs raise ``ValueError``.
+The step is :func:`hems_ros.physics.kernel.step`, the same function the batch API loops,
+so both give the same trajectory for the same input.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from hems_ros.physics import kernel, sensors
+from hems_ros.physics.electrical import DRIVE_NAMES
+from hems_ros.physics.params import UnitParams
+
+
+@dataclass(frozen=True, slots=True)
+class StepResult:
+    """Measurements (what the hardware sees) and simulation truth after one step."""
+
+    time_s: float
+    # measurements
+    encoder_counts: int
+    encoder_position_m: float
+    force_reading_n: float
+    force_saturated: bool
+    # simulation truth
+    wire_temperature_c: float
+    martensite_fraction: float
+    resistance_ohm: float
+    current_a: float
+    electrical_power_w: float
+    stress_pa: float
+    strain: float
+    sheath_temperature_c: float
+    slider_position_m: float
+    slider_velocity_m_s: float
+    tendon_position_m: float
+    tendon_force_n: float
+    wire_force_n: float
+
+
+def check_drive(kind: str, value: float) -> None:
+    """Raise ValueError for a non-finite drive or a duty outside 0-100 %."""
+    if not math.isfinite(value):
+        raise ValueError(f"{kind} = {value!r}: drive input must be finite")
+    if kind == "duty" and not 0.0 <= value <= 100.0:
+        raise ValueError(f"duty = {value!r} %: must be within 0-100 % (the controller clamps, not the plant)")
+
+
+def select_drive(duty: float | None, current: float | None, voltage: float | None):
+    """(kind name, value) of the one drive given; ValueError unless exactly one is given."""
+    given = [(k, v) for k, v in (("duty", duty), ("current", current), ("voltage", voltage)) if v is not None]
+    if len(given) != 1:
+        raise ValueError(f"give exactly one of duty, current, voltage (got {', '.join(k for k, _ in given) or 'none'})")
+    return given[0]
+
+
+class ActuationUnit:
+    """One SMA actuation unit (wire, sheath, slider, pulley, tendon load, sensors)."""
+
+    def __init__(self, params: UnitParams | None = None, dt: float = 1e-3) -> None:
+        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt = {dt!r}: must be a finite step > 0 s")
+        self.params = params if params is not None else UnitParams()
+        if not isinstance(self.params, UnitParams):
+            raise TypeError("params must be a UnitParams")
+        self.dt = float(dt)
+        self._p = kernel.pack(self.params)
+        self._out = np.zeros(kernel.N_O)
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to t = 0: cold martensitic wire at rest, sensor noise generator re-seeded."""
+        self._s = kernel.initial_state(self.params)
+        self._out[:] = 0.0
+        self._steps = 0
+        self._rng = sensors.noise_generator(self.params.force_sensor.seed)
+
+    @property
+    def time(self) -> float:
+        """Simulated time since the last reset, s."""
+        return self._steps * self.dt
+
+    @property
+    def state(self) -> dict[str, float]:
+        """The kernel state by name (temperatures, fraction, stress, position, energies)."""
+        return {name: float(self._s[i]) for i, name in enumerate(kernel.STATE_NAMES)}
+
+    @property
+    def energy(self) -> dict[str, float]:
+        """Energy accumulators since reset, J (Joule = stored + convected + latent + to sheath)."""
+        return {k: v for k, v in self.state.items() if k.startswith("energy_")}
+
+    def step(self, duty: float | None = None, current: float | None = None,
+             voltage: float | None = None) -> StepResult:
+        """Advance by dt with one drive: duty %, current A or voltage V."""
+        kind, value = select_drive(duty, current, voltage)
+        value = float(value)
+        check_drive(kind, value)
+        if not kernel.step(self._p, self._s, DRIVE_NAMES[kind], value, self.dt, self._out):
+            raise FloatingPointError(f"state became non-finite at t = {self.time + self.dt:.6f} s ({self.state})")
+        self._steps += 1
+        noise = self._rng.standard_normal()
+        return self._result(noise)
+
+    def _result(self, noise: float) -> StepResult:
+        s, o, prm = self._s, self._out, self.params
+        counts = sensors.encoder_counts(s[kernel.S_X], prm.encoder.resolution_m)
+        fs = prm.force_sensor
+        reading, saturated = sensors.force_reading(o[kernel.O_FW], noise * fs.noise_std_n, fs.range_max_n, fs.resolution_n)
+        return StepResult(
+            time_s=self.time,
+            encoder_counts=counts,
+            encoder_position_m=counts * prm.encoder.resolution_m,
+            force_reading_n=reading,
+            force_saturated=saturated,
+            wire_temperature_c=float(s[kernel.S_T]),
+            martensite_fraction=float(s[kernel.S_XI]),
+            resistance_ohm=float(o[kernel.O_R]),
+            current_a=float(o[kernel.O_I]),
+            electrical_power_w=float(o[kernel.O_P]),
+            stress_pa=float(s[kernel.S_SIG]),
+            strain=float(s[kernel.S_X]) / prm.wire.length_m,
+            sheath_temperature_c=float(s[kernel.S_TS]),
+            slider_position_m=float(s[kernel.S_X]),
+            slider_velocity_m_s=float(s[kernel.S_V]),
+            tendon_position_m=float(o[kernel.O_XT]),
+            tendon_force_n=float(o[kernel.O_FT]),
+            wire_force_n=float(o[kernel.O_FW]),
+        )
