@@ -207,12 +207,15 @@ def run_batch(params, states, drive_kind, drives, dt, record_every, channels, re
         p = params[i]
         out = np.zeros(N_O)
         r = 0
+        countdown = record_every
         failed_at[i] = -1
         for k in range(n_steps):
             if not step(p, s, drive_kind, drives[i, k], dt, out):
                 failed_at[i] = k
                 break
-            if (k + 1) % record_every == 0:
+            countdown -= 1
+            if countdown == 0:
+                countdown = record_every
                 for c in range(n_ch):
                     ch = channels[c]
                     records[i, r, c] = s[ch] if ch < N_S else out[ch - N_S]
