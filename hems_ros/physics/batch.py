@@ -64,10 +64,10 @@ def _drive_array(kind: str, values, n_sets: int) -> np.ndarray:
     bad = ~np.isfinite(arr)
     if bad.any():
         i, k = np.argwhere(bad)[0]
-        raise ValueError(f"{kind}[{i}, {k}] = {arr[i, k]!r}: drive input must be finite")
+        raise ValueError(f"{kind}[{i}, {k}] = {float(arr[i, k])!r}: drive input must be finite")
     if kind == "duty" and ((arr < 0).any() or (arr > 100).any()):
         i, k = np.argwhere((arr < 0) | (arr > 100))[0]
-        raise ValueError(f"duty[{i}, {k}] = {arr[i, k]!r} %: must be within 0-100 %")
+        raise ValueError(f"duty[{i}, {k}] = {float(arr[i, k])!r} %: must be within 0-100 %")
     return np.ascontiguousarray(arr)
 
 

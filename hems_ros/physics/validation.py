@@ -1,0 +1,353 @@
+"""Validation scenarios and the ``hems validate`` report (docs/validation.md + PNG figures).
+
+Every number in the report comes from the functions here, which the tests call too:
+- :func:`mass_loops` — 4 A x 1.8 s with 1, 3, 5 kg hanging masses (Table 4.1, bare wire);
+- :func:`six_pulses` — six 4 A pulses of 0.5-1.0 s with 2 s pauses, 12 N spring (minor loops);
+- :func:`voltage_runaway` — constant-voltage drive, bare vs sheathed;
+- :func:`sheath_facts` — cold-sheath 106.8 J displacement ratio, controlled-displacement
+  cooling times, heat build-up over repeated cycles;
+- :func:`sweep` — the Table 3.2/3.3 pulse sweep on the calibrated sheathed rig.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from hems_ros.physics import calibration, heat, scenarios, sheath
+from hems_ros.physics.batch import SimResult, simulate
+from hems_ros.physics.friction import capstan_ratio
+from hems_ros.physics.params import UnitParams, load_params
+
+DT = 1e-3
+
+
+# ------------------------------------------------------------------ scenarios
+@dataclass
+class MassLoops:
+    masses_kg: tuple
+    result: SimResult
+    heating_midpoint_c: list      # wire temperature where xi crosses 0.5 on heating (NaN if never)
+    heating_onset_c: list         # wire temperature where xi crosses 0.95 on heating
+    min_martensite: list
+    cooling_capacity_ratio: list  # peak apparent heat capacity on cooling / c_p rho V
+
+
+def mass_loops(params: UnitParams | None = None, masses=(1.0, 3.0, 5.0), pulse_s: float = 1.8,
+               total_s: float = 25.0) -> MassLoops:
+    base = params or load_params("table41")
+    sets = [base.replace({"load.kind": "hanging_mass", "load.mass_kg": m, "load.pretension_n": 0.0,
+                          "load.stiffness_n_per_m": 0.0, "sheath.enabled": False}) for m in masses]
+    res = simulate(sets, DT, current=scenarios.pulse_train(pulse_s, total_s, DT))
+    end = int(round(pulse_s / DT))
+    mid, onset, ximin, cap = [], [], [], []
+    for i, p in enumerate(sets):
+        temp, xi = res.wire_temperature_c[i], res.martensite_fraction[i]
+        mid.append(_crossing(temp[:end], xi[:end], 0.5))
+        onset.append(_crossing(temp[:end], xi[:end], 0.95))
+        ximin.append(float(xi.min()))
+        cap.append(_cooling_capacity_ratio(p, temp[end:], xi[end:]))
+    return MassLoops(tuple(masses), res, mid, onset, ximin, cap)
+
+
+def _crossing(temp: np.ndarray, xi: np.ndarray, level: float) -> float:
+    below = np.flatnonzero(xi <= level)
+    return float(temp[below[0]]) if below.size else float("nan")
+
+
+def _cooling_capacity_ratio(p: UnitParams, temp: np.ndarray, xi: np.ndarray) -> float:
+    """Peak of (convective loss / |C dT/dt|) while cooling: 1 without latent heat."""
+    c_w = p.thermal.density_kg_m3 * p.wire.volume_m3 * p.thermal.specific_heat_j_kg_c
+    q = heat.convection_loss(temp, p.ambient_temperature_c, p.thermal.h0_w_m2_c, p.thermal.h2_w_m2_c3,
+                             p.wire.surface_area_m2)
+    rate = -np.gradient(temp, DT)
+    ok = rate > 1e-3
+    return float(np.max(q[ok] / (c_w * rate[ok]))) if ok.any() else float("nan")
+
+
+@dataclass
+class SixPulses:
+    result: SimResult
+    drive: np.ndarray
+    reversal_temperature_c: list   # peak temperature of each pulse
+    reversal_martensite: list      # xi at that peak
+    pause_martensite: list         # xi at the end of the following pause
+    return_deviation: list         # xi when the next pulse passes the previous peak - xi at the peak
+
+
+def six_pulses(params: UnitParams | None = None, pulses=(0.5, 0.6, 0.7, 0.8, 0.9, 1.0),
+               pause_s: float = 2.0) -> SixPulses:
+    base = params or load_params("table41")
+    seg = []
+    for p in pulses:
+        seg += [scenarios.PULSE_CURRENT_A] * int(round(p / DT)) + [0.0] * int(round(pause_s / DT))
+    drive = np.array(seg)
+    res = simulate(base, DT, current=drive)
+    temp, xi = res.wire_temperature_c[0], res.martensite_fraction[0]
+    on = drive > 0
+    ends = np.flatnonzero(on[:-1] & ~on[1:])
+    starts = np.flatnonzero(~on[:-1] & on[1:]) + 1
+    t_rev, xi_rev, xi_pause, dev = [], [], [], []
+    for j, e in enumerate(ends):
+        t_rev.append(float(temp[e]))
+        xi_rev.append(float(xi[e]))
+        if j + 1 < len(ends):
+            s, nxt = starts[j], ends[j + 1]
+            xi_pause.append(float(xi[s - 1]))
+            seg_t = temp[s:nxt + 1]
+            k = int(np.argmax(seg_t >= temp[e]))
+            dev.append(float(xi[s + k] - xi[e]) if seg_t[k] >= temp[e] else float("nan"))
+    return SixPulses(res, drive, t_rev, xi_rev, xi_pause, dev)
+
+
+@dataclass
+class Runaway:
+    voltage_v: float
+    result: SimResult          # set 0 bare, set 1 sheathed
+    power_gain: list           # peak power / initial power
+    peak_temperature_c: list
+    peak_velocity_m_s: list
+
+
+def voltage_runaway(params: UnitParams | None = None, voltage_v: float = 16.0, total_s: float = 4.0) -> Runaway:
+    base = params or load_params("sheathed_calibrated")
+    sets = [scenarios.characterization_rig(base, False), scenarios.characterization_rig(base, True)]
+    res = simulate(sets, DT, voltage=np.full(int(round(total_s / DT)), voltage_v))
+    power = res.electrical_power_w
+    return Runaway(voltage_v, res, list(power.max(axis=1) / power[:, 0]),
+                   list(res.wire_temperature_c.max(axis=1)), list(res.slider_velocity_m_s.max(axis=1)))
+
+
+@dataclass
+class SheathFacts:
+    bare_106j_m: float
+    sheathed_106j_m: float
+    displacement_ratio: float
+    cooling_bare_s: float
+    cooling_sheathed_s: float
+    cooling_ratio: float
+    cycle_sheath_start_c: list    # sheath temperature at the start of each repeated cycle
+    cycle_cooling_s: list         # cooling time of each repeated cycle
+    cycles: SimResult
+
+
+def sheath_facts(params: UnitParams | None = None, cycles: int = 6, period_s: float = 30.0) -> SheathFacts:
+    base = params or load_params("sheathed_calibrated")
+    bare, sheathed = scenarios.characterization_rig(base, False), scenarios.characterization_rig(base, True)
+    resp = scenarios.pulse_responses([bare, sheathed], [1.6, 1.6], DT)
+    cb, cs = scenarios.controlled_cooling_times([bare, sheathed], dt=DT)
+    one = scenarios.pulse_train(1.6, period_s, DT)
+    rep = simulate(sheathed, DT, current=np.tile(one, cycles),
+                   channels=["slider_position_m", "sheath_temperature_c", "wire_temperature_c"])
+    n = one.size
+    end = int(round(1.6 / DT)) - 1
+    starts, cool = [], []
+    for c in range(cycles):
+        x = rep.slider_position_m[0, c * n:(c + 1) * n]
+        starts.append(float(rep.sheath_temperature_c[0, c * n]))
+        cool.append(scenarios.cooling_time(x, end, DT))
+    return SheathFacts(resp[0].max_displacement_m, resp[1].max_displacement_m,
+                       resp[1].max_displacement_m / resp[0].max_displacement_m,
+                       cb, cs, cs / cb, starts, cool, rep)
+
+
+def sweep(params: UnitParams | None = None, pulses=tuple(scenarios.TABLE_32_33)) -> list[scenarios.PulseResponse]:
+    """Table 3.2/3.3 protocol on the calibrated sheathed rig, each pulse from a cold start."""
+    rig = scenarios.characterization_rig(params or load_params("sheathed_calibrated"), True)
+    return scenarios.pulse_responses([rig] * len(pulses), list(pulses), DT)
+
+
+# ------------------------------------------------------------------ report
+def run(out_dir: Path, progress: Callable[[str], None] = print) -> Path:
+    """Run all scenarios, write ``validation.md`` and ``figures/validation_*.png`` under out_dir."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out_dir = Path(out_dir)
+    fig_dir = out_dir / "figures"
+    fig_dir.mkdir(parents=True, exist_ok=True)
+    t41 = load_params("table41")
+    cal = load_params("sheathed_calibrated")
+
+    progress("[1/6] closed-form checks (h, Churchill-Chu, sheath resistances, capstan)")
+    nu, h_cc = heat.appendix_free_convection()
+    r = sheath.sheath_resistances(cal.sheath, cal.wire.length_m)
+    checks = [
+        ("h(22 degC), W/m2K", f"{heat.convection_coefficient(22.0, t41.thermal.h0_w_m2_c, t41.thermal.h2_w_m2_c3):.2f}", "42.51"),
+        ("Churchill-Chu Nu (appendix 4.4)", f"{nu:.4f}", "0.8403"),
+        ("Churchill-Chu h, W/m2K", f"{h_cc:.2f}", "42.51"),
+        ("PTFE conduction, K/W", f"{r.ptfe_conduction:.4f}", "0.4038"),
+        ("steel conduction, K/W", f"{r.steel_conduction:.2e}", "4.73e-3"),
+        ("steel convection, K/W", f"{r.outer_convection:.2f}", "7.48"),
+        ("sheathed total, K/W", f"{r.sheathed_total:.2f}", "7.89"),
+        ("capstan ratio, mu 0.04, Theta pi", f"{capstan_ratio(0.04, math.pi):.3f}", "0.88 (0.84 measured)"),
+    ]
+
+    progress("[2/6] Table 3.2/3.3 sweep, calibrated sheathed rig (and Table 4.1 for comparison)")
+    sw = sweep(cal)
+    sw41 = sweep(t41.replace({"sheath.enabled": True}))
+    progress("[3/6] sheath facts: cold-sheath 106.8 J, controlled-displacement cooling, repeated cycles")
+    sf = sheath_facts(cal)
+    progress("[4/6] hanging masses 1/3/5 kg, 4 A x 1.8 s (Table 4.1)")
+    ml = mass_loops(t41)
+    progress("[5/6] six pulses with the 12 N spring (Table 4.1): minor loops")
+    sp = six_pulses(t41)
+    progress("[6/6] constant-voltage drive, bare vs sheathed; figures")
+    ru = voltage_runaway(cal)
+
+    _figures(plt, fig_dir, cal, sw, ml, sp, ru, sf)
+    md = _markdown(checks, sw, sw41, sf, ml, sp, ru, cal)
+    path = out_dir / "validation.md"
+    path.write_text(md)
+    progress(f"wrote {path} and {len(list(fig_dir.glob('validation_*.png')))} figures in {fig_dir}")
+    return path
+
+
+def _figures(plt, fig_dir, cal, sw, ml, sp, ru, sf):
+    t = np.arange(1, int(round(16.0 / DT)) + 1) * DT
+    rig = scenarios.characterization_rig(cal, True)
+    pulses = [r.pulse_s for r in sw]
+    res = simulate([rig] * len(pulses), DT, current=np.stack([scenarios.pulse_train(p, 16.0, DT) for p in pulses]),
+                   channels=["slider_position_m", "wire_force_n", "wire_temperature_c"])
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    for i, p in enumerate(pulses):
+        ax[0].plot(t, res.slider_position_m[i] * 1e3, label=f"{p:.1f} s")
+        ax[1].plot(t, res.wire_force_n[i], label=f"{p:.1f} s")
+        ax[0].plot([0, 16], [scenarios.TABLE_32_33[p][1]] * 2, ":", color=ax[0].lines[-1].get_color(), lw=0.8)
+    ax[0].axhline(4.5, color="k", lw=0.5)
+    ax[0].set(xlabel="time, s", ylabel="slider displacement, mm", title="4 A pulses, sheathed rig (dotted: Tables 3.2/3.3)")
+    ax[1].set(xlabel="time, s", ylabel="wire force, N", title="wire force (50 N preload)")
+    ax[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(fig_dir / "validation_pulses.png", dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    for i, m in enumerate(ml.masses_kg):
+        ax[0].plot(ml.result.wire_temperature_c[i], ml.result.martensite_fraction[i], label=f"{m:g} kg")
+        ax[1].plot(ml.result.time, ml.result.wire_temperature_c[i], label=f"{m:g} kg")
+    ax[0].set(xlabel="wire temperature, degC", ylabel="martensite fraction", title="loops, 4 A x 1.8 s (Table 4.1)")
+    ax[1].set(xlabel="time, s", ylabel="wire temperature, degC", title="temperature (latent-heat plateau on cooling)")
+    ax[0].legend()
+    fig.tight_layout()
+    fig.savefig(fig_dir / "validation_loops.png", dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    ax[0].plot(sp.result.wire_temperature_c[0], sp.result.martensite_fraction[0])
+    ax[0].set(xlabel="wire temperature, degC", ylabel="martensite fraction", title="six pulses, 12 N spring: minor loops")
+    ax[1].plot(ml.result.wire_temperature_c[0], ml.result.resistance_ohm[0])
+    ax[1].set(xlabel="wire temperature, degC", ylabel="resistance, ohm", title="resistance hysteresis (1 kg)")
+    fig.tight_layout()
+    fig.savefig(fig_dir / "validation_minor_loops_resistance.png", dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+    for i, lab in enumerate(("bare", "sheathed")):
+        ax[0].plot(ru.result.time, ru.result.electrical_power_w[i], label=lab)
+        ax[1].plot(ru.result.time, ru.result.wire_temperature_c[i], label=lab)
+    ax[0].set(xlabel="time, s", ylabel="power, W", title=f"constant {ru.voltage_v:g} V drive")
+    ax[1].set(xlabel="time, s", ylabel="wire temperature, degC")
+    ax[0].legend()
+    n = sf.cycles.time.size
+    ax[2].plot(sf.cycles.time, sf.cycles.sheath_temperature_c[0], label="sheath")
+    ax[2].plot(sf.cycles.time, sf.cycles.wire_temperature_c[0], lw=0.6, label="wire")
+    ax[2].set(xlabel="time, s", ylabel="temperature, degC", title=f"repeated 1.6 s pulses ({n * DT:.0f} s)")
+    ax[2].legend()
+    fig.tight_layout()
+    fig.savefig(fig_dir / "validation_sheath.png", dpi=110)
+    plt.close(fig)
+
+
+def _fmt(v: float, spec: str = ".2f") -> str:
+    return "-" if not math.isfinite(v) else format(v, spec)
+
+
+def _markdown(checks, sw, sw41, sf, ml, sp, ru, cal) -> str:
+    L = ["# Physics validation (generated by `hems validate`)", "",
+         "Model: `hems_ros/physics` (dissertation chapter 4 wire model + sheath, friction, pulley, sensors).",
+         "Parameter sets: `config/physics/table41.yaml` (Table 4.1) and "
+         "`config/physics/sheathed_calibrated.yaml` (calibrated, below). Step 1 ms. "
+         "Regenerate with `hems validate` (add `--calibrate` to refit the calibrated sets).", "",
+         "## Closed-form checks", "", "| quantity | model | dissertation |", "|---|---|---|"]
+    L += [f"| {a} | {b} | {c} |" for a, b, c in checks]
+    L += ["", "## Table 3.2 / 3.3 sweep (4 A pulses, 30 N mass + 20 N spring, sheathed, cold start)", "",
+          "| pulse s | energy J model / diss. | max displ. mm model / diss. | ratio | max force N model / diss. "
+          "| cooling s model / diss. | Table 4.1 displ. mm |", "|---|---|---|---|---|---|---|"]
+    for r, r41 in zip(sw, sw41):
+        e, x, f, tc = scenarios.TABLE_32_33[r.pulse_s]
+        L.append(f"| {r.pulse_s:.1f} | {r.energy_j:.1f} / {e:.2f} | {r.max_displacement_m * 1e3:.2f} / {x:.2f} | "
+                 f"{r.max_displacement_m * 1e3 / x:.2f} | {r.max_force_n:.1f} / {f:.2f} | "
+                 f"{_fmt(r.cooling_time_s)} / {tc:.2f} | {r41.max_displacement_m * 1e3:.2f} |")
+    L += ["", "Displacement rises with pulse length and saturates; pulses >= 1.6 s are within 25 % of the "
+          "dissertation (ratio column). The 1.0 s pulse barely starts the transformation in the model "
+          "(the measured 5.94 mm would need the wire to transform below the zero-stress As = 88 degC: "
+          "66.75 J heat a 0.98 J/K wire by at most 68 K). The model energy is I^2 R of the model's "
+          "resistance (about 4.3 ohm cold) where the dissertation used the mean 4.17 ohm. Forces follow "
+          "from the 754 N/m spring chosen from the saturated rows. With Table 4.1 values (last column) the "
+          "50 N preload shifts As to 124 degC and the 1.6-2.2 s pulses fall far short.", "",
+          "![pulses](figures/validation_pulses.png)", "",
+          "## Calibrated parameters", "",
+          "Fewest parameters, fitted by `hems_ros.physics.calibration` (Nelder-Mead on the chapter 3 facts); "
+          "everything else is Table 4.1 / Table 3.1.", "",
+          "| parameter | Table 4.1 / default | calibrated | why |", "|---|---|---|---|",
+          f"| C_M = C_A, Pa/degC | 6.89e6 | {cal.kinetics.cm_pa_per_c:.3e} | Table 4.1 was identified near 12 N "
+          "(9 degC shift); at 50-70 N its 36-50 degC shift puts As out of reach of a 107 J pulse, "
+          "while the measured wire moves 15 mm |",
+          f"| eps_L | 0.038 | {cal.constitutive.max_recoverable_strain:.4f} | measured stroke saturates at "
+          "27.45 mm (3.05 %); 3.8 % saturates at 32 mm |",
+          f"| sheath gap resistance, K/W | 1.80 (air film ln(0.66/0.508)/(2 pi k_air L)) | "
+          f"{cal.sheath.gap_resistance_k_per_w:.3f} | wire-PTFE contact; with the PTFE wall 0.4038 K/W "
+          f"the wire-sheath conductance is {1 / (cal.sheath.gap_resistance_k_per_w + 0.4038):.3f} W/K |",
+          f"| sheath heat capacity, J/K | 17 (PTFE 1.4 + steel helix) | {cal.sheath.heat_capacity_j_per_k:.2f} | "
+          "the part that follows the wire on a pulse time scale (PTFE liner + inner helix); a larger "
+          "capacity cools the sheathed wire too fast (cooling ratio < 0.6) |", "",
+          "## Sheath facts (calibrated set)", "",
+          "| fact | model | dissertation / accepted |", "|---|---|---|",
+          f"| 106.8 J (4 A x 1.6 s), cold sheath: sheathed / bare displacement | "
+          f"{sf.sheathed_106j_m * 1e3:.2f} / {sf.bare_106j_m * 1e3:.2f} mm = {sf.displacement_ratio:.2f} | about 0.5 / 0.35-0.65 |",
+          f"| cooling time after 20 mm controlled displacement, bare | {sf.cooling_bare_s:.2f} s | 4.83 s |",
+          f"| same, sheathed | {sf.cooling_sheathed_s:.2f} s | 3.33 s |",
+          f"| ratio sheathed / bare | {sf.cooling_ratio:.2f} | 0.69 / 0.6-0.8 |",
+          f"| repeated 1.6 s pulses every 30 s: sheath temperature at each start, degC | "
+          f"{', '.join(f'{v:.1f}' for v in sf.cycle_sheath_start_c)} | heat builds up (ch. 7) |",
+          f"| same: cooling time of each cycle, s | {', '.join(_fmt(v) for v in sf.cycle_cooling_s)} | lengthens slowly |", "",
+          "A single lumped sheath node cannot give both ratios at their centre: a heat sink strong enough "
+          "to halve the stroke on heating also speeds up cooling more than the measured 0.69. The fit sits "
+          "between the two, inside both accepted ranges.", "",
+          "![sheath](figures/validation_sheath.png)", "",
+          "## Dissertation model behaviour (Table 4.1, bare wire)", "",
+          "| fact | model |", "|---|---|"]
+    for i, m in enumerate(ml.masses_kg):
+        L.append(f"| {m:g} kg, 4 A x 1.8 s: onset (xi = 0.95) / midpoint (xi = 0.5) on heating, min xi, "
+                 f"peak apparent heat capacity on cooling / c_p rho V | {_fmt(ml.heating_onset_c[i], '.1f')} degC / "
+                 f"{_fmt(ml.heating_midpoint_c[i], '.1f')} degC, {ml.min_martensite[i]:.2f}, {ml.cooling_capacity_ratio[i]:.1f} |")
+    L += [f"| six pulses 0.5-1.0 s, 2 s pauses, 12 N spring: xi at each pulse peak | "
+          f"{', '.join(f'{v:.3f}' for v in sp.reversal_martensite)} |",
+          f"| xi at the end of each pause | {', '.join(f'{v:.3f}' for v in sp.pause_martensite)} |",
+          f"| return-point deviation (xi when reheating passes the previous peak temperature minus xi there) | "
+          f"{', '.join(_fmt(v, '+.3f') for v in sp.return_deviation)} |",
+          f"| constant {ru.voltage_v:g} V, calibrated wire on the 50 N rig: peak / initial power, bare vs sheathed | "
+          f"{ru.power_gain[0]:.3f} vs {ru.power_gain[1]:.3f} |",
+          f"| same: peak wire temperature, degC | {ru.peak_temperature_c[0]:.1f} vs {ru.peak_temperature_c[1]:.1f} |",
+          f"| same: peak contraction speed, mm/s | {ru.peak_velocity_m_s[0] * 1e3:.1f} vs {ru.peak_velocity_m_s[1] * 1e3:.1f} |",
+          "",
+          "Loops move to higher temperature with load and at 5 kg the transformation no longer completes; "
+          "the apparent heat capacity on cooling rises above c_p rho V where the reverse transformation "
+          "releases latent heat (the plateau). Minor loops nest. Return-point memory is only approximate in "
+          "the printed Duhem/Likhachev law (eqs. 4.22-4.24): the state carries no memory of reversal points, "
+          "and re-heating from inside the band immediately resumes at a reduced slope, so it passes the "
+          "previous reversal temperature with a lower martensite fraction (deviations above). The issue's "
+          "0.02 bound is not met by the dissertation's law; see tests/physics/test_kinetics.py (strict xfail).",
+          "", "![loops](figures/validation_loops.png)", "",
+          "![minor loops and resistance](figures/validation_minor_loops_resistance.png)", ""]
+    return "\n".join(L)
+
+
+__all__ = ["mass_loops", "six_pulses", "voltage_runaway", "sheath_facts", "sweep", "run", "calibration"]

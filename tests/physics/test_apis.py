@@ -1,0 +1,120 @@
+"""Stepping and batch APIs: one kernel, same trajectory; sensors; errors for bad inputs."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hems_ros.physics import ActuationUnit, simulate
+from hems_ros.physics.batch import CHANNELS
+from hems_ros.physics.params import load_params
+
+
+def _drive(n):
+    t = np.arange(n) * 1e-3
+    return np.clip(50 + 50 * np.sin(2 * np.pi * 0.25 * t), 0, 100) * (t < 6)
+
+
+@pytest.mark.parametrize("name", ["sheathed_calibrated", "ch6_hems_index", "table41"])
+def test_step_and_batch_agree(name):
+    p = load_params(name)
+    duty = _drive(9000)
+    res = simulate(p, 1e-3, duty=duty)
+    unit = ActuationUnit(p, dt=1e-3)
+    steps = [unit.step(duty=d) for d in duty]
+    pairs = {
+        "wire_temperature_c": "wire_temperature_c", "martensite_fraction": "martensite_fraction",
+        "stress_pa": "stress_pa", "slider_position_m": "slider_position_m",
+        "sheath_temperature_c": "sheath_temperature_c", "resistance_ohm": "resistance_ohm",
+        "wire_force_n": "wire_force_n", "tendon_force_n": "tendon_force_n",
+        "current_a": "current_a", "electrical_power_w": "electrical_power_w",
+    }
+    for batch_name, step_name in pairs.items():
+        a = res[batch_name][0]
+        b = np.array([getattr(s, step_name) for s in steps])
+        span = max(np.ptp(a), 1e-12)
+        assert np.max(np.abs(a - b)) <= 1e-6 * span, batch_name
+    assert np.array_equal(res.encoder_counts[0], [s.encoder_counts for s in steps])
+    assert np.array_equal(res.force_reading_n[0], [s.force_reading_n for s in steps])
+    assert np.array_equal(res.force_saturated[0], [s.force_saturated for s in steps])
+    assert unit.time == pytest.approx(9.0)
+
+
+def test_batch_of_many_sets_matches_single_runs_and_record_every():
+    base = load_params("sheathed_calibrated")
+    sets = [base.replace({"sheath.heat_capacity_j_per_k": c}) for c in (2.0, 3.0, 6.0)]
+    cur = np.where(np.arange(4000) < 1800, 4.0, 0.0)
+    many = simulate(sets, 1e-3, current=cur, record_every=10)
+    assert many.slider_position_m.shape == (3, 400) and many.time[0] == pytest.approx(0.01)
+    for i, p in enumerate(sets):
+        one = simulate(p, 1e-3, current=cur)
+        assert np.array_equal(many.slider_position_m[i], one.slider_position_m[0, 9::10])
+    assert many.slider_position_m[0].max() > many.slider_position_m[2].max()
+
+
+def test_sensors_quantise_and_flag_saturation():
+    p = load_params("sheathed_calibrated")   # 50 N preload on a 0-50 N sensor
+    r = ActuationUnit(p).step(current=0.0)
+    assert isinstance(r.encoder_counts, int)
+    assert r.encoder_position_m == r.encoder_counts * 1e-6
+    assert r.force_saturated and r.force_reading_n in (0.0, 50.0)
+    q = ActuationUnit(p.replace({"force_sensor.range_max_n": 100.0, "force_sensor.noise_std_n": 0.0})).step(current=0.0)
+    assert not q.force_saturated and q.force_reading_n == pytest.approx(50.0, abs=0.005)
+    assert round(q.force_reading_n / 0.01) * 0.01 == pytest.approx(q.force_reading_n)
+
+
+def test_force_noise_is_seeded():
+    p = load_params("ch6_hems_index").replace({"force_sensor.noise_std_n": 0.5})
+    a = [ActuationUnit(p).step(current=0.0).force_reading_n for _ in range(1)]
+    u1, u2 = ActuationUnit(p), ActuationUnit(p.replace({"force_sensor.seed": 7}))
+    s1 = [u1.step(current=0.0).force_reading_n for _ in range(50)]
+    s2 = [u2.step(current=0.0).force_reading_n for _ in range(50)]
+    u1.reset()
+    assert [u1.step(current=0.0).force_reading_n for _ in range(50)] == s1
+    assert s1 != s2 and a[0] == s1[0]
+    assert np.std(s1) > 0.2
+
+
+def test_reset_and_state():
+    u = ActuationUnit(load_params("table41"))
+    for _ in range(500):
+        u.step(current=4.0)
+    assert u.state["wire_temperature_c"] > 40 and u.time == pytest.approx(0.5)
+    u.reset()
+    assert u.time == 0.0 and u.state["wire_temperature_c"] == 22.0 and u.state["martensite_fraction"] == 1.0
+
+
+@pytest.mark.parametrize("kwargs, pattern", [
+    ({"duty": math.nan}, "must be finite"),
+    ({"current": math.inf}, "must be finite"),
+    ({"duty": 100.5}, "within 0-100"),
+    ({"duty": -1.0}, "within 0-100"),
+    ({}, "exactly one"),
+    ({"duty": 10.0, "current": 1.0}, "exactly one"),
+])
+def test_step_rejects_bad_drive(kwargs, pattern):
+    with pytest.raises(ValueError, match=pattern):
+        ActuationUnit().step(**kwargs)
+
+
+def test_simulate_rejects_bad_input():
+    p = load_params("table41")
+    with pytest.raises(ValueError, match=r"current\[0, 3\] = nan"):
+        simulate(p, 1e-3, current=np.array([0, 0, 0, np.nan]))
+    with pytest.raises(ValueError, match="within 0-100"):
+        simulate(p, 1e-3, duty=np.array([0.0, 120.0]))
+    with pytest.raises(ValueError, match="exactly one"):
+        simulate(p, 1e-3)
+    with pytest.raises(ValueError, match="shape"):
+        simulate([p, p], 1e-3, current=np.zeros((3, 10)))
+    with pytest.raises(ValueError, match="unknown channel"):
+        simulate(p, 1e-3, current=np.zeros(10), channels=["nope"])
+    with pytest.raises(ValueError, match="dt"):
+        ActuationUnit(p, dt=0.0)
+    assert "slider_position_m" in CHANNELS
+
+
+def test_runaway_state_raises_instead_of_returning_nan():
+    p = load_params("table41")
+    with pytest.raises(FloatingPointError, match="non-finite"):
+        simulate(p, 1e-3, voltage=np.full(100, 1e200))

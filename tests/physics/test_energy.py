@@ -1,0 +1,52 @@
+"""Energy balance over a pulse: Joule = stored + convected + latent (+ to sheath), within 1 %.
+
+The accumulators of the kernel are checked against an independent integration of the
+recorded trajectories (trapezoidal convective loss from T(t), stored heat from T_end,
+latent heat from xi_end), so a wrong sign or a missing term in the kernel fails here.
+"""
+
+import numpy as np
+import pytest
+
+from hems_ros.physics import heat, scenarios, simulate
+from hems_ros.physics.params import load_params
+from hems_ros.physics.sheath import sheath_resistances
+
+DT = 1e-3
+
+
+def _trapezoid(y, dt, y0):
+    y = np.concatenate([[y0], y])
+    return float(np.sum(0.5 * (y[1:] + y[:-1])) * dt)
+
+
+@pytest.mark.parametrize("sheathed", [False, True])
+def test_joule_equals_stored_convected_latent(sheathed):
+    p = load_params("table41").replace({"sheath.enabled": sheathed})
+    # balance at the end of the pulse, where the latent term is largest
+    res = simulate(p, DT, current=scenarios.pulse_train(1.8, 1.8, DT))
+    t_amb = p.ambient_temperature_c
+    temp, xi = res.wire_temperature_c[0], res.martensite_fraction[0]
+    c_w = p.thermal.density_kg_m3 * p.wire.volume_m3 * p.thermal.specific_heat_j_kg_c
+    lat = p.thermal.density_kg_m3 * p.wire.volume_m3 * p.thermal.latent_heat_j_kg
+    joule = float(np.sum(res.electrical_power_w[0]) * DT)
+    stored = c_w * (temp[-1] - t_amb)
+    latent = lat * (1.0 - xi[-1])
+    if sheathed:
+        r = sheath_resistances(p.sheath, p.wire.length_m)
+        lost = _trapezoid((temp - res.sheath_temperature_c[0]) / r.wire_to_sheath, DT, 0.0)
+    else:
+        q = heat.convection_loss(temp, t_amb, p.thermal.h0_w_m2_c, p.thermal.h2_w_m2_c3, p.wire.surface_area_m2)
+        lost = _trapezoid(q, DT, 0.0)
+    assert 1.0 - xi[-1] > 0.3, "the pulse must transform the wire for the latent term to matter"
+    assert latent > 0.05 * joule
+    assert stored + lost + latent == pytest.approx(joule, rel=0.01)
+    # the kernel's own accumulators close exactly
+    e = {k: res[k][0, -1] for k in res.channels() if k.startswith("energy_")}
+    total = e["energy_stored_j"] + e["energy_convected_j"] + e["energy_latent_j"] + e["energy_to_sheath_j"]
+    assert total == pytest.approx(e["energy_joule_j"], rel=1e-9)
+    assert e["energy_joule_j"] == pytest.approx(joule, rel=1e-9)
+    if sheathed:
+        assert e["energy_convected_j"] == 0.0 and e["energy_to_sheath_j"] > 0.3 * joule
+        assert (e["energy_sheath_stored_j"] + e["energy_sheath_convected_j"]
+                == pytest.approx(e["energy_to_sheath_j"], rel=1e-9))
