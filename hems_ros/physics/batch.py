@@ -8,7 +8,8 @@ Parameter sets are packed into a (n_sets, N_P) float64 array and run in parallel
 numba loop (kernel.run_batch) around the same single-step kernel the stepping API uses.
 ``record_every`` keeps every k-th step; ``channels`` limits what is stored (memory for big
 batches). Sensor channels (encoder, force reading with the seeded noise of each set) are
-derived from the recorded truth with the same functions and draws as the stepping API.
+derived on first access from the recorded truth, with the same functions and noise draws as
+the stepping API.
 """
 
 from __future__ import annotations
@@ -28,29 +29,47 @@ DERIVED = ("strain", "encoder_counts", "encoder_position_m", "force_reading_n", 
 
 @dataclass
 class SimResult:
-    """Recorded channels, each an array shaped (n_sets, n_records)."""
+    """Recorded channels, each an array shaped (n_sets, n_records).
+
+    Sensor channels (``strain``, ``encoder_counts``, ``encoder_position_m``,
+    ``force_reading_n``, ``force_saturated``) are computed on first access, so a fitting
+    loop that reads only the truth does not pay for them.
+    """
 
     params: list[UnitParams]
     dt: float
     record_every: int
     time: np.ndarray
     data: dict[str, np.ndarray] = field(default_factory=dict)
+    n_steps: int = 0
 
     @property
     def n_sets(self) -> int:
         return len(self.params)
 
     def __getitem__(self, name: str) -> np.ndarray:
+        if name in DERIVED and name not in self.data:
+            _add_sensors(self.data, self.params, self.n_steps, self.record_every)
+        if name not in self.data:
+            raise KeyError(f"SimResult has no channel {name!r} (recorded: {', '.join(self.channels())})")
         return self.data[name]
 
     def __getattr__(self, name: str) -> np.ndarray:
-        data = self.__dict__.get("data", {})
-        if name in data:
-            return data[name]
-        raise AttributeError(f"SimResult has no channel {name!r} (recorded: {', '.join(data)})")
+        if name.startswith("__") or name not in CHANNELS + DERIVED:
+            raise AttributeError(name)
+        try:
+            return self[name]
+        except KeyError as exc:
+            raise AttributeError(str(exc)) from None
 
     def channels(self) -> list[str]:
-        return list(self.data)
+        """Recorded channels plus the sensor channels derivable from them."""
+        derivable = []
+        if "slider_position_m" in self.data:
+            derivable += ["strain", "encoder_counts", "encoder_position_m"]
+        if "wire_force_n" in self.data:
+            derivable += ["force_reading_n", "force_saturated"]
+        return list(dict.fromkeys(list(self.data) + derivable))
 
 
 def _drive_array(kind: str, values, n_sets: int) -> np.ndarray:
@@ -102,7 +121,7 @@ def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
     n_rec = n_steps // record_every
     packed = np.ascontiguousarray(np.stack([kernel.pack(p) for p in plist]))
     states = np.ascontiguousarray(np.stack([kernel.initial_state(p) for p in plist]))
-    records = np.zeros((n_sets, n_rec, len(index)))
+    records = np.zeros((len(index), n_sets, n_rec))
     failed_at = np.zeros(n_sets, dtype=np.int64)
     kernel.run_batch(packed, states, DRIVE_NAMES[kind], drives, float(dt), int(record_every),
                      index, records, failed_at)
@@ -111,27 +130,31 @@ def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
         raise FloatingPointError(f"parameter set {i} ({plist[i].name}): state became non-finite "
                                  f"at step {failed_at[i]} (t = {(failed_at[i] + 1) * dt:.6f} s)")
 
-    data = {name: records[:, :, j] for j, name in enumerate(wanted)}
-    _add_sensors(data, plist, n_steps, record_every)
+    data = {name: records[j] for j, name in enumerate(wanted)}
     time = (np.arange(n_rec) + 1) * record_every * dt
-    return SimResult(params=plist, dt=float(dt), record_every=int(record_every), time=time, data=data)
+    return SimResult(params=plist, dt=float(dt), record_every=int(record_every), time=time, data=data,
+                     n_steps=n_steps)
 
 
 def _add_sensors(data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: int, every: int) -> None:
+    """Sensor channels from the recorded truth, with the same draws as the stepping API."""
+    def column(values):
+        return np.array(values, dtype=np.float64)[:, None]
+
     if "slider_position_m" in data:
         x = data["slider_position_m"]
-        data["strain"] = x / np.array([p.wire.length_m for p in plist])[:, None]
-        counts = np.stack([sensors.encoder_counts_array(x[i], p.encoder.resolution_m) for i, p in enumerate(plist)])
+        data["strain"] = x / column([p.wire.length_m for p in plist])
+        resolution = column([p.encoder.resolution_m for p in plist])
+        counts = sensors.encoder_counts_array(x / resolution, 1.0)
         data["encoder_counts"] = counts
-        data["encoder_position_m"] = counts * np.array([p.encoder.resolution_m for p in plist])[:, None]
+        data["encoder_position_m"] = counts * resolution
     if "wire_force_n" in data:
-        readings, saturated = [], []
         picks = np.arange(every - 1, (n_steps // every) * every, every)
-        for i, p in enumerate(plist):
-            fs = p.force_sensor
-            noise = sensors.noise_generator(fs.seed).standard_normal(n_steps)[picks] * fs.noise_std_n
-            r, s = sensors.force_reading_array(data["wire_force_n"][i], noise, fs.range_max_n, fs.resolution_n)
-            readings.append(r)
-            saturated.append(s)
-        data["force_reading_n"] = np.stack(readings)
-        data["force_saturated"] = np.stack(saturated)
+        noise = np.stack([sensors.noise_generator(p.force_sensor.seed).standard_normal(n_steps)[picks]
+                          if p.force_sensor.noise_std_n > 0 else np.zeros(picks.size) for p in plist])
+        fs = [p.force_sensor for p in plist]
+        reading, saturated = sensors.force_reading_array(
+            data["wire_force_n"], noise * column([f.noise_std_n for f in fs]),
+            column([f.range_max_n for f in fs]), column([f.resolution_n for f in fs]))
+        data["force_reading_n"] = reading
+        data["force_saturated"] = saturated

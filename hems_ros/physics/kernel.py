@@ -196,8 +196,8 @@ def step(p, s, drive_kind, drive_value, dt, out):
 def run_batch(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at):
     """Run every set (row of ``params``/``states``/``drives``) over its drive row.
 
-    ``channels`` indexes the concatenation (state, outputs); ``records[i, r, c]`` holds
-    channel c after step (r + 1) * record_every. ``failed_at[i]`` is the first step whose
+    ``channels`` indexes the concatenation (state, outputs); ``records[c, i, r]`` holds
+    channel c of set i after step (r + 1) * record_every. ``failed_at[i]`` is the first step whose
     state was not finite (the set stops there), else -1.
     """
     n_sets, n_steps = drives.shape
@@ -218,5 +218,5 @@ def run_batch(params, states, drive_kind, drives, dt, record_every, channels, re
                 countdown = record_every
                 for c in range(n_ch):
                     ch = channels[c]
-                    records[i, r, c] = s[ch] if ch < N_S else out[ch - N_S]
+                    records[c, i, r] = s[ch] if ch < N_S else out[ch - N_S]
                 r += 1

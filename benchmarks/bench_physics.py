@@ -1,0 +1,142 @@
+"""Physics speed benchmark: the numba kernel against scipy's LSODA on the same equations.
+
+Prints measured numbers and ratios side by side (not a pass/fail test; floors from issue 3):
+- one unit, full model (calibrated sheathed rig), 60 s at 1 kHz: real-time factor (floor 1000x),
+  through the batch API (one set) and the stepping API (what a node calls every 1 ms);
+- batch, 256 parameter sets x 30 s: simulated unit-seconds per wall second (floor 1e5), at the
+  1 kHz step and at the 100 Hz control period (Ts = 10 ms, digest section 4), with the
+  trajectory difference between the two steps;
+- baseline: scipy.integrate.solve_ivp(method="LSODA") on the same equations (right-hand side
+  built from the same equation functions), integrated piecewise between input changes.
+
+Run: python benchmarks/bench_physics.py
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from scipy.integrate import solve_ivp  # noqa: E402
+
+from hems_ros.physics import ActuationUnit, constitutive, electrical, heat, kinetics, load_params, sheath, simulate  # noqa: E402
+from hems_ros.physics import kernel as K  # noqa: E402
+
+
+def current_profile(total_s: float, dt: float) -> np.ndarray:
+    """4 A for 2 s every 10 s: full heat/transform/cool cycles."""
+    t = np.arange(int(round(total_s / dt))) * dt
+    return np.where((t % 10.0) < 2.0, 4.0, 0.0)
+
+
+def timed(fn, repeat: int = 3) -> float:
+    best = math.inf
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def lsoda_rhs(p):
+    """Continuous-time form of kernel.step for a hanging-mass rig without friction."""
+    c_w, lat, s_area = p[K.P_CW], p[K.P_LAT], p[K.P_S]
+    mass, n = p[K.P_MASS], p[K.P_N]
+
+    def rhs(_t, y, cur):
+        temp, xi, sig, x, v, ts = y
+        ms, mf, a_s, a_f = kinetics.transformation_temperatures(sig, p[K.P_MS0], p[K.P_MF0], p[K.P_AS0], p[K.P_AF0],
+                                                                p[K.P_CM], p[K.P_CA])
+        rho = electrical.mixture_resistivity(
+            xi, electrical.phase_resistivity(p[K.P_RHO0M], p[K.P_T0M], p[K.P_DRDTM], p[K.P_DRDSM], temp, sig),
+            electrical.phase_resistivity(p[K.P_RHO0A], p[K.P_T0A], p[K.P_DRDTA], p[K.P_DRDSA], temp, sig))
+        _, power = electrical.current_source(cur, electrical.wire_resistance(rho, p[K.P_L0] - x, s_area))
+        if p[K.P_SHEATH] > 0:
+            q_sh, q_sa = sheath.sheath_heat_flows(temp, ts, p[K.P_TAMB], p[K.P_GWS], p[K.P_GSA])
+            net, dts = power - q_sh, (q_sh - q_sa) / p[K.P_CS]
+        else:
+            net, dts = power - heat.convection_loss(temp, p[K.P_TAMB], p[K.P_H0], p[K.P_H2], p[K.P_AREA]), 0.0
+        slope = kinetics.transformation_slope(temp, xi, net > 0, ms, mf, a_s, a_f)
+        dtemp = net / (c_w - lat * slope)
+        dxi = slope * dtemp
+        e = constitutive.reuss_modulus(xi, p[K.P_EM], p[K.P_EA])
+        dsig = (-e * v / p[K.P_L0] + constitutive.transformation_coefficient(e, p[K.P_EPSL]) * dxi
+                + constitutive.thermoelastic_coefficient(xi, e, p[K.P_ALM], p[K.P_ALA], p[K.P_NU]) * dtemp)
+        force = s_area * sig / n
+        acc = (force - mass * p[K.P_G] - p[K.P_DAMP] * n * v - p[K.P_F0] - p[K.P_K] * n * x) / (mass * n)
+        return [dtemp, dxi, dsig, v, acc, dts]
+
+    return rhs
+
+
+def run_lsoda(params, current: np.ndarray, dt: float) -> np.ndarray:
+    """Slider position at the kernel's sample times, integrating between input changes."""
+    p = K.pack(params)
+    rhs = lsoda_rhs(p)
+    y = K.initial_state(params)[:6].copy()
+    edges = np.flatnonzero(np.diff(current)) + 1
+    bounds = np.concatenate([[0], edges, [current.size]])
+    out = np.empty(current.size)
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        t_eval = (np.arange(a, b) + 1) * dt
+        sol = solve_ivp(rhs, (a * dt, b * dt), y, method="LSODA", t_eval=t_eval, args=(current[a],),
+                        rtol=1e-6, atol=[1e-6, 1e-8, 1.0, 1e-9, 1e-9, 1e-6])
+        out[a:b] = sol.y[3]
+        y = sol.y[:, -1]
+    return out
+
+
+def main() -> int:
+    params = load_params("sheathed_calibrated")
+    dt = 1e-3
+    print("physics benchmark (calibrated sheathed rig: 30 N mass + 20 N spring, 4 A x 2 s every 10 s)")
+    cur60 = current_profile(60.0, dt)
+    simulate(params, dt, current=cur60[:10])  # compile / load the cache
+
+    t_batch1 = timed(lambda: simulate(params, dt, current=cur60, channels=["slider_position_m"]))
+    unit = ActuationUnit(params, dt)
+
+    def stepping():
+        unit.reset()
+        for c in cur60:
+            unit.step(current=c)
+
+    t_step = timed(stepping, repeat=1)
+    print(f"one unit, 60 s at 1 kHz, batch API : {t_batch1 * 1e3:8.1f} ms  real-time factor {60 / t_batch1:9.0f}x "
+          f"(floor 1000x: {60 / t_batch1 / 1000:.1f} x floor)")
+    print(f"one unit, 60 s at 1 kHz, step API  : {t_step * 1e3:8.1f} ms  real-time factor {60 / t_step:9.0f}x "
+          f"(a node needs 1x)")
+
+    cur30 = current_profile(30.0, dt)
+    lsoda_s = timed(lambda: run_lsoda(params, cur30, dt), repeat=1)
+    x_lsoda = run_lsoda(params, cur30, dt)
+    x_kernel = simulate(params, dt, current=cur30).slider_position_m[0]
+    diff = np.max(np.abs(x_lsoda - x_kernel)) / np.ptp(x_kernel)
+    print(f"LSODA baseline, one unit 30 s      : {lsoda_s * 1e3:8.1f} ms  real-time factor {30 / lsoda_s:9.1f}x; "
+          f"kernel / LSODA speed {lsoda_s / (t_batch1 / 2):.0f}x; max |x_kernel - x_LSODA| = {diff:.2%} of stroke")
+
+    sets = [params.replace({"sheath.heat_capacity_j_per_k": c}) for c in np.linspace(2.0, 6.0, 256)]
+    for step in (1e-3, 1e-2):
+        cur = current_profile(30.0, step)
+        every = max(1, int(round(0.01 / step)))
+        simulate(sets[:2], step, current=cur[:10])
+        t = timed(lambda: simulate(sets, step, current=cur, record_every=every,
+                                   channels=["slider_position_m", "wire_force_n"]))
+        rate = 256 * 30.0 / t
+        print(f"batch 256 sets x 30 s, dt {step * 1e3:4.0f} ms : {t * 1e3:8.1f} ms  {rate:10.0f} unit-s per wall-s "
+              f"(floor 1e5: {rate / 1e5:.2f} x floor; LSODA at this rate: {30 / lsoda_s:.1f}, "
+              f"ratio {rate / (30 / lsoda_s):.0f}x)")
+    fine = simulate(params, 1e-3, current=cur30, record_every=10).slider_position_m[0]
+    coarse = simulate(params, 1e-2, current=current_profile(30.0, 1e-2)).slider_position_m[0]
+    print(f"dt 10 ms vs 1 ms trajectory difference: {np.max(np.abs(fine - coarse)) / np.ptp(fine):.2%} of stroke")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
