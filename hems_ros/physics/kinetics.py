@@ -58,8 +58,10 @@ def transformation_slope(temperature_c, xi, heating, m_s, m_f, a_s, a_f):
     """dxi/dT on the active branch (eqs. 4.22-4.24); dxi/dt = slope * dT/dt.
 
     Heating: dz+/dT (xi - z-)/(z+ - z-); cooling: dz-/dT (z+ - xi)/(z+ - z-).
-    The ratio is the state's relative position inside the band; it is confined to [0, 1]
-    so an O(dT^2) step overshoot past a branch cannot reverse the transformation direction.
+    The ratio is the state's relative position inside the band. It is kept >= 0 so that a
+    state pushed outside the band (stress shifts the branches, O(dT^2) step error) never
+    transforms backwards (heating never forms martensite); above 1 it is left as printed,
+    which pulls a state outside the band back onto the active branch.
     """
     zp, dzp = heating_branch(temperature_c, a_s, a_f)
     zm, dzm = cooling_branch(temperature_c, m_s, m_f)
@@ -72,6 +74,4 @@ def transformation_slope(temperature_c, xi, heating, m_s, m_f, a_s, a_f):
         slope = dzm
     if ratio < 0.0:
         ratio = 0.0
-    elif ratio > 1.0:
-        ratio = 1.0
     return slope * ratio
