@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from hems_ros.physics import calibration, heat, scenarios, sheath
+from hems_ros.physics import heat, scenarios, sheath
 from hems_ros.physics.batch import SimResult, simulate
 from hems_ros.physics.friction import capstan_ratio
 from hems_ros.physics.params import UnitParams, load_params
@@ -356,4 +356,4 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, cal) -> str:
     return "\n".join(L)
 
 
-__all__ = ["mass_loops", "six_pulses", "voltage_runaway", "sheath_facts", "sweep", "run", "calibration"]
+__all__ = ["mass_loops", "six_pulses", "voltage_runaway", "sheath_facts", "sweep", "run"]

@@ -65,13 +65,13 @@ def test_sensors_quantise_and_flag_saturation():
 
 def test_force_noise_is_seeded():
     p = load_params("ch6_hems_index").replace({"force_sensor.noise_std_n": 0.5})
-    a = [ActuationUnit(p).step(current=0.0).force_reading_n for _ in range(1)]
+    first = ActuationUnit(p).step(current=0.0).force_reading_n
     u1, u2 = ActuationUnit(p), ActuationUnit(p.replace({"force_sensor.seed": 7}))
     s1 = [u1.step(current=0.0).force_reading_n for _ in range(50)]
     s2 = [u2.step(current=0.0).force_reading_n for _ in range(50)]
     u1.reset()
     assert [u1.step(current=0.0).force_reading_n for _ in range(50)] == s1
-    assert s1 != s2 and a[0] == s1[0]
+    assert s1 != s2 and first == s1[0]
     assert np.std(s1) > 0.2
 
 
