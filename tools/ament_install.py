@@ -1,10 +1,12 @@
 """Give an installed ``hems_ros`` the ament layout inside a Python prefix (the venv).
 
-``pip install -e .`` puts the console scripts in ``<prefix>/bin``; ``ros2 run`` looks for
-executables in ``<prefix>/lib/<package>`` of a prefix listed in ``AMENT_PREFIX_PATH`` that
-has the package in its ament resource index. This writes exactly that: the index marker,
-``share/hems_ros`` (package.xml and a link to the live config folder, so edits need no
-reinstall) and one launcher per executable in ``lib/hems_ros``.
+``pip install -e .`` makes the package importable (setup.cfg's colcon-style script folder
+sends its console scripts to ``lib/hems_ros``, which this tool rewrites). ``ros2 run``
+looks for executables in ``<prefix>/lib/<package>`` of a prefix listed in
+``AMENT_PREFIX_PATH`` that has the package in its ament resource index. This writes exactly
+that: the index marker, ``share/hems_ros`` (package.xml and a link to the live config
+folder, so edits need no reinstall), and one launcher per executable in ``lib/hems_ros``
+and the same launcher in ``bin`` so that the executables are on PATH in the venv.
 
 Usage: python tools/ament_install.py <prefix>
 """
@@ -54,12 +56,12 @@ def install(prefix: Path) -> list[Path]:
     written = []
     for name, target in sorted(executables.items()):
         module, function = target.split(":")
-        path = lib / name
-        path.write_text(
-            LAUNCHER.format(python=python, name=name, package=PACKAGE, module=module, function=function)
-        )
-        path.chmod(0o755)
-        written.append(path)
+        text = LAUNCHER.format(python=python, name=name, package=PACKAGE, module=module, function=function)
+        for folder in (lib, prefix / "bin"):
+            path = folder / name
+            path.write_text(text)
+            path.chmod(0o755)
+        written.append(lib / name)
     return written
 
 

@@ -11,14 +11,20 @@ from hems_ros.rosenv import apply_network_defaults
 def run_node(make_node: Callable[[], object], argv: list[str] | None = None) -> int:
     """Initialise rclpy, spin the node until Ctrl-C or SIGTERM, shut down cleanly.
 
+    ``-h``/``--help`` before ``--ros-args`` prints the node's documentation and exits.
     A ``ValueError`` raised while constructing the node is a configuration error: it is
     printed with the node's name and the process exits with code 2.
     """
+    args = sys.argv if argv is None else argv
+    user_args = args[1:args.index("--ros-args")] if "--ros-args" in args else args[1:]
+    if "-h" in user_args or "--help" in user_args:
+        print(node_help(make_node, args[0]))
+        return 0
     apply_network_defaults()
     import rclpy
     from rclpy.executors import ExternalShutdownException
 
-    rclpy.init(args=sys.argv if argv is None else argv)
+    rclpy.init(args=args)
     node = None
     try:
         node = make_node()
@@ -33,3 +39,14 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None) -> 
             node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def node_help(make_node: Callable[[], object], program: str) -> str:
+    """Usage text of a node executable: its class documentation and the ROS argument form."""
+    import inspect
+    import os
+
+    doc = inspect.cleandoc(make_node.__doc__ or sys.modules[make_node.__module__].__doc__ or "")
+    name = os.path.basename(program)
+    return (f"usage: {name} [--ros-args -p <parameter>:=<value> ... | --params-file <file>]\n\n"
+            f"{doc}\n\nStops cleanly on Ctrl-C (SIGINT) or SIGTERM.")

@@ -1,0 +1,56 @@
+"""Test-session environment: DDS on loopback only and a ROS domain of this session's own.
+
+The domain id is reserved with an exclusive lock file for the whole session, so two test
+sessions on one machine (a developer's and CI's, say) never share a DDS domain. It is set
+in ``os.environ`` before any test starts, so every child process inherits it.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+VENV = REPO / ".venv"
+DOMAIN_IDS = range(11, 101)  # clear of 0 (the default) and within the 0-101 port-mapping range
+_domain_lock = None
+
+
+def _reserve_domain_id() -> int:
+    global _domain_lock
+    start = os.getpid() % len(DOMAIN_IDS)
+    for offset in range(len(DOMAIN_IDS)):
+        domain = DOMAIN_IDS[(start + offset) % len(DOMAIN_IDS)]
+        handle = open(f"/tmp/hems-ros-domain-{domain}.lock", "w")
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            continue
+        _domain_lock = handle
+        return domain
+    raise RuntimeError("every ROS domain id 11-100 is held by another test session")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if "HEMS_TEST_DOMAIN_ID" not in os.environ:
+        os.environ["HEMS_TEST_DOMAIN_ID"] = str(_reserve_domain_id())
+    os.environ["ROS_DOMAIN_ID"] = os.environ["HEMS_TEST_DOMAIN_ID"]
+
+
+@pytest.fixture(scope="session")
+def ros_domain_id() -> int:
+    """The DDS domain this test session owns (also in ``os.environ['ROS_DOMAIN_ID']``)."""
+    return int(os.environ["ROS_DOMAIN_ID"])
+
+
+@pytest.fixture(scope="session")
+def venv() -> Path:
+    if not (VENV / "bin" / "python").exists():
+        pytest.fail(f"{VENV} is missing: run `make setup`")
+    return VENV
+

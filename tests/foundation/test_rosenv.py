@@ -1,0 +1,23 @@
+import sys
+
+from hems_ros.rosenv import apply_network_defaults, child_environment
+
+
+def test_discovery_defaults_to_localhost_and_keeps_a_user_choice():
+    assert apply_network_defaults({})["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    chosen = apply_network_defaults({"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"})
+    assert chosen["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "SUBNET"
+
+
+def test_the_interpreter_prefix_becomes_an_ament_prefix_once():
+    env = apply_network_defaults({"AMENT_PREFIX_PATH": "/opt/other"})
+    assert env["AMENT_PREFIX_PATH"].split(":") == ["/opt/other", sys.prefix]
+    assert apply_network_defaults(dict(env))["AMENT_PREFIX_PATH"] == env["AMENT_PREFIX_PATH"]
+
+
+def test_child_environment_carries_the_test_domain(ros_domain_id):
+    env = child_environment({"EXTRA": "1"})
+    assert env["ROS_DOMAIN_ID"] == str(ros_domain_id)
+    assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    assert env["EXTRA"] == "1"
+    assert 11 <= ros_domain_id <= 100
