@@ -6,7 +6,7 @@ from conftest import REPO
 
 
 def test_second_make_setup_has_nothing_to_rebuild():
-    result = subprocess.run(["make", "--dry-run", "setup"], cwd=REPO, capture_output=True, text=True, timeout=120)
+    result = subprocess.run(["make", "--no-print-directory", "--dry-run", "setup"], cwd=REPO, capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     commands = [line for line in result.stdout.splitlines() if line.strip()]
     assert commands == ["tools/check_system.sh python3.11"], commands
