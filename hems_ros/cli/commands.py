@@ -1,0 +1,129 @@
+"""Verbs that command a running graph: enable, disable, estop, reset, setpoint, status."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from hems_ros.graph import names
+from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
+
+UNITS = {"mm": ("position", 1e-3), "m": ("position", 1.0), "N": ("force", 1.0)}
+
+
+def register(subparsers) -> None:
+    for command, text in (("enable", "allow heating: supervisor to ENABLED (needs every stream alive)"),
+                          ("disable", "stop heating: supervisor to DISABLED"),
+                          ("estop", "emergency stop: every duty to 0, latched until reset"),
+                          ("reset", "clear a latched FAULT or ESTOP (refused while a fault persists)")):
+        parser = subparsers.add_parser(command, help=text, description=text + ".")
+        parser.add_argument("--timeout", type=float, default=10.0, help="seconds to wait for the supervisor")
+        parser.set_defaults(func=lambda args, c=command: run_trigger(c, args))
+
+    parser = subparsers.add_parser(
+        "setpoint", help="send a finger setpoint (tendon side)",
+        description="Publish hems_msgs/FingerSetpoint on /hems/<finger>/setpoint. Values are tendon side: "
+                    "position in m (or mm with --unit mm), force in N. Checked here against the same limits "
+                    "the controller applies (tendon stroke 0-54 mm, force 0-25 N).")
+    parser.add_argument("finger", help="finger name or 'all': " + ", ".join(names.FINGERS))
+    parser.add_argument("value", help="setpoint value in --unit")
+    parser.add_argument("--mode", choices=MODES, default=None,
+                        help="position or force (default: from --unit, position for m/mm, force for N)")
+    parser.add_argument("--unit", choices=tuple(UNITS), default=None,
+                        help="unit of VALUE: mm, m (position) or N (force); default m or N by mode")
+    parser.set_defaults(func=run_setpoint)
+
+    parser = subparsers.add_parser(
+        "status", help="one row per finger: mode, setpoint, position, force, duty, faults",
+        description="Listen to the graph briefly and print one row per finger (tendon side: position in "
+                    "mm, force in N; duty in %%) and the supervisor state.")
+    parser.add_argument("--listen", type=float, default=1.5, help="seconds to listen (default 1.5)")
+    parser.set_defaults(func=run_status)
+
+
+def run_trigger(command: str, args: argparse.Namespace) -> int:
+    from hems_ros.cli.graph_client import GraphClient
+
+    with GraphClient() as client:
+        ok, message = client.call(command, args.timeout)
+    print(f"{command}: {message}", file=sys.stdout if ok else sys.stderr)
+    return 0 if ok else 1
+
+
+def parse_setpoint(finger: str, value_text: str, mode: str | None, unit: str | None) -> tuple[list[str], str, float]:
+    """(fingers, mode, SI value) from the command line; ValueError with the reason."""
+    fingers = list(names.FINGERS) if finger == "all" else [names.check_finger(finger)]
+    if unit is not None:
+        unit_mode, factor = UNITS[unit]
+        if mode is not None and mode != unit_mode:
+            raise ValueError(f"--unit {unit} is a {unit_mode} unit but --mode is {mode}")
+        mode = unit_mode
+    else:
+        mode = mode or "position"
+        factor = 1.0
+    try:
+        value = float(value_text) * factor
+    except ValueError:
+        raise ValueError(f"setpoint value {value_text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ValueError(f"setpoint value {value_text!r} is not finite")
+    try:
+        validate(mode, value, SetpointLimits())
+    except SetpointError as error:
+        raise ValueError(str(error)) from None
+    return fingers, mode, value
+
+
+def run_setpoint(args: argparse.Namespace) -> int:
+    try:
+        fingers, mode, value = parse_setpoint(args.finger, args.value, args.mode, args.unit)
+    except ValueError as error:
+        print(f"setpoint rejected: {error}", file=sys.stderr)
+        return 2
+    from hems_ros.cli.graph_client import GraphClient
+
+    with GraphClient() as client:
+        missing = [f for f in fingers if not client.send_setpoint(f, mode, value)]
+        client.spin_for(0.2)  # let reliable delivery finish before the node goes away
+    for finger in fingers:
+        if finger not in missing:
+            print(f"{finger}: {mode} setpoint {value:g} {'m' if mode == 'position' else 'N'} sent")
+    for finger in missing:
+        print(f"{finger}: no finger_controller subscribed to {names.topic(finger, 'setpoint')}", file=sys.stderr)
+    return 1 if missing else 0
+
+
+def format_status(snap) -> str:
+    rows = [f"{'finger':<16} {'mode':<9} {'setpoint':>10} {'position mm':>12} {'force N':>8} {'duty %':>7}  faults"]
+    for finger in names.FINGERS:
+        c = snap.controllers.get(finger)
+        s = snap.states.get(finger)
+        f = snap.forces.get(finger)
+        if c is None:
+            rows.append(f"{finger:<16} {'-':<9} {'-':>10} {'-':>12} {'-':>8} {'-':>7}  no controller status")
+            continue
+        unit = "mm" if c.mode == "position" else "N"
+        setpoint = 1e3 * c.setpoint if c.mode == "position" else c.setpoint
+        position = 1e3 * s.tendon_position if s is not None else math.nan
+        force = f.force / 2.0 if f is not None else math.nan
+        faults = [c.fault] if c.fault else []
+        if s is not None and s.watchdog_tripped:
+            faults.append("watchdog")
+        if c.rejected_setpoints:
+            faults.append(f"{c.rejected_setpoints} rejected ({c.last_rejection})")
+        rows.append(f"{finger:<16} {c.mode:<9} {setpoint:>7.2f} {unit:<2} {position:>12.2f} {force:>8.2f} "
+                    f"{c.duty_percent:>7.1f}  {', '.join(faults) or '-'}")
+    sup = snap.supervisor
+    rows.append(f"supervisor: {sup.state_name if sup else 'not running'}"
+                + (f" ({'; '.join(sup.faults)})" if sup and sup.faults else ""))
+    return "\n".join(rows)
+
+
+def run_status(args: argparse.Namespace) -> int:
+    from hems_ros.cli.graph_client import GraphClient
+
+    with GraphClient() as client:
+        snap = client.snapshot(seconds=args.listen)
+    print(format_status(snap))
+    return 0 if snap.supervisor is not None else 1

@@ -1,0 +1,96 @@
+"""A short-lived rclpy node the command-line verbs use to talk to a running graph."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import rclpy
+from rclpy.node import Node
+from std_srvs.srv import Trigger
+
+from hems_msgs.msg import ActuatorState, ControllerStatus, FingerSetpoint, SupervisorStatus, WireForce
+from hems_ros.graph import names
+from hems_ros.nodes import qos
+
+
+@dataclass
+class Snapshot:
+    """The latest message of each kind per finger, gathered over a short listen."""
+
+    controllers: dict[str, ControllerStatus] = field(default_factory=dict)
+    states: dict[str, ActuatorState] = field(default_factory=dict)
+    forces: dict[str, WireForce] = field(default_factory=dict)
+    supervisor: SupervisorStatus | None = None
+
+
+class GraphClient:
+    def __init__(self, name: str = "hems_cli") -> None:
+        if not rclpy.ok():
+            rclpy.init(args=[])
+        self.node = Node(f"{name}_{int(time.time() * 1e3) % 100000}", namespace=names.NAMESPACE)
+        self._setpoint_pubs: dict[str, object] = {}
+
+    def close(self) -> None:
+        self.node.destroy_node()
+        rclpy.try_shutdown()
+
+    def __enter__(self) -> "GraphClient":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def spin_for(self, seconds: float) -> None:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            rclpy.spin_once(self.node, timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())))
+
+    def call(self, command: str, timeout: float = 10.0) -> tuple[bool, str]:
+        """Call a supervisor Trigger service; (success, message)."""
+        client = self.node.create_client(Trigger, names.service(command))
+        try:
+            if not client.wait_for_service(timeout_sec=timeout):
+                return False, f"no supervisor answers {names.service(command)} (is the graph up?)"
+            future = client.call_async(Trigger.Request())
+            rclpy.spin_until_future_complete(self.node, future, timeout_sec=timeout)
+            if future.result() is None:
+                return False, f"{names.service(command)} did not answer within {timeout:g} s"
+            return future.result().success, future.result().message
+        finally:
+            self.node.destroy_client(client)
+
+    def send_setpoint(self, finger: str, mode: str, value: float, timeout: float = 5.0) -> bool:
+        """Publish one setpoint once the finger's controller is subscribed; False if none is."""
+        publisher = self._setpoint_pubs.get(finger)
+        if publisher is None:
+            publisher = self.node.create_publisher(FingerSetpoint, names.topic(finger, "setpoint"), qos.COMMAND)
+            self._setpoint_pubs[finger] = publisher
+        deadline = time.monotonic() + timeout
+        while publisher.get_subscription_count() == 0:
+            if time.monotonic() > deadline:
+                return False
+            rclpy.spin_once(self.node, timeout_sec=0.02)
+        message = FingerSetpoint(mode=mode, value=float(value))
+        message.header.stamp = self.node.get_clock().now().to_msg()
+        publisher.publish(message)
+        return True
+
+    def snapshot(self, fingers=names.FINGERS, seconds: float = 0.5) -> Snapshot:
+        snap = Snapshot()
+        subs = [self.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
+                                              lambda m: setattr(snap, "supervisor", m), qos.STATUS)]
+        for finger in fingers:
+            subs.append(self.node.create_subscription(
+                ControllerStatus, names.topic(finger, "controller_status"),
+                lambda m, f=finger: snap.controllers.__setitem__(f, m), qos.COMMAND))
+            subs.append(self.node.create_subscription(
+                ActuatorState, names.sim_topic(finger, "state"), lambda m, f=finger: snap.states.__setitem__(f, m),
+                qos.SENSOR))
+            subs.append(self.node.create_subscription(
+                WireForce, names.topic(finger, "wire_force"), lambda m, f=finger: snap.forces.__setitem__(f, m),
+                qos.SENSOR))
+        self.spin_for(seconds)
+        for sub in subs:
+            self.node.destroy_subscription(sub)
+        return snap

@@ -1,0 +1,3 @@
+"""Plain-Python logic of the HEMS node graph (no rclpy): names, setpoint rules, the
+supervisor's state machine and monitors, the pulley transmission. Node shells in
+:mod:`hems_ros.nodes` wire these to topics and timers."""

@@ -1,0 +1,116 @@
+"""Real-time driving of one simulated actuation unit (plain Python, no ROS).
+
+The node calls :meth:`UnitDriver.advance` from a timer with the current clock time; the
+driver integrates the physics in fixed 1 ms steps up to that time, so the model runs at
+1 kHz of simulated time whatever the timer rate, and returns the encoder samples that fell
+due on the way (every ``sample_period_s``, stamped with their own time).
+
+Safety gates on the applied duty, checked at every physics step:
+- duty watchdog: no command for ``watchdog_timeout_s`` (three control periods) -> 0 duty,
+  flagged, until the next command;
+- heating permission from the supervisor (ENABLED only), which also lapses when the
+  supervisor's status is older than ``permission_timeout_s``;
+- an invalid command (non-finite, outside 0-100 %) is rejected and applies 0 duty.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+from hems_ros.physics import ActuationUnit, StepResult
+
+MAX_STEPS_PER_ADVANCE = 500  # a stalled process catches up over several ticks, not at once
+
+
+@dataclass(frozen=True)
+class Sample:
+    time_s: float
+    result: StepResult
+
+
+class UnitDriver:
+    def __init__(self, unit: ActuationUnit, start_time_s: float, sample_period_s: float = 0.01,
+                 watchdog_timeout_s: float = 0.03, permission_timeout_s: float = 0.5,
+                 require_permission: bool = True, latency_window: int = 20000) -> None:
+        self.unit = unit
+        self.start_time_s = start_time_s
+        self.sample_period_s = sample_period_s
+        self.watchdog_timeout_s = watchdog_timeout_s
+        self.permission_timeout_s = permission_timeout_s
+        self.require_permission = require_permission
+        self.commanded_duty = 0.0
+        self.last_command_s: float | None = None
+        self.permission_s: float | None = None
+        self.watchdog_tripped = True
+        self.applied_duty = 0.0
+        self.rejected_commands = 0
+        self.commands = 0
+        self.missed_periods = 0
+        self.latencies_s: deque[float] = deque(maxlen=latency_window)
+        self.last_result: StepResult | None = None
+        self._samples_taken = 0
+
+    @property
+    def time_s(self) -> float:
+        """Clock time the physics has been integrated to."""
+        return self.start_time_s + self.unit.time
+
+    def command(self, duty_percent: float, now_s: float, measurement_stamp_s: float | None = None) -> None:
+        """Accept a duty command; ValueError (and 0 duty) for a non-finite or out-of-range one."""
+        if not (math.isfinite(duty_percent) and 0.0 <= duty_percent <= 100.0):
+            self.rejected_commands += 1
+            self.commanded_duty = 0.0
+            raise ValueError(f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %")
+        if self.last_command_s is not None:
+            gap_periods = round((now_s - self.last_command_s) / self.sample_period_s)
+            self.missed_periods += max(0, gap_periods - 1)
+        self.commands += 1
+        self.commanded_duty = float(duty_percent)
+        self.last_command_s = now_s
+        if measurement_stamp_s is not None and measurement_stamp_s > 0:
+            self.latencies_s.append(now_s - measurement_stamp_s)
+
+    def permit_heating(self, allowed: bool, now_s: float) -> None:
+        """Supervisor's word: heating allowed (ENABLED) or not; refreshed by every status."""
+        self.permission_s = now_s if allowed else None
+        if not allowed:
+            self.applied_duty = 0.0
+
+    def heating_allowed(self, now_s: float) -> bool:
+        if not self.require_permission:
+            return True
+        return self.permission_s is not None and now_s - self.permission_s <= self.permission_timeout_s
+
+    def gate(self, now_s: float) -> float:
+        """The duty the PWM stage applies at ``now_s`` after the safety gates."""
+        self.watchdog_tripped = (self.last_command_s is None
+                                 or now_s - self.last_command_s > self.watchdog_timeout_s)
+        if self.watchdog_tripped or not self.heating_allowed(now_s):
+            return 0.0
+        return self.commanded_duty
+
+    def advance(self, now_s: float) -> list[Sample]:
+        """Integrate up to ``now_s``; return the encoder samples that fell due."""
+        samples = []
+        dt = self.unit.dt
+        for _ in range(MAX_STEPS_PER_ADVANCE):
+            step_end = self.time_s + dt
+            if step_end > now_s + 1e-9:
+                break
+            self.applied_duty = self.gate(step_end)
+            self.last_result = self.unit.step(duty=self.applied_duty)
+            due = self.start_time_s + (self._samples_taken + 1) * self.sample_period_s
+            if self.time_s >= due - 1e-9:
+                self._samples_taken += 1
+                samples.append(Sample(self.time_s, self.last_result))
+        return samples
+
+    def latency_percentiles(self) -> tuple[float, float, float]:
+        """(p50, p99, max) of measurement-to-applied latency, s (nan before any command)."""
+        if not self.latencies_s:
+            return math.nan, math.nan, math.nan
+        ordered = sorted(self.latencies_s)
+        pick = lambda q: ordered[min(len(ordered) - 1, int(q * len(ordered)))]  # noqa: E731
+        return pick(0.5), pick(0.99), ordered[-1]

@@ -1,0 +1,142 @@
+"""One HEMS actuation unit: SMA wire in its Bowden sheath, slider with pulley, tendon and
+glove load, slider encoder (hems_ros.physics, integrated at 1 kHz of simulated time).
+
+Subscribes
+  /hems/<finger>/duty            hems_msgs/DutyCommand    reliable
+  /hems/supervisor/status        hems_msgs/SupervisorStatus  transient local (heating only while ENABLED)
+Publishes
+  /hems/<finger>/encoder         hems_msgs/EncoderReading  best effort, every encoder_period_s (wire side, m)
+  /hems/sim/<finger>/wire_tension hems_msgs/WireForce      best effort, same rate (simulation link to the shoulder module)
+  /hems/sim/<finger>/state       hems_msgs/ActuatorState   best effort, every state_period_s (simulation truth)
+  /diagnostics                   diagnostic_msgs/DiagnosticArray  1 Hz (latency, missed periods, watchdog)
+
+Duty watchdog: no duty command for three control periods sets the duty to 0 and flags it.
+"""
+
+from __future__ import annotations
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.node import Node
+
+from hems_msgs.msg import ActuatorState, DutyCommand, EncoderReading, SupervisorStatus, WireForce
+from hems_ros.graph import names
+from hems_ros.graph.unit_driver import UnitDriver
+from hems_ros.nodes import qos
+from hems_ros.nodes.clock_time import from_msg, seconds, to_msg
+from hems_ros.nodes.params import Spec, declare, one_of, positive
+from hems_ros.nodes.runner import run_node
+from hems_ros.physics import ActuationUnit, load_params
+
+PARAMETERS = [
+    Spec("finger", "index", "finger this unit drives: " + ", ".join(names.FINGERS), one_of(*names.FINGERS), True),
+    Spec("physics_config", "ch6_hems_index",
+         "physics parameter set: a name in config/physics/ or a YAML path", None, True),
+    Spec("physics_dt_s", 0.001, "physics integration step, s (1 kHz default)", positive, True),
+    Spec("tick_period_s", 0.004, "wall/sim period of the integration timer, s", positive, True),
+    Spec("encoder_period_s", 0.01, "encoder and wire-tension publishing period, s (100 Hz)", positive, True),
+    Spec("state_period_s", 0.05, "simulation-truth state publishing period, s (20 Hz)", positive, True),
+    Spec("control_period_s", 0.01, "controller period Ts, s; the watchdog trips after three", positive, True),
+    Spec("require_supervisor", True, "heat only while the supervisor reports ENABLED", None, True),
+    Spec("supervisor_timeout_s", 0.5, "supervisor status older than this withdraws heating permission, s",
+         positive, True),
+]
+
+
+class ActuationUnitNode(Node):
+    """Simulated HEMS actuation unit (see the module documentation for topics)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__("actuation_unit", namespace=names.NAMESPACE, **node_kwargs)
+        p = declare(self, PARAMETERS)
+        self.finger = p["finger"]
+        try:
+            physics = load_params(p["physics_config"])
+        except (OSError, ValueError) as error:
+            raise ValueError(f"parameter 'physics_config' = {p['physics_config']!r}: {error}") from None
+        self.driver = UnitDriver(
+            ActuationUnit(physics, dt=p["physics_dt_s"]), start_time_s=seconds(self),
+            sample_period_s=p["encoder_period_s"], watchdog_timeout_s=3 * p["control_period_s"],
+            permission_timeout_s=p["supervisor_timeout_s"], require_permission=p["require_supervisor"])
+        self.resolution = physics.encoder.resolution_m
+        self.sequence = 0
+        self.state_sequence = 0
+        self.encoder_pub = self.create_publisher(EncoderReading, names.topic(self.finger, "encoder"), qos.SENSOR)
+        self.tension_pub = self.create_publisher(WireForce, names.sim_topic(self.finger, "wire_tension"), qos.SENSOR)
+        self.state_pub = self.create_publisher(ActuatorState, names.sim_topic(self.finger, "state"), qos.SENSOR)
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
+        self.create_subscription(DutyCommand, names.topic(self.finger, "duty"), self.on_duty, qos.COMMAND)
+        self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
+        self.create_timer(p["tick_period_s"], self.on_tick)
+        self.create_timer(p["state_period_s"], self.publish_state)
+        self.create_timer(1.0, self.publish_diagnostics)
+        self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
+
+    def on_duty(self, message: DutyCommand) -> None:
+        try:
+            self.driver.command(message.duty_percent, seconds(self), from_msg(message.measurement_stamp))
+        except ValueError as error:
+            self.get_logger().error(f"{self.finger}: {error}; applying 0 %")
+
+    def on_supervisor(self, message: SupervisorStatus) -> None:
+        now = seconds(self)
+        was_allowed = self.driver.heating_allowed(now)
+        self.driver.permit_heating(message.state == SupervisorStatus.ENABLED, now)
+        if was_allowed and not self.driver.heating_allowed(now):
+            self.publish_state()  # the moment heating stopped, for the record
+
+    def on_tick(self) -> None:
+        was_tripped = self.driver.watchdog_tripped
+        samples = self.driver.advance(seconds(self))
+        if self.driver.watchdog_tripped != was_tripped:
+            self.publish_state()
+        for sample in samples:
+            self.sequence += 1
+            stamp = to_msg(sample.time_s)
+            r = sample.result
+            encoder = EncoderReading(finger=self.finger, counts=r.encoder_counts, position=r.encoder_position_m,
+                                     resolution=self.resolution, sequence=self.sequence)
+            encoder.header.stamp = stamp
+            self.encoder_pub.publish(encoder)
+            tension = WireForce(finger=self.finger, force=r.wire_force_n, sequence=self.sequence)
+            tension.header.stamp = stamp
+            self.tension_pub.publish(tension)
+
+    def publish_state(self) -> None:
+        r = self.driver.last_result
+        if r is None:
+            return
+        self.state_sequence += 1
+        state = ActuatorState(
+            finger=self.finger, duty_percent=self.driver.applied_duty,
+            watchdog_tripped=self.driver.watchdog_tripped, wire_temperature_c=r.wire_temperature_c,
+            martensite_fraction=r.martensite_fraction, resistance=r.resistance_ohm, current=r.current_a,
+            electrical_power=r.electrical_power_w, stress=r.stress_pa, strain=r.strain,
+            sheath_temperature_c=r.sheath_temperature_c, slider_position=r.slider_position_m,
+            slider_velocity=r.slider_velocity_m_s, tendon_position=r.tendon_position_m,
+            tendon_force=r.tendon_force_n, wire_force=r.wire_force_n, sequence=self.state_sequence)
+        state.header.stamp = to_msg(max(self.driver.time_s, seconds(self)))
+        self.state_pub.publish(state)
+
+    def publish_diagnostics(self) -> None:
+        d = self.driver
+        p50, p99, worst = d.latency_percentiles()
+        values = {"applied_duty_percent": d.applied_duty, "watchdog_tripped": d.watchdog_tripped,
+                  "duty_commands": d.commands, "rejected_commands": d.rejected_commands,
+                  "missed_control_periods": d.missed_periods, "latency_p50_s": p50, "latency_p99_s": p99,
+                  "latency_max_s": worst, "simulated_time_s": d.unit.time}
+        status = DiagnosticStatus(
+            level=DiagnosticStatus.WARN if d.watchdog_tripped else DiagnosticStatus.OK,
+            name=f"hems/actuation_unit/{self.finger}", hardware_id=f"actuation_unit_{self.finger}",
+            message="duty watchdog tripped: duty 0" if d.watchdog_tripped else "running",
+            values=[KeyValue(key=k, value=str(v)) for k, v in values.items()])
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self.diagnostics_pub.publish(array)
+
+
+def main() -> int:
+    return run_node(ActuationUnitNode)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,169 @@
+"""One finger's controller: BPID (default), PID or PI-PD in position or force mode
+(hems_ros.control), Ts = 10 ms.
+
+Setpoints are tendon side (what moves the finger); the encoder and force readings are wire
+side (what the hardware measures); the controller converts through the pulley ratio.
+
+Subscribes
+  /hems/<finger>/setpoint    hems_msgs/FingerSetpoint   reliable   (mode position [m] | force [N], tendon side)
+  /hems/<finger>/encoder     hems_msgs/EncoderReading   best effort (position-mode feedback)
+  /hems/<finger>/wire_force  hems_msgs/WireForce        best effort (force-mode feedback)
+  /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only while ENABLED)
+Publishes
+  /hems/<finger>/duty              hems_msgs/DutyCommand      reliable, one per feedback sample
+  /hems/<finger>/controller_status hems_msgs/ControllerStatus reliable, every status_period_s (heartbeat)
+
+An invalid setpoint (non-finite, outside the tendon stroke or force range, unknown mode) is
+rejected with a logged error and counted in the status; the last valid setpoint stays.
+Outside ENABLED, or after a controller fault (non-finite input), the duty sent is 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields
+
+from rclpy.node import Node
+
+from hems_msgs.msg import ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
+from hems_ros.control import STRATEGIES, TABLE_5_1, make_controller
+from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
+from hems_ros.graph import names, transmission
+from hems_ros.graph.setpoints import MODES, Setpoint, SetpointError, SetpointLimits, validate
+from hems_ros.nodes import qos
+from hems_ros.nodes.params import Spec, declare, one_of, positive
+from hems_ros.nodes.runner import run_node
+
+PARAMETERS = [
+    Spec("finger", "index", "finger this controller drives: " + ", ".join(names.FINGERS), one_of(*names.FINGERS),
+         True),
+    Spec("strategy", "bpid", "control law: bpid | pid | pipd", one_of(*STRATEGIES), True),
+    Spec("mode", "position", "initial mode: position | force (setpoints may switch it)", one_of(*MODES), True),
+    Spec("ts", DEFAULT_TS, "control period Ts, s", positive, True),
+    Spec("n_filter", DEFAULT_N_FILTER, "derivative filter pole N, rad/s", positive, True),
+    Spec("pulley_ratio", transmission.PULLEY_RATIO, "tendon / wire displacement ratio of the slider pulley",
+         positive, True),
+    Spec("max_position_m", SetpointLimits.max_position_m, "largest accepted tendon position setpoint, m",
+         positive, True),
+    Spec("max_force_n", SetpointLimits.max_force_n, "largest accepted tendon force setpoint, N", positive, True),
+    Spec("status_period_s", 0.01, "controller status (heartbeat) period, s", positive, True),
+]
+
+
+def _non_negative(value) -> str | None:
+    return None if isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0 else "must be >= 0"
+
+
+class FingerControllerNode(Node):
+    """Per-finger BPID/PID/PI-PD controller (see the module documentation)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__("finger_controller", namespace=names.NAMESPACE, **node_kwargs)
+        p = declare(self, PARAMETERS)
+        table = TABLE_5_1[p["strategy"]]
+        gain_specs = [Spec(f"gains.{f.name}", float(getattr(table, f.name)),
+                           f"{p['strategy']} gain {f.name} (default Table 5.1; errors scaled per the gains' "
+                           "position_scale / force_scale)", _non_negative, True) for f in fields(table)]
+        gains = declare(self, gain_specs)
+        self.finger = p["finger"]
+        self.ratio = p["pulley_ratio"]
+        self.limits = SetpointLimits(p["max_position_m"], p["max_force_n"])
+        self.controller = make_controller(
+            p["strategy"], p["mode"], type(table)(**{k.split(".", 1)[1]: v for k, v in gains.items()}),
+            ts=p["ts"], n_filter=p["n_filter"])
+        self.setpoint = Setpoint(p["mode"], 0.0)
+        self.enabled = False
+        self.wire_position: float | None = None
+        self.wire_force: float | None = None
+        self.duty = 0.0
+        self.rejected = 0
+        self.last_rejection = ""
+        self.sequence = 0
+        self.status_sequence = 0
+        self.duty_pub = self.create_publisher(DutyCommand, names.topic(self.finger, "duty"), qos.COMMAND)
+        self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status"),
+                                                qos.COMMAND)
+        self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint"), self.on_setpoint, qos.COMMAND)
+        self.create_subscription(EncoderReading, names.topic(self.finger, "encoder"), self.on_encoder, qos.SENSOR)
+        self.create_subscription(WireForce, names.topic(self.finger, "wire_force"), self.on_force, qos.SENSOR)
+        self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
+        self.create_timer(p["status_period_s"], self.publish_status)
+
+    # inputs -------------------------------------------------------------------
+    def on_setpoint(self, message: FingerSetpoint) -> None:
+        try:
+            setpoint = validate(message.mode, message.value, self.limits)
+        except SetpointError as error:
+            self.rejected += 1
+            self.last_rejection = str(error)
+            self.get_logger().error(f"{self.finger}: setpoint rejected: {error}; keeping "
+                                    f"{self.setpoint.mode} {self.setpoint.value:g}")
+            self.publish_status()
+            return
+        if setpoint.mode != self.controller.mode:
+            measurement = self._wire_measurement(setpoint.mode)
+            self.controller.set_mode(setpoint.mode, 0.0 if measurement is None else measurement)
+            if measurement is None:
+                self.controller.reset()  # nothing measured yet in that mode: nothing to carry over
+        self.setpoint = setpoint
+        self.get_logger().info(f"{self.finger}: setpoint {setpoint.mode} {setpoint.value:g}")
+
+    def on_supervisor(self, message: SupervisorStatus) -> None:
+        enabled = message.state == SupervisorStatus.ENABLED
+        if enabled and not self.enabled:
+            self.controller.reset()
+        self.enabled = enabled
+
+    def on_encoder(self, message: EncoderReading) -> None:
+        self.wire_position = message.position
+        if self.setpoint.mode == "position":
+            self.control(message.header.stamp)
+
+    def on_force(self, message: WireForce) -> None:
+        self.wire_force = message.force
+        if self.setpoint.mode == "force":
+            self.control(message.header.stamp)
+
+    # control ------------------------------------------------------------------
+    def _wire_measurement(self, mode: str) -> float | None:
+        return self.wire_position if mode == "position" else self.wire_force
+
+    def _wire_reference(self) -> float:
+        if self.setpoint.mode == "position":
+            return transmission.wire_position(self.setpoint.value, self.ratio)
+        return transmission.wire_force(self.setpoint.value, self.ratio)
+
+    def control(self, stamp) -> None:
+        if self.enabled:
+            self.duty = self.controller.update(self._wire_reference(), self._wire_measurement(self.setpoint.mode))
+        else:
+            self.duty = 0.0
+        self.sequence += 1
+        command = DutyCommand(finger=self.finger, duty_percent=self.duty, measurement_stamp=stamp,
+                              sequence=self.sequence)
+        command.header.stamp = self.get_clock().now().to_msg()
+        self.duty_pub.publish(command)
+
+    def publish_status(self) -> None:
+        measurement = self._wire_measurement(self.setpoint.mode)
+        if measurement is None:
+            tendon = float("nan")
+        elif self.setpoint.mode == "position":
+            tendon = transmission.tendon_position(measurement, self.ratio)
+        else:
+            tendon = transmission.tendon_force(measurement, self.ratio)
+        self.status_sequence += 1
+        status = ControllerStatus(
+            finger=self.finger, strategy=self.controller.strategy, mode=self.setpoint.mode, active=self.enabled,
+            setpoint=self.setpoint.value, measurement=tendon, error=self.setpoint.value - tendon,
+            duty_percent=self.duty, fault=self.controller.fault or "", rejected_setpoints=self.rejected,
+            last_rejection=self.last_rejection, sequence=self.status_sequence)
+        status.header.stamp = self.get_clock().now().to_msg()
+        self.status_pub.publish(status)
+
+
+def main() -> int:
+    return run_node(FingerControllerNode)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,67 @@
+"""Declaring and validating node parameters.
+
+Every parameter is declared with a description; values are checked at start-up (a bad one
+raises ``ValueError`` naming the parameter, which stops the node with exit code 2) and on
+every later ``set_parameters`` call (rejected with the same message, node keeps running).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.node import Node
+
+
+@dataclass(frozen=True)
+class Spec:
+    name: str
+    default: Any
+    description: str
+    check: Callable[[Any], str | None] | None = None  # returns an error text or None
+    read_only: bool = False
+
+
+def positive(value: Any) -> str | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        return "must be a finite number > 0"
+    return None
+
+
+def one_of(*choices: str) -> Callable[[Any], str | None]:
+    def check(value: Any) -> str | None:
+        return None if value in choices else f"must be one of {', '.join(choices)}"
+    return check
+
+
+def declare(node: Node, specs: list[Spec]) -> dict[str, Any]:
+    """Declare, validate and return the parameters; reject invalid later changes."""
+    by_name = {spec.name: spec for spec in specs}
+    values = {}
+    for spec in specs:
+        descriptor = ParameterDescriptor(description=spec.description, read_only=spec.read_only)
+        values[spec.name] = node.declare_parameter(spec.name, spec.default, descriptor).value
+        error = _error(spec, values[spec.name])
+        if error:
+            raise ValueError(error)
+
+    def on_set(parameters) -> SetParametersResult:
+        for parameter in parameters:
+            spec = by_name.get(parameter.name)
+            error = _error(spec, parameter.value) if spec else None
+            if error:
+                return SetParametersResult(successful=False, reason=error)
+        return SetParametersResult(successful=True)
+
+    node.add_on_set_parameters_callback(on_set)
+    return values
+
+
+def _error(spec: Spec, value: Any) -> str | None:
+    if spec.check is None:
+        return None
+    problem = spec.check(value)
+    return f"parameter '{spec.name}' = {value!r}: {problem}" if problem else None

@@ -1,0 +1,73 @@
+"""One HEMS shoulder module: the fixed anchor of two actuators with their two wire-force
+sensors (range 0-50 N, resolution, seeded noise, saturation; digest section 1).
+
+Subscribes  /hems/sim/<finger>/wire_tension  hems_msgs/WireForce  best effort (physical tension, simulation link)
+Publishes   /hems/<finger>/wire_force        hems_msgs/WireForce  best effort, one reading per tension sample (100 Hz)
+
+Each reading carries ``saturated`` (clipped at 0 or the range) and ``over_force``
+(reading at or above ``over_force_n``).
+"""
+
+from __future__ import annotations
+
+from rclpy.node import Node
+
+from hems_msgs.msg import WireForce
+from hems_ros.graph import names
+from hems_ros.nodes import qos
+from hems_ros.nodes.params import Spec, declare, one_of, positive
+from hems_ros.nodes.runner import run_node
+from hems_ros.physics import sensors
+from hems_ros.physics.params import ForceSensor
+
+_SENSOR = ForceSensor()
+
+
+def non_negative(value) -> str | None:
+    return None if isinstance(value, (int, float)) and value >= 0 else "must be >= 0"
+
+
+PARAMETERS = [
+    Spec("module", "index_middle", "shoulder module: " + ", ".join(names.MODULES), one_of(*names.MODULES), True),
+    Spec("range_max_n", _SENSOR.range_max_n, "force sensor range, N (readings clip at 0 and here)", positive, True),
+    Spec("resolution_n", _SENSOR.resolution_n, "force sensor resolution, N", positive, True),
+    Spec("noise_std_n", _SENSOR.noise_std_n, "force sensor noise standard deviation, N", non_negative, True),
+    Spec("seed", _SENSOR.seed, "seed of the noise generator (each sensor adds its index)", None, True),
+    Spec("over_force_n", 50.0, "over-force flag threshold, N (wire side)", positive, True),
+]
+
+
+class ShoulderModuleNode(Node):
+    """Two wire-force sensors of one shoulder module (see the module documentation)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__("shoulder_module", namespace=names.NAMESPACE, **node_kwargs)
+        p = declare(self, PARAMETERS)
+        self.params = p
+        self.publishers_ = {}
+        self.sequences = {}
+        self.rngs = {}
+        for index, finger in enumerate(names.MODULES[p["module"]]):
+            self.publishers_[finger] = self.create_publisher(WireForce, names.topic(finger, "wire_force"), qos.SENSOR)
+            self.sequences[finger] = 0
+            self.rngs[finger] = sensors.noise_generator(p["seed"] + index)
+            self.create_subscription(WireForce, names.sim_topic(finger, "wire_tension"),
+                                     lambda message, f=finger: self.on_tension(f, message), qos.SENSOR)
+
+    def on_tension(self, finger: str, tension: WireForce) -> None:
+        p = self.params
+        noise = self.rngs[finger].standard_normal() * p["noise_std_n"]
+        force, saturated = sensors.force_reading(tension.force, noise, p["range_max_n"], p["resolution_n"])
+        self.sequences[finger] += 1
+        reading = WireForce(finger=finger, force=force, saturated=saturated,
+                            over_force=force >= p["over_force_n"], sequence=self.sequences[finger])
+        reading.header.stamp = tension.header.stamp
+        self.publishers_[finger].publish(reading)
+
+
+def main() -> int:
+    return run_node(ShoulderModuleNode)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

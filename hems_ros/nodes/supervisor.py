@@ -1,0 +1,152 @@
+"""The HEMS supervisor: state machine IDLE / ENABLED / DISABLED / FAULT / ESTOP
+(hems_ros.graph.supervisor_logic) and the safety monitors of all six fingers.
+
+Services (std_srvs/Trigger)   /hems/supervisor/{enable,disable,estop,reset}
+Subscribes  /hems/<finger>/encoder, /hems/<finger>/wire_force (best effort),
+            /hems/<finger>/controller_status (reliable, heartbeat),
+            /hems/sim/<finger>/state (best effort, duty-watchdog flag)
+Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, transient local; on change and every status_period_s
+            /hems/joint_states       sensor_msgs/JointState      tendon position (m) and tendon force (N, as effort)
+            /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz
+
+Monitors: stale encoder, force or controller heartbeat (> stale_s, default 50 ms), wire
+over-force (default 50 N), tendon over-travel, duty-watchdog flags. Heating is allowed only
+in ENABLED: the units and controllers drop every duty to 0 as soon as they see any other
+state. FAULT and ESTOP latch until reset.
+"""
+
+from __future__ import annotations
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.node import Node
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+
+from hems_msgs.msg import ActuatorState, ControllerStatus, EncoderReading, SupervisorStatus, WireForce
+from hems_ros.graph import names, transmission
+from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
+from hems_ros.nodes import qos
+from hems_ros.nodes.clock_time import seconds
+from hems_ros.nodes.params import Spec, declare, positive
+from hems_ros.nodes.runner import run_node
+
+_LIMITS = MonitorLimits()
+def _fingers(value) -> str | None:
+    unknown = [f for f in value if f not in names.FINGERS]
+    if not value or unknown:
+        return f"must be a non-empty list of fingers from {', '.join(names.FINGERS)} (unknown: {unknown})"
+    return None
+
+
+PARAMETERS = [
+    Spec("fingers", list(names.FINGERS), "fingers to supervise (all six by default)", _fingers, True),
+    Spec("stale_s", _LIMITS.stale_s, "a stream silent for longer than this is a fault, s", positive, True),
+    Spec("max_wire_force_n", _LIMITS.max_wire_force_n, "wire over-force limit, N", positive, True),
+    Spec("max_tendon_position_m", _LIMITS.max_tendon_position_m, "tendon over-travel limit, m", positive, True),
+    Spec("check_period_s", 0.01, "monitor period, s", positive, True),
+    Spec("status_period_s", 0.1, "status re-publishing period, s (also on every change)", positive, True),
+    Spec("joint_states_period_s", 0.02, "joint_states publishing period, s", positive, True),
+]
+
+
+class SupervisorNode(Node):
+    """Safety supervisor of the HEMS graph (see the module documentation)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__("supervisor", namespace=names.NAMESPACE, **node_kwargs)
+        p = declare(self, PARAMETERS)
+        self.fingers = tuple(p["fingers"])
+        self.logic = SupervisorLogic(self.fingers, MonitorLimits(
+            p["stale_s"], p["max_wire_force_n"], p["max_tendon_position_m"]))
+        self.position = {f: float("nan") for f in self.fingers}
+        self.force = {f: float("nan") for f in self.fingers}
+        self.published = None
+        self.status_pub = self.create_publisher(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
+        self.joints_pub = self.create_publisher(JointState, names.JOINT_STATES_TOPIC, qos.SENSOR)
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
+        for finger in self.fingers:
+            self.create_subscription(EncoderReading, names.topic(finger, "encoder"),
+                                     lambda m, f=finger: self.on_encoder(f, m), qos.SENSOR)
+            self.create_subscription(WireForce, names.topic(finger, "wire_force"),
+                                     lambda m, f=finger: self.on_force(f, m), qos.SENSOR)
+            self.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
+                                     lambda m, f=finger: self.logic.saw("heartbeat", f, seconds(self)), qos.COMMAND)
+            self.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
+                                     lambda m, f=finger: self.on_state(f, m), qos.SENSOR)
+        for command in names.SUPERVISOR_SERVICES:
+            self.create_service(Trigger, names.service(command),
+                                lambda request, response, c=command: self.on_command(c, response))
+        self.create_timer(p["check_period_s"], self.check)
+        self.create_timer(p["status_period_s"], self.publish_status)
+        self.create_timer(p["joint_states_period_s"], self.publish_joint_states)
+        self.create_timer(1.0, self.publish_diagnostics)
+        self.publish_status()
+
+    def on_encoder(self, finger: str, message: EncoderReading) -> None:
+        self.position[finger] = message.position
+        self.logic.encoder(finger, message.position, seconds(self))
+        self.publish_if_changed()
+
+    def on_force(self, finger: str, message: WireForce) -> None:
+        self.force[finger] = message.force
+        self.logic.wire_force(finger, message.force, seconds(self))
+        self.publish_if_changed()
+
+    def on_state(self, finger: str, message: ActuatorState) -> None:
+        self.logic.watchdog(finger, message.watchdog_tripped)
+        self.publish_if_changed()
+
+    def on_command(self, command: str, response: Trigger.Response) -> Trigger.Response:
+        response.success, response.message = self.logic.request(command, seconds(self))
+        log = self.get_logger().warning if command == "estop" or not response.success else self.get_logger().info
+        log(f"{command}: {response.message}")
+        self.publish_status()
+        return response
+
+    def check(self) -> None:
+        self.logic.check_streams(seconds(self))
+        self.publish_if_changed()
+
+    def publish_if_changed(self) -> None:
+        if self.published != (self.logic.state, len(self.logic.faults)):
+            self.publish_status()
+
+    def publish_status(self) -> None:
+        logic = self.logic
+        if self.published is None or self.published[0] != logic.state:
+            self.get_logger().info(f"state {logic.state.name}" + (
+                f": {'; '.join(map(str, logic.faults))}" if logic.faults else ""))
+        self.published = (logic.state, len(logic.faults))
+        status = SupervisorStatus(state=int(logic.state), state_name=logic.state.name,
+                                  faults=[str(f) for f in logic.faults],
+                                  fault_fingers=sorted({f.finger for f in logic.faults if f.finger}))
+        status.header.stamp = self.get_clock().now().to_msg()
+        self.status_pub.publish(status)
+
+    def publish_joint_states(self) -> None:
+        joints = JointState(name=list(self.fingers),
+                            position=[transmission.tendon_position(self.position[f]) for f in self.fingers],
+                            effort=[transmission.tendon_force(self.force[f]) for f in self.fingers])
+        joints.header.stamp = self.get_clock().now().to_msg()
+        self.joints_pub.publish(joints)
+
+    def publish_diagnostics(self) -> None:
+        state = self.logic.state
+        level = {State.FAULT: DiagnosticStatus.ERROR, State.ESTOP: DiagnosticStatus.ERROR}.get(
+            state, DiagnosticStatus.OK)
+        missing = self.logic.missing_streams(seconds(self))
+        status = DiagnosticStatus(
+            level=level, name="hems/supervisor", hardware_id="supervisor", message=state.name,
+            values=[KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
+            + [KeyValue(key="not ready", value=m) for m in missing])
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self.diagnostics_pub.publish(array)
+
+
+def main() -> int:
+    return run_node(SupervisorNode)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
