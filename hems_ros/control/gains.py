@@ -13,13 +13,19 @@ the gains act on a *scaled* error ``e = scale * (r - y)``, the scale depending o
     would leave 10 mm of steady-state error; an error in metres would never lift the wire.
     Gains are then Kp in %/um, Ki in %/(um s), Kd in % s/um, Kb in 1/um.
 
-``force_scale`` (default :data:`MN_PER_N` = 1e3, error in millinewtons)
-    Chapter 6 runs BPID in force mode with no separate gain table. An error in mN keeps the
-    Table 5.1 gains at about the loop gain they have in position mode: the HEMS load (bias
-    spring, glove and tendon) takes roughly 20 N over the 27 mm stroke, about 0.75 N/mm, so
-    1 mN of force error corresponds to about 1.3 um of position error. The same argument
-    predicts the steady-state force error: 10-15 % holding duty at Kp = 0.8 %/mN is 12-19 mN,
-    well inside the 0.1 N of the issue. Gains are then Kp in %/mN etc., Kb in 1/mN.
+``force_scale`` (default :data:`FORCE_SCALE` = 400 per N, error in units of 2.5 mN)
+    Chapter 6 runs BPID in force mode with no separate gain table. The first choice, an
+    error in mN (1e3 per N), kept the Table 5.1 gains at about their position-mode loop
+    gain (the HEMS load takes about 0.5 N per mm of wire, so 1 mN is about 2 um), but it
+    ignores the force sensor's noise (0.03 N rms): at 1e3 per N that noise alone moves the
+    duty by 24 % rms through Kp and 35 % through the filtered derivative, the duty chatters
+    between 0 and 100 % (MACSI 16-36 %/sample in the chapter 6 lockstep runs) and the
+    staircase steady-state error grows to 0.15 N. The scale was swept in the lockstep
+    simulation (``hems experiment ch6``, docs/experiments.md): at 400 per N the noise moves
+    the duty by 10 % and 14 % rms, MACSI drops by 10-15 % and the steady-state errors are
+    0.036 N (step) and 0.028 N (staircase), the order of the dissertation's 0.05 and 0.04 N;
+    lower scales lose holding gain (0.10 N at 250 per N). Gains are then Kp in %/(2.5 mN),
+    Kb in 1/(2.5 mN).
 
 The scales are fields of every gain set so a tuned force set can change them explicitly.
 Validation rejects negative, NaN and infinite gains at construction, naming the gain.
@@ -34,6 +40,7 @@ from types import MappingProxyType
 
 UM_PER_M = 1e6
 MN_PER_N = 1e3
+FORCE_SCALE = 400.0
 
 
 def _check_gain(name: str, value: object) -> None:
@@ -48,7 +55,7 @@ def _check_gain(name: str, value: object) -> None:
 @dataclass(frozen=True, kw_only=True)
 class _Gains:
     position_scale: float = UM_PER_M
-    force_scale: float = MN_PER_N
+    force_scale: float = FORCE_SCALE
 
     def __post_init__(self) -> None:
         for f in fields(self):

@@ -67,9 +67,9 @@ def test_pipd_anti_windup_accounts_for_feed_forward():
     assert c.update(10 * UM, 0) == pytest.approx(98.0)
 
 
-def test_force_mode_scale_is_millinewtons():
+def test_force_mode_scale_is_400_per_newton():
     c = make_controller("pid", "force", PIDGains(kp=1, ki=0, kd=0))
-    assert c.update(0.012, 0.002) == pytest.approx(10.0)
+    assert c.update(0.030, 0.005) == pytest.approx(10.0)
     custom = make_controller("pid", "force", PIDGains(kp=1, ki=0, kd=0, force_scale=1.0))
     assert custom.update(12.0, 2.0) == pytest.approx(10.0)
 

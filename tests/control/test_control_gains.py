@@ -6,7 +6,7 @@ import pytest
 
 from hems_ros.control import (
     DEFAULT_N_FILTER,
-    MN_PER_N,
+    FORCE_SCALE,
     TABLE_5_1,
     UM_PER_M,
     BPIDGains,
@@ -24,11 +24,11 @@ def test_table_5_1_by_name():
         TABLE_5_1["pid"] = PIDGains(kp=1, ki=0, kd=0)
 
 
-def test_scales_default_to_micrometres_and_millinewtons():
+def test_scales_default_to_micrometres_and_force_scale():
     g = TABLE_5_1["bpid"]
-    assert (g.position_scale, g.force_scale) == (UM_PER_M, MN_PER_N) == (1e6, 1e3)
+    assert (g.position_scale, g.force_scale) == (UM_PER_M, FORCE_SCALE) == (1e6, 400.0)
     assert g.scale_for("position") == 1e6
-    assert g.scale_for("force") == 1e3
+    assert g.scale_for("force") == 400.0
 
 
 @pytest.mark.parametrize(
