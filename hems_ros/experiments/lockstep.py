@@ -162,6 +162,13 @@ def settled_mask(t, r, y, rest: float, settle: float = 1.0, arrive: float = 0.9)
     return mask
 
 
+def rmse_mask(t, r, y, segment: str, rest: float | None = None):
+    """Samples the RMSE covers: ``segment`` "all", "ascending" or "stationary" (:func:`settled_mask`)."""
+    if segment == "stationary":
+        return settled_mask(t, r, y, r[0] if rest is None else rest)
+    return metrics.segment_mask(segment, t, r)
+
+
 def figures(t, r, y, u, mode: str, segment: str = "all", rest: float | None = None,
             y_true=None) -> dict[str, float]:
     """Figures of merit of one run in the dissertation's units (mm or N, %, W, s).
@@ -176,10 +183,7 @@ def figures(t, r, y, u, mode: str, segment: str = "all", rest: float | None = No
     """
     unit = 1e3 if mode == "position" else 1.0
     r_u, y_u = np.asarray(r) * unit, np.asarray(y) * unit
-    if segment == "stationary":
-        mask = settled_mask(t, r, y, r[0] if rest is None else rest)
-    else:
-        mask = metrics.segment_mask(segment, t, r)
+    mask = rmse_mask(t, r, y, segment, rest)
     out = {
         "rmse": metrics.rmse(r_u, y_u, mask),
         "iae": metrics.iae_sum(r_u, y_u),
