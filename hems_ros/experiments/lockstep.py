@@ -42,9 +42,14 @@ DEFAULT_DT = 1e-3
 _DUTY = DRIVE_NAMES["duty"]
 
 
-@njit(cache=True)
+@njit
 def _hold(p, s, duty, n_steps, dt, out):
-    """``n_steps`` plant steps at constant ``duty``; False if the state turned non-finite."""
+    """``n_steps`` plant steps at constant ``duty``; False if the state turned non-finite.
+
+    Not cached on disk: numba's cache would keep the kernel.step inlined at the first
+    compile and miss later edits of the physics modules (kernel.py guards its own cache
+    only), so the lockstep would silently drift from the stepping API.
+    """
     for _ in range(n_steps):
         if not kernel.step(p, s, _DUTY, duty, dt, out):
             return False

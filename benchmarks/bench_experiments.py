@@ -1,0 +1,45 @@
+"""Speed of the full `hems experiment ch5` (issue 4 floor: under 20 s, real-time factor printed).
+
+Times the 15 lockstep runs (3 controllers x (three 20 s sines + two 70 s step tests) = 600 s,
+10 simulated minutes) and the whole command (runs, findings, tables, PNGs), in process.
+
+Run: python benchmarks/bench_experiments.py
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from hems_ros.cli import experiment  # noqa: E402
+from hems_ros.experiments import chapters  # noqa: E402
+
+FLOOR_S = 20.0
+
+
+def main() -> int:
+    chapters.run_ch5()  # compile the numba hold loop outside the timing
+    start = time.perf_counter()
+    runs = chapters.run_ch5()
+    sim_wall = time.perf_counter() - start
+    simulated = sum(run.time.size * 0.01 for run in runs.values())
+    with tempfile.TemporaryDirectory() as tmp:
+        args = argparse.Namespace(chapter="ch5", output=Path(tmp), docs=None)
+        start = time.perf_counter()
+        experiment.run(args)
+        total = time.perf_counter() - start
+    print()
+    print(f"simulated time, 15 runs        : {simulated:.0f} s ({simulated / 60:.1f} min)")
+    print(f"lockstep runs only             : {sim_wall:.2f} s wall, real-time factor {simulated / sim_wall:.0f}x")
+    print(f"full `hems experiment ch5`     : {total:.2f} s wall, real-time factor {simulated / total:.0f}x "
+          f"(floor {FLOOR_S:.0f} s: {'met' if total < FLOOR_S else 'MISSED'})")
+    return 0 if total < FLOOR_S else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

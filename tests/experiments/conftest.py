@@ -1,0 +1,28 @@
+"""Session-wide lockstep runs: chapter 5 (15 runs) and chapter 6 (8 runs) once per session."""
+
+from __future__ import annotations
+
+import pytest
+
+from hems_ros.experiments import chapters, findings
+from hems_ros.physics import load_params
+
+
+@pytest.fixture(scope="session")
+def ch5_runs():
+    return chapters.run_ch5()
+
+
+@pytest.fixture(scope="session")
+def ch6_runs():
+    return chapters.run_ch6()
+
+
+@pytest.fixture(scope="session")
+def ch5_found(ch5_runs):
+    return {f.key: f for f in findings.ch5_findings(ch5_runs, load_params(chapters.CH5_PARAMS))}
+
+
+@pytest.fixture(scope="session")
+def ch6_found(ch6_runs):
+    return {f.key: f for f in findings.ch6_findings(ch6_runs)}

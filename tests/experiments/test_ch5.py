@@ -1,0 +1,72 @@
+"""Chapter 5 must-show points of issue 4 on the lockstep runs (docs/experiments.md).
+
+Findings the simulation does not reproduce assert the documented outcome and its evidence.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from hems_ros.experiments.dissertation import CH5_PROTOCOLS
+from hems_ros.experiments.findings import authority_split, bilinear_activity, ratios
+
+STEPS = ("ch5_step", "ch5_staircase")
+
+
+def test_all_runs_complete(ch5_runs):
+    assert len(ch5_runs) == 15
+    assert all(run.fault is None for run in ch5_runs.values())
+
+
+@pytest.mark.parametrize("protocol", STEPS)
+def test_bpid_steady_state_error_at_most_005_mm(ch5_runs, protocol):
+    assert ch5_runs[protocol, "bpid"].metrics["ss_error"] <= 0.05
+
+
+@pytest.mark.parametrize("protocol", STEPS)
+def test_bpid_overshoot_documented_as_plant_coast(ch5_runs, ch5_found, protocol):
+    # Not reproduced: the model's wire coasts past the target after the heater is cut.
+    assert not ch5_found["bpid_overshoot"].reproduced
+    assert ch5_runs[protocol, "bpid"].metrics["overshoot"] > 0.05
+    assert "keeps moving" in ch5_found["bpid_overshoot"].evidence
+
+
+@pytest.mark.parametrize("protocol", CH5_PROTOCOLS)
+def test_pipd_has_the_lowest_macsi(ch5_runs, protocol):
+    m = {s: ch5_runs[protocol, s].metrics["macsi"] for s in ("pid", "pipd", "bpid")}
+    assert min(m, key=m.get) == "pipd"
+
+
+@pytest.mark.parametrize("protocol", STEPS)
+def test_bpid_runs_the_pid_loop(ch5_runs, ch5_found, protocol):
+    # Not reproduced: BPID clearly highest MACSI / lowest RMSE. With Table 5.1 gains in um
+    # the eq 5.36 factor almost never acts, so BPID and PID agree within a few per cent.
+    assert not ch5_found["bpid_lowest_rmse"].reproduced
+    assert not ch5_found["bpid_highest_macsi"].reproduced
+    assert bilinear_activity(ch5_runs[protocol, "bpid"]) < 0.01
+    for metric in ("rmse", "macsi"):
+        b, p = ch5_runs[protocol, "bpid"].metrics[metric], ch5_runs[protocol, "pid"].metrics[metric]
+        assert abs(b - p) <= 0.05 * p
+
+
+@pytest.mark.parametrize("metric", ["rmse", "iae", "apc_w"])
+def test_within_factor_2_on_step_and_staircase(ch5_runs, metric):
+    for (p, s), r in ratios(ch5_runs, metric, STEPS).items():
+        assert 0.5 <= r <= 2.0, (p, s, r)
+
+
+def test_apc_within_factor_2_on_sine_0125(ch5_runs):
+    for r in ratios(ch5_runs, "apc_w", ("ch5_sine_0.125",)).values():
+        assert 0.5 <= r <= 2.0
+
+
+@pytest.mark.parametrize("metric", ["rmse", "iae"])
+def test_sine_0125_error_is_cooling_limited(ch5_runs, ch5_found, metric):
+    # Not reproduced: ratio above 2. Documented: the error is made at 0 % duty above the
+    # reference; where the actuator is not saturated the RMSE is below the dissertation's.
+    assert not ch5_found[f"factor2_{metric}"].reproduced
+    for s in ("pid", "pipd", "bpid"):
+        assert ratios(ch5_runs, metric, ("ch5_sine_0.125",))["ch5_sine_0.125", s] > 2.0
+        split = authority_split(ch5_runs["ch5_sine_0.125", s])
+        assert split["cooling_share"] > 0.9
+        assert split["rmse_unsaturated"] < 1.71

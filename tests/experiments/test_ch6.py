@@ -1,0 +1,42 @@
+"""Chapter 6 must-show points of issue 4 on the lockstep runs (docs/experiments.md)."""
+
+from __future__ import annotations
+
+import pytest
+
+from hems_ros.experiments.dissertation import CH6_TABLES
+from hems_ros.experiments.findings import authority_split
+
+FORCE_STEPS = ("ch6_force_step", "ch6_force_staircase")
+
+
+def test_all_runs_complete(ch6_runs):
+    assert len(ch6_runs) == 8
+    assert all(run.fault is None for run in ch6_runs.values())
+
+
+@pytest.mark.parametrize("protocol", FORCE_STEPS)
+def test_force_steady_state_error_at_most_01_n_with_noise(ch6_runs, protocol):
+    run = ch6_runs[protocol]
+    assert run.metrics["ss_error"] <= 0.1
+    assert (run.measurement != run.wire_force_n).any()  # the controller saw the noisy sensor
+
+
+@pytest.mark.parametrize("protocol", FORCE_STEPS)
+def test_force_overshoot_documented(ch6_runs, ch6_found, protocol):
+    # Not reproduced: about 2 N of overshoot on the force steps (docs/experiments.md).
+    assert not ch6_found["force_no_overshoot"].reproduced
+    assert 0.1 < ch6_runs[protocol].metrics["overshoot"] < 3.0
+
+
+def test_position_staircase_within_3x_table_6_1(ch6_runs):
+    table = CH6_TABLES["position"][2]
+    assert ch6_runs["ch6_position_staircase"].metrics["rmse"] <= 3 * table["ch6_position_staircase"]["rmse"]
+
+
+@pytest.mark.parametrize("protocol", ["ch6_position_sine_0.125", "ch6_position_ramp", "ch6_position_step"])
+def test_position_rmse_misses_documented_as_saturated_actuator(ch6_runs, ch6_found, protocol):
+    # Not reproduced (3x Table 6.1): the error is made at 0 % or 100 % duty.
+    assert not ch6_found["position_rmse_3x"].reproduced
+    split = authority_split(ch6_runs[protocol])
+    assert split["cooling_share"] + split["heating_share"] > 0.9
