@@ -19,7 +19,7 @@ from hems_ros.bag.msgdefs import PRIMITIVES, DefinitionError, Field
 
 HEADER_SIZE = 4
 LITTLE_ENDIAN_KINDS = (0x01, 0x03)  # CDR_LE, PL_CDR_LE
-_SCALAR = {  # name: (struct code, size, numpy dtype)
+SCALARS = {  # name: (struct code, size, numpy dtype)
     "bool": ("?", 1, np.bool_), "byte": ("B", 1, np.uint8), "char": ("B", 1, np.uint8),
     "int8": ("b", 1, np.int8), "uint8": ("B", 1, np.uint8),
     "int16": ("h", 2, np.int16), "uint16": ("H", 2, np.uint16),
@@ -47,6 +47,7 @@ class Decoder:
     type_name: str
     columns: tuple[Column, ...]
     decode: Callable[[bytes], tuple]
+    types: dict[str, list[Field]]
 
 
 class _Emitter:
@@ -103,7 +104,7 @@ class _Emitter:
         self.modulus, self.phase = 1, 0
 
     def scalar(self, primitive: str) -> str:
-        code, size, _ = _SCALAR[primitive]
+        code, size, _ = SCALARS[primitive]
         self.align(size)
         target = self.var()
         self.pending_fmt += code
@@ -125,7 +126,7 @@ class _Emitter:
         return target
 
     def primitive_array(self, primitive: str, count: str | int) -> str:
-        _, size, dtype = _SCALAR[primitive]
+        _, size, dtype = SCALARS[primitive]
         if isinstance(count, int):
             self.align(size)
             self.flush()
@@ -154,7 +155,7 @@ class _Emitter:
             if field.type == "string":
                 self.column(Column(name, object, "string"), self.string())
             elif field.type in PRIMITIVES:
-                self.column(Column(name, np.dtype(_SCALAR[field.type][2]), "scalar"), self.scalar(field.type))
+                self.column(Column(name, np.dtype(SCALARS[field.type][2]), "scalar"), self.scalar(field.type))
             else:
                 for sub in self.types[field.type]:
                     self.field(sub, f"{name}.")
@@ -226,4 +227,4 @@ def build_decoder(type_name: str, types: dict[str, list[Field]]) -> Decoder:
         except (struct.error, ValueError, UnicodeDecodeError) as error:
             raise CdrError(f"{type_name}: {error}") from None
 
-    return Decoder(type_name, tuple(emitter.columns), decode)
+    return Decoder(type_name, tuple(emitter.columns), decode, types)

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections import defaultdict
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from hems_ros.bag import cdr, msgdefs
+from hems_ros.bag import cdr, columns, msgdefs
 from hems_ros.bag.mcapscan import BagFormatError, Channel, McapScan, ScanReport, Schema
 from hems_ros.bag.selection import TopicSelection
 
@@ -188,23 +187,6 @@ class _Decoders:
         return None
 
 
-def _columns(decoder: cdr.Decoder, rows: list[tuple]) -> dict[str, np.ndarray]:
-    transposed = list(zip(*rows)) if rows else [()] * len(decoder.columns)
-    out: dict[str, np.ndarray] = {}
-    for column, values in zip(decoder.columns, transposed):
-        if column.kind == "scalar":
-            out[column.name] = np.array(values, dtype=column.dtype)
-        elif column.kind == "string":
-            out[column.name] = np.array(values, dtype=str) if values else np.array([], dtype=str)
-        elif column.kind == "array" and values and len({len(v) for v in values}) == 1:
-            out[column.name] = np.stack(values)
-        else:
-            array = np.empty(len(values), dtype=object)
-            array[:] = list(values) if values else []
-            out[column.name] = array
-    return out
-
-
 def load_bag(path: str | os.PathLike, topics: Iterable[str] | None = None, regex: str | None = None) -> Bag:
     """Decode a bag (folder or ``.mcap`` file) into per-topic numpy columns.
 
@@ -214,39 +196,35 @@ def load_bag(path: str | os.PathLike, topics: Iterable[str] | None = None, regex
     selection = TopicSelection.of(topics, regex)
     warnings_out: list[str] = []
     decoders = _Decoders(warnings_out)
-    rows: dict[str, list[tuple]] = defaultdict(list)
-    times: dict[str, list[tuple[int, int]]] = defaultdict(list)
-    kinds: dict[str, cdr.Decoder] = {}
-    failures: dict[str, list[str]] = defaultdict(list)
+    collected: dict[str, tuple[cdr.Decoder, list[bytes], list[int], list[int]]] = {}
     reports = []
     for file in bag_files(path):
         scan = McapScan(file, lambda channel: selection.matches(channel.topic))
-        by_channel: dict[int, tuple[str, cdr.Decoder | None]] = {}
+        sinks: dict[int, tuple[list[bytes], list[int], list[int]] | None] = {}
         for channel_id, log_time, publish_time, data in scan.messages():
-            entry = by_channel.get(channel_id)
-            if entry is None:
+            sink = sinks.get(channel_id, False)
+            if sink is False:
                 channel = scan.channels[channel_id]
-                entry = by_channel[channel_id] = (channel.topic, decoders.for_channel(channel, scan.schemas))
-            topic, decoder = entry
-            if decoder is None:
-                continue
-            try:
-                rows[topic].append(decoder.decode(data))
-            except cdr.CdrError as error:
-                failures[topic].append(str(error))
-                continue
-            times[topic].append((log_time, publish_time))
-            kinds[topic] = decoder
+                decoder = decoders.for_channel(channel, scan.schemas)
+                sink = None
+                if decoder is not None:
+                    entry = collected.setdefault(channel.topic, (decoder, [], [], []))
+                    sink = entry[1:]
+                sinks[channel_id] = sink
+            if sink is not None:
+                sink[0].append(data)
+                sink[1].append(log_time)
+                sink[2].append(publish_time)
         reports.append(scan.report)
-    for topic, errors in failures.items():
-        _warn(warnings_out, f"{topic}: {len(errors)} messages could not be decoded (first: {errors[0]})")
-    start = min((t[0][0] for t in times.values() if t), default=0)
-    end = max((max(x[0] for x in t) for t in times.values() if t), default=0)
-    data = {}
-    for topic, decoder in kinds.items():
-        stamps = np.array(times[topic], dtype=np.int64).reshape(-1, 2)
-        data[topic] = TopicData(topic, decoder.type_name, stamps[:, 0].copy(), stamps[:, 1].copy(),
-                                _columns(decoder, rows[topic]), start)
+    start = min((e[2][0] for e in collected.values() if e[2]), default=0)
+    end = max((max(e[2]) for e in collected.values() if e[2]), default=0)
+    data: dict[str, TopicData] = {}
+    for topic, (decoder, datas, log_times, publish_times) in collected.items():
+        fields, index, errors = columns.decode_columns(decoder, datas)
+        if errors:
+            _warn(warnings_out, f"{topic}: {len(errors)} messages could not be decoded (first: {errors[0]})")
+        data[topic] = TopicData(topic, decoder.type_name, np.array(log_times, dtype=np.int64)[index],
+                                np.array(publish_times, dtype=np.int64)[index], fields, start)
     return Bag(Path(path), data, reports, warnings_out, start, end)
 
 

@@ -35,5 +35,5 @@ class TopicSelection:
         return self.pattern is not None and self.pattern.fullmatch(topic) is not None
 
     def describe(self) -> str:
-        parts = sorted(self.names) + ([f"/{self.pattern.pattern}/"] if self.pattern else [])
+        parts = sorted(self.names) + ([f"regex {self.pattern.pattern!r}"] if self.pattern else [])
         return ", ".join(parts) if parts else "all topics"

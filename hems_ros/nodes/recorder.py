@@ -1,0 +1,169 @@
+"""Records topics to an MCAP bag in the rosbag2 layout (``hems_ros.bag.BagWriter``).
+
+Topics are found by querying the ROS graph every ``discovery_period`` seconds and taken if
+named in ``topics`` or fully matching ``regex`` (default: every ``/hems`` topic,
+``/diagnostics`` and ``/clock``). Each is subscribed raw: the serialized CDR bytes are
+written as received, never decoded. The subscription QoS follows the publishers: reliable
+only if every publisher is reliable (so best-effort sensor streams are matched), transient
+local if every publisher is (so latched status is received on joining).
+
+Parameters: ``output`` (bag folder, must not exist or be empty; default
+``hems_<date>_<time>``), ``topics`` (string array), ``regex`` (string), ``discovery_period``
+(s, 0.2), ``flush_period`` (s, 0.5: the open chunk is closed and handed to the OS this often,
+so a SIGKILL loses at most that much), ``chunk_size`` (bytes, 262144), ``compression``
+(zstd | lz4 | none), ``queue_depth`` (1000), ``duration`` (s, 0 = until stopped).
+
+Each subscribed topic is logged as ``recording <topic> [<type>] ...``; on SIGINT or SIGTERM
+(or after ``duration``) the bag is finished (summary, footer, ``metadata.yaml``) and its path
+and message counts are logged.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import time
+from datetime import datetime
+
+from rcl_interfaces.msg import ParameterDescriptor, ParameterType
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from hems_ros.bag import BagWriter, TopicSelection, offered_qos
+from hems_ros.bag.selection import DEFAULT_RECORD_REGEX
+
+READY_PREFIX = "recording "
+FINISHED_PREFIX = "bag finished: "
+
+
+def message_class(type_name: str) -> type:
+    """The generated Python class of ``pkg/msg/Type``."""
+    package, _, name = type_name.split("/")
+    return getattr(importlib.import_module(f"{package}.msg"), name)
+
+
+def subscription_qos(publishers: list, depth: int) -> tuple[QoSProfile, list[dict]]:
+    """A QoS that matches every publisher, and their offered profiles for the bag."""
+    reliable = bool(publishers) and all(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE for p in publishers)
+    latched = bool(publishers) and all(
+        p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in publishers)
+    qos = QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+    offered = [offered_qos(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE,
+                           p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL,
+                           p.qos_profile.depth) for p in publishers]
+    return qos, offered
+
+
+class Recorder(Node):
+    def __init__(self) -> None:
+        super().__init__("recorder", namespace="/hems", enable_rosout=False)
+        strings = ParameterDescriptor(type=ParameterType.PARAMETER_STRING_ARRAY)
+        output = self.declare_parameter("output", "").value or datetime.now().strftime("hems_%Y%m%d_%H%M%S")
+        topics = self.declare_parameter("topics", [], strings).value
+        regex = self.declare_parameter("regex", "").value
+        self._selection = TopicSelection.of(topics, regex or (None if topics else DEFAULT_RECORD_REGEX))
+        discovery = self._positive("discovery_period", 0.2)
+        flush = self._positive("flush_period", 0.5)
+        chunk_size = int(self.declare_parameter("chunk_size", 262144).value)
+        compression = self.declare_parameter("compression", "zstd").value
+        self._depth = int(self.declare_parameter("queue_depth", 1000).value)
+        duration = float(self.declare_parameter("duration", 0.0).value)
+        if chunk_size <= 0 or self._depth <= 0 or duration < 0:
+            raise ValueError("chunk_size and queue_depth must be positive, duration >= 0")
+        self._writer = BagWriter(output, compression=compression, chunk_size=chunk_size)
+        self._recorded: dict[str, object] = {}
+        self._skipped: set[str] = set()
+        self._deadline = time.monotonic() + duration if duration > 0 else None
+        self.get_logger().info(f"bag {self._writer.folder}: recording {self._selection.describe()}")
+        self._discover()
+        self.create_timer(discovery, self._discover)
+        self.create_timer(flush, self._writer.flush)
+
+    def _positive(self, name: str, default: float) -> float:
+        value = float(self.declare_parameter(name, default).value)
+        if value <= 0:
+            raise ValueError(f"{name} must be positive, not {value}")
+        return value
+
+    @property
+    def expired(self) -> bool:
+        return self._deadline is not None and time.monotonic() >= self._deadline
+
+    def _discover(self) -> None:
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self._recorded or topic in self._skipped or not self._selection.matches(topic):
+                continue
+            publishers = self.get_publishers_info_by_topic(topic)
+            if not publishers:
+                continue
+            self._subscribe(topic, types[0], publishers)
+
+    def _subscribe(self, topic: str, type_name: str, publishers: list) -> None:
+        try:
+            cls = message_class(type_name)
+            qos, offered = subscription_qos(publishers, self._depth)
+            channel = self._writer.add_topic(topic, type_name, offered)
+        except (ImportError, AttributeError, ValueError, OSError) as error:
+            self._skipped.add(topic)
+            self.get_logger().warning(f"not recording {topic} [{type_name}]: {error}")
+            return
+        write = self._writer.write
+
+        def on_message(data: bytes, info=None) -> None:
+            write(channel, time.time_ns(), data, info.get("source_timestamp") if info else None)
+
+        self._recorded[topic] = self.create_subscription(cls, topic, on_message, qos, raw=True)
+        self.get_logger().info(f"{READY_PREFIX}{topic} [{type_name}] "
+                               f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}")
+
+    def finish(self) -> None:
+        summary = self._writer.finish()
+        counts = ", ".join(f"{t} {n}" for t, n in sorted(summary.counts.items()))
+        self.get_logger().info(f"{FINISHED_PREFIX}{summary.folder} ({summary.message_count} messages"
+                               f"{': ' + counts if counts else ''})")
+
+    def destroy_node(self) -> None:
+        self.finish()
+        super().destroy_node()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Like ``runner.run_node``, with the events executor (recording is callback-bound)."""
+    from hems_ros.nodes.runner import node_help
+    from hems_ros.rosenv import apply_network_defaults
+
+    args = sys.argv if argv is None else argv
+    user_args = args[1:args.index("--ros-args")] if "--ros-args" in args else args[1:]
+    if "-h" in user_args or "--help" in user_args:
+        print(node_help(Recorder, args[0]))
+        return 0
+    apply_network_defaults()
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.experimental import EventsExecutor
+
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = Recorder()
+        executor = EventsExecutor()
+        executor.add_node(node)
+        while rclpy.ok() and not node.expired:
+            executor.spin_once(timeout_sec=0.1)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (ValueError, FileExistsError) as error:
+        print(f"recorder: invalid configuration: {error}", file=sys.stderr)
+        return 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
