@@ -1,0 +1,52 @@
+"""``hems tune``: BPID gains tuned on the model for one chapter 5 protocol."""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+PROTOCOL_CHOICES = ("ch5_sine_0.125", "ch5_sine_0.25", "ch5_sine_0.5", "ch5_step", "ch5_staircase")
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "tune",
+        help="tune BPID gains on the model (scipy Nelder-Mead) and compare with Table 5.1",
+        description="Tune the BPID gains Kp (%%/um), Kd (%% s/um), Kb (1/um) and optionally Ki "
+                    "(%%/(um s)) on the chapter 5 rig (40 N mass, plant 1 kHz, control 100 Hz) for "
+                    "one protocol, minimising RMSE (mm) + weight x MACSI (%% per sample); then report "
+                    "RMSE, MACSI and APC (W) of Table 5.1 and tuned gains on all five references.",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    parser.add_argument("--protocol", choices=PROTOCOL_CHOICES, default="ch5_step",
+                        help="protocol the cost is measured on")
+    parser.add_argument("--macsi-weight", type=float, default=0.1,
+                        help="weight of MACSI (%% per sample) against RMSE (mm) in the cost")
+    parser.add_argument("--with-ki", action="store_true", help="also tune Ki (Table 5.1 has Ki = 0)")
+    parser.add_argument("--max-evaluations", type=int, default=120,
+                        help="closed-loop simulations the optimiser may spend")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from hems_ros.experiments.tuning import compare, tune_bpid
+
+    start = time.perf_counter()
+    print(f"tuning BPID on {args.protocol} (cost = RMSE mm + {args.macsi_weight} x MACSI) ...", flush=True)
+
+    def progress(n, g, cost):
+        if n % 10 == 0:
+            print(f"  evaluation {n}: Kp {g.kp:.3g} Ki {g.ki:.3g} Kd {g.kd:.3g} Kb {g.kb:.3g} cost {cost:.3f}",
+                  flush=True)
+
+    tuned, before, after = tune_bpid(args.protocol, args.macsi_weight, args.with_ki,
+                                     args.max_evaluations, progress)
+    print(f"tuned: Kp {tuned.kp:.4g} %/um, Ki {tuned.ki:.4g} %/(um s), Kd {tuned.kd:.4g} % s/um, "
+          f"Kb {tuned.kb:.4g} 1/um; cost {before:.3f} -> {after:.3f}")
+    print("\n| reference | RMSE mm Table 5.1 / tuned | MACSI % Table 5.1 / tuned | APC W Table 5.1 / tuned |")
+    print("|---|---|---|---|")
+    for p, a, b in compare(tuned):
+        print(f"| {p} | {a['rmse']:.3f} / {b['rmse']:.3f} | {a['macsi']:.2f} / {b['macsi']:.2f} | "
+              f"{a['apc_w']:.1f} / {b['apc_w']:.1f} |")
+    print(f"done in {time.perf_counter() - start:.1f} s")
+    return 0
