@@ -45,14 +45,17 @@ def timed(fn, repeat: int = 3) -> float:
 
 
 def lsoda_rhs(p):
-    """Continuous-time form of kernel.step for a hanging-mass rig without friction."""
+    """Continuous-time form of kernel.step for a hanging-mass rig without friction.
+
+    The printed Duhem law in effective temperature (no reversal-point memory: the profile's
+    cycles run the full loop), with dxi/dt = slope du/dt and du/dt = dT/dt - dsigma/dt / C
+    solved together as in the kernel.
+    """
     c_w, lat, s_area = p[K.P_CW], p[K.P_LAT], p[K.P_S]
     mass, n = p[K.P_MASS], p[K.P_N]
 
     def rhs(_t, y, cur):
         temp, xi, sig, x, v, ts = y
-        ms, mf, a_s, a_f = kinetics.transformation_temperatures(sig, p[K.P_MS0], p[K.P_MF0], p[K.P_AS0], p[K.P_AF0],
-                                                                p[K.P_CM], p[K.P_CA])
         rho = electrical.mixture_resistivity(
             xi, electrical.phase_resistivity(p[K.P_RHO0M], p[K.P_T0M], p[K.P_DRDTM], p[K.P_DRDSM], temp, sig),
             electrical.phase_resistivity(p[K.P_RHO0A], p[K.P_T0A], p[K.P_DRDTA], p[K.P_DRDSA], temp, sig))
@@ -62,12 +65,20 @@ def lsoda_rhs(p):
             net, dts = power - q_sh, (q_sh - q_sa) / p[K.P_CS]
         else:
             net, dts = power - heat.convection_loss(temp, p[K.P_TAMB], p[K.P_H0], p[K.P_H2], p[K.P_AREA]), 0.0
-        slope = kinetics.transformation_slope(temp, xi, net > 0, ms, mf, a_s, a_f)
-        dtemp = net / (c_w - lat * slope)
-        dxi = slope * dtemp
         e = constitutive.reuss_modulus(xi, p[K.P_EM], p[K.P_EA])
-        dsig = (-e * v / p[K.P_L0] + constitutive.transformation_coefficient(e, p[K.P_EPSL]) * dxi
-                + constitutive.thermoelastic_coefficient(xi, e, p[K.P_ALM], p[K.P_ALA], p[K.P_NU]) * dtemp)
+        omega = constitutive.transformation_coefficient(e, p[K.P_EPSL])
+        theta = constitutive.thermoelastic_coefficient(xi, e, p[K.P_ALM], p[K.P_ALA], p[K.P_NU])
+        dtemp0 = net / c_w
+        dsig0 = -e * v / p[K.P_L0] + theta * dtemp0
+        u_m, u_a = kinetics.effective_temperatures(temp, sig, p[K.P_CM], p[K.P_CA])
+        heating = dtemp0 - dsig0 / p[K.P_CA] > 0
+        c = p[K.P_CA] if heating else p[K.P_CM]
+        slope = kinetics.transformation_slope(u_a, u_m, xi, heating, p[K.P_MS0], p[K.P_MF0], p[K.P_AS0],
+                                              p[K.P_AF0])
+        du_dxi = lat / c_w - (omega + theta * lat / c_w) / c
+        dxi = slope * (dtemp0 - dsig0 / c) / (1.0 - slope * du_dxi)
+        dtemp = dtemp0 + lat / c_w * dxi
+        dsig = dsig0 + omega * dxi + theta * lat / c_w * dxi
         force = s_area * sig / n
         acc = (force - mass * p[K.P_G] - p[K.P_DAMP] * n * v - p[K.P_F0] - p[K.P_K] * n * x) / (mass * n)
         return [dtemp, dxi, dsig, v, acc, dts]

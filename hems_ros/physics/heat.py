@@ -1,9 +1,9 @@
 """Heat block (digest section 3, eqs. 4.7-4.12, appendix 4.4).
 
-Lumped wire heat balance rho V c_p dT/dt = P - Q_out + rho V dH dxi/dt. Because dxi/dt is
-itself proportional to dT/dt on the active branch (kinetics.transformation_slope), the
-balance is solved for dT/dt first with an apparent heat capacity C + L |dxi/dT|; the
-latent heat therefore appears as the plateau of the cooling curve.
+Lumped wire heat balance rho V c_p dT/dt = P - Q_out + rho V dH dxi/dt. The kernel solves
+it over each step together with the kinetics, C dT = (P - Q) dt + L dxi (kernel.step):
+while the wire transforms, the latent heat holds the temperature back, which appears as
+the plateau of the cooling curve.
 
 The Churchill-Chu correlation derives h for a horizontal cylinder from geometry; with the
 appendix conditions it gives the h(22 degC) = 42.51 W/m2K of h(T) = h0 + h2 T^2.
@@ -29,15 +29,6 @@ def convection_coefficient(temperature_c, h0, h2):
 def convection_loss(temperature_c, ambient_c, h0, h2, area_m2):
     """Q = h(T) A (T - T_amb) (eq. 4.10)."""
     return convection_coefficient(temperature_c, h0, h2) * area_m2 * (temperature_c - ambient_c)
-
-
-@njit(cache=True)
-def temperature_increment(net_heat_w, heat_capacity_j_per_c, latent_j, dxi_dt_slope, dt):
-    """dT over dt from eq. 4.10 with dxi = slope * dT substituted (slope = dxi/dT <= 0).
-
-    C dT = (P - Q) dt + L dxi  =>  dT = (P - Q) dt / (C - L slope).
-    """
-    return net_heat_w * dt / (heat_capacity_j_per_c - latent_j * dxi_dt_slope)
 
 
 def churchill_chu_nusselt(rayleigh: float, prandtl: float) -> float:
@@ -67,6 +58,6 @@ def appendix_free_convection(diameter_m: float = 0.508e-3) -> tuple[float, float
 
 
 __all__ = [
-    "convection_coefficient", "convection_loss", "temperature_increment",
+    "convection_coefficient", "convection_loss",
     "churchill_chu_nusselt", "grashof_number", "free_convection_h", "appendix_free_convection",
 ]

@@ -4,10 +4,16 @@ Parameters are packed into a flat float64 row (:func:`pack`, index constants ``P
 the batch loop can run many parameter sets in parallel (``prange``); the state is a flat
 row too (``S_*``), and each step writes its derived outputs into ``out`` (``O_*``).
 
-Order inside one step (digest section 3): electrical (R, drive) -> heat balance gives the
-sign of dT/dt -> kinetics picks the branch and gives dxi/dT -> dT with the latent heat as
-apparent capacity, dxi -> constitutive increment at fixed strain -> implicit wire + load
-solve (loads.py) -> sheath node -> energy accumulators.
+Order inside one step (digest section 3): electrical (R, drive) and heat flows at the start
+of the step -> elastic trial (no transformation: heat balance, constitutive increment at
+fixed strain, implicit wire + load solve) whose effective-temperature change picks heating,
+cooling or neither (kinetics.py) -> the martensite increment dxi solved together with its
+consequences: dT = ((P - Q) dt + L dxi) / C (eq. 4.10, latent heat), the constitutive
+increment (4.26) and the load solve (loads.py) give u_A, u_M at the end of the step, and dxi
+must put xi on the kinetics' branch at that u -> sheath node -> energy accumulators.
+The coupled update is a scalar root (safeguarded Newton, see :func:`step`).
+
+The state row carries, after the named states, the kinetics' reversal-point memory.
 
 Numba's on-disk cache only tracks this file, while the kernel inlines the equation
 modules; :func:`_invalidate_stale_cache` drops the cached kernel when any of them changed.
@@ -66,6 +72,16 @@ STATE_NAMES = (
 (S_T, S_XI, S_SIG, S_X, S_V, S_TS,
  S_EJ, S_ESTORED, S_ECONV, S_ELAT, S_ESH, S_ESHSTORED, S_ESHCONV) = range(len(STATE_NAMES))
 N_S = len(STATE_NAMES)
+# kinetics memory: last direction (+1 heating, -1 cooling, 0 none yet), number of reversal
+# points, then the points (kinetics.memory_branch layout)
+S_DIR, S_NREV = N_S, N_S + 1
+S_MEM = N_S + 2
+N_STATE = S_MEM + kinetics.POINT_SIZE * kinetics.MEMORY_DEPTH
+
+# coupled kinetic-mechanical solve: residual tolerance in xi, iteration cap (the bracket
+# halves at least every other iteration, so the cap is never the limit in practice)
+XI_TOLERANCE = 1e-12
+MAX_ITERATIONS = 60
 
 # ---------------------------------------------------------------- per-step outputs
 OUT_NAMES = ("resistance_ohm", "current_a", "electrical_power_w", "wire_force_n",
@@ -111,7 +127,7 @@ def pack(params: UnitParams) -> np.ndarray:
 
 def initial_state(params: UnitParams) -> np.ndarray:
     """Cold, fully martensitic wire at rest in the frictionless static balance with the load."""
-    s = np.zeros(N_S)
+    s = np.zeros(N_STATE)
     s[S_T] = s[S_TS] = params.ambient_temperature_c
     s[S_XI] = 1.0
     s[S_SIG] = params.load.pulley_ratio * params.load.static_force_n() / params.wire.cross_section_m2
@@ -119,17 +135,31 @@ def initial_state(params: UnitParams) -> np.ndarray:
 
 
 @njit(cache=True)
+def _mechanics(p, sig_free, modulus, x, v, dt):
+    """Implicit wire + load solve for a stress at fixed strain: (v, sigma, dsigma/dsig_free)."""
+    v_new, gain = loads.solve_slider_velocity(
+        p[P_S] * sig_free, p[P_S] * modulus / p[P_L0], x, v, dt, p[P_MASS], p[P_DAMP], p[P_K],
+        p[P_F0], p[P_G], p[P_N], p[P_CAPSTAN], p[P_COULOMB])
+    relax = modulus * dt / p[P_L0]
+    return v_new, sig_free - relax * v_new, 1.0 - relax * p[P_S] * gain
+
+
+@njit(cache=True)
 def step(p, s, drive_kind, drive_value, dt, out):
-    """Advance one unit by dt in place (state ``s``); write derived outputs to ``out``."""
+    """Advance one unit by dt in place (state ``s``); write derived outputs to ``out``.
+
+    The martensite increment d solves R(d) = xi + d - X(u(d)) = 0, where u(d) are the
+    effective temperatures at the end of the step given d (heat balance with latent heat,
+    constitutive increment, load solve) and X the kinetics' branch (kinetics.memory_branch).
+    u rises with d and X never rises with u, so R is increasing with slope >= 1 and has one
+    root, bracketed by xi + d in [0, 1] and found by Newton steps that fall back to bisection.
+    """
     temp = s[S_T]
     xi = s[S_XI]
     sig = s[S_SIG]
     x = s[S_X]
     v = s[S_V]
     t_sheath = s[S_TS]
-
-    ms, mf, a_s, a_f = kinetics.transformation_temperatures(
-        sig, p[P_MS0], p[P_MF0], p[P_AS0], p[P_AF0], p[P_CM], p[P_CA])
 
     rho_m = electrical.phase_resistivity(p[P_RHO0M], p[P_T0M], p[P_DRDTM], p[P_DRDSM], temp, sig)
     rho_a = electrical.phase_resistivity(p[P_RHO0A], p[P_T0A], p[P_DRDTA], p[P_DRDSA], temp, sig)
@@ -150,21 +180,57 @@ def step(p, s, drive_kind, drive_value, dt, out):
         q_sa = 0.0
     net = power - q_air - q_sh
 
-    slope = kinetics.transformation_slope(temp, xi, net > 0.0, ms, mf, a_s, a_f)
-    d_temp = heat.temperature_increment(net, p[P_CW], p[P_LAT], slope, dt)
-    d_xi = slope * d_temp
-
+    # eq. 4.10: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT
+    d_temp0 = net * dt / p[P_CW]
+    temp_per_xi = p[P_LAT] / p[P_CW]
     modulus = constitutive.reuss_modulus(xi, p[P_EM], p[P_EA])
     omega = constitutive.transformation_coefficient(modulus, p[P_EPSL])
     theta = constitutive.thermoelastic_coefficient(xi, modulus, p[P_ALM], p[P_ALA], p[P_NU])
-    sig_free = sig + constitutive.stress_increment_at_fixed_strain(omega, theta, d_xi, d_temp)
-    w0 = p[P_S] * sig_free
-    wire_stiffness = p[P_S] * modulus / p[P_L0]
-    v_new = loads.solve_slider_velocity(
-        w0, wire_stiffness, x, v, dt, p[P_MASS], p[P_DAMP], p[P_K], p[P_F0], p[P_G], p[P_N],
-        p[P_CAPSTAN], p[P_COULOMB])
+    sig_free0 = sig + constitutive.stress_increment_at_fixed_strain(omega, theta, 0.0, d_temp0)
+    sig_free_per_xi = constitutive.stress_increment_at_fixed_strain(omega, theta, 1.0, temp_per_xi)
+
+    cm, ca = p[P_CM], p[P_CA]
+    um_old, ua_old = kinetics.effective_temperatures(temp, sig, cm, ca)
+    v_new, sig_new, relax = _mechanics(p, sig_free0, modulus, x, v, dt)
+    um, ua = kinetics.effective_temperatures(temp + d_temp0, sig_new, cm, ca)
+    d_xi = 0.0
+    heating = ua > ua_old
+    cooling = um < um_old
+    if heating and cooling:          # only when C_A != C_M: keep the current direction
+        heating = s[S_DIR] > 0.0
+    if heating or cooling:
+        direction = 1.0 if heating else -1.0
+        memory = s[S_MEM:]
+        n_points = int(s[S_NREV])
+        ms0, mf0, as0, af0 = p[P_MS0], p[P_MF0], p[P_AS0], p[P_AF0]
+        if s[S_DIR] != 0.0 and s[S_DIR] != direction:
+            n_points = kinetics.push_reversal(memory, n_points, ua_old, um_old, xi, ms0, mf0, as0, af0)
+        s[S_DIR] = direction
+        # the printed law's slope at the start, needed only on an outermost branch
+        slope0 = (kinetics.transformation_slope(ua_old, um_old, xi, heating, ms0, mf0, as0, af0)
+                  if n_points < 2 else 0.0)
+        c_eff = ca if heating else cm
+        lo = -xi if heating else 0.0
+        hi = 0.0 if heating else 1.0 - xi
+        closed = 0
+        for _ in range(MAX_ITERATIONS):
+            xi_branch, dxi_du, closed = kinetics.memory_branch(
+                ua, um, heating, memory, n_points, xi, ua_old, um_old, slope0, ms0, mf0, as0, af0)
+            r = xi + d_xi - xi_branch
+            if abs(r) <= XI_TOLERANCE:
+                break
+            if r > 0.0:
+                hi = d_xi
+            else:
+                lo = d_xi
+            du_dxi = temp_per_xi - relax * sig_free_per_xi / c_eff
+            d_next = d_xi - r / (1.0 - dxi_du * du_dxi)
+            d_xi = d_next if lo < d_next < hi else 0.5 * (lo + hi)
+            v_new, sig_new, relax = _mechanics(p, sig_free0 + sig_free_per_xi * d_xi, modulus, x, v, dt)
+            um, ua = kinetics.effective_temperatures(temp + d_temp0 + temp_per_xi * d_xi, sig_new, cm, ca)
+        s[S_NREV] = n_points - 2 * closed
+    d_temp = d_temp0 + temp_per_xi * d_xi
     x_new = x + v_new * dt
-    sig_new = sig_free - modulus * v_new * dt / p[P_L0]
 
     s[S_T] = temp + d_temp
     s[S_XI] = xi + d_xi

@@ -1,10 +1,35 @@
-"""Phase kinetics block (digest section 3, eqs. 4.13-4.25): Duhem model, Likhachev scaling.
+"""Phase kinetics block (digest section 3, eqs. 4.13-4.25): Duhem model, Likhachev scaling,
+with return-point memory.
 
-Major branches z+(T) (heating) and z-(T) (cooling) are tanh curves between the
-stress-shifted transformation temperatures. Inside the hysteresis band the state moves
-with the active branch's slope scaled by its relative position between the branches,
-which produces minor loops. The active branch is chosen from the sign of dT/dt, so the
-kernel computes the heat balance first (heat.temperature_increment).
+Effective temperature (eq. 4.25). Stress shifts the transformation temperatures by
+sigma/C, so a branch evaluated at T with shifted temperatures equals the same branch at the
+effective temperature with the zero-stress temperatures: the heating branch z+ (eq. 4.17)
+is a function of u_A = T - sigma/C_A, the cooling branch z- (eq. 4.18) of
+u_M = T - sigma/C_M. The kinetics are written in u: the increments of eqs. 4.22-4.24 are
+dxi = dz/du * ratio * du, with du = dT - dsigma/C. A stiffening bias spring (stress rising
+as the wire contracts) then moves the state along its branch instead of off it, which is
+what lets return points be reached at all under the 12 N spring. Heating means u_A rises,
+cooling means u_M falls; the kernel finds both from an elastic trial of the step and then
+solves the kinetic and mechanical updates of the step together (kernel.step).
+
+Return-point memory (beyond the printed law). Eqs. 4.22-4.24 are a first-order Duhem law:
+their state is (u, xi) only, so re-heating from inside the band follows a curve that
+passes the previous reversal 0.045 away from it in xi (six-pulse scenario, Table 4.1),
+while the dissertation's Fig. 4.6 shows closing minor loops. The kinetics therefore keep a
+stack of reversal points (u_A, u_M, xi) and follow Madelung's rules, as in Preisach models:
+
+- a reversal of u pushes the current point;
+- a branch with no earlier reversal ahead of it (the outermost branches, and the first
+  heating from the martensitic start) is the printed law, eqs. 4.22-4.24;
+- a branch that starts at reversal point r with the earlier reversal point t ahead of it
+  (the top two of the stack) is the active major branch (4.17 or 4.18) scaled through both
+  points, xi = xi_t + (xi_r - xi_t) (z(u) - z(u_t)) / (z(u_r) - z(u_t)), so it reaches t
+  exactly;
+- reaching t closes the minor loop: r and t are wiped out and the state continues on the
+  branch it followed before it reversed at t.
+
+The stack holds MEMORY_DEPTH points; a reversal beyond that forgets the innermost loop
+(the top two points), which keeps the nesting order valid.
 """
 
 from __future__ import annotations
@@ -21,13 +46,17 @@ TANH_SATURATION = 19.5
 # scaling ratio is 0/0; the branch slope is then ~0 too, so any ratio in [0, 1] is exact.
 BRANCH_GAP_FLOOR = 1e-12
 
+# Reversal points kept. Nested minor loops of a pulse series or a position controller use
+# a few; the depth only bounds memory for long noisy inputs. Each point holds u_A, u_M, xi
+# and the branch values z+(u_A), z-(u_M), which every step on a scaled branch needs.
+MEMORY_DEPTH = 16
+POINT_SIZE = 5
+
 
 @njit(cache=True)
-def transformation_temperatures(stress_pa, ms0, mf0, as0, af0, cm, ca):
-    """Stress-shifted temperatures, eq. 4.25: Ms = Ms0 + sigma/C_M ... Af = Af0 + sigma/C_A."""
-    shift_m = stress_pa / cm
-    shift_a = stress_pa / ca
-    return ms0 + shift_m, mf0 + shift_m, as0 + shift_a, af0 + shift_a
+def effective_temperatures(temperature_c, stress_pa, cm, ca):
+    """(u_M, u_A) = (T - sigma/C_M, T - sigma/C_A): eq. 4.25 moved onto the temperature."""
+    return temperature_c - stress_pa / cm, temperature_c - stress_pa / ca
 
 
 @njit(cache=True)
@@ -54,17 +83,17 @@ def cooling_branch(temperature_c, m_s, m_f):
 
 
 @njit(cache=True)
-def transformation_slope(temperature_c, xi, heating, m_s, m_f, a_s, a_f):
-    """dxi/dT on the active branch (eqs. 4.22-4.24); dxi/dt = slope * dT/dt.
+def transformation_slope(u_a, u_m, xi, heating, m_s, m_f, a_s, a_f):
+    """dxi/du on the printed branch (eqs. 4.22-4.24) at effective temperatures u_A, u_M.
 
-    Heating: dz+/dT (xi - z-)/(z+ - z-); cooling: dz-/dT (z+ - xi)/(z+ - z-).
-    The ratio is the state's relative position inside the band. It is kept >= 0 so that a
-    state pushed outside the band (stress shifts the branches, O(dT^2) step error) never
-    transforms backwards (heating never forms martensite); above 1 it is left as printed,
-    which pulls a state outside the band back onto the active branch.
+    Heating: dz+/du (xi - z-)/(z+ - z-); cooling: dz-/du (z+ - xi)/(z+ - z-), with
+    zero-stress transformation temperatures. The ratio is the state's relative position
+    inside the band. It is kept >= 0 so that a state outside the band (O(du^2) step error)
+    never transforms backwards (heating never forms martensite); above 1 it is left as
+    printed, which pulls such a state back onto the active branch.
     """
-    zp, dzp = heating_branch(temperature_c, a_s, a_f)
-    zm, dzm = cooling_branch(temperature_c, m_s, m_f)
+    zp, dzp = heating_branch(u_a, a_s, a_f)
+    zm, dzm = cooling_branch(u_m, m_s, m_f)
     gap = zp - zm
     if heating:
         ratio = (xi - zm) / gap if gap > BRANCH_GAP_FLOOR else 1.0
@@ -75,3 +104,73 @@ def transformation_slope(temperature_c, xi, heating, m_s, m_f, a_s, a_f):
     if ratio < 0.0:
         ratio = 0.0
     return slope * ratio
+
+
+@njit(cache=True)
+def _scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_s, m_f, a_s, a_f):
+    """Major branch scaled through reversal point r and target t, for u strictly between.
+
+    Returns xi and dxi/du. Where the active branch is flat to machine precision between the
+    two points (both far outside its band) the scaling is 0/0; the branch is then the
+    straight line between them, which still closes the loop at t.
+    """
+    if heating:
+        z, dz = heating_branch(u, a_s, a_f)
+    else:
+        z, dz = cooling_branch(u, m_s, m_f)
+    den = z_r - z_t
+    if abs(den) > BRANCH_GAP_FLOOR:
+        frac, dfrac = (z - z_t) / den, dz / den
+    else:
+        frac, dfrac = (u - u_t) / (u_r - u_t), 1.0 / (u_r - u_t)
+    return xi_t + (xi_r - xi_t) * frac, (xi_r - xi_t) * dfrac
+
+
+@njit(cache=True)
+def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, m_s, m_f, a_s, a_f):
+    """xi reached at (u_a, u_m) moving from the state (u_a0, u_m0, xi0) in one direction.
+
+    ``memory[POINT_SIZE * k + (0, 1, 2, 3, 4)]`` is reversal point k (u_A, u_M, xi, z+, z-),
+    the top at ``n_points - 1``. ``slope0`` is the printed law's dxi/du at the start state
+    (transformation_slope), used while the state stays on an outermost branch. Returns
+    (xi, dxi/du, loops closed on the way); the caller commits the closures
+    (n_points - 2 * loops) once the step's u is final. Behind the start point the state
+    does not move, so xi(u) is continuous and never increasing in u.
+    """
+    closed = 0
+    xi_s, ua_s, um_s, slope = xi0, u_a0, u_m0, slope0
+    u = u_a if heating else u_m
+    col = 0 if heating else 1
+    zcol = 3 if heating else 4
+    while n_points - 2 * closed >= 2:
+        r = POINT_SIZE * (n_points - 2 * closed - 1)
+        t = r - POINT_SIZE
+        u_s = ua_s if heating else um_s
+        u_t = memory[t + col]
+        if (u <= u_s) if heating else (u >= u_s):
+            return xi_s, 0.0, closed
+        if (u < u_t) if heating else (u > u_t):
+            xi, dxi = _scaled_branch(u, heating, memory[r + col], memory[r + 2], memory[r + zcol],
+                                     u_t, memory[t + 2], memory[t + zcol], m_s, m_f, a_s, a_f)
+            return xi, dxi, closed
+        xi_s, ua_s, um_s = memory[t + 2], memory[t], memory[t + 1]
+        closed += 1
+        slope = transformation_slope(ua_s, um_s, xi_s, heating, m_s, m_f, a_s, a_f)
+    du = u_a - ua_s if heating else u_m - um_s
+    if (du <= 0.0) if heating else (du >= 0.0):
+        return xi_s, 0.0, closed
+    return xi_s + slope * du, slope, closed
+
+
+@njit(cache=True)
+def push_reversal(memory, n_points, u_a, u_m, xi, m_s, m_f, a_s, a_f):
+    """Record a reversal point; returns the new count. Full: forget the innermost loop first."""
+    if n_points + 1 > MEMORY_DEPTH:
+        n_points -= 2
+    k = POINT_SIZE * n_points
+    memory[k] = u_a
+    memory[k + 1] = u_m
+    memory[k + 2] = xi
+    memory[k + 3] = heating_branch(u_a, a_s, a_f)[0]
+    memory[k + 4] = cooling_branch(u_m, m_s, m_f)[0]
+    return n_points + 1

@@ -24,10 +24,11 @@ from hems_ros.physics.friction import transmitted_force
 @njit(cache=True)
 def solve_slider_velocity(w0, wire_stiffness, x, v, dt, mass, damping, stiffness, pretension,
                           gravity, pulley, capstan, coulomb):
-    """Slider velocity at the end of the step (eqs. 4.32-4.35 + friction.transmitted_force).
+    """Slider velocity at the end of the step and dv/dW0 (eqs. 4.32-4.35 + friction).
 
     Tries motion inward, then outward, else the slider sticks (v = 0): the direction whose
     solution has a consistent sign is the unique implicit-Euler solution with friction.
+    v is piecewise linear in W0; the kernel's kinetic-mechanical solve needs the slope.
     """
     n = pulley
     inertia = mass * n / dt + damping * n + stiffness * n * dt
@@ -35,15 +36,17 @@ def solve_slider_velocity(w0, wire_stiffness, x, v, dt, mass, damping, stiffness
     # F_L(dir) = a_dir * (w0 - K dt v) + f_dir, linear in v
     a_in = transmitted_force(1.0, 1.0, capstan, n, 0.0)
     f_in = transmitted_force(0.0, 1.0, capstan, n, coulomb)
-    v_in = (rest + a_in * w0 + f_in) / (inertia + a_in * wire_stiffness * dt)
+    den_in = inertia + a_in * wire_stiffness * dt
+    v_in = (rest + a_in * w0 + f_in) / den_in
     if v_in > 0.0:
-        return v_in
+        return v_in, a_in / den_in
     a_out = transmitted_force(1.0, -1.0, capstan, n, 0.0)
     f_out = transmitted_force(0.0, -1.0, capstan, n, coulomb)
-    v_out = (rest + a_out * w0 + f_out) / (inertia + a_out * wire_stiffness * dt)
+    den_out = inertia + a_out * wire_stiffness * dt
+    v_out = (rest + a_out * w0 + f_out) / den_out
     if v_out < 0.0:
-        return v_out
-    return 0.0
+        return v_out, a_out / den_out
+    return 0.0, 0.0
 
 
 @njit(cache=True)
