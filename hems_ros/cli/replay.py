@@ -1,0 +1,158 @@
+"""``hems replay <bag>``: republish a bag onto the live graph with its original timing."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections import Counter
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+CLOCK_TOPIC = "/clock"
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "replay",
+        help="republish a bag with its original timing",
+        description=(
+            "Publish the messages of a bag (as stored, no re-encoding) at their recorded "
+            "log-time spacing divided by --rate, with the QoS their publishers offered. "
+            "--clock publishes rosgraph_msgs/Clock with the bag's time so nodes with "
+            "use_sim_time follow the replay (a recorded /clock topic is then not replayed). "
+            "With --loop the bag restarts (and its clock jumps back) after the last message."),
+    )
+    parser.add_argument("bag", help="bag folder or .mcap file")
+    parser.add_argument("--rate", type=float, default=1.0, help="speed factor (2 = twice as fast)")
+    parser.add_argument("--loop", action="store_true", help="replay until interrupted")
+    parser.add_argument("--topic", action="append", default=[], dest="topics", help="replay this topic (repeatable)")
+    parser.add_argument("--regex", default=None, help="replay topics fully matching this regular expression")
+    parser.add_argument("--remap", action="append", default=[], metavar="FROM:=TO",
+                        help="publish topic FROM on TO (repeatable)")
+    parser.add_argument("--clock", type=float, nargs="?", const=100.0, default=0.0, metavar="HZ",
+                        help="publish /clock from the bag's time at HZ (default 100 Hz when given)")
+    parser.add_argument("--start-delay", type=float, default=1.0,
+                        help="seconds between creating the publishers and the first message (discovery)")
+    parser.set_defaults(func=run)
+
+
+@dataclass
+class ReplayResult:
+    published: Counter = field(default_factory=Counter)
+    loops: int = 0
+    wall_s: float = 0.0
+
+
+def parse_remaps(items: Iterable[str]) -> dict[str, str]:
+    remaps = {}
+    for item in items:
+        source, sep, target = item.partition(":=")
+        if not sep or not source.startswith("/") or not target.startswith("/"):
+            raise ValueError(f"remap {item!r} is not of the form /from:=/to")
+        remaps[source] = target
+    return remaps
+
+
+def replay_qos(offered: str, depth: int = 100):
+    """Reliable / transient local only if every recorded publisher offered it."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    try:
+        profiles = yaml.safe_load(offered) if offered else []
+    except yaml.YAMLError:
+        profiles = []
+    profiles = [p for p in profiles or [] if isinstance(p, dict)]
+    reliable = not profiles or all(str(p.get("reliability")) in ("reliable", "1") for p in profiles)
+    latched = bool(profiles) and all(str(p.get("durability")) in ("transient_local", "1") for p in profiles)
+    return QoSProfile(depth=depth,
+                      reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+
+
+def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Iterable[str] | None = None,
+           regex: str | None = None, remap: dict[str, str] | None = None, clock_hz: float = 0.0,
+           start_delay: float = 1.0) -> ReplayResult:
+    """Republish ``bag`` on the live graph (rclpy must not be initialised by the caller)."""
+    import rclpy
+    from rclpy.node import Node
+    from rosgraph_msgs.msg import Clock
+
+    from hems_ros.bag import iter_messages
+    from hems_ros.nodes.recorder import message_class
+
+    if rate <= 0:
+        raise ValueError(f"rate must be positive, not {rate}")
+    remap = remap or {}
+    messages = sorted((m for m in iter_messages(bag, topics, regex) if not (clock_hz and m.topic == CLOCK_TOPIC)),
+                      key=lambda m: m.log_time_ns)
+    result = ReplayResult()
+    if not messages:
+        return result
+    rclpy.init(args=[])
+    node = Node("replay", namespace="/hems", enable_rosout=False)
+    try:
+        publishers = {}
+        for message in messages:
+            if message.topic not in publishers:
+                publishers[message.topic] = node.create_publisher(
+                    message_class(message.type), remap.get(message.topic, message.topic),
+                    replay_qos(message.offered_qos_profiles))
+        clock = node.create_publisher(Clock, CLOCK_TOPIC, 10) if clock_hz > 0 else None
+        time.sleep(start_delay)
+        first, last = messages[0].log_time_ns, messages[-1].log_time_ns
+        started = time.perf_counter()
+        while rclpy.ok():
+            wall_start = time.perf_counter()
+            next_tick = wall_start
+            for message in messages:
+                due = wall_start + (message.log_time_ns - first) * 1e-9 / rate
+                while True:
+                    now = time.perf_counter()
+                    if clock is not None and now >= next_tick:
+                        bag_ns = first + int((now - wall_start) * rate * 1e9)
+                        clock.publish(Clock(clock=_time_msg(min(bag_ns, message.log_time_ns))))
+                        next_tick += 1.0 / clock_hz
+                    if now >= due:
+                        break
+                    wake = min(due, next_tick) if clock is not None else due
+                    time.sleep(max(0.0, min(wake - now, 0.05)))
+                if not rclpy.ok():
+                    break
+                publishers[message.topic].publish(message.data)
+                result.published[message.topic] += 1
+            if clock is not None:
+                clock.publish(Clock(clock=_time_msg(last)))
+            result.loops += 1
+            if not loop:
+                break
+        result.wall_s = time.perf_counter() - started
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return result
+
+
+def _time_msg(nanoseconds: int):
+    from builtin_interfaces.msg import Time
+
+    sec, nanosec = divmod(nanoseconds, 1_000_000_000)
+    return Time(sec=sec, nanosec=nanosec)
+
+
+def run(args: argparse.Namespace) -> int:
+    from hems_ros.bag import BagFormatError
+
+    try:
+        remaps = parse_remaps(args.remap)
+        result = replay(args.bag, args.rate, args.loop, args.topics, args.regex, remaps, args.clock, args.start_delay)
+    except (BagFormatError, FileNotFoundError, ValueError) as error:
+        print(f"hems replay: {error}", file=sys.stderr)
+        return 2
+    total = sum(result.published.values())
+    print(f"replayed {total} messages on {len(result.published)} topics in {result.wall_s:.3f} s "
+          f"({result.loops} pass{'es' if result.loops != 1 else ''})")
+    return 0
