@@ -25,8 +25,8 @@ import sys
 import time
 from datetime import datetime
 
-from rcl_interfaces.msg import ParameterDescriptor, ParameterType
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from hems_ros.bag import BagWriter, TopicSelection, offered_qos
@@ -60,9 +60,8 @@ def subscription_qos(publishers: list, depth: int) -> tuple[QoSProfile, list[dic
 class Recorder(Node):
     def __init__(self) -> None:
         super().__init__("recorder", namespace="/hems", enable_rosout=False)
-        strings = ParameterDescriptor(type=ParameterType.PARAMETER_STRING_ARRAY)
         output = self.declare_parameter("output", "").value or datetime.now().strftime("hems_%Y%m%d_%H%M%S")
-        topics = self.declare_parameter("topics", [], strings).value
+        topics = self.declare_parameter("topics", Parameter.Type.STRING_ARRAY).value or []
         regex = self.declare_parameter("regex", "").value
         self._selection = TopicSelection.of(topics, regex or (None if topics else DEFAULT_RECORD_REGEX))
         discovery = self._positive("discovery_period", 0.2)
@@ -112,14 +111,17 @@ class Recorder(Node):
             return
         write = self._writer.write
 
-        def on_message(data: bytes, info=None) -> None:
-            write(channel, time.time_ns(), data, info.get("source_timestamp") if info else None)
+        # The events executor passes no MessageInfo, so publish time = receive time.
+        def on_message(data: bytes) -> None:
+            write(channel, time.time_ns(), data)
 
         self._recorded[topic] = self.create_subscription(cls, topic, on_message, qos, raw=True)
         self.get_logger().info(f"{READY_PREFIX}{topic} [{type_name}] "
                                f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}")
 
     def finish(self) -> None:
+        if not hasattr(self, "_writer"):  # construction failed before the bag was opened
+            return
         summary = self._writer.finish()
         counts = ", ".join(f"{t} {n}" for t, n in sorted(summary.counts.items()))
         self.get_logger().info(f"{FINISHED_PREFIX}{summary.folder} ({summary.message_count} messages"

@@ -1,0 +1,112 @@
+"""The recorder node in its own process recording synthetic publishers in another (real DDS)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import PUBLISHER_SCRIPT
+from synthetic_publisher import STATUS_TOPIC, STREAMS, expected_values
+
+from hems_ros.bag import load_bag
+from hems_ros.bag.recording import RecorderProcess, record_for
+from hems_ros.rosenv import child_environment
+
+TOPICS = list(STREAMS) + [STATUS_TOPIC]
+
+
+def publish(count: int, rate: float, linger: float = 1.0) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, str(PUBLISHER_SCRIPT), "--count", str(count), "--rate", str(rate),
+                             "--linger", str(linger)], env=child_environment(), stdout=subprocess.PIPE, text=True)
+
+
+def published_counts(publisher: subprocess.Popen) -> dict[str, int]:
+    out, _ = publisher.communicate(timeout=60)
+    assert publisher.returncode == 0, out
+    return json.loads(out.strip().splitlines()[-1])["published"]
+
+
+def check_streams(bag, counts: dict[str, int]) -> None:
+    for topic, count in counts.items():
+        data = bag[topic]
+        assert len(data) == count, topic
+        if topic in STREAMS and "sequence" in data.fields:
+            assert np.array_equal(data["sequence"], np.arange(count)), topic
+        if topic in STREAMS:
+            for name, value in expected_values(topic, count - 1).items():
+                assert data[name][-1] == value, (topic, name)
+    assert np.all(np.diff(bag["/hems/test/duty"].log_time_ns) >= 0)
+
+
+def test_records_every_message_and_finishes_on_sigterm(ros_domain_id: int, tmp_path: Path) -> None:
+    output = tmp_path / "graph"
+    recorder = RecorderProcess(output, regex=r"/hems/.*", flush_period=0.2)
+    try:
+        publisher = publish(count=2000, rate=1000.0)
+        recorder.wait_for_topics(TOPICS)
+        counts = published_counts(publisher)
+    finally:
+        info = recorder.stop()
+    assert recorder.process.returncode in (0, -15)
+    assert any("bag finished" in line for line in recorder.log)
+    assert (output / "metadata.yaml").is_file()
+    assert info.reports[0].complete and {t: e.count for t, e in info.topics.items()} == counts
+    bag = load_bag(output)
+    check_streams(bag, counts)
+    assert bag["/hems/supervisor/status"]["state_name"][0] == "ENABLED"   # latched, published before we joined
+
+    from mcap.reader import make_reader
+    from rosbags.highlevel import AnyReader
+
+    with open(output / "graph_0.mcap", "rb") as stream:
+        summary = make_reader(stream).get_summary()
+    assert summary.statistics.message_count == sum(counts.values())
+    with AnyReader([output]) as reader:
+        duty = [c for c in reader.connections if c.topic == "/hems/test/duty"]
+        values = [reader.deserialize(raw, c.msgtype).duty_percent for c, _, raw in reader.messages(connections=duty)]
+    assert values == [expected_values("/hems/test/duty", i)["duty_percent"] for i in range(counts["/hems/test/duty"])]
+
+
+def test_sigkill_keeps_every_flushed_chunk(ros_domain_id: int, tmp_path: Path) -> None:
+    output = tmp_path / "killed"
+    recorder = RecorderProcess(output, topics=list(STREAMS), flush_period=0.2)
+    try:
+        publisher = publish(count=1500, rate=1000.0)
+        recorder.wait_for_topics(STREAMS)
+        counts = published_counts(publisher)
+        time.sleep(0.6)  # > flush_period: the last messages are in a finished chunk now
+    finally:
+        recorder.kill()
+    assert recorder.process.returncode == -9
+    assert not (output / "metadata.yaml").exists()
+    bag = load_bag(output)
+    report = bag.reports[0]
+    assert not report.complete and report.chunks >= 5 and "did not finish" in report.reason
+    check_streams(bag, {t: c for t, c in counts.items() if t in STREAMS})
+
+
+def test_record_for_a_fixed_time(ros_domain_id: int, tmp_path: Path) -> None:
+    publisher = publish(count=1500, rate=500.0, linger=0.2)
+    try:
+        started = time.monotonic()
+        info = record_for(tmp_path / "timed", 2.0, regex=r"/hems/test/.*|/hems/joint_states")
+        elapsed = time.monotonic() - started
+    finally:
+        publisher.kill()
+        publisher.wait()
+    assert 2.0 <= elapsed < 15.0
+    assert info.reports[0].complete and set(info.topics) == set(STREAMS)
+    assert info.topics["/hems/test/encoder"].count > 100
+
+
+def test_recorder_rejects_a_used_folder(tmp_path: Path) -> None:
+    (tmp_path / "used").mkdir()
+    (tmp_path / "used" / "file").write_text("x")
+    recorder = RecorderProcess(tmp_path / "used")
+    with pytest.raises(RuntimeError, match="code 2"):
+        recorder.wait(timeout=30)
