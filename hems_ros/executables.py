@@ -8,6 +8,7 @@ that both can load it without importing rclpy.
 EXECUTABLES = {
     "hems": "hems_ros.cli.main:main",
     "ping_responder": "hems_ros.nodes.ping_responder:main",
+    "recorder": "hems_ros.nodes.recorder:main",
     "actuation_unit": "hems_ros.nodes.actuation_unit:main",
     "shoulder_module": "hems_ros.nodes.shoulder_module:main",
     "finger_controller": "hems_ros.nodes.finger_controller:main",
