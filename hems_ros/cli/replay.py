@@ -37,6 +37,8 @@ def register(subparsers) -> None:
                         help="publish /clock from the bag's time at HZ (default 100 Hz when given)")
     parser.add_argument("--start-delay", type=float, default=1.0,
                         help="seconds between creating the publishers and the first message (discovery)")
+    parser.add_argument("--wait-subscribers", type=float, default=0.0, metavar="SECONDS",
+                        help="before starting, wait up to SECONDS until every replayed topic has a subscriber")
     parser.set_defaults(func=run)
 
 
@@ -75,7 +77,7 @@ def replay_qos(offered: str, depth: int = 100):
 
 def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Iterable[str] | None = None,
            regex: str | None = None, remap: dict[str, str] | None = None, clock_hz: float = 0.0,
-           start_delay: float = 1.0) -> ReplayResult:
+           start_delay: float = 1.0, wait_subscribers: float = 0.0) -> ReplayResult:
     """Republish ``bag`` on the live graph (rclpy must not be initialised by the caller)."""
     import rclpy
     from rclpy.node import Node
@@ -103,6 +105,12 @@ def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Itera
                     replay_qos(message.offered_qos_profiles))
         clock = node.create_publisher(Clock, CLOCK_TOPIC, 10) if clock_hz > 0 else None
         time.sleep(start_delay)
+        deadline = time.monotonic() + wait_subscribers
+        while (any(p.get_subscription_count() == 0 for p in publishers.values())
+               and time.monotonic() < deadline):
+            time.sleep(0.02)
+        if wait_subscribers:
+            time.sleep(0.2)  # matched here; the subscribers' side matches us a moment later
         first, last = messages[0].log_time_ns, messages[-1].log_time_ns
         started = time.perf_counter()
         while rclpy.ok():
@@ -148,7 +156,8 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         remaps = parse_remaps(args.remap)
-        result = replay(args.bag, args.rate, args.loop, args.topics, args.regex, remaps, args.clock, args.start_delay)
+        result = replay(args.bag, args.rate, args.loop, args.topics, args.regex, remaps, args.clock, args.start_delay,
+                        args.wait_subscribers)
     except (BagFormatError, FileNotFoundError, ValueError) as error:
         print(f"hems replay: {error}", file=sys.stderr)
         return 2

@@ -56,7 +56,8 @@ def test_replay_keeps_timing_remaps_and_publishes_clock(ros_domain_id: int, tmp_
     executor.add_node(node)
     replay = subprocess.Popen(
         [sys.executable, "-m", "hems_ros.cli.main", "replay", str(tmp_path / "bag"), "--rate", str(rate),
-         "--remap", "/hems/index/duty:=/replayed/duty", "--clock", "50", "--start-delay", "1.5"],
+         "--remap", "/hems/index/duty:=/replayed/duty", "--clock", "50", "--start-delay", "0.5",
+         "--wait-subscribers", "20"],
         env=child_environment(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 30
