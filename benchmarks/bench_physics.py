@@ -70,13 +70,13 @@ def lsoda_rhs(p):
         theta = constitutive.thermoelastic_coefficient(xi, e, p[K.P_ALM], p[K.P_ALA], p[K.P_NU])
         dtemp0 = net / c_w
         dsig0 = -e * v / p[K.P_L0] + theta * dtemp0
-        u_m, u_a = kinetics.effective_temperatures(temp, sig, p[K.P_CM], p[K.P_CA])
-        heating = dtemp0 - dsig0 / p[K.P_CA] > 0
-        c = p[K.P_CA] if heating else p[K.P_CM]
+        u_m, u_a = kinetics.effective_temperatures(temp, sig, p[K.P_INV_CM], p[K.P_INV_CA])
+        heating = dtemp0 - dsig0 * p[K.P_INV_CA] > 0
+        inv_c = p[K.P_INV_CA] if heating else p[K.P_INV_CM]
         slope = kinetics.transformation_slope(u_a, u_m, xi, heating, p[K.P_MS0], p[K.P_MF0], p[K.P_AS0],
                                               p[K.P_AF0])
-        du_dxi = lat / c_w - (omega + theta * lat / c_w) / c
-        dxi = slope * (dtemp0 - dsig0 / c) / (1.0 - slope * du_dxi)
+        du_dxi = lat / c_w - (omega + theta * lat / c_w) * inv_c
+        dxi = slope * (dtemp0 - dsig0 * inv_c) / (1.0 - slope * du_dxi)
         dtemp = dtemp0 + lat / c_w * dxi
         dsig = dsig0 + omega * dxi + theta * lat / c_w * dxi
         force = s_area * sig / n

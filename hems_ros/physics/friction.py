@@ -6,7 +6,7 @@ friction of the tendon in the glove (chapter 6 force-displacement hysteresis).
 
 Both oppose the motion: while the wire pulls the load in (slider velocity > 0) the load
 receives c F_wire / n - F_c; while the load drags the wire out it receives F_wire / (c n)
-+ F_c; at rest anything in between holds (stiction). loads.solve_slider_velocity resolves
++ F_c; at rest anything in between holds (stiction). loads.slider_velocity resolves
 the three cases exactly for the implicit step.
 """
 

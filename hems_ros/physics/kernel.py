@@ -55,12 +55,13 @@ _invalidate_stale_cache()
 (P_L0, P_S, P_AREA, P_CW, P_LAT,
  P_RHO0M, P_T0M, P_DRDTM, P_DRDSM, P_RHO0A, P_T0A, P_DRDTA, P_DRDSA,
  P_H0, P_H2, P_TAMB,
- P_MS0, P_MF0, P_AS0, P_AF0, P_CM, P_CA,
+ P_MS0, P_MF0, P_AS0, P_AF0,
  P_EM, P_EA, P_ALM, P_ALA, P_EPSL, P_NU,
  P_VSUP, P_ILIM,
  P_MASS, P_DAMP, P_K, P_F0, P_G, P_N,
  P_SHEATH, P_GWS, P_GSA, P_CS,
- P_CAPSTAN, P_COULOMB, N_P) = range(43)
+ P_CAPSTAN, P_COULOMB,
+ P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, N_P) = range(45)
 
 # ---------------------------------------------------------------- state row
 STATE_NAMES = (
@@ -106,7 +107,6 @@ def pack(params: UnitParams) -> np.ndarray:
     p[P_DRDTA], p[P_DRDSA] = el.drho_dt_austenite_ohm_m_per_c, el.drho_dsigma_austenite_ohm_m_per_pa
     p[P_H0], p[P_H2], p[P_TAMB] = th.h0_w_m2_c, th.h2_w_m2_c3, params.ambient_temperature_c
     p[P_MS0], p[P_MF0], p[P_AS0], p[P_AF0] = ki.ms0_c, ki.mf0_c, ki.as0_c, ki.af0_c
-    p[P_CM], p[P_CA] = ki.cm_pa_per_c, ki.ca_pa_per_c
     p[P_EM], p[P_EA] = co.e_martensite_pa, co.e_austenite_pa
     p[P_ALM], p[P_ALA] = co.alpha_martensite_per_c, co.alpha_austenite_per_c
     p[P_EPSL], p[P_NU] = co.max_recoverable_strain, co.poisson_ratio
@@ -119,6 +119,9 @@ def pack(params: UnitParams) -> np.ndarray:
         p[P_GWS] = 1.0 / r.wire_to_sheath
         p[P_GSA] = 1.0 / r.sheath_to_air
         p[P_CS] = params.sheath.heat_capacity_j_per_k
+    # reciprocals the step would otherwise divide by several times per step
+    p[P_INV_CW], p[P_INV_L0] = 1.0 / p[P_CW], 1.0 / w.length_m
+    p[P_INV_CM], p[P_INV_CA] = 1.0 / ki.cm_pa_per_c, 1.0 / ki.ca_pa_per_c
     cap = params.capstan
     p[P_CAPSTAN] = friction.capstan_ratio(cap.friction_coefficient, cap.bend_angle_rad) if cap.enabled else 1.0
     p[P_COULOMB] = params.glove_friction.force_n if params.glove_friction.enabled else 0.0
@@ -135,13 +138,10 @@ def initial_state(params: UnitParams) -> np.ndarray:
 
 
 @njit(cache=True)
-def _mechanics(p, sig_free, modulus, x, v, dt):
+def _mechanics(sig_free, area, relax, c_in, g_in, c_out, g_out):
     """Implicit wire + load solve for a stress at fixed strain: (v, sigma, dsigma/dsig_free)."""
-    v_new, gain = loads.solve_slider_velocity(
-        p[P_S] * sig_free, p[P_S] * modulus / p[P_L0], x, v, dt, p[P_MASS], p[P_DAMP], p[P_K],
-        p[P_F0], p[P_G], p[P_N], p[P_CAPSTAN], p[P_COULOMB])
-    relax = modulus * dt / p[P_L0]
-    return v_new, sig_free - relax * v_new, 1.0 - relax * p[P_S] * gain
+    v_new, gain = loads.slider_velocity(area * sig_free, c_in, g_in, c_out, g_out)
+    return v_new, sig_free - relax * v_new, 1.0 - relax * area * gain
 
 
 @njit(cache=True)
@@ -181,18 +181,24 @@ def step(p, s, drive_kind, drive_value, dt, out):
     net = power - q_air - q_sh
 
     # eq. 4.10: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT
-    d_temp0 = net * dt / p[P_CW]
-    temp_per_xi = p[P_LAT] / p[P_CW]
+    d_temp0 = net * dt * p[P_INV_CW]
+    temp_per_xi = p[P_LAT] * p[P_INV_CW]
     modulus = constitutive.reuss_modulus(xi, p[P_EM], p[P_EA])
     omega = constitutive.transformation_coefficient(modulus, p[P_EPSL])
     theta = constitutive.thermoelastic_coefficient(xi, modulus, p[P_ALM], p[P_ALA], p[P_NU])
     sig_free0 = sig + constitutive.stress_increment_at_fixed_strain(omega, theta, 0.0, d_temp0)
     sig_free_per_xi = constitutive.stress_increment_at_fixed_strain(omega, theta, 1.0, temp_per_xi)
 
-    cm, ca = p[P_CM], p[P_CA]
-    um_old, ua_old = kinetics.effective_temperatures(temp, sig, cm, ca)
-    v_new, sig_new, relax = _mechanics(p, sig_free0, modulus, x, v, dt)
-    um, ua = kinetics.effective_temperatures(temp + d_temp0, sig_new, cm, ca)
+    area = p[P_S]
+    relax = modulus * dt * p[P_INV_L0]                  # stress drop per slider velocity
+    c_in, g_in, c_out, g_out = loads.slider_response(
+        area * modulus * p[P_INV_L0], x, v, dt, p[P_MASS], p[P_DAMP], p[P_K], p[P_F0], p[P_G], p[P_N],
+        p[P_CAPSTAN], p[P_COULOMB])
+
+    inv_cm, inv_ca = p[P_INV_CM], p[P_INV_CA]
+    um_old, ua_old = kinetics.effective_temperatures(temp, sig, inv_cm, inv_ca)
+    v_new, sig_new, sig_gain = _mechanics(sig_free0, area, relax, c_in, g_in, c_out, g_out)
+    um, ua = kinetics.effective_temperatures(temp + d_temp0, sig_new, inv_cm, inv_ca)
     d_xi = 0.0
     heating = ua > ua_old
     cooling = um < um_old
@@ -209,7 +215,7 @@ def step(p, s, drive_kind, drive_value, dt, out):
         # the printed law's slope at the start, needed only on an outermost branch
         slope0 = (kinetics.transformation_slope(ua_old, um_old, xi, heating, ms0, mf0, as0, af0)
                   if n_points < 2 else 0.0)
-        c_eff = ca if heating else cm
+        inv_c = inv_ca if heating else inv_cm
         lo = -xi if heating else 0.0
         hi = 0.0 if heating else 1.0 - xi
         closed = 0
@@ -223,11 +229,18 @@ def step(p, s, drive_kind, drive_value, dt, out):
                 hi = d_xi
             else:
                 lo = d_xi
-            du_dxi = temp_per_xi - relax * sig_free_per_xi / c_eff
+            du_dxi = temp_per_xi - sig_gain * sig_free_per_xi * inv_c
             d_next = d_xi - r / (1.0 - dxi_du * du_dxi)
-            d_xi = d_next if lo < d_next < hi else 0.5 * (lo + hi)
-            v_new, sig_new, relax = _mechanics(p, sig_free0 + sig_free_per_xi * d_xi, modulus, x, v, dt)
-            um, ua = kinetics.effective_temperatures(temp + d_temp0 + temp_per_xi * d_xi, sig_new, cm, ca)
+            newton = lo < d_next < hi
+            d_xi = d_next if newton else 0.5 * (lo + hi)
+            gain_before = sig_gain
+            v_new, sig_new, sig_gain = _mechanics(sig_free0 + sig_free_per_xi * d_xi, area, relax,
+                                                  c_in, g_in, c_out, g_out)
+            um, ua = kinetics.effective_temperatures(temp + d_temp0 + temp_per_xi * d_xi, sig_new, inv_cm, inv_ca)
+            if newton and n_points < 2 and sig_gain == gain_before:
+                # outermost branch: X is linear in u and u(dxi) affine while the load keeps its
+                # direction of motion, so this Newton step landed on the root
+                break
         s[S_NREV] = n_points - 2 * closed
     d_temp = d_temp0 + temp_per_xi * d_xi
     x_new = x + v_new * dt

@@ -54,9 +54,12 @@ POINT_SIZE = 5
 
 
 @njit(cache=True)
-def effective_temperatures(temperature_c, stress_pa, cm, ca):
-    """(u_M, u_A) = (T - sigma/C_M, T - sigma/C_A): eq. 4.25 moved onto the temperature."""
-    return temperature_c - stress_pa / cm, temperature_c - stress_pa / ca
+def effective_temperatures(temperature_c, stress_pa, inv_cm, inv_ca):
+    """(u_M, u_A) = (T - sigma/C_M, T - sigma/C_A): eq. 4.25 moved onto the temperature.
+
+    Takes 1/C_M and 1/C_A (the kernel keeps the reciprocals per parameter set).
+    """
+    return temperature_c - stress_pa * inv_cm, temperature_c - stress_pa * inv_ca
 
 
 @njit(cache=True)

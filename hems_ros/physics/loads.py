@@ -22,13 +22,14 @@ from hems_ros.physics.friction import transmitted_force
 
 
 @njit(cache=True)
-def solve_slider_velocity(w0, wire_stiffness, x, v, dt, mass, damping, stiffness, pretension,
-                          gravity, pulley, capstan, coulomb):
-    """Slider velocity at the end of the step and dv/dW0 (eqs. 4.32-4.35 + friction).
+def slider_response(wire_stiffness, x, v, dt, mass, damping, stiffness, pretension, gravity, pulley,
+                    capstan, coulomb):
+    """Slider velocity at the end of the step as v = c + g W0, per direction of motion.
 
-    Tries motion inward, then outward, else the slider sticks (v = 0): the direction whose
-    solution has a consistent sign is the unique implicit-Euler solution with friction.
-    v is piecewise linear in W0; the kernel's kinetic-mechanical solve needs the slope.
+    Returns (c_in, g_in, c_out, g_out) for motion inward and outward (eqs. 4.32-4.35 with
+    friction.transmitted_force). They depend on the state at the start of the step only, so
+    the kernel computes them once and evaluates :func:`slider_velocity` for each W0 its
+    kinetic-mechanical solve tries.
     """
     n = pulley
     inertia = mass * n / dt + damping * n + stiffness * n * dt
@@ -37,15 +38,25 @@ def solve_slider_velocity(w0, wire_stiffness, x, v, dt, mass, damping, stiffness
     a_in = transmitted_force(1.0, 1.0, capstan, n, 0.0)
     f_in = transmitted_force(0.0, 1.0, capstan, n, coulomb)
     den_in = inertia + a_in * wire_stiffness * dt
-    v_in = (rest + a_in * w0 + f_in) / den_in
-    if v_in > 0.0:
-        return v_in, a_in / den_in
     a_out = transmitted_force(1.0, -1.0, capstan, n, 0.0)
     f_out = transmitted_force(0.0, -1.0, capstan, n, coulomb)
     den_out = inertia + a_out * wire_stiffness * dt
-    v_out = (rest + a_out * w0 + f_out) / den_out
+    return (rest + f_in) / den_in, a_in / den_in, (rest + f_out) / den_out, a_out / den_out
+
+
+@njit(cache=True)
+def slider_velocity(w0, c_in, g_in, c_out, g_out):
+    """Slider velocity at the end of the step and dv/dW0 (coefficients from slider_response).
+
+    Tries motion inward, then outward, else the slider sticks (v = 0): the direction whose
+    solution has a consistent sign is the unique implicit-Euler solution with friction.
+    """
+    v_in = c_in + g_in * w0
+    if v_in > 0.0:
+        return v_in, g_in
+    v_out = c_out + g_out * w0
     if v_out < 0.0:
-        return v_out, a_out / den_out
+        return v_out, g_out
     return 0.0, 0.0
 
 

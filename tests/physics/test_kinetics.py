@@ -18,7 +18,7 @@ def test_branches_and_stress_shift():
     assert dzp == pytest.approx(-0.1) and dzm == pytest.approx(-0.1)  # -sech^2(0) / 10 K
     # eq. 4.25: 68.9 MPa shifts every temperature by 10 K; the branch at the effective
     # temperature T - sigma/C with zero-stress temperatures is the same number
-    u_m, u_a = kinetics.effective_temperatures(103.0, 6.89e7, 6.89e6, 6.89e6)
+    u_m, u_a = kinetics.effective_temperatures(103.0, 6.89e7, 1 / 6.89e6, 1 / 6.89e6)
     assert (u_m, u_a) == pytest.approx((93.0, 93.0))
     assert kinetics.heating_branch(u_a, 88.0, 98.0)[0] == pytest.approx(kinetics.heating_branch(103.0, 98.0, 108.0)[0])
     assert kinetics.cooling_branch(u_m, 72.0, 62.0)[0] == pytest.approx(kinetics.cooling_branch(103.0, 82.0, 72.0)[0])
