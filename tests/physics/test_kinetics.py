@@ -1,5 +1,7 @@
 """Phase kinetics (eqs. 4.17-4.25) and the dissertation's qualitative figures (Table 4.1)."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -27,7 +29,11 @@ def test_branches_and_stress_shift():
 def test_slope_guard_outside_the_loop():
     # far below both branches z+ = z- = 1 exactly: 0/0 must not produce NaN
     s = kinetics.transformation_slope(-200.0, -200.0, 1.0, True, 72, 62, 88, 98)
-    assert s == 0.0
+    assert math.isfinite(s) and abs(s) < 1e-40
+    # the branches far outside their bands: exactly 0 / 1, slopes finite
+    for u in (-1e4, 1e4):
+        for z, dz in (kinetics.heating_branch(u, 88, 98), kinetics.cooling_branch(u, 72, 62)):
+            assert z in (0.0, 1.0) and math.isfinite(dz)
     # on the major heating branch the slope is the branch slope; on the cooling branch zero
     zp, dzp = kinetics.heating_branch(93.0, 88, 98)
     assert kinetics.transformation_slope(93.0, 93.0, zp, True, 72, 62, 88, 98) == pytest.approx(dzp, rel=1e-6)
