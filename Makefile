@@ -11,7 +11,7 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
 MSG_SOURCES := $(wildcard hems_msgs/msg/*.msg hems_msgs/srv/*.srv) hems_msgs/CMakeLists.txt hems_msgs/package.xml
 
-.PHONY: setup demo test test-quick bench clean check-system
+.PHONY: setup demo test test-quick test-graph bench clean check-system
 
 setup: check-system $(VENV)/.stamp-hems_ros
 
@@ -50,6 +50,9 @@ test: setup
 
 test-quick: setup
 	tools/run_pytest.sh $(PY) tests -m "not slow" $(PYTEST_ARGS)
+
+test-graph: setup
+	tools/run_pytest.sh $(PY) tests/graph -m graph_realtime $(PYTEST_ARGS)
 
 bench: setup
 	@for b in benchmarks/bench_*.py; do echo "== $$b"; $(PY) $$b || exit 1; done

@@ -1,24 +1,74 @@
-"""``hems demo``: the main end-to-end job (`make demo`)."""
+"""``hems demo``: the main end-to-end job (`make demo`).
+
+Brings the 16-node graph up as separate processes, enables it, runs the scripted grasp on
+all six fingers (position approach, force hold, release), prints the per-finger summary,
+writes a PNG plot and shuts everything down.
+"""
 
 from __future__ import annotations
 
 import argparse
+import sys
+import time
+from pathlib import Path
 
-from hems_ros.cli import ping
+from hems_ros.cli import grasp
+from hems_ros.cli.up import add_graph_arguments, graph_options
+from hems_ros.launcher import Graph
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "demo",
-        help="run the end-to-end demonstration (what `make demo` runs)",
-        description=(
-            "Start a ping_responder node in its own process and exchange hems_msgs "
-            "messages with it over Fast DDS (loopback only), checking every answer."
-        ),
-    )
-    ping.add_arguments(parser)
-    parser.set_defaults(func=run)
+        "demo", help="run the end-to-end demonstration (what `make demo` runs)",
+        description="Start the HEMS graph (16 nodes, one process each), enable it, run a scripted grasp on "
+                    "all six fingers (position approach, force hold, release), print a per-finger summary "
+                    "(tracking error, peak force, energy), write a PNG plot, shut down.")
+    add_graph_arguments(parser)
+    grasp.add_grasp_arguments(parser)
+    parser.set_defaults(func=run, plot=Path("results/demo_grasp.png"))
+    parser.add_argument("--ready-timeout", type=float, default=60.0,
+                        help="seconds to wait for every node to come up (default 60)")
+
+
+def enable_when_ready(client, timeout: float) -> tuple[bool, str]:
+    deadline = time.monotonic() + timeout
+    ok, message = False, "no answer"
+    while time.monotonic() < deadline:
+        ok, message = client.call("enable", timeout=max(1.0, deadline - time.monotonic()))
+        if ok:
+            return ok, message
+        client.spin_for(2.0)
+    return ok, message
 
 
 def run(args: argparse.Namespace) -> int:
-    return ping.run(args)
+    try:
+        options = graph_options(args)
+        plan = grasp.plan_from(args)
+    except ValueError as error:
+        print(f"demo: {error}", file=sys.stderr)
+        return 2
+    from hems_ros.cli.graph_client import GraphClient
+
+    graph = Graph(options)
+    graph.start()
+    print(f"demo: started {len(graph.processes)} processes; waiting for every stream", flush=True)
+    try:
+        with GraphClient("hems_demo") as client:
+            ok, message = enable_when_ready(client, args.ready_timeout)
+            if not ok:
+                print(f"demo: could not enable the graph: {message}", file=sys.stderr)
+                return 1
+            print(f"demo: {message}", flush=True)
+            traces, t_start = grasp.run_grasp(client, plan, options.fingers)
+            client.call("disable")
+        grasp.report(traces, plan, t_start, args.plot)
+        crashed = graph.exited()
+        if crashed:
+            print(f"demo: nodes exited during the run: {crashed}", file=sys.stderr)
+            return 1
+        return 0
+    finally:
+        started = time.monotonic()
+        graph.stop()
+        print(f"demo: graph stopped in {time.monotonic() - started:.2f} s")

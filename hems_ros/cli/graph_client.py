@@ -30,6 +30,9 @@ class GraphClient:
             rclpy.init(args=[])
         self.node = Node(f"{name}_{int(time.time() * 1e3) % 100000}", namespace=names.NAMESPACE)
         self._setpoint_pubs: dict[str, object] = {}
+        # Endpoints are kept for the client's life: every new endpoint is announced to all
+        # sixteen nodes, which costs them CPU at the moment they should be controlling.
+        self._service_clients: dict[str, object] = {}
 
     def close(self) -> None:
         self.node.destroy_node()
@@ -48,17 +51,16 @@ class GraphClient:
 
     def call(self, command: str, timeout: float = 10.0) -> tuple[bool, str]:
         """Call a supervisor Trigger service; (success, message)."""
-        client = self.node.create_client(Trigger, names.service(command))
-        try:
-            if not client.wait_for_service(timeout_sec=timeout):
-                return False, f"no supervisor answers {names.service(command)} (is the graph up?)"
-            future = client.call_async(Trigger.Request())
-            rclpy.spin_until_future_complete(self.node, future, timeout_sec=timeout)
-            if future.result() is None:
-                return False, f"{names.service(command)} did not answer within {timeout:g} s"
-            return future.result().success, future.result().message
-        finally:
-            self.node.destroy_client(client)
+        client = self._service_clients.get(command)
+        if client is None:
+            client = self._service_clients[command] = self.node.create_client(Trigger, names.service(command))
+        if not client.wait_for_service(timeout_sec=timeout):
+            return False, f"no supervisor answers {names.service(command)} (is the graph up?)"
+        future = client.call_async(Trigger.Request())
+        rclpy.spin_until_future_complete(self.node, future, timeout_sec=timeout)
+        if future.result() is None:
+            return False, f"{names.service(command)} did not answer within {timeout:g} s"
+        return future.result().success, future.result().message
 
     def send_setpoint(self, finger: str, mode: str, value: float, timeout: float = 5.0) -> bool:
         """Publish one setpoint once the finger's controller is subscribed; False if none is."""

@@ -4,10 +4,12 @@ States: IDLE -> ENABLED <-> DISABLED; any monitored fault latches FAULT, ``estop
 ESTOP; both stay until ``reset``, which is refused while a fault condition persists.
 Heating is allowed only in ENABLED, so every other state means zero duty.
 
-Monitors (per finger, on the receive times of the streams, in the node's clock):
-a stream that has been seen and then stays silent longer than ``stale_s`` (encoder, wire
-force, controller heartbeat), wire force at or above ``max_wire_force_n``, tendon travel
-beyond ``max_tendon_position_m``, and the actuation unit's duty-watchdog flag while ENABLED.
+Monitors (per finger, on the receive times of the streams, in the node's clock): wire force
+at or above ``max_wire_force_n`` and tendon travel beyond ``max_tendon_position_m`` fault in
+any state; while ENABLED, an encoder or wire-force stream silent for longer than ``stale_s``,
+a controller heartbeat silent for longer than ``heartbeat_timeout_s``, and the actuation unit's duty-watchdog flag held for ``stale_s`` fault too. Outside
+ENABLED nothing heats, so a silent stream (a node starting or restarting) only blocks
+``enable`` and ``reset`` until it is back.
 """
 
 from __future__ import annotations
@@ -34,9 +36,15 @@ class MonitorLimits:
     stale_s: float = 0.05
     max_wire_force_n: float = 50.0
     max_tendon_position_m: float = 0.056
+    # A lost controller is already caught within 30 ms by each unit's duty watchdog; the
+    # heartbeat only has to name it, so it tolerates the scheduling hiccups of a busy host.
+    heartbeat_timeout_s: float = 0.2
+
+    def timeout(self, stream: str) -> float:
+        return self.heartbeat_timeout_s if stream == "heartbeat" else self.stale_s
 
     def __post_init__(self) -> None:
-        for name in ("stale_s", "max_wire_force_n", "max_tendon_position_m"):
+        for name in ("stale_s", "max_wire_force_n", "max_tendon_position_m", "heartbeat_timeout_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} = {value!r}: must be a finite value > 0")
@@ -45,6 +53,7 @@ class MonitorLimits:
 @dataclass
 class Fault:
     finger: str
+    kind: str  # one fault per finger and kind is kept: the first occurrence
     text: str
 
     def __str__(self) -> str:
@@ -60,6 +69,9 @@ class SupervisorLogic:
 
     def __post_init__(self) -> None:
         self._last_seen: dict[tuple[str, str], float] = {}
+        self._enabled_at = float("inf")
+        self._last_check: float | None = None
+        self._tripped_since: dict[str, float] = {}
 
     # observations -------------------------------------------------------------
     def saw(self, stream: str, finger: str, now: float) -> None:
@@ -68,25 +80,44 @@ class SupervisorLogic:
     def wire_force(self, finger: str, force_n: float, now: float) -> None:
         self.saw("wire_force", finger, now)
         if force_n >= self.limits.max_wire_force_n:
-            self._fault(finger, f"wire over-force {force_n:.1f} N (limit {self.limits.max_wire_force_n:g} N)")
+            self._fault(finger, "over-force", f"wire over-force {force_n:.1f} N (limit {self.limits.max_wire_force_n:g} N)")
 
     def encoder(self, finger: str, wire_position_m: float, now: float) -> None:
         self.saw("encoder", finger, now)
         travel = tendon_position(wire_position_m)
         if travel > self.limits.max_tendon_position_m:
-            self._fault(finger, f"tendon over-travel {1e3 * travel:.1f} mm "
+            self._fault(finger, "over-travel", f"tendon over-travel {1e3 * travel:.1f} mm "
                                 f"(limit {1e3 * self.limits.max_tendon_position_m:g} mm)")
 
-    def watchdog(self, finger: str, tripped: bool) -> None:
-        if tripped and self.state == State.ENABLED:
-            self._fault(finger, "duty watchdog tripped: no duty command for three control periods")
+    def watchdog(self, finger: str, tripped: bool, stamp: float) -> None:
+        """A unit's watchdog flag as of ``stamp``.
+
+        The unit already forced its duty to 0 when the flag rose; the supervisor latches a
+        FAULT when the flag has stayed up for ``stale_s`` while ENABLED (a lost controller),
+        not for a single late command. Flags raised before enabling do not count.
+        """
+        if not tripped or self.state != State.ENABLED or stamp <= self._enabled_at:
+            self._tripped_since.pop(finger, None)
+            return
+        since = self._tripped_since.setdefault(finger, stamp)
+        if stamp - since >= self.limits.stale_s:
+            self._fault(finger, "watchdog", f"duty watchdog tripped for {1e3 * (stamp - since):.0f} ms: no duty commands")
 
     def check_streams(self, now: float) -> None:
-        """Fault every stream that was seen and has gone silent for longer than stale_s."""
+        """While ENABLED, fault every stream silent for longer than stale_s.
+
+        When this check itself comes late (the supervisor was not scheduled for a while),
+        the messages that arrived meanwhile are still queued and every stream would look
+        stale at once; such a check only re-arms, and the next on-time one judges.
+        """
+        late = self._last_check is not None and now - self._last_check > self.limits.stale_s / 2
+        self._last_check = now
+        if self.state != State.ENABLED or late:
+            return
         for (stream, finger), seen in self._last_seen.items():
             age = now - seen
-            if age > self.limits.stale_s:
-                self._fault(finger, f"{stream} stale ({1e3 * age:.0f} ms without a message)")
+            if age > self.limits.timeout(stream):
+                self._fault(finger, stream, f"{stream} stale ({1e3 * age:.0f} ms without a message)")
 
     def missing_streams(self, now: float) -> list[str]:
         """Streams never seen or currently stale: the reasons enabling is refused."""
@@ -96,7 +127,7 @@ class SupervisorLogic:
                 seen = self._last_seen.get((stream, finger))
                 if seen is None:
                     missing.append(f"{finger}: no {stream} yet")
-                elif now - seen > self.limits.stale_s:
+                elif now - seen > self.limits.timeout(stream):
                     missing.append(f"{finger}: {stream} stale")
         return missing
 
@@ -113,6 +144,7 @@ class SupervisorLogic:
             if missing:
                 return False, "cannot enable: " + "; ".join(missing)
             self.state = State.ENABLED
+            self._enabled_at = now
             return True, "ENABLED"
         if command == "disable":
             if self.state in (State.FAULT, State.ESTOP):
@@ -122,13 +154,10 @@ class SupervisorLogic:
         if command == "reset":
             if self.state not in (State.FAULT, State.ESTOP):
                 return True, f"nothing to reset ({self.state.name})"
-            self.faults.clear()
-            self.check_streams(now)
             missing = self.missing_streams(now)
-            if self.faults or missing:
-                reasons = [str(f) for f in self.faults] + missing
-                self.faults.clear()
-                return False, "reset refused, faults persist: " + "; ".join(reasons)
+            if missing:
+                return False, "reset refused, faults persist: " + "; ".join(missing)
+            self.faults.clear()
             self.state = State.IDLE
             return True, "reset: IDLE (call enable to heat again)"
         raise ValueError(f"unknown supervisor command {command!r}")
@@ -137,12 +166,9 @@ class SupervisorLogic:
     def heating_allowed(self) -> bool:
         return self.state == State.ENABLED
 
-    def _fault(self, finger: str, text: str) -> None:
-        if any(f.finger == finger and f.text.split(" (")[0] == text.split(" (")[0] for f in self.faults):
+    def _fault(self, finger: str, kind: str, text: str) -> None:
+        if any(f.finger == finger and f.kind == kind for f in self.faults):
             return
-        self.faults.append(Fault(finger, text))
+        self.faults.append(Fault(finger, kind, text))
         if self.state != State.ESTOP:
             self.state = State.FAULT
-
-    def forget(self, stream: str, finger: str) -> None:
-        self._last_seen.pop((stream, finger), None)

@@ -11,7 +11,8 @@ Subscribes
   /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only while ENABLED)
 Publishes
   /hems/<finger>/duty              hems_msgs/DutyCommand      reliable, one per feedback sample
-  /hems/<finger>/controller_status hems_msgs/ControllerStatus reliable, every status_period_s (heartbeat)
+  /hems/<finger>/controller_status hems_msgs/ControllerStatus reliable, with every second duty (50 Hz heartbeat), and
+                                   every idle_status_period_s while no feedback arrives
 
 An invalid setpoint (non-finite, outside the tendon stroke or force range, unknown mode) is
 rejected with a logged error and counted in the status; the last valid setpoint stays.
@@ -45,7 +46,8 @@ PARAMETERS = [
     Spec("max_position_m", SetpointLimits.max_position_m, "largest accepted tendon position setpoint, m",
          positive, True),
     Spec("max_force_n", SetpointLimits.max_force_n, "largest accepted tendon force setpoint, N", positive, True),
-    Spec("status_period_s", 0.01, "controller status (heartbeat) period, s", positive, True),
+    Spec("idle_status_period_s", 0.1, "status period while no feedback arrives, s (otherwise one per duty)",
+         positive, True),
 ]
 
 
@@ -86,7 +88,9 @@ class FingerControllerNode(Node):
         self.create_subscription(EncoderReading, names.topic(self.finger, "encoder"), self.on_encoder, qos.SENSOR)
         self.create_subscription(WireForce, names.topic(self.finger, "wire_force"), self.on_force, qos.SENSOR)
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
-        self.create_timer(p["status_period_s"], self.publish_status)
+        self.last_control_s = 0.0
+        self.idle_status_period_s = p["idle_status_period_s"]
+        self.create_timer(p["idle_status_period_s"], self.publish_idle_status)
 
     # inputs -------------------------------------------------------------------
     def on_setpoint(self, message: FingerSetpoint) -> None:
@@ -140,8 +144,16 @@ class FingerControllerNode(Node):
         self.sequence += 1
         command = DutyCommand(finger=self.finger, duty_percent=self.duty, measurement_stamp=stamp,
                               sequence=self.sequence)
-        command.header.stamp = self.get_clock().now().to_msg()
+        now = self.get_clock().now()
+        command.header.stamp = now.to_msg()
         self.duty_pub.publish(command)
+        self.last_control_s = now.nanoseconds * 1e-9
+        if self.sequence % 2 == 0:  # a 50 Hz heartbeat is ample for the 50 ms stale check
+            self.publish_status()
+
+    def publish_idle_status(self) -> None:
+        if self.get_clock().now().nanoseconds * 1e-9 - self.last_control_s >= self.idle_status_period_s:
+            self.publish_status()
 
     def publish_status(self) -> None:
         measurement = self._wire_measurement(self.setpoint.mode)

@@ -9,7 +9,8 @@ Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, trans
             /hems/joint_states       sensor_msgs/JointState      tendon position (m) and tendon force (N, as effort)
             /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz
 
-Monitors: stale encoder, force or controller heartbeat (> stale_s, default 50 ms), wire
+Monitors: stale encoder or force streams (> stale_s, default 50 ms), controller heartbeats
+(> heartbeat_timeout_s, default 200 ms), wire
 over-force (default 50 N), tendon over-travel, duty-watchdog flags. Heating is allowed only
 in ENABLED: the units and controllers drop every duty to 0 as soon as they see any other
 state. FAULT and ESTOP latch until reset.
@@ -26,7 +27,7 @@ from hems_msgs.msg import ActuatorState, ControllerStatus, EncoderReading, Super
 from hems_ros.graph import names, transmission
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.nodes import qos
-from hems_ros.nodes.clock_time import seconds
+from hems_ros.nodes.clock_time import from_msg, seconds
 from hems_ros.nodes.params import Spec, declare, positive
 from hems_ros.nodes.runner import run_node
 
@@ -41,6 +42,8 @@ def _fingers(value) -> str | None:
 PARAMETERS = [
     Spec("fingers", list(names.FINGERS), "fingers to supervise (all six by default)", _fingers, True),
     Spec("stale_s", _LIMITS.stale_s, "a stream silent for longer than this is a fault, s", positive, True),
+    Spec("heartbeat_timeout_s", _LIMITS.heartbeat_timeout_s, "a controller heartbeat silent for longer is a fault, s",
+         positive, True),
     Spec("max_wire_force_n", _LIMITS.max_wire_force_n, "wire over-force limit, N", positive, True),
     Spec("max_tendon_position_m", _LIMITS.max_tendon_position_m, "tendon over-travel limit, m", positive, True),
     Spec("check_period_s", 0.01, "monitor period, s", positive, True),
@@ -57,7 +60,7 @@ class SupervisorNode(Node):
         p = declare(self, PARAMETERS)
         self.fingers = tuple(p["fingers"])
         self.logic = SupervisorLogic(self.fingers, MonitorLimits(
-            p["stale_s"], p["max_wire_force_n"], p["max_tendon_position_m"]))
+            p["stale_s"], p["max_wire_force_n"], p["max_tendon_position_m"], p["heartbeat_timeout_s"]))
         self.position = {f: float("nan") for f in self.fingers}
         self.force = {f: float("nan") for f in self.fingers}
         self.published = None
@@ -93,7 +96,7 @@ class SupervisorNode(Node):
         self.publish_if_changed()
 
     def on_state(self, finger: str, message: ActuatorState) -> None:
-        self.logic.watchdog(finger, message.watchdog_tripped)
+        self.logic.watchdog(finger, message.watchdog_tripped, from_msg(message.header.stamp))
         self.publish_if_changed()
 
     def on_command(self, command: str, response: Trigger.Response) -> Trigger.Response:
@@ -114,8 +117,8 @@ class SupervisorNode(Node):
     def publish_status(self) -> None:
         logic = self.logic
         if self.published is None or self.published[0] != logic.state:
-            self.get_logger().info(f"state {logic.state.name}" + (
-                f": {'; '.join(map(str, logic.faults))}" if logic.faults else ""))
+            log = self.get_logger().error if logic.state in (State.FAULT, State.ESTOP) else self.get_logger().info
+            log(f"state {logic.state.name}" + (f": {'; '.join(map(str, logic.faults))}" if logic.faults else ""))
         self.published = (logic.state, len(logic.faults))
         status = SupervisorStatus(state=int(logic.state), state_name=logic.state.name,
                                   faults=[str(f) for f in logic.faults],

@@ -1,0 +1,111 @@
+"""``hems grasp``: the scripted grasp on a running graph, with a summary and a plot."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from hems_ros.graph import names
+from hems_ros.graph.grasp import FingerTrace, GraspPlan, format_summary, plot, summarize
+from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
+
+
+def add_grasp_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--force", type=float, default=10.0, help="tendon force to hold, N (default 10)")
+    parser.add_argument("--approach-mm", type=float, default=20.0, help="tendon approach position, mm (default 20)")
+    parser.add_argument("--approach-s", type=float, default=5.0, help="approach duration, s")
+    parser.add_argument("--hold-s", type=float, default=6.0, help="force hold duration, s")
+    parser.add_argument("--release-s", type=float, default=4.0, help="release duration, s")
+    parser.add_argument("--plot", type=Path, default=Path("results/grasp.png"), help="PNG plot path")
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "grasp", help="scripted grasp on all six fingers: position approach, force hold, release",
+        description="On a running, enabled graph (hems up; hems enable): every finger approaches a tendon "
+                    "position, holds a tendon force, then releases; prints a per-finger summary (tracking "
+                    "error, peak force, energy) and writes a PNG plot.")
+    add_grasp_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def plan_from(args: argparse.Namespace) -> GraspPlan:
+    limits = SetpointLimits()
+    validate("force", args.force, limits)
+    validate("position", args.approach_mm * 1e-3, limits)
+    return GraspPlan(force_n=args.force, approach_m=args.approach_mm * 1e-3, approach_s=args.approach_s,
+                     hold_s=args.hold_s, release_s=args.release_s)
+
+
+def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
+    """Drive the phases on ``fingers``; return (traces, start time) from the graph's topics."""
+    from sensor_msgs.msg import JointState
+
+    from hems_msgs.msg import ActuatorState, DutyCommand
+    from hems_ros.nodes import qos
+
+    traces = {f: FingerTrace.empty() for f in fingers}
+    node = client.node
+
+    def on_joints(message: JointState) -> None:
+        t = message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec
+        for name, x, f in zip(message.name, message.position, message.effort):
+            if name in traces:
+                traces[name].t.append(t)
+                traces[name].position_m.append(x)
+                traces[name].force_n.append(f)
+
+    def on_state(finger: str, message: ActuatorState) -> None:
+        traces[finger].power_t.append(message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec)
+        traces[finger].power_w.append(message.electrical_power)
+
+    def on_duty(finger: str, message: DutyCommand) -> None:
+        traces[finger].duty_t.append(message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec)
+        traces[finger].duty_percent.append(message.duty_percent)
+
+    subs = [node.create_subscription(JointState, names.JOINT_STATES_TOPIC, on_joints, qos.SENSOR)]
+    for finger in fingers:
+        subs.append(node.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
+                                             lambda m, f=finger: on_state(f, m), qos.SENSOR))
+        subs.append(node.create_subscription(DutyCommand, names.topic(finger, "duty"),
+                                             lambda m, f=finger: on_duty(f, m), qos.COMMAND))
+    client.spin_for(0.5)
+    t_start = node.get_clock().now().nanoseconds * 1e-9
+    for phase, mode, value, duration in plan.phases():
+        print(f"grasp: {phase}: {mode} {value:g} {'m' if mode == 'position' else 'N'} for {duration:g} s", flush=True)
+        missing = [f for f in fingers if not client.send_setpoint(f, mode, value)]
+        if missing:
+            raise RuntimeError(f"no finger_controller for {', '.join(missing)}")
+        client.spin_for(duration)
+    for sub in subs:
+        node.destroy_subscription(sub)
+    return traces, t_start
+
+
+def report(traces, plan: GraspPlan, t_start: float, plot_path: Path) -> list:
+    rows = [summarize(f, trace, plan, t_start) for f, trace in traces.items()]
+    print(format_summary(rows, plan))
+    plot_path.parent.mkdir(parents=True, exist_ok=True)
+    plot(traces, plan, t_start, plot_path)
+    print(f"grasp: plot written to {plot_path}")
+    return rows
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        plan = plan_from(args)
+    except SetpointError as error:
+        print(f"grasp: {error}", file=sys.stderr)
+        return 2
+    from hems_ros.cli.graph_client import GraphClient
+
+    with GraphClient("hems_grasp") as client:
+        try:
+            traces, t_start = run_grasp(client, plan)
+        except RuntimeError as error:
+            print(f"grasp: {error}", file=sys.stderr)
+            return 1
+    report(traces, plan, t_start, args.plot)
+    return 0

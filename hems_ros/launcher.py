@@ -1,0 +1,146 @@
+"""Starting and stopping the HEMS graph as child processes (no rclpy here).
+
+Each node runs as its own process (``lib/hems_ros/<executable>`` in the prefix, like
+``ros2 run``), or all of them in one process (``--composed``) on a multi-threaded
+executor. Children die with the launcher even if it is killed (PR_SET_PDEATHSIG), and
+:meth:`Graph.stop` ends every child within ``grace_s`` (SIGINT, then SIGKILL).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from hems_ros.graph import names
+from hems_ros.rosenv import child_environment
+
+PR_SET_PDEATHSIG = 1
+
+
+def default_params_file() -> Path:
+    """config/hems.yaml of the source tree, or of share/hems_ros when installed elsewhere."""
+    source = Path(__file__).resolve().parent.parent / "config" / "hems.yaml"
+    if source.is_file():
+        return source
+    return Path(sys.prefix) / "share" / "hems_ros" / "config" / "hems.yaml"
+
+
+def _die_with_parent() -> None:
+    ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
+@dataclass
+class GraphOptions:
+    params_file: Path = field(default_factory=default_params_file)
+    composed: bool = False
+    sim_time: bool = False
+    rate: float = 1.0
+    fingers: tuple[str, ...] = names.FINGERS
+    extra_ros_args: tuple[str, ...] = ()
+    log_level: str = "info"
+
+
+def node_specs(options: GraphOptions) -> list[tuple[str, str, dict[str, str]]]:
+    """(executable, node name, parameters) for the requested fingers (all 16 nodes by default)."""
+    wanted = set(options.fingers)
+    specs = []
+    for executable, node, params in names.node_names():
+        if "finger" in params and params["finger"] not in wanted:
+            continue
+        if "module" in params and not wanted & set(names.MODULES[params["module"]]):
+            continue
+        if executable == "supervisor" and wanted != set(names.FINGERS):
+            params = {"fingers": "[" + ",".join(f for f in names.FINGERS if f in wanted) + "]"}
+        specs.append((executable, node, params))
+    return specs
+
+
+def ros_arguments(node: str, params: dict[str, str], options: GraphOptions) -> list[str]:
+    args = ["--ros-args", "--params-file", str(options.params_file), "-r", f"__node:={node}",
+            "--log-level", options.log_level]
+    for key, value in params.items():
+        args += ["-p", f"{key}:={value}"]
+    if options.sim_time:
+        args += ["-p", "use_sim_time:=true"]
+    return args + list(options.extra_ros_args)
+
+
+def executable_path(executable: str) -> list[str]:
+    installed = Path(sys.prefix) / "lib" / "hems_ros" / executable
+    if installed.is_file():
+        return [str(installed)]
+    return [sys.executable, "-m", f"hems_ros.nodes.{executable}"]
+
+
+class Graph:
+    """The running graph: child processes, started by :meth:`start`, ended by :meth:`stop`."""
+
+    def __init__(self, options: GraphOptions) -> None:
+        self.options = options
+        self.processes: dict[str, subprocess.Popen] = {}
+        self.killed: list[str] = []  # children that needed SIGKILL at the last stop
+
+    def commands(self) -> dict[str, list[str]]:
+        specs = node_specs(self.options)
+        commands = {}
+        if self.options.sim_time:
+            commands["sim_clock"] = [sys.executable, "-m", "hems_ros.nodes.sim_clock", "--ros-args",
+                                     "-p", f"rate:={self.options.rate}"]
+        if self.options.composed:
+            spec_args = [f"{exe}:{node}:" + ",".join(f"{k}={v}" for k, v in params.items())
+                         for exe, node, params in specs]
+            commands["composed"] = ([sys.executable, "-m", "hems_ros.nodes.composed", *spec_args]
+                                    + ros_arguments("", {}, self.options)[:3]
+                                    + (["-p", "use_sim_time:=true"] if self.options.sim_time else []))
+        else:
+            for executable, node, params in specs:
+                commands[node] = executable_path(executable) + ros_arguments(node, params, self.options)
+        return commands
+
+    def start(self) -> None:
+        env = child_environment()
+        for name, command in self.commands().items():
+            self.processes[name] = subprocess.Popen(command, env=env, preexec_fn=_die_with_parent)
+
+    def restart(self, name: str) -> None:
+        """Start the named node's process again (after it died or was killed)."""
+        old = self.processes[name]
+        if old.poll() is None:
+            raise RuntimeError(f"{name} is still running (pid {old.pid})")
+        self.processes[name] = subprocess.Popen(self.commands()[name], env=child_environment(),
+                                                preexec_fn=_die_with_parent)
+
+    def exited(self) -> dict[str, int]:
+        return {name: p.returncode for name, p in self.processes.items() if p.poll() is not None}
+
+    def stop(self, grace_s: float = 2.5) -> dict[str, int]:
+        """SIGINT every child, SIGKILL what is left after ``grace_s``; return exit codes."""
+        for process in self.processes.values():
+            if process.poll() is None:
+                process.send_signal(signal.SIGINT)
+        deadline = time.monotonic() + grace_s
+        self.killed = []
+        for name, process in self.processes.items():
+            try:
+                process.wait(max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+                self.killed.append(name)
+        return {name: p.returncode for name, p in self.processes.items()}
+
+    def __enter__(self) -> "Graph":
+        self.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    @property
+    def pids(self) -> list[int]:
+        return [p.pid for p in self.processes.values()]

@@ -1,0 +1,80 @@
+"""All nodes of the graph in one process on a multi-threaded executor (`hems up --composed`).
+
+Usage: python -m hems_ros.nodes.composed <executable>:<node name>:<k=v,...> ... [--ros-args ...]
+Each node gets its own name and parameters as node-level arguments; the global
+``--ros-args`` (params file, use_sim_time) apply to all of them.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from hems_ros.rosenv import apply_network_defaults
+
+NODE_CLASSES = {
+    "actuation_unit": ("hems_ros.nodes.actuation_unit", "ActuationUnitNode"),
+    "shoulder_module": ("hems_ros.nodes.shoulder_module", "ShoulderModuleNode"),
+    "finger_controller": ("hems_ros.nodes.finger_controller", "FingerControllerNode"),
+    "supervisor": ("hems_ros.nodes.supervisor", "SupervisorNode"),
+}
+
+
+def parse_spec(spec: str) -> tuple[str, str, list[str]]:
+    executable, node, params = spec.split(":", 2)
+    args = ["--ros-args", "-r", f"__node:={node}"]
+    for pair in filter(None, _split_params(params)):
+        key, value = pair.split("=", 1)
+        args += ["-p", f"{key}:={value}"]
+    return executable, node, args
+
+
+def _split_params(text: str) -> list[str]:
+    """Split k=v pairs on commas outside brackets (list values such as [index,middle])."""
+    parts, depth, current = [], 0, ""
+    for char in text:
+        depth += char == "["
+        depth -= char == "]"
+        if char == "," and depth == 0:
+            parts.append(current)
+            current = ""
+        else:
+            current += char
+    return parts + [current]
+
+
+def main(argv: list[str] | None = None) -> int:
+    apply_network_defaults()
+    import importlib
+
+    import rclpy
+    from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+
+    argv = sys.argv[1:] if argv is None else argv
+    split = argv.index("--ros-args") if "--ros-args" in argv else len(argv)
+    specs, ros_args = argv[:split], argv[split:]
+    rclpy.init(args=["composed", *ros_args])
+    executor = MultiThreadedExecutor(num_threads=4)
+    nodes = []
+    try:
+        for spec in specs:
+            executable, node_name, cli_args = parse_spec(spec)
+            module, cls = NODE_CLASSES[executable]
+            node = getattr(importlib.import_module(module), cls)(cli_args=cli_args)
+            nodes.append(node)
+            executor.add_node(node)
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ValueError as error:
+        print(f"composed: invalid configuration: {error}", file=sys.stderr)
+        return 2
+    finally:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,37 @@
+"""A running HEMS graph (16 node processes) shared by the tests of a module."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+
+@pytest.fixture(scope="module")
+def graph(venv):
+    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.graph import names
+    from hems_ros.launcher import Graph, GraphOptions
+
+    running = Graph(GraphOptions(log_level="warn"))
+    running.start()
+    client = GraphClient("hems_test")
+    try:
+        deadline = time.monotonic() + 90
+        ok, message = False, ""
+        while time.monotonic() < deadline and not ok:
+            client.call("reset", timeout=5)  # a start-up hiccup may have latched a fault
+            ok, message = client.call("enable", timeout=5)
+            if not ok:
+                client.spin_for(1.0)
+        assert ok, f"graph did not become ready: {message}"
+        client.call("disable")
+        client.spin_for(3.0)  # let start-up load (imports, JIT cache loads) pass
+        client.call("reset")
+        for finger in names.FINGERS:  # create every endpoint the tests use before they start
+            client.send_setpoint(finger, "position", 0.0)
+        client.spin_for(2.0)
+        yield running, client
+    finally:
+        client.close()
+        running.stop()

@@ -1,0 +1,191 @@
+"""The real graph in separate processes: tracking, safety paths and bad input (issue 5).
+
+The tests of this module run in order on one graph; each leaves it DISABLED or IDLE.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+from hems_msgs.msg import ActuatorState, ControllerStatus, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
+from hems_ros.graph import names
+from hems_ros.nodes import qos
+from hems_ros.nodes.clock_time import from_msg
+
+from recording import Recorder
+
+pytestmark = [pytest.mark.slow, pytest.mark.graph_realtime]
+
+FINGER = "index"
+
+
+@pytest.fixture(scope="module")
+def rec(graph):
+    _, client = graph
+    recorder = Recorder(client)
+    recorder.listen(EncoderReading, names.topic(FINGER, "encoder"), qos.SENSOR)
+    recorder.listen(WireForce, names.topic(FINGER, "wire_force"), qos.SENSOR)
+    recorder.listen(ControllerStatus, names.topic(FINGER, "controller_status"), qos.COMMAND)
+    recorder.listen(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
+    for finger in names.FINGERS:
+        recorder.listen(ActuatorState, names.sim_topic(finger, "state"), qos.SENSOR)
+    recorder.spin(1.0)
+    return recorder
+
+
+def enable(client) -> None:
+    ok, message = client.call("enable")
+    if not ok:
+        status = client.snapshot(seconds=0.5).supervisor
+        message += f" (supervisor faults: {list(status.faults) if status else 'no status'})"
+    assert ok, message
+
+
+def cool_down(client, rec, seconds: float = 8.0) -> None:
+    """Setpoint 0 and wait until the index wire is back near rest."""
+    client.send_setpoint(FINGER, "position", 0.0)
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        rec.spin(0.5)
+        recent = rec.since(names.topic(FINGER, "encoder"), time.time() - 0.3)
+        if recent and max(m.position for _, m in recent) < 0.0005:
+            return
+
+
+def test_index_position_step_settles_without_overshoot_and_matches_lockstep(graph, rec):
+    from hems_ros.experiments.lockstep import simulate_loop
+
+    _, client = graph
+    enable(client)
+    t0 = time.time()
+    assert client.send_setpoint(FINGER, "position", 0.020)
+    rec.spin(4.5)
+    samples = [(from_msg(m.header.stamp), 2 * m.position) for _, m in rec.since(names.topic(FINGER, "encoder"), t0)]
+    t = np.array([s[0] for s in samples]) - t0
+    x = np.array([s[1] for s in samples])
+    assert len(x) > 350, f"only {len(x)} encoder samples in 4.5 s"
+    late = t >= 3.0
+    status = rec.since(names.SUPERVISOR_STATUS_TOPIC, t0 - 5)
+    assert x.max() > 0.0, f"no motion; supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-2:]]}"
+    assert np.all(np.abs(x[late] - 0.020) <= 1e-4), (
+        f"tendon {1e3 * x[late].min():.3f}-{1e3 * x[late].max():.3f} mm after 3 s; "
+        f"supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-1:]]}")
+    assert x.max() <= 0.020 + 1e-4, f"overshoot to {1e3 * x.max():.3f} mm"
+
+    window = (t >= 0) & (t < 4.0)
+    rmse_graph = math.sqrt(np.mean((x[window] - 0.020) ** 2))
+    measured, *_ = simulate_loop(np.full(400, 0.010), "bpid", "position", "ch6_hems_index")
+    rmse_lockstep = math.sqrt(np.mean((2 * np.asarray(measured) - 0.020) ** 2))
+    assert abs(rmse_graph - rmse_lockstep) <= 0.05 * rmse_lockstep, (
+        f"RMSE graph {1e3 * rmse_graph:.3f} mm vs lockstep {1e3 * rmse_lockstep:.3f} mm")
+    client.call("disable")
+    cool_down(client, rec)
+
+
+def test_index_force_mode_holds_10_newtons(graph, rec):
+    _, client = graph
+    enable(client)
+    t0 = time.time()
+    assert client.send_setpoint(FINGER, "force", 10.0)
+    rec.spin(7.0)
+    readings = [(t - t0, m.force / 2.0) for t, m in rec.since(names.topic(FINGER, "wire_force"), t0)]
+    hold = np.array([f for t, f in readings if 4.0 <= t <= 7.0])
+    assert len(hold) > 200
+    assert np.all(np.abs(hold - 10.0) <= 0.2), f"tendon force {hold.min():.3f}-{hold.max():.3f} N while holding"
+
+
+def test_estop_zeroes_every_duty_within_30ms_and_latches(graph, rec):
+    _, client = graph
+    t_call = time.time()
+    ok, message = client.call("estop")
+    assert ok, message
+    rec.spin(1.0)
+    for finger in names.FINGERS:
+        states = rec.since(names.sim_topic(finger, "state"), t_call - 0.2)
+        first_zero = next(from_msg(m.header.stamp) for _, m in states
+                          if m.duty_percent == 0.0 and from_msg(m.header.stamp) >= t_call - 0.2)
+        assert first_zero - t_call <= 0.030, f"{finger}: duty 0 only {1e3 * (first_zero - t_call):.1f} ms after estop"
+    assert client.send_setpoint(FINGER, "position", 0.030)
+    rec.spin(1.0)
+    after = [m for _, m in rec.since(names.sim_topic(FINGER, "state"), t_call + 0.05)]
+    assert after and all(m.duty_percent == 0.0 for m in after), "duty returned before reset"
+    ok, message = client.call("enable")
+    assert not ok and "ESTOP" in message
+    ok, message = client.call("reset")
+    assert ok, message
+    cool_down(client, rec)
+
+
+def test_killed_controller_zeroes_its_duty_and_faults_the_supervisor_then_recovers(graph, rec):
+    running, client = graph
+    enable(client)
+    assert client.send_setpoint(FINGER, "position", 0.015)
+    rec.spin(1.0)
+    name = f"finger_controller_{FINGER}"
+    t_kill = time.time()
+    os.kill(running.processes[name].pid, signal.SIGKILL)
+    rec.spin(1.0)
+    tripped = [from_msg(m.header.stamp) for _, m in rec.since(names.sim_topic(FINGER, "state"), t_kill)
+               if m.watchdog_tripped and m.duty_percent == 0.0]
+    assert tripped, "no watchdog trip after the controller was killed"
+    assert tripped[0] - t_kill <= 0.050, f"duty 0 after {1e3 * (tripped[0] - t_kill):.1f} ms"
+    statuses = [m for _, m in rec.since(names.SUPERVISOR_STATUS_TOPIC, t_kill)]
+    assert statuses and statuses[-1].state == SupervisorStatus.FAULT
+    assert FINGER in statuses[-1].fault_fingers, statuses[-1].faults
+
+    running.processes[name].wait(5)
+    running.restart(name)
+    deadline = time.monotonic() + 60
+    ok, message = False, ""
+    while time.monotonic() < deadline and not ok:
+        rec.spin(1.0)
+        ok, message = client.call("reset")
+    assert ok, message
+    enable(client)
+    client.call("disable")
+    cool_down(client, rec)
+
+
+def test_bad_setpoints_by_topic_are_rejected_and_change_nothing(graph, rec):
+    running, client = graph
+    enable(client)
+    assert client.send_setpoint(FINGER, "position", 0.0)
+    rec.spin(0.5)
+    before = rec.since(names.topic(FINGER, "controller_status"), time.time() - 0.3)[-1][1]
+    t0 = time.time()
+    for mode, value in (("position", math.nan), ("position", -1.0), ("position", 1e9), ("force", math.inf),
+                        ("grip", 0.01)):
+        assert client.send_setpoint(FINGER, mode, value)
+    rec.spin(1.0)
+    after = rec.since(names.topic(FINGER, "controller_status"), time.time() - 0.3)[-1][1]
+    assert after.rejected_setpoints - before.rejected_setpoints == 5
+    assert "unknown mode 'grip'" in after.last_rejection
+    assert (after.mode, after.setpoint) == ("position", 0.0)
+    duties = [m.duty_percent for _, m in rec.since(names.sim_topic(FINGER, "state"), t0)]
+    assert duties and max(duties) == 0.0
+    assert running.exited() == {}
+    client.call("disable")
+
+
+@pytest.mark.parametrize("argv, reason", [
+    (["index", "nan"], "not finite"),
+    (["index", "-1", "--unit", "mm"], "outside the tendon stroke"),
+    (["index", "1e9"], "outside the tendon stroke"),
+    (["pinky", "0.01"], "unknown finger 'pinky'"),
+    (["index", "0.01", "--mode", "grip"], "invalid choice: 'grip'"),
+])
+def test_bad_setpoints_by_cli_are_rejected_with_a_message(graph, venv, argv, reason):
+    running, _ = graph
+    result = subprocess.run([str(venv / "bin" / "hems"), "setpoint", *argv],
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    assert reason in result.stderr
+    assert running.exited() == {}
+
