@@ -60,9 +60,13 @@ def run(args: argparse.Namespace) -> int:
                 print(f"demo: could not enable the graph: {message}", file=sys.stderr)
                 return 1
             print(f"demo: {message}", flush=True)
-            traces, t_start = grasp.run_grasp(client, plan, options.fingers)
+            traces, t_start, statuses = grasp.run_grasp(client, plan, options.fingers)
             client.call("disable")
         grasp.report(traces, plan, t_start, args.plot)
+        problem = grasp.fault_report(statuses)
+        if problem:
+            print(f"demo: not a valid run: {problem}", file=sys.stderr)
+            return 1
         crashed = graph.exited()
         if crashed:
             print(f"demo: nodes exited during the run: {crashed}", file=sys.stderr)

@@ -40,10 +40,10 @@ def plan_from(args: argparse.Namespace) -> GraspPlan:
 
 
 def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
-    """Drive the phases on ``fingers``; return (traces, start time) from the graph's topics."""
+    """Drive the phases on ``fingers``; return (traces, start time, supervisor statuses seen)."""
     from sensor_msgs.msg import JointState
 
-    from hems_msgs.msg import ActuatorState, DutyCommand
+    from hems_msgs.msg import ActuatorState, DutyCommand, SupervisorStatus
     from hems_ros.nodes import qos
 
     traces = {f: FingerTrace.empty() for f in fingers}
@@ -65,7 +65,9 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
         traces[finger].duty_t.append(message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec)
         traces[finger].duty_percent.append(message.duty_percent)
 
-    subs = [node.create_subscription(JointState, names.JOINT_STATES_TOPIC, on_joints, qos.SENSOR)]
+    statuses = []
+    subs = [node.create_subscription(JointState, names.JOINT_STATES_TOPIC, on_joints, qos.SENSOR),
+            node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, statuses.append, qos.STATUS)]
     for finger in fingers:
         subs.append(node.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
                                              lambda m, f=finger: on_state(f, m), qos.SENSOR))
@@ -81,7 +83,17 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
         client.spin_for(duration)
     for sub in subs:
         node.destroy_subscription(sub)
-    return traces, t_start
+    return traces, t_start, statuses
+
+
+def fault_report(statuses) -> str | None:
+    """Why the run is invalid (the supervisor left ENABLED), or None."""
+    bad = [s for s in statuses if s.state_name != "ENABLED"]
+    if not statuses:
+        return "no supervisor status received"
+    if bad:
+        return f"supervisor {bad[0].state_name}: {'; '.join(bad[0].faults) or 'no fault text'}"
+    return None
 
 
 def report(traces, plan: GraspPlan, t_start: float, plot_path: Path) -> list:
@@ -103,9 +115,13 @@ def run(args: argparse.Namespace) -> int:
 
     with GraphClient("hems_grasp") as client:
         try:
-            traces, t_start = run_grasp(client, plan)
+            traces, t_start, statuses = run_grasp(client, plan)
         except RuntimeError as error:
             print(f"grasp: {error}", file=sys.stderr)
             return 1
     report(traces, plan, t_start, args.plot)
+    problem = fault_report(statuses)
+    if problem:
+        print(f"grasp: not a valid run: {problem}", file=sys.stderr)
+        return 1
     return 0

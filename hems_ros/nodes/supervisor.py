@@ -127,8 +127,11 @@ class SupervisorNode(Node):
         self.status_pub.publish(status)
 
     def publish_joint_states(self) -> None:
+        # velocity is unknown here and left NaN rather than empty: rclpy serializes an empty
+        # float64 array with trailing padding that the rosbags reader rejects.
         joints = JointState(name=list(self.fingers),
                             position=[transmission.tendon_position(self.position[f]) for f in self.fingers],
+                            velocity=[float("nan")] * len(self.fingers),
                             effort=[transmission.tendon_force(self.force[f]) for f in self.fingers])
         joints.header.stamp = self.get_clock().now().to_msg()
         self.joints_pub.publish(joints)
