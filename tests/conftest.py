@@ -42,6 +42,11 @@ def pytest_configure(config: pytest.Config) -> None:
     os.environ["ROS_DOMAIN_ID"] = os.environ["HEMS_TEST_DOMAIN_ID"]
 
 
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if _domain_lock is not None:
+        _domain_lock.close()  # releases the domain for the next session
+
+
 @pytest.fixture(scope="session")
 def ros_domain_id() -> int:
     """The DDS domain this test session owns (also in ``os.environ['ROS_DOMAIN_ID']``)."""

@@ -21,7 +21,6 @@ and message counts are logged.
 from __future__ import annotations
 
 import importlib
-import sys
 import time
 from datetime import datetime
 
@@ -132,40 +131,21 @@ class Recorder(Node):
         super().destroy_node()
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Like ``runner.run_node``, with the events executor (recording is callback-bound)."""
-    from hems_ros.nodes.runner import node_help
-    from hems_ros.rosenv import apply_network_defaults
-
-    args = sys.argv if argv is None else argv
-    user_args = args[1:args.index("--ros-args")] if "--ros-args" in args else args[1:]
-    if "-h" in user_args or "--help" in user_args:
-        print(node_help(Recorder, args[0]))
-        return 0
-    apply_network_defaults()
+def spin_until_expired(node: "Recorder") -> None:
+    """The events executor: recording is callback-bound, and it keeps the recorder's CPU low."""
     import rclpy
-    from rclpy.executors import ExternalShutdownException
     from rclpy.experimental import EventsExecutor
 
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = Recorder()
-        executor = EventsExecutor()
-        executor.add_node(node)
-        while rclpy.ok() and not node.expired:
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ValueError, FileExistsError) as error:
-        print(f"recorder: invalid configuration: {error}", file=sys.stderr)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    executor = EventsExecutor()
+    executor.add_node(node)
+    while rclpy.ok() and not node.expired:
+        executor.spin_once(timeout_sec=0.1)
 
+
+def main(argv: list[str] | None = None) -> int:
+    from hems_ros.nodes.runner import run_node
+
+    return run_node(Recorder, argv, spin=spin_until_expired, config_errors=(ValueError, FileExistsError))
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -10,12 +10,15 @@ from collections.abc import Callable
 from hems_ros.rosenv import apply_network_defaults
 
 
-def run_node(make_node: Callable[[], object], argv: list[str] | None = None) -> int:
+def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
+             spin: Callable[[object], None] | None = None,
+             config_errors: tuple[type[Exception], ...] = (ValueError,)) -> int:
     """Initialise rclpy, spin the node until Ctrl-C or SIGTERM, shut down cleanly.
 
     ``-h``/``--help`` before ``--ros-args`` prints the node's documentation and exits.
-    A ``ValueError`` raised while constructing the node is a configuration error: it is
-    printed with the node's name and the process exits with code 2.
+    A ``config_errors`` exception (``ValueError`` by default) raised while constructing the
+    node is a configuration error: it is printed with the node's name and the process exits
+    with code 2. ``spin(node)`` replaces ``rclpy.spin`` for nodes that drive their own executor.
     """
     args = sys.argv if argv is None else argv
     user_args = args[1:args.index("--ros-args")] if "--ros-args" in args else args[1:]
@@ -39,14 +42,14 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None) -> 
         # freezing them keeps the collector's pauses far below the 10 ms control period.
         gc.collect()
         gc.freeze()
-        rclpy.spin(node)
+        (spin or rclpy.spin)(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RuntimeError:
         if rclpy.ok():
             raise
         # a take interrupted by the shutdown signal: the node was stopping anyway
-    except ValueError as error:
+    except config_errors as error:
         print(f"{getattr(make_node, '__name__', 'node')}: invalid configuration: {error}", file=sys.stderr)
         return 2
     finally:

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import PUBLISHER_SCRIPT
+from bag_helpers import PUBLISHER_SCRIPT
 from synthetic_publisher import STATUS_TOPIC, STREAMS, expected_values
 
 from hems_ros.bag import load_bag

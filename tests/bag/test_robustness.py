@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import write_bag
+from bag_helpers import write_bag
 
 from hems_ros.bag import BagFormatError, BagWarning, bag_info, load_bag
 from hems_ros.bag.mcapscan import MAGIC

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from conftest import T0, TOPICS, log_time, write_bag
+from bag_helpers import T0, TOPICS, log_time, write_bag
 
 from hems_ros.bag import BagWriter, bag_info, iter_messages, load_bag, msgdefs
 from hems_ros.bag.cdr import build_decoder

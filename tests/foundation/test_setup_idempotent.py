@@ -1,8 +1,9 @@
 """`make setup` on a set-up checkout has nothing left to build."""
 
 import subprocess
+from pathlib import Path
 
-from conftest import REPO
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_second_make_setup_has_nothing_to_rebuild():
