@@ -6,6 +6,9 @@ PY := $(VENV)/bin/python
 PREFIX := $(abspath $(VENV))
 MSGS_BUILD := build/hems_msgs
 PYTEST_ARGS ?=
+# The all-six-finger grasp (DEMO_ARGS=) still misses the graph's 50 ms deadlines now and then
+# on a 2-core host (tests/graph/README.md); the index finger's full node chain runs clean.
+DEMO_ARGS ?= --fingers index
 # Every process started from here keeps DDS discovery on the loopback interface.
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
@@ -43,7 +46,7 @@ $(VENV)/.stamp-hems_ros: setup.py setup.cfg package.xml hems_ros/executables.py 
 	@touch $@
 
 demo: setup
-	$(VENV)/bin/hems demo
+	$(VENV)/bin/hems demo $(DEMO_ARGS)
 
 test: setup
 	tools/run_pytest.sh $(PY) tests $(PYTEST_ARGS)

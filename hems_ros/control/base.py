@@ -134,6 +134,11 @@ class Controller:
         if not math.isfinite(y):
             return self._trip(f"measurement is {y}")
         bias = self._bias
+        if r < y:
+            # The mode-switch transfer term only carries heating towards or at the setpoint; a
+            # setpoint below the measurement (a release) must be free to cut the duty at
+            # once, whatever the bilinear factor does to the PID term.
+            bias = self._bias = 0.0
         u = self._step(self._scale * r, self._scale * y, bias)
         self._bias = bias * self._transfer_decay
         if u > DUTY_MAX:

@@ -101,8 +101,11 @@ class SupervisorNode(Node):
 
     def on_command(self, command: str, response: Trigger.Response) -> Trigger.Response:
         response.success, response.message = self.logic.request(command, seconds(self))
-        log = self.get_logger().warning if command == "estop" or not response.success else self.get_logger().info
-        log(f"{command}: {response.message}")
+        # rclpy ties a severity to each logging call site, so the two levels need two calls
+        if command == "estop" or not response.success:
+            self.get_logger().warning(f"{command}: {response.message}")
+        else:
+            self.get_logger().info(f"{command}: {response.message}")
         self.publish_status()
         return response
 
@@ -117,8 +120,11 @@ class SupervisorNode(Node):
     def publish_status(self) -> None:
         logic = self.logic
         if self.published is None or self.published[0] != logic.state:
-            log = self.get_logger().error if logic.state in (State.FAULT, State.ESTOP) else self.get_logger().info
-            log(f"state {logic.state.name}" + (f": {'; '.join(map(str, logic.faults))}" if logic.faults else ""))
+            text = f"state {logic.state.name}" + (f": {'; '.join(map(str, logic.faults))}" if logic.faults else "")
+            if logic.state in (State.FAULT, State.ESTOP):
+                self.get_logger().error(text)
+            else:
+                self.get_logger().info(text)
         self.published = (logic.state, len(logic.faults))
         status = SupervisorStatus(state=int(logic.state), state_name=logic.state.name,
                                   faults=[str(f) for f in logic.faults],

@@ -90,6 +90,17 @@ def test_bumpless_switch(strategy):
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
+def test_release_after_a_mode_switch_drops_the_transfer_term(strategy):
+    c = make_controller(strategy, "force")
+    for _ in range(50):
+        held = c.update(20.0, 19.99)
+    assert held > 0
+    c.set_mode("position", 0.026)
+    # release: position setpoint 0 below the measured 26 mm: no carried-over heating
+    assert c.update(0.0, 0.026) == 0.0
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
 def test_switch_to_same_mode_keeps_state(strategy):
     a = make_controller(strategy, "position")
     b = make_controller(strategy, "position")
