@@ -44,10 +44,11 @@ def test_every_executable_is_installed_and_answers_help(venv, name):
 
 
 @pytest.mark.parametrize("name", NODE_EXECUTABLES)
-def test_every_node_starts_and_stops_cleanly_on_sigint_and_sigterm(venv, name):
+def test_every_node_starts_and_stops_cleanly_on_sigint_and_sigterm(venv, name, tmp_path):
     for stop in (signal.SIGINT, signal.SIGTERM):
+        # run in a scratch folder: a recorder started without `output` writes its bag to the cwd
         process = subprocess.Popen([str(venv / "lib" / "hems_ros" / name), "--ros-args", "--log-level", "warn"],
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
         time.sleep(3.0)
         assert process.poll() is None, f"{name} exited early: {process.communicate()[1]}"
         started = time.monotonic()
