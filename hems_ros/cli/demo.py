@@ -2,7 +2,9 @@
 
 Brings the 16-node graph up as separate processes, enables it, runs the scripted grasp on
 all six fingers (position approach, force hold, release), prints the per-finger summary,
-writes a PNG plot and shuts everything down.
+writes a PNG plot and shuts everything down. The run is recorded into a bag
+(``bags/demo_<date>_<time>/`` unless ``--record DIR``) whose path and message counts are
+printed at the end.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import time
 from pathlib import Path
 
 from hems_ros.cli import grasp
-from hems_ros.cli.up import add_graph_arguments, graph_options
+from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, graph_topics, stop_recorder
 from hems_ros.launcher import Graph
 
 
@@ -28,6 +30,8 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run, plot=Path("results/demo_grasp.png"))
     parser.add_argument("--ready-timeout", type=float, default=60.0,
                         help="seconds to wait for every node to come up (default 60)")
+    parser.add_argument("--record", type=Path, default=True, metavar="DIR",
+                        help="bag folder the run is recorded into (default bags/demo_<date>_<time>)")
 
 
 def enable_when_ready(client, timeout: float) -> tuple[bool, str]:
@@ -45,16 +49,31 @@ def run(args: argparse.Namespace) -> int:
     try:
         options = graph_options(args)
         plan = grasp.plan_from(args)
+        record = bag_folder(args.record, "demo")
     except ValueError as error:
         print(f"demo: {error}", file=sys.stderr)
         return 2
+    from hems_ros.bag.recording import RecorderProcess
     from hems_ros.cli.graph_client import GraphClient
 
     graph = Graph(options)
     graph.start()
-    print(f"demo: started {len(graph.processes)} processes; waiting for every stream", flush=True)
+    recorder = RecorderProcess(record)
+    print(f"demo: started {len(graph.processes)} processes, recording into {record}; waiting for every stream",
+          flush=True)
     try:
         with GraphClient("hems_demo") as client:
+            # The controllers start at position 0 already; sending it creates the setpoint
+            # publishers now, so the recorder is subscribed before the first real setpoint.
+            deadline = time.monotonic() + args.ready_timeout
+            for finger in options.fingers:
+                while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
+                    pass
+            try:
+                recorder.wait_for_topics(graph_topics(options.fingers), timeout=max(1.0, deadline - time.monotonic()))
+            except (TimeoutError, RuntimeError) as error:
+                print(f"demo: {error}", file=sys.stderr)
+                return 1
             ok, message = enable_when_ready(client, args.ready_timeout)
             if not ok:
                 print(f"demo: could not enable the graph: {message}", file=sys.stderr)
@@ -62,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"demo: {message}", flush=True)
             traces, t_start, statuses = grasp.run_grasp(client, plan, options.fingers)
             client.call("disable")
+            client.spin_for(0.3)  # the DISABLED status and the cooling start reach the bag
         grasp.report(traces, plan, t_start, args.plot)
         problem = grasp.fault_report(statuses)
         if problem:
@@ -73,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
             return 1
         return 0
     finally:
+        stop_recorder("demo", recorder)
         started = time.monotonic()
         graph.stop()
         print(f"demo: graph stopped in {time.monotonic() - started:.2f} s")

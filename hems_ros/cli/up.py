@@ -6,6 +6,7 @@ import argparse
 import signal
 import sys
 import time
+from datetime import datetime
 from pathlib import Path
 
 from hems_ros.graph import names
@@ -27,6 +28,42 @@ def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
                         help="ROS log level of the nodes")
 
 
+def default_bag(prefix: str) -> Path:
+    return Path("bags") / datetime.now().strftime(f"{prefix}_%Y%m%d_%H%M%S")
+
+
+def graph_topics(fingers) -> list[str]:
+    """Topics a recording of the graph must hold before the run starts (setpoints included:
+    their publisher is reliable but not latched, so a recorder joining late misses one)."""
+    topics = [names.SUPERVISOR_STATUS_TOPIC]
+    for finger in fingers:
+        topics += [names.topic(finger, s) for s in ("encoder", "wire_force", "duty", "setpoint")]
+    return topics
+
+
+def bag_folder(record, prefix: str) -> Path:
+    """The folder ``--record`` asks for; ValueError if it is already used (checked before the graph starts)."""
+    folder = default_bag(prefix) if record is True else Path(record)
+    if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
+        raise ValueError(f"--record {folder}: exists and is not an empty folder")
+    return folder
+
+
+def stop_recorder(prefix: str, recorder) -> None:
+    try:
+        print_bag(prefix, recorder.stop())
+    except RuntimeError as error:
+        print(f"{prefix}: recording failed: {error}", file=sys.stderr, flush=True)
+
+
+def print_bag(prefix: str, info) -> None:
+    """The bag's path and its per-topic message counts (hems_ros.bag.bag_info)."""
+    print(f"{prefix}: bag {info.path}: {info.message_count} messages, "
+          f"{(info.end_ns - info.start_ns) * 1e-9:.1f} s", flush=True)
+    for topic, entry in sorted(info.topics.items()):
+        print(f"  {topic:<40} {entry.count:>7}  {entry.type}")
+
+
 def graph_options(args: argparse.Namespace) -> GraphOptions:
     fingers = names.FINGERS if args.fingers == "all" else tuple(
         names.check_finger(f.strip()) for f in args.fingers.split(","))
@@ -46,12 +83,16 @@ def register(subparsers) -> None:
                     "node within 3 s. Then: hems enable; hems setpoint index 20 --unit mm; hems status.")
     add_graph_arguments(parser)
     parser.add_argument("--duration", type=float, default=None, help="stop by itself after this many seconds")
+    parser.add_argument("--record", nargs="?", type=Path, const=True, default=None, metavar="DIR",
+                        help="record every /hems topic, /diagnostics and /clock into the bag folder DIR "
+                             "(default bags/hems_<date>_<time>)")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     try:
         options = graph_options(args)
+        record = None if args.record is None else bag_folder(args.record, "hems")
     except ValueError as error:
         print(f"hems up: {error}", file=sys.stderr)
         return 2
@@ -64,6 +105,12 @@ def run(args: argparse.Namespace) -> int:
     signal.signal(signal.SIGTERM, request_stop)
     graph = Graph(options)
     graph.start()
+    recorder = None
+    if record is not None:
+        from hems_ros.bag.recording import RecorderProcess
+
+        recorder = RecorderProcess(record)
+        print(f"hems up: recording into {recorder.output}", flush=True)
     print(f"hems up: {len(graph.processes)} processes "
           f"({'composed' if options.composed else 'one per node'}"
           f"{f', sim time x{options.rate:g}' if options.sim_time else ''}); Ctrl-C to stop", flush=True)
@@ -81,6 +128,8 @@ def run(args: argparse.Namespace) -> int:
                 break
             time.sleep(0.05)
     finally:
+        if recorder is not None:  # first, so that the bag ends with the graph still running
+            stop_recorder("hems up", recorder)
         t0 = time.monotonic()
         codes = graph.stop()
         print(f"hems up: stopped {len(codes)} processes in {time.monotonic() - t0:.2f} s"
