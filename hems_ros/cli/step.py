@@ -1,0 +1,119 @@
+"""``hems step``: one recorded tendon-position step on a graph it starts (the chapter 5 step run).
+
+Starts the graph (one finger by default) with an optional physics set and pulley ratio,
+records it, enables it, holds position 0 for ``--before-s``, steps to ``--step-mm`` for
+``--step-s``, returns to 0 for ``--after-s``, disables, and prints the step's figures from
+the bag (tendon position from the encoder, times from the message stamps).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, graph_topics, stop_recorder
+from hems_ros.graph import names, transmission
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "step", help="one recorded tendon-position step on a graph it starts (chapter 5 step run)",
+        description="Start the graph (default: index finger only), record it, enable it, step the tendon "
+                    "position 0 -> STEP -> 0 and print RMSE, overshoot and steady-state error from the bag. "
+                    "Chapter 5 rig: --physics-config ch5_straight_40n --pulley-ratio 1.")
+    add_graph_arguments(parser)
+    parser.set_defaults(func=run, fingers="index")
+    parser.add_argument("--physics-config", default=None,
+                        help="physics parameter set of the actuation units (default: the params file's)")
+    parser.add_argument("--pulley-ratio", type=float, default=transmission.PULLEY_RATIO,
+                        help="tendon / wire ratio the controllers convert with; must match the physics set "
+                             f"(default {transmission.PULLEY_RATIO:g}; 1 for ch5_straight_40n)")
+    parser.add_argument("--step-mm", type=float, default=20.0, help="step height, tendon mm (default 20)")
+    parser.add_argument("--before-s", type=float, default=2.0, help="seconds at 0 before the step")
+    parser.add_argument("--step-s", type=float, default=5.0, help="seconds at the step height")
+    parser.add_argument("--after-s", type=float, default=8.0, help="seconds at 0 after the step (cooling)")
+    parser.add_argument("--record", type=Path, default=True, metavar="DIR",
+                        help="bag folder (default bags/step_<date>_<time>)")
+    parser.add_argument("--ready-timeout", type=float, default=60.0, help="seconds to wait for the graph")
+
+
+def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.0) -> dict[str, float]:
+    """RMSE (whole step), overshoot and steady-state error (mean over its last ``settle_s``), tendon mm."""
+    from hems_ros.bag import load_bag
+
+    bag = load_bag(bag_path, topics=[names.topic(finger, "encoder"), names.topic(finger, "setpoint")])
+    encoder, setpoint = bag[names.topic(finger, "encoder")], bag[names.topic(finger, "setpoint")]
+    t, y = encoder.stamp, 1e3 * transmission.tendon_position(encoder["position"], ratio)
+    start, end = setpoint.stamp[-2], setpoint.stamp[-1]
+    height = 1e3 * setpoint["value"][-2]
+    during = (t >= start) & (t < end)
+    settled = (t >= end - settle_s) & (t < end)
+    return {"rmse_mm": float(np.sqrt(np.mean((y[during] - height) ** 2))),
+            "overshoot_mm": float(max(0.0, y[during].max() - height)),
+            "steady_state_error_mm": float(np.mean(height - y[settled]))}
+
+
+def run(args: argparse.Namespace) -> int:
+    from hems_ros.bag.recording import RecorderProcess
+    from hems_ros.cli.demo import enable_when_ready
+    from hems_ros.cli.up import print_bag
+
+    try:
+        options = graph_options(args)
+        record = bag_folder(args.record, "step")
+        if not args.pulley_ratio > 0:
+            raise ValueError(f"--pulley-ratio {args.pulley_ratio}: must be > 0")
+    except ValueError as error:
+        print(f"step: {error}", file=sys.stderr)
+        return 2
+    overrides = ["-p", f"pulley_ratio:={args.pulley_ratio!r}"]
+    if args.physics_config:
+        overrides += ["-p", f"physics_config:={args.physics_config}"]
+    options.extra_ros_args = tuple(overrides)
+    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.launcher import Graph
+
+    graph = Graph(options)
+    graph.start()
+    recorder = RecorderProcess(record)
+    finished = None
+    try:
+        with GraphClient("hems_step") as client:
+            deadline = time.monotonic() + args.ready_timeout
+            for finger in options.fingers:  # creates the setpoint publishers before recording starts
+                while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
+                    pass
+            recorder.wait_for_topics(graph_topics(options.fingers), timeout=max(1.0, deadline - time.monotonic()))
+            ok, message = enable_when_ready(client, args.ready_timeout)
+            if not ok:
+                print(f"step: could not enable the graph: {message}", file=sys.stderr)
+                return 1
+            for value, seconds in ((0.0, args.before_s), (args.step_mm * 1e-3, args.step_s), (0.0, args.after_s)):
+                print(f"step: position {value * 1e3:g} mm for {seconds:g} s", flush=True)
+                for finger in options.fingers:
+                    client.send_setpoint(finger, "position", value)
+                client.spin_for(seconds)
+            state = client.snapshot(options.fingers, 0.3).supervisor
+            client.call("disable")
+            client.spin_for(0.3)
+        finished = recorder.stop()
+    except (TimeoutError, RuntimeError) as error:
+        print(f"step: {error}", file=sys.stderr)
+        return 1
+    finally:
+        if finished is None:
+            stop_recorder("step", recorder)
+        graph.stop()
+    print_bag("step", finished)
+    for finger in options.fingers:
+        figures = step_figures(record, finger, args.pulley_ratio)
+        print(f"step: {finger}: " + ", ".join(f"{k} {v:.3f}" for k, v in figures.items()))
+    if state is None or state.state_name != "ENABLED":
+        print(f"step: not a valid run: supervisor {state.state_name if state else 'silent'}"
+              f"{': ' + '; '.join(state.faults) if state and state.faults else ''}", file=sys.stderr)
+        return 1
+    return 0
