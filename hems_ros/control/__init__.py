@@ -17,7 +17,7 @@ from hems_ros.control.base import (
     Controller,
 )
 from hems_ros.control.bpid import BPIDController
-from hems_ros.control.gains import FORCE_SCALE, MN_PER_N, TABLE_5_1, UM_PER_M, BPIDGains, PIDGains, PIPDGains
+from hems_ros.control.gains import FORCE_MODE_BPID, FORCE_SCALE, MN_PER_N, TABLE_5_1, UM_PER_M, BPIDGains, PIDGains, PIPDGains
 from hems_ros.control.pid import PIDController
 from hems_ros.control.pipd import PIPDController
 
@@ -58,6 +58,7 @@ __all__ = [
     "DEFAULT_TS",
     "DUTY_MAX",
     "DUTY_MIN",
+    "FORCE_MODE_BPID",
     "FORCE_SCALE",
     "MN_PER_N",
     "MODES",

@@ -27,6 +27,18 @@ the gains act on a *scaled* error ``e = scale * (r - y)``, the scale depending o
     lower scales lose holding gain (0.10 N at 250 per N). Gains are then Kp in %/(2.5 mN),
     Kb in 1/(2.5 mN).
 
+    With the Table 5.1 gains the force loop still limit-cycles between 0 and 100 % duty
+    with a period of 3-4 samples. The HEMS load carries the wire's contraction rate into
+    the force (the tendon damper, n^2 b v = 4 x 65 N s/m on the wire, plus friction), so a
+    single 10 ms sample at full duty lifts the force by about 0.6 N while the proportional
+    band at 400 per N is 0.31 N wide, and the derivative term differentiates that rate
+    once more. :data:`FORCE_MODE_BPID` is the force-mode set used for chapter 6: Kd = 0
+    (the measured force already contains the rate), an error in units of 10 mN
+    (proportional band 1.25 N, the noise moves the duty by 2.4 % rms) and Ki = 0.5 to hold
+    the force without the error a lower Kp leaves (0.42 N at 100 per N with Ki = 0).
+    Swept in the lockstep (docs/experiments.md): MACSI falls from 11-32 to 2-3 %/sample,
+    the steady-state errors are 0.04 N (step) and 0.03 N (staircase).
+
 The scales are fields of every gain set so a tuned force set can change them explicitly.
 Validation rejects negative, NaN and infinite gains at construction, naming the gain.
 """
@@ -111,3 +123,7 @@ TABLE_5_1 = MappingProxyType(
     }
 )
 """Dissertation Table 5.1 gain sets by strategy name, in the units of the module docstring."""
+
+FORCE_MODE_BPID = BPIDGains(kp=0.8, ki=0.5, kd=0.0, kb=1.0, force_scale=100.0)
+"""BPID gains for force mode on the HEMS unit (module docstring): Kp in %/(10 mN),
+Ki in %/(10 mN s), Kb in 1/(10 mN). Position mode keeps Table 5.1."""

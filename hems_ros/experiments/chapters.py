@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable, Mapping
 
+from hems_ros.control import FORCE_MODE_BPID
 from hems_ros.control.references import CH6_FORCE_PEAK, PROTOCOLS, Protocol, sine, staircase, step_pair
 from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH5_STRATEGIES, CH6_FORCE, CH6_POSITION
 from hems_ros.experiments.lockstep import LockstepRun, run_protocol
@@ -68,14 +69,20 @@ def run_ch5(gains: Mapping[str, object] | None = None, params: UnitParams | str 
 
 
 def run_ch6(gains=None, params: UnitParams | str = CH6_PARAMS, progress: Progress = None,
-            **kwargs) -> dict[str, LockstepRun]:
-    """All chapter 6 runs (BPID) by protocol name."""
+            force_gains=FORCE_MODE_BPID, **kwargs) -> dict[str, LockstepRun]:
+    """All chapter 6 runs (BPID) by protocol name.
+
+    Position references run with ``gains`` (default Table 5.1), force references with
+    ``force_gains`` (default :data:`hems_ros.control.FORCE_MODE_BPID`, see
+    :mod:`hems_ros.control.gains` for why force mode needs its own set).
+    """
     prm = params if isinstance(params, UnitParams) else load_params(params)
     rest = rest_wire_tension(prm)
     runs = {}
     for name in CH6_POSITION + CH6_FORCE:
-        proto = force_protocol(name, rest) if name in CH6_FORCE else PROTOCOLS[name]
-        run = run_protocol(proto, "bpid", prm, gains, **kwargs)
+        force = name in CH6_FORCE
+        proto = force_protocol(name, rest) if force else PROTOCOLS[name]
+        run = run_protocol(proto, "bpid", prm, force_gains if force else gains, **kwargs)
         runs[name] = run
         _report(progress, run, "mm" if run.mode == "position" else "N")
     return runs

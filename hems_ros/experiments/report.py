@@ -152,10 +152,16 @@ def plot_ch6(ch6: dict, folder: Path) -> list[Path]:
 SETUP_CH5 = ("Straight sheathed actuator with a 40 N hanging mass (`config/physics/ch5_straight_40n.yaml`), "
              "plant 1 kHz, controllers at 100 Hz (zero-order hold), encoder feedback (1 um counts), "
              "Table 5.1 gains with the error in micrometres, derivative filter N = 20 rad/s. One run "
-             "per reference from a cold wire (the dissertation averaged three repetitions).")
+             "per reference from a cold wire (the dissertation averaged three repetitions). "
+             "`config/physics/ch5_straight_40n_table32.yaml` (same rig, heating band refitted to "
+             "Table 3.2's displacement per pulse energy) serves only as an evidence run in the "
+             "findings: it reproduces the 1.0 s row and a slower rise, but loses the 2.2-2.8 s rows "
+             "(22.5-26.2 mm against 24.5-27.5 mm; calibration objective 0.51 against 0.28), so the "
+             "validated set stays the plant.")
 SETUP_CH6 = ("HEMS index unit (`config/physics/ch6_hems_index.yaml`: x2 pulley, glove as a bias spring "
-             "pretensioned 2 N on the tendon, capstan and glove friction), BPID with Table 5.1 gains, "
-             "encoder (position) or force-sensor (force, 0.03 N rms noise) feedback. Position RMSE on "
+             "pretensioned 2 N on the tendon, capstan and glove friction), BPID with Table 5.1 gains on "
+             "the encoder (position) and `FORCE_MODE_BPID` (Kp 0.8, Ki 0.5, Kd 0, Kb 1, error in 10 mN; "
+             "why: hems_ros/control/gains.py) on the force sensor (0.03 N rms noise). Position RMSE on "
              "ascending parts (sine, ramp) or on plateaus once the rise is over (steps); force "
              "references run from the wire's rest tension (4 N: 2 N behind the x2 pulley) to 20 N.")
 

@@ -6,6 +6,7 @@ import pytest
 
 from hems_ros.control import (
     DEFAULT_N_FILTER,
+    FORCE_MODE_BPID,
     FORCE_SCALE,
     TABLE_5_1,
     UM_PER_M,
@@ -29,6 +30,12 @@ def test_scales_default_to_micrometres_and_force_scale():
     assert (g.position_scale, g.force_scale) == (UM_PER_M, FORCE_SCALE) == (1e6, 400.0)
     assert g.scale_for("position") == 1e6
     assert g.scale_for("force") == 400.0
+
+
+def test_force_mode_bpid_set():
+    # Kd 0 (the HEMS force already carries the contraction rate), error in 10 mN, Ki holds it.
+    assert FORCE_MODE_BPID == BPIDGains(kp=0.8, ki=0.5, kd=0.0, kb=1.0, force_scale=100.0)
+    assert FORCE_MODE_BPID.scale_for("force") == 100.0
 
 
 @pytest.mark.parametrize(

@@ -8,7 +8,9 @@ from __future__ import annotations
 import pytest
 
 from hems_ros.experiments.dissertation import CH5_PROTOCOLS
-from hems_ros.experiments.findings import authority_split, bilinear_activity, ratios
+from hems_ros.experiments.findings import authority_split, bilinear_activity, rate_check, ratios
+from hems_ros.physics import load_params
+from hems_ros.physics.scenarios import characterization_rig, pulse_responses
 
 STEPS = ("ch5_step", "ch5_staircase")
 
@@ -70,3 +72,23 @@ def test_sine_0125_error_is_cooling_limited(ch5_runs, ch5_found, metric):
         split = authority_split(ch5_runs["ch5_sine_0.125", s])
         assert split["cooling_share"] > 0.9
         assert split["rmse_unsaturated"] < 1.71
+
+
+def test_overshoot_persists_at_the_dissertations_rise_speed(ch5_runs, ch5_found):
+    # Evidence run: the wire refitted to Table 3.2 rises slower (nearer 1.2-1.4 s) but the
+    # same BPID still overshoots; four times the load damping removes most of it on the step.
+    rc = rate_check()
+    assert rc["step_rise_time_s"] > 1.5 * ch5_runs["ch5_step", "bpid"].metrics["rise_time_s"]
+    assert rc["step_overshoot"] > 0.05 and rc["staircase_overshoot"] > 0.05
+    assert rc["step_overshoot_damped"] < 0.5 * rc["step_overshoot"]
+    assert "ch5_straight_40n_table32" in ch5_found["bpid_overshoot"].evidence
+
+
+def test_table32_set_reproduces_the_short_pulse_row():
+    # The refit's reason: displacement after a 1.0 s pulse (Table 3.2: 5.94 mm) within 25 %,
+    # where the calibrated set gives almost none.
+    rig = characterization_rig(load_params("ch5_straight_40n_table32"), True)
+    base = characterization_rig(load_params("ch5_straight_40n"), True)
+    short, base_short = pulse_responses([rig, base], [1.0, 1.0], dt=2e-3)
+    assert abs(short.max_displacement_m * 1e3 / 5.94 - 1) < 0.25
+    assert base_short.max_displacement_m * 1e3 < 1.0

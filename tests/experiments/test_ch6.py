@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from hems_ros.experiments.dissertation import CH6_TABLES
-from hems_ros.experiments.findings import authority_split
+from hems_ros.experiments.findings import authority_split, force_noise_free
 
 FORCE_STEPS = ("ch6_force_step", "ch6_force_staircase")
 
@@ -24,9 +24,21 @@ def test_force_steady_state_error_at_most_01_n_with_noise(ch6_runs, protocol):
 
 @pytest.mark.parametrize("protocol", FORCE_STEPS)
 def test_force_overshoot_documented(ch6_runs, ch6_found, protocol):
-    # Not reproduced: about 2 N of overshoot on the force steps (docs/experiments.md).
+    # Not reproduced: 0.14-0.17 N past the level on the force steps, mostly hold ripple
+    # driven by the sensor noise (docs/experiments.md); it was 1-2 N with the Table 5.1 gains.
     assert not ch6_found["force_no_overshoot"].reproduced
-    assert 0.1 < ch6_runs[protocol].metrics["overshoot"] < 3.0
+    assert 0.1 < ch6_runs[protocol].metrics["overshoot"] < 0.3
+    assert "without sensor noise" in ch6_found["force_no_overshoot"].evidence
+
+
+def test_force_step_without_noise_does_not_overshoot():
+    assert force_noise_free()["ch6_force_step"] <= 0.1
+
+
+@pytest.mark.parametrize("protocol", FORCE_STEPS + ("ch6_force_sine_0.125", "ch6_force_sine_0.25"))
+def test_force_mode_duty_does_not_chatter(ch6_runs, protocol):
+    # FORCE_MODE_BPID: with Table 5.1 gains the duty limit-cycled 0-100 % (MACSI 11-32 %/sample).
+    assert ch6_runs[protocol].metrics["macsi"] < 4.0
 
 
 def test_position_staircase_within_3x_table_6_1(ch6_runs):
