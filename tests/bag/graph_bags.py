@@ -1,0 +1,231 @@
+"""Helpers of the graph bag tests: reference bags, node processes, the controller replay, metrics."""
+
+from __future__ import annotations
+
+import subprocess
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from hems_ros.bag import iter_messages, load_bag
+from hems_ros.graph import names, transmission
+from hems_ros.graph.grasp import FingerTrace, GraspPlan, summarize
+from hems_ros.launcher import GraphOptions, executable_path, ros_arguments
+from hems_ros.rosenv import child_environment
+
+REPO = Path(__file__).resolve().parents[2]
+BAGS = REPO / "bags"
+
+
+@dataclass(frozen=True)
+class Reference:
+    path: Path
+    finger: str
+    pulley_ratio: float  # the controller's; the bag does not store node parameters
+
+
+REFERENCES = {
+    "demo_grasp_index": Reference(BAGS / "demo_grasp_index", "index", transmission.PULLEY_RATIO),
+    "ch5_step_index": Reference(BAGS / "ch5_step_index", "index", 1.0),
+}
+
+
+def stamp_ns(data, prefix: str = "header.stamp") -> np.ndarray:
+    return data[f"{prefix}.sec"].astype(np.int64) * 1_000_000_000 + data[f"{prefix}.nanosec"]
+
+
+def start_node(executable: str, node: str, params: dict[str, str], extra: tuple[str, ...] = ()) -> subprocess.Popen:
+    options = GraphOptions(extra_ros_args=extra, log_level="warn")
+    return subprocess.Popen(executable_path(executable) + ros_arguments(node, params, options),
+                            env=child_environment())
+
+
+def stop(process: subprocess.Popen) -> None:
+    if process.poll() is None:
+        process.terminate()
+        try:
+            process.wait(10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+class ControllerReplay:
+    """Feeds a fresh finger_controller the recorded inputs of one finger in recorded order,
+    one at a time: every feedback sample that triggers a control step is answered by a duty
+    before the next input goes out, so the controller sees exactly the recorded sequence."""
+
+    def __init__(self, finger: str) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+
+        from hems_msgs.msg import ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint, SupervisorStatus
+        from hems_msgs.msg import WireForce
+        from hems_ros.nodes import qos
+
+        self.finger = finger
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node("controller_replay", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.duties: list = []
+        self.statuses: list = []
+        self.node.create_subscription(DutyCommand, names.topic(finger, "duty"), self.duties.append, qos.COMMAND)
+        self.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
+                                      self.statuses.append, qos.COMMAND)
+        self.publishers = {
+            names.topic(finger, "setpoint"): self.node.create_publisher(
+                FingerSetpoint, names.topic(finger, "setpoint"), qos.COMMAND),
+            names.topic(finger, "encoder"): self.node.create_publisher(
+                EncoderReading, names.topic(finger, "encoder"), qos.SENSOR),
+            names.topic(finger, "wire_force"): self.node.create_publisher(
+                WireForce, names.topic(finger, "wire_force"), qos.SENSOR),
+        }
+        self.status = self.node.create_publisher(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
+
+    def spin_until(self, condition, timeout: float, what: str) -> None:
+        deadline = time.monotonic() + timeout
+        while not condition():
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"controller replay: no {what} within {timeout:g} s")
+            self.executor.spin_once(timeout_sec=0.005)
+
+    def wait_for_controller(self, timeout: float = 60.0) -> None:
+        self.spin_until(lambda: all(p.get_subscription_count() for p in self.publishers.values())
+                        and self.statuses, timeout, "controller")
+
+    def enable(self) -> None:
+        from hems_msgs.msg import SupervisorStatus
+
+        self.status.publish(SupervisorStatus(state=SupervisorStatus.ENABLED, state_name="ENABLED"))
+        self.spin_until(lambda: self.statuses[-1].active, 5.0, "active controller status")
+
+    def feed(self, topic: str, data: bytes, triggers: bool, stamp: int = 0) -> None:
+        before = len(self.duties)
+        self.publishers[topic].publish(data)
+        if triggers:
+            self.spin_until(lambda: len(self.duties) > before and stamp_ns_of(self.duties[-1].measurement_stamp) == stamp,
+                            5.0, f"duty for the sample stamped {stamp}")
+        else:
+            # a setpoint or the other mode's feedback: no reply to wait for, but the
+            # controller must have taken it before the next sample arrives
+            end = time.monotonic() + 0.05
+            while time.monotonic() < end:
+                self.executor.spin_once(timeout_sec=0.005)
+
+    def close(self) -> None:
+        import rclpy
+
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+
+
+def stamp_ns_of(message) -> int:
+    return message.sec * 1_000_000_000 + message.nanosec
+
+
+def controller_inputs(bag_path: Path, finger: str):
+    """The recorded controller inputs from the supervisor's first ENABLED on, in log-time order.
+
+    Returns (inputs, first_enabled_index): inputs are (topic, raw bytes, decoded message) of the
+    setpoint, encoder and wire-force streams and the supervisor status.
+    """
+    from rclpy.serialization import deserialize_message
+
+    from hems_msgs.msg import EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
+
+    types = {names.topic(finger, "setpoint"): FingerSetpoint, names.topic(finger, "encoder"): EncoderReading,
+             names.topic(finger, "wire_force"): WireForce, names.SUPERVISOR_STATUS_TOPIC: SupervisorStatus}
+    duty = load_bag(bag_path, topics=[names.topic(finger, "duty")])[names.topic(finger, "duty")]
+    computed = dict(zip(stamp_ns(duty, "measurement_stamp")[::-1].tolist(), stamp_ns(duty)[::-1].tolist()))
+    decoded = []
+    for m in iter_messages(bag_path, topics=list(types)):
+        msg = deserialize_message(m.data, types[m.topic])
+        # Ordered by when the original controller most likely took each message; the
+        # recorder's receive time can lag that by a few ms. A feedback sample was taken no
+        # later than the duty computed from its sample time was stamped; a setpoint or a
+        # status is stamped just before it is sent.
+        if m.topic in (names.topic(finger, "encoder"), names.topic(finger, "wire_force")):
+            taken = min(m.log_time_ns, computed.get(stamp_ns_of(msg.header.stamp), m.log_time_ns))
+        else:
+            taken = min(m.log_time_ns, stamp_ns_of(msg.header.stamp))
+        decoded.append((m.topic, m.data, msg, taken))
+    decoded.sort(key=lambda entry: entry[3])
+    enabled = next(i for i, (topic, _, msg, _) in enumerate(decoded)
+                   if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED)
+    return decoded, enabled
+
+
+def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]], list[tuple[int, float]]]:
+    """Replay ``reference`` into a fresh controller; (replayed, recorded) duties as (measurement stamp, duty)."""
+    finger = reference.finger
+    inputs, enabled = controller_inputs(reference.path, finger)
+    encoder, wire_force, setpoint = (names.topic(finger, s) for s in ("encoder", "wire_force", "setpoint"))
+    controller = start_node("finger_controller", f"finger_controller_{finger}", {"finger": finger},
+                            ("-p", f"pulley_ratio:={reference.pulley_ratio!r}"))
+    replay = ControllerReplay(finger)
+    try:
+        replay.wait_for_controller()
+        mode = "position"
+        # Feedback of the mode not being controlled only updates the value the controller
+        # holds for a mode switch, so only its latest sample is sent, just before a setpoint
+        # (and before ENABLED, when the controller computes nothing).
+        held = {}
+        for topic, data, msg, _ in inputs[:enabled]:
+            if topic == setpoint:
+                mode = msg.mode
+                replay.feed(topic, data, False)
+            elif topic in (encoder, wire_force):
+                held[topic] = data
+        for topic, data in held.items():
+            replay.feed(topic, data, False)
+        held.clear()
+        replay.enable()
+        first_duty = len(replay.duties)
+        for topic, data, msg, _ in inputs[enabled + 1:]:
+            if topic == names.SUPERVISOR_STATUS_TOPIC:
+                if msg.state_name != "ENABLED":
+                    break  # the run ends at the first state change after ENABLED
+                continue
+            if topic == setpoint:
+                for held_topic, held_data in held.items():
+                    replay.feed(held_topic, held_data, False)
+                held.clear()
+                mode = msg.mode
+                replay.feed(topic, data, False)
+            elif (topic == encoder) == (mode == "position"):
+                replay.feed(topic, data, True, stamp_ns_of(msg.header.stamp))
+            else:
+                held[topic] = data
+        replayed = [(stamp_ns_of(d.measurement_stamp), d.duty_percent) for d in replay.duties[first_duty:]]
+    finally:
+        replay.close()
+        stop(controller)
+    duty = load_bag(reference.path, topics=[names.topic(finger, "duty")])[names.topic(finger, "duty")]
+    recorded = list(zip(stamp_ns(duty, "measurement_stamp").tolist(), duty["duty_percent"].tolist()))
+    start = next(i for i, (stamp, _) in enumerate(recorded) if stamp == replayed[0][0])
+    return replayed, recorded[start:start + len(replayed)]
+
+
+def grasp_metrics(bag_path: Path, finger: str, plan: GraspPlan, t_start: float):
+    """The demo's per-finger summary computed from a bag: tendon position and force from the
+    encoder and wire-force streams (matched by stamp), power from the actuator state."""
+    bag = load_bag(bag_path, topics=[names.topic(finger, "encoder"), names.topic(finger, "wire_force"),
+                                     names.sim_topic(finger, "state"), names.topic(finger, "duty")])
+    encoder, force = bag[names.topic(finger, "encoder")], bag[names.topic(finger, "wire_force")]
+    state, duty = bag[names.sim_topic(finger, "state")], bag[names.topic(finger, "duty")]
+    common, ei, fi = np.intersect1d(stamp_ns(encoder), stamp_ns(force), return_indices=True)
+    trace = FingerTrace(list(common * 1e-9), list(transmission.tendon_position(encoder["position"][ei])),
+                        list(transmission.tendon_force(force["force"][fi])), list(state.stamp),
+                        list(state["electrical_power"]), list(duty.stamp), list(duty["duty_percent"]))
+    return summarize(finger, trace, plan, t_start)
+
+
+def first_setpoint_stamp(bag_path: Path, finger: str) -> float:
+    """Header stamp (s) of the grasp's first setpoint (the approach), the start of its phases."""
+    data = load_bag(bag_path, topics=[names.topic(finger, "setpoint")])[names.topic(finger, "setpoint")]
+    return float(data.stamp[np.flatnonzero(data["value"] > 0)[0]])

@@ -1,0 +1,96 @@
+"""Replaying the committed reference bags (bags/README.md) into live nodes.
+
+1. Into a fresh finger_controller: the recorded setpoint and feedback streams, in the order
+   the original controller took them, reproduce the recorded duty stream exactly.
+2. Through a live one-finger graph on /clock from the bag: the recorded supervisor status and
+   setpoints drive a freshly simulated plant; the grasp's tracking metrics are compared with
+   the original run's.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from graph_bags import REFERENCES, first_setpoint_stamp, grasp_metrics, replay_into_controller, start_node, stop
+
+from hems_ros.bag import BagWriter, iter_messages
+from hems_ros.bag.recording import RecorderProcess
+from hems_ros.graph import names
+from hems_ros.graph.grasp import GraspPlan
+from hems_ros.rosenv import child_environment
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(REFERENCES))
+def test_controller_reproduces_the_recorded_duty_stream(ros_domain_id: int, name: str) -> None:
+    replayed, recorded = replay_into_controller(REFERENCES[name])
+    assert len(replayed) > 1400                        # every control step from ENABLED to the end
+    stamps, duty = np.array(replayed).T
+    recorded_stamps, recorded_duty = np.array(recorded).T
+    assert np.array_equal(stamps, recorded_stamps)     # the same steps (measurement stamps)
+    assert np.max(np.abs(duty - recorded_duty)) <= 1e-9
+    assert duty.max() == 100.0 and np.count_nonzero(duty) > 300   # the run heated and saturated
+
+
+def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000_000_000) -> tuple[Path, int]:
+    """``topics`` of ``source`` copied into a new bag with log times shifted to begin at ``start_ns``."""
+    messages = sorted(iter_messages(source, topics=topics), key=lambda m: m.log_time_ns)
+    offset = messages[0].log_time_ns - start_ns
+    with BagWriter(target) as writer:
+        for m in messages:
+            channel = writer.add_topic(m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or [])
+            writer.write(channel, m.log_time_ns - offset, m.data)
+    return target, offset
+
+
+# Out of the default run: the plant is simulated anew, and the position limit cycle, the
+# peak force and the energy depend on when each duty lands relative to the unit's 5 ms
+# tick, which the /clock replay does not reproduce. Measured once here: force RMSE 0.0364 vs
+# 0.0365 N (0.2 %), position RMSE 0.062 vs 0.046 mm (+35 %), peak 10.56 vs 10.87 N (-3 %),
+# energy 291 vs 272 J (+7 %).
+@pytest.mark.slow
+@pytest.mark.graph_realtime
+def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_domain_id: int, tmp_path: Path) -> None:
+    reference = REFERENCES["demo_grasp_index"]
+    finger = reference.finger
+    plan = GraspPlan()   # what `hems demo` ran (its default phases)
+    t_start = first_setpoint_stamp(reference.path, finger)
+    original = grasp_metrics(reference.path, finger, plan, t_start)
+
+    # A node reads its clock as 0 while it is constructed (no /clock taken yet), and the
+    # actuation unit's simulation starts there; it catches up with a clock near 0 (as with
+    # `hems up --sim-time`, which starts at 1 s) but not with wall-clock epoch times. So the
+    # replayed streams are re-based to start at 1 s of simulated time.
+    inputs, offset = rebased(reference.path, tmp_path / "inputs",
+                             [names.topic(finger, "setpoint"), names.SUPERVISOR_STATUS_TOPIC])
+    t_live = t_start - offset * 1e-9
+    sim_time = ("-p", "use_sim_time:=true")
+    # No supervisor: the replayed status is the original run's; a live one would decide anew.
+    nodes = [start_node("actuation_unit", f"actuation_unit_{finger}", {"finger": finger}, sim_time),
+             start_node("shoulder_module", "shoulder_module_index_middle", {"module": "index_middle"}, sim_time),
+             start_node("finger_controller", f"finger_controller_{finger}", {"finger": finger}, sim_time)]
+    output = tmp_path / "replayed"
+    recorder = RecorderProcess(output, topics=[names.topic(finger, s) for s in ("encoder", "wire_force", "duty")]
+                               + [names.sim_topic(finger, "state")])
+    try:
+        recorder.wait_for_topics([names.topic(finger, "encoder"), names.topic(finger, "duty")], timeout=60)
+        replay = subprocess.run(
+            [sys.executable, "-m", "hems_ros.cli.main", "replay", str(inputs),
+             "--clock", "200", "--wait-subscribers", "30"],
+            env=child_environment(), capture_output=True, text=True, timeout=120)
+        assert replay.returncode == 0, replay.stderr
+        assert all(node.poll() is None for node in nodes)
+    finally:
+        info = recorder.stop()
+        for node in nodes:
+            stop(node)
+    assert info.topics[names.topic(finger, "encoder")].count > 1500
+    live = grasp_metrics(output, finger, plan, t_live)
+    print(f"original {original}\nreplayed {live}")
+    for field in ("position_rmse_mm", "force_rmse_n", "peak_force_n", "energy_j"):
+        assert getattr(live, field) == pytest.approx(getattr(original, field), rel=0.02), field
