@@ -129,9 +129,9 @@ def stamp_ns_of(message) -> int:
 
 
 def controller_inputs(bag_path: Path, finger: str):
-    """The recorded controller inputs from the supervisor's first ENABLED on, in log-time order.
+    """The recorded controller inputs in the order the controller took them (see below).
 
-    Returns (inputs, first_enabled_index): inputs are (topic, raw bytes, decoded message) of the
+    Returns (inputs, first_enabled_index): inputs are (topic, raw bytes, decoded message, time taken) of the
     setpoint, encoder and wire-force streams and the supervisor status.
     """
     from rclpy.serialization import deserialize_message
