@@ -132,7 +132,7 @@ class Recorder(Node):
 
 
 def spin_until_expired(node: "Recorder") -> None:
-    """The events executor: recording is callback-bound, and it keeps the recorder's CPU low."""
+    """The events executor (as every node), stopping also when ``duration`` has passed."""
     import rclpy
     from rclpy.experimental import EventsExecutor
 
