@@ -137,14 +137,116 @@ def initial_state(params: UnitParams) -> np.ndarray:
     return s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", forceinline=True)
 def _mechanics(sig_free, area, relax, c_in, g_in, c_out, g_out):
     """Implicit wire + load solve for a stress at fixed strain: (v, sigma, dsigma/dsig_free)."""
     v_new, gain = loads.slider_velocity(area * sig_free, c_in, g_in, c_out, g_out)
     return v_new, sig_free - relax * v_new, 1.0 - relax * area * gain
 
 
-@njit(cache=True)
+# The step is split into _begin (electrical, heat flows, elastic trial), the kinetic solve and
+# _finish (state update, accumulators, outputs) so that step and the batch's SIMD block path
+# (_step_block) share the arithmetic and give bit-identical results. Both halves address a
+# set through (array, offset, stride): field f of the set is a[offset + f * stride]; a packed
+# row (pack, initial_state) is offset 0, stride 1, a block of BLOCK sets is stride BLOCK.
+
+@njit(cache=True, error_model="numpy", forceinline=True)
+def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
+    """Start of a step: drive, heat flows, elastic trial and the kinetic solve's coefficients."""
+    temp = s[sk + S_T * n]
+    xi = s[sk + S_XI * n]
+    sig = s[sk + S_SIG * n]
+    x = s[sk + S_X * n]
+    v = s[sk + S_V * n]
+    t_sheath = s[sk + S_TS * n]
+
+    rho_m = electrical.phase_resistivity(p[pk + P_RHO0M * n], p[pk + P_T0M * n], p[pk + P_DRDTM * n],
+                                         p[pk + P_DRDSM * n], temp, sig)
+    rho_a = electrical.phase_resistivity(p[pk + P_RHO0A * n], p[pk + P_T0A * n], p[pk + P_DRDTA * n],
+                                         p[pk + P_DRDSA * n], temp, sig)
+    res = electrical.wire_resistance(electrical.mixture_resistivity(xi, rho_m, rho_a), p[pk + P_L0 * n] - x,
+                                     p[pk + P_S * n])
+    if drive_kind == electrical.DRIVE_DUTY:
+        cur, power = electrical.pwm_stage(drive_value, res, p[pk + P_VSUP * n], p[pk + P_ILIM * n])
+    elif drive_kind == electrical.DRIVE_CURRENT:
+        cur, power = electrical.current_source(drive_value, res)
+    else:
+        cur, power = electrical.voltage_source(drive_value, res)
+
+    t_amb = p[pk + P_TAMB * n]
+    q_sh, q_sa = sheath.sheath_heat_flows(temp, t_sheath, t_amb, p[pk + P_GWS * n], p[pk + P_GSA * n])
+    q_air = heat.convection_loss(temp, t_amb, p[pk + P_H0 * n], p[pk + P_H2 * n], p[pk + P_AREA * n])
+    if p[pk + P_SHEATH * n] > 0.0:
+        q_air = 0.0
+    else:
+        q_sh = 0.0
+        q_sa = 0.0
+    net = power - q_air - q_sh
+
+    # eq. 4.10: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT
+    inv_cw = p[pk + P_INV_CW * n]
+    d_temp0 = net * dt * inv_cw
+    temp_per_xi = p[pk + P_LAT * n] * inv_cw
+    modulus = constitutive.reuss_modulus(xi, p[pk + P_EM * n], p[pk + P_EA * n])
+    omega = constitutive.transformation_coefficient(modulus, p[pk + P_EPSL * n])
+    theta = constitutive.thermoelastic_coefficient(xi, modulus, p[pk + P_ALM * n], p[pk + P_ALA * n],
+                                                   p[pk + P_NU * n])
+    sig_free0 = sig + constitutive.stress_increment_at_fixed_strain(omega, theta, 0.0, d_temp0)
+    sig_free_per_xi = constitutive.stress_increment_at_fixed_strain(omega, theta, 1.0, temp_per_xi)
+
+    area = p[pk + P_S * n]
+    inv_l0 = p[pk + P_INV_L0 * n]
+    relax = modulus * dt * inv_l0                  # stress drop per slider velocity
+    c_in, g_in, c_out, g_out = loads.slider_response(
+        area * modulus * inv_l0, x, v, dt, p[pk + P_MASS * n], p[pk + P_DAMP * n], p[pk + P_K * n],
+        p[pk + P_F0 * n], p[pk + P_G * n], p[pk + P_N * n], p[pk + P_CAPSTAN * n], p[pk + P_COULOMB * n])
+
+    inv_cm, inv_ca = p[pk + P_INV_CM * n], p[pk + P_INV_CA * n]
+    um_old, ua_old = kinetics.effective_temperatures(temp, sig, inv_cm, inv_ca)
+    v_new, sig_new, sig_gain = _mechanics(sig_free0, area, relax, c_in, g_in, c_out, g_out)
+    um, ua = kinetics.effective_temperatures(temp + d_temp0, sig_new, inv_cm, inv_ca)
+    return (temp, xi, sig, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
+            d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
+            inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua)
+
+
+@njit(cache=True, error_model="numpy", forceinline=True)
+def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
+            d_temp0, temp_per_xi, d_xi, v_new, sig_new):
+    """End of a step: new state (read at sk, written at dk), accumulators, outputs; True if finite."""
+    d_temp = d_temp0 + temp_per_xi * d_xi
+    x_new = x + v_new * dt
+    temp_new = temp + d_temp
+
+    s[dk + S_T * n] = temp_new
+    s[dk + S_XI * n] = xi + d_xi
+    s[dk + S_SIG * n] = sig_new
+    s[dk + S_X * n] = x_new
+    s[dk + S_V * n] = v_new
+    c_s = p[pk + P_CS * n]
+    d_ts = (q_sh - q_sa) * dt / c_s
+    sheathed = p[pk + P_SHEATH * n] > 0.0
+    s[dk + S_TS * n] = t_sheath + d_ts if sheathed else t_sheath
+    s[dk + S_ESHSTORED * n] = s[sk + S_ESHSTORED * n] + c_s * d_ts if sheathed else s[sk + S_ESHSTORED * n]
+    s[dk + S_EJ * n] = s[sk + S_EJ * n] + power * dt
+    s[dk + S_ESTORED * n] = s[sk + S_ESTORED * n] + p[pk + P_CW * n] * d_temp
+    s[dk + S_ECONV * n] = s[sk + S_ECONV * n] + q_air * dt
+    s[dk + S_ELAT * n] = s[sk + S_ELAT * n] - p[pk + P_LAT * n] * d_xi
+    s[dk + S_ESH * n] = s[sk + S_ESH * n] + q_sh * dt
+    s[dk + S_ESHCONV * n] = s[sk + S_ESHCONV * n] + q_sa * dt
+
+    pulley = p[pk + P_N * n]
+    out[ok + O_R * n] = res
+    out[ok + O_I * n] = cur
+    out[ok + O_P * n] = power
+    out[ok + O_FW * n] = p[pk + P_S * n] * sig_new
+    out[ok + O_FT * n] = loads.load_force(v_new, v, x_new, dt, p[pk + P_MASS * n], p[pk + P_DAMP * n],
+                                          p[pk + P_K * n], p[pk + P_F0 * n], p[pk + P_G * n], pulley)
+    out[ok + O_XT * n] = pulley * x_new
+    return math.isfinite(temp_new) and math.isfinite(sig_new) and math.isfinite(x_new)
+
+
+@njit(cache=True, error_model="numpy")
 def step(p, s, drive_kind, drive_value, dt, out):
     """Advance one unit by dt in place (state ``s``); write derived outputs to ``out``.
 
@@ -153,52 +255,12 @@ def step(p, s, drive_kind, drive_value, dt, out):
     constitutive increment, load solve) and X the kinetics' branch (kinetics.memory_branch).
     u rises with d and X never rises with u, so R is increasing with slope >= 1 and has one
     root, bracketed by xi + d in [0, 1] and found by Newton steps that fall back to bisection.
+    Returns False when the new state is not finite.
     """
-    temp = s[S_T]
-    xi = s[S_XI]
-    sig = s[S_SIG]
-    x = s[S_X]
-    v = s[S_V]
-    t_sheath = s[S_TS]
-
-    rho_m = electrical.phase_resistivity(p[P_RHO0M], p[P_T0M], p[P_DRDTM], p[P_DRDSM], temp, sig)
-    rho_a = electrical.phase_resistivity(p[P_RHO0A], p[P_T0A], p[P_DRDTA], p[P_DRDSA], temp, sig)
-    res = electrical.wire_resistance(electrical.mixture_resistivity(xi, rho_m, rho_a), p[P_L0] - x, p[P_S])
-    if drive_kind == electrical.DRIVE_DUTY:
-        cur, power = electrical.pwm_stage(drive_value, res, p[P_VSUP], p[P_ILIM])
-    elif drive_kind == electrical.DRIVE_CURRENT:
-        cur, power = electrical.current_source(drive_value, res)
-    else:
-        cur, power = electrical.voltage_source(drive_value, res)
-
-    if p[P_SHEATH] > 0.0:
-        q_air = 0.0
-        q_sh, q_sa = sheath.sheath_heat_flows(temp, t_sheath, p[P_TAMB], p[P_GWS], p[P_GSA])
-    else:
-        q_air = heat.convection_loss(temp, p[P_TAMB], p[P_H0], p[P_H2], p[P_AREA])
-        q_sh = 0.0
-        q_sa = 0.0
-    net = power - q_air - q_sh
-
-    # eq. 4.10: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT
-    d_temp0 = net * dt * p[P_INV_CW]
-    temp_per_xi = p[P_LAT] * p[P_INV_CW]
-    modulus = constitutive.reuss_modulus(xi, p[P_EM], p[P_EA])
-    omega = constitutive.transformation_coefficient(modulus, p[P_EPSL])
-    theta = constitutive.thermoelastic_coefficient(xi, modulus, p[P_ALM], p[P_ALA], p[P_NU])
-    sig_free0 = sig + constitutive.stress_increment_at_fixed_strain(omega, theta, 0.0, d_temp0)
-    sig_free_per_xi = constitutive.stress_increment_at_fixed_strain(omega, theta, 1.0, temp_per_xi)
-
-    area = p[P_S]
-    relax = modulus * dt * p[P_INV_L0]                  # stress drop per slider velocity
-    c_in, g_in, c_out, g_out = loads.slider_response(
-        area * modulus * p[P_INV_L0], x, v, dt, p[P_MASS], p[P_DAMP], p[P_K], p[P_F0], p[P_G], p[P_N],
-        p[P_CAPSTAN], p[P_COULOMB])
-
-    inv_cm, inv_ca = p[P_INV_CM], p[P_INV_CA]
-    um_old, ua_old = kinetics.effective_temperatures(temp, sig, inv_cm, inv_ca)
-    v_new, sig_new, sig_gain = _mechanics(sig_free0, area, relax, c_in, g_in, c_out, g_out)
-    um, ua = kinetics.effective_temperatures(temp + d_temp0, sig_new, inv_cm, inv_ca)
+    (temp, xi, sig, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
+     d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
+     inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua) = _begin(
+        p, 0, s, 0, 1, drive_kind, drive_value, dt)
     d_xi = 0.0
     heating = ua > ua_old
     cooling = um < um_old
@@ -242,60 +304,148 @@ def step(p, s, drive_kind, drive_value, dt, out):
                 # direction of motion, so this Newton step landed on the root
                 break
         s[S_NREV] = n_points - 2 * closed
-    d_temp = d_temp0 + temp_per_xi * d_xi
-    x_new = x + v_new * dt
-
-    s[S_T] = temp + d_temp
-    s[S_XI] = xi + d_xi
-    s[S_SIG] = sig_new
-    s[S_X] = x_new
-    s[S_V] = v_new
-    if p[P_SHEATH] > 0.0:
-        d_ts = (q_sh - q_sa) * dt / p[P_CS]
-        s[S_TS] = t_sheath + d_ts
-        s[S_ESHSTORED] += p[P_CS] * d_ts
-    s[S_EJ] += power * dt
-    s[S_ESTORED] += p[P_CW] * d_temp
-    s[S_ECONV] += q_air * dt
-    s[S_ELAT] -= p[P_LAT] * d_xi
-    s[S_ESH] += q_sh * dt
-    s[S_ESHCONV] += q_sa * dt
-
-    out[O_R] = res
-    out[O_I] = cur
-    out[O_P] = power
-    out[O_FW] = p[P_S] * sig_new
-    out[O_FT] = loads.load_force(v_new, v, x_new, dt, p[P_MASS], p[P_DAMP], p[P_K], p[P_F0],
-                                 p[P_G], p[P_N])
-    out[O_XT] = p[P_N] * x_new
-    return math.isfinite(s[S_T]) and math.isfinite(s[S_SIG]) and math.isfinite(s[S_X])
+    return _finish(p, 0, s, 0, 0, 1, out, 0, dt, temp, xi, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
+                   d_temp0, temp_per_xi, d_xi, v_new, sig_new)
 
 
-@njit(cache=True, parallel=True)
+# ---------------------------------------------------------------- batch
+# The batch runs blocks of BLOCK sets through time together. Each step first runs every set of
+# the block through the common case in one loop over the sets that LLVM vectorises (SIMD):
+# a set on an outermost branch (fewer than two reversal points) that does not reverse, whose
+# kinetic solve ends after its first Newton step exactly as in step. Sets outside that case
+# (a reversal, a scaled minor-loop branch, more Newton steps, a non-finite state) are flagged
+# and redone from their old state by step itself; they are about a tenth of the steps of a
+# pulse train. One float64 buffer holds the block, field f of set j at f * BLOCK + j: the
+# constant offsets let LLVM prove that the loop's loads and stores do not overlap.
+BLOCK = 32
+B_CUR = N_P                        # state fields up to the memory (S_T ... S_NREV), step start
+B_NEXT = B_CUR + S_MEM             # the same fields at the step end
+B_OUT = B_NEXT + S_MEM             # outputs of the step
+B_DRIVE = B_OUT + N_O              # drive value of the step
+B_REDO = B_DRIVE + 1               # 1.0: the set needs step (written by _step_block)
+B_SIZE = B_REDO + 1
+
+
+@njit(cache=True, error_model="numpy")
+def _step_block(b, drive_kind, dt):
+    """One step of the common case for every set of block ``b``; flags the others (B_REDO)."""
+    for j in range(BLOCK):
+        pk = j
+        sk = B_CUR * BLOCK + j
+        (temp, xi, sig, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
+         d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
+         inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua) = _begin(
+            b, pk, b, sk, BLOCK, drive_kind, b[B_DRIVE * BLOCK + j], dt)
+        old_dir = b[sk + S_DIR * BLOCK]
+        heating = ua > ua_old
+        cooling = um < um_old
+        if heating and cooling:
+            heating = old_dir > 0.0
+        moving = heating or cooling
+        direction = 1.0 if heating else -1.0
+        n_points = b[sk + S_NREV * BLOCK]
+        redo = moving and (n_points >= 2.0 or (old_dir != 0.0 and old_dir != direction))
+        # step's first Newton iteration on an outermost branch (kinetics.memory_branch with
+        # fewer than two points: the printed law's slope from the start state)
+        slope0 = kinetics.transformation_slope(ua_old, um_old, xi, heating, b[pk + P_MS0 * BLOCK],
+                                               b[pk + P_MF0 * BLOCK], b[pk + P_AS0 * BLOCK],
+                                               b[pk + P_AF0 * BLOCK])
+        du = ua - ua_old if heating else um - um_old
+        behind = du <= 0.0 if heating else du >= 0.0
+        xi_branch = xi if behind else xi + slope0 * du
+        dxi_du = 0.0 if behind else slope0
+        r = xi + 0.0 - xi_branch
+        converged = abs(r) <= XI_TOLERANCE
+        lo = -xi if heating else 0.0
+        hi = 0.0 if heating else 1.0 - xi
+        if r > 0.0:
+            hi = 0.0
+        else:
+            lo = 0.0
+        inv_c = inv_ca if heating else inv_cm
+        du_dxi = temp_per_xi - sig_gain * sig_free_per_xi * inv_c
+        d_next = 0.0 - r / (1.0 - dxi_du * du_dxi)
+        v_try, sig_try, gain_try = _mechanics(sig_free0 + sig_free_per_xi * d_next, area, relax,
+                                              c_in, g_in, c_out, g_out)
+        if moving and not converged:
+            redo = redo or not (lo < d_next < hi and gain_try == sig_gain)
+            d_xi = d_next
+            v_new = v_try
+            sig_new = sig_try
+        else:
+            d_xi = 0.0
+        b[B_NEXT * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
+        b[B_NEXT * BLOCK + j + S_NREV * BLOCK] = n_points
+        finite = _finish(b, pk, b, sk, B_NEXT * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt, temp, xi, x, v,
+                         t_sheath, res, cur, power, q_air, q_sh, q_sa, d_temp0, temp_per_xi, d_xi, v_new,
+                         sig_new)
+        b[B_REDO * BLOCK + j] = 1.0 if redo or not finite else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _run_block(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at, first, count):
+    """Sets first .. first + count - 1 of run_batch (count <= BLOCK) through every step."""
+    n_steps = drives.shape[1]
+    n_ch = channels.shape[0]
+    b = np.zeros(B_SIZE * BLOCK)
+    out = np.zeros(N_O)
+    for j in range(BLOCK):
+        i = first + min(j, count - 1)   # spare lanes repeat the last set and are never read
+        for f in range(N_P):
+            b[f * BLOCK + j] = params[i, f]
+        for f in range(S_MEM):
+            b[(B_CUR + f) * BLOCK + j] = states[i, f]
+    for j in range(count):
+        failed_at[first + j] = -1
+    r = 0
+    countdown = record_every
+    for k in range(n_steps):
+        for j in range(count):
+            b[B_DRIVE * BLOCK + j] = drives[first + j, k]
+        _step_block(b, drive_kind, dt)
+        for j in range(count):
+            i = first + j
+            if b[B_REDO * BLOCK + j] == 0.0 or failed_at[i] >= 0:
+                continue
+            s = states[i]
+            for f in range(S_MEM):
+                s[f] = b[(B_CUR + f) * BLOCK + j]
+            finite = step(params[i], s, drive_kind, drives[i, k], dt, out)
+            for f in range(S_MEM):
+                b[(B_NEXT + f) * BLOCK + j] = s[f]
+            for f in range(N_O):
+                b[(B_OUT + f) * BLOCK + j] = out[f]
+            if not finite:
+                failed_at[i] = k
+        countdown -= 1
+        if countdown == 0:
+            countdown = record_every
+            for c in range(n_ch):
+                ch = channels[c]
+                base = (B_NEXT + ch) * BLOCK if ch < N_S else (B_OUT + ch - N_S) * BLOCK
+                for j in range(count):
+                    if failed_at[first + j] < 0:
+                        records[c, first + j, r] = b[base + j]
+            r += 1
+        for q in range(S_MEM * BLOCK):     # a failed set's row in states keeps its last state
+            b[B_CUR * BLOCK + q] = b[B_NEXT * BLOCK + q]
+    for j in range(count):
+        if failed_at[first + j] < 0:
+            for f in range(S_MEM):
+                states[first + j, f] = b[(B_CUR + f) * BLOCK + j]
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
 def run_batch(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at):
     """Run every set (row of ``params``/``states``/``drives``) over its drive row.
 
     ``channels`` indexes the concatenation (state, outputs); ``records[c, i, r]`` holds
     channel c of set i after step (r + 1) * record_every. ``failed_at[i]`` is the first step whose
-    state was not finite (the set stops there), else -1.
+    state was not finite (the set stops there), else -1. Blocks of BLOCK sets run in parallel.
     """
-    n_sets, n_steps = drives.shape
-    n_ch = channels.shape[0]
-    for i in prange(n_sets):
-        s = states[i]
-        p = params[i]
-        out = np.zeros(N_O)
-        r = 0
-        countdown = record_every
-        failed_at[i] = -1
-        for k in range(n_steps):
-            if not step(p, s, drive_kind, drives[i, k], dt, out):
-                failed_at[i] = k
-                break
-            countdown -= 1
-            if countdown == 0:
-                countdown = record_every
-                for c in range(n_ch):
-                    ch = channels[c]
-                    records[c, i, r] = s[ch] if ch < N_S else out[ch - N_S]
-                r += 1
+    n_sets = drives.shape[0]
+    n_blocks = (n_sets + BLOCK - 1) // BLOCK
+    for blk in prange(n_blocks):
+        first = blk * BLOCK
+        _run_block(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at,
+                   first, min(BLOCK, n_sets - first))

@@ -21,7 +21,7 @@ from numba import njit
 from hems_ros.physics.friction import transmitted_force
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def slider_response(wire_stiffness, x, v, dt, mass, damping, stiffness, pretension, gravity, pulley,
                     capstan, coulomb):
     """Slider velocity at the end of the step as v = c + g W0, per direction of motion.
@@ -44,7 +44,7 @@ def slider_response(wire_stiffness, x, v, dt, mass, damping, stiffness, pretensi
     return (rest + f_in) / den_in, a_in / den_in, (rest + f_out) / den_out, a_out / den_out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def slider_velocity(w0, c_in, g_in, c_out, g_out):
     """Slider velocity at the end of the step and dv/dW0 (coefficients from slider_response).
 
@@ -60,7 +60,7 @@ def slider_velocity(w0, c_in, g_in, c_out, g_out):
     return 0.0, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def load_force(v_new, v_old, x_new, dt, mass, damping, stiffness, pretension, gravity, pulley):
     """Force the load receives (load coordinates), from its own equation of motion (4.33)."""
     n = pulley
