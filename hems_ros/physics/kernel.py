@@ -309,33 +309,140 @@ def step(p, s, drive_kind, drive_value, dt, out):
 
 
 # ---------------------------------------------------------------- batch
-# The batch runs blocks of BLOCK sets through time together. Each step first runs every set of
-# the block through the common case in one loop over the sets that LLVM vectorises (SIMD):
-# a set on an outermost branch (fewer than two reversal points) that does not reverse, whose
-# kinetic solve ends after its first Newton step exactly as in step. Sets outside that case
-# (a reversal, a scaled minor-loop branch, more Newton steps, a non-finite state) are flagged
-# and redone from their old state by step itself; they are about a tenth of the steps of a
-# pulse train. One float64 buffer holds the block, field f of set j at f * BLOCK + j: the
-# constant offsets let LLVM prove that the loop's loads and stores do not overlap.
+# The batch runs blocks of BLOCK sets through time together, each step in loops over the sets
+# of the block that LLVM vectorises (SIMD): _block_begin does the start of the step and the
+# kinetic solve's first iteration, _block_iterate the further iterations while any set needs
+# them, _block_finish the end of the step for those sets. They take step's arithmetic in step's
+# order, so a set gives the same bits in both APIs. Sets that push or wipe out reversal points,
+# or need more than BLOCK_ITERATIONS iterations, or turn non-finite, are flagged (B_REDO) and
+# redone from their old state by step itself (a few per mille of the steps of a pulse train).
+# One float64 buffer holds the block, field f of set j at f * BLOCK + j: the constant offsets
+# let LLVM prove that a loop's loads and stores do not overlap.
 BLOCK = 32
+BLOCK_ITERATIONS = 8
+# top two reversal points (kinetics.memory_branch's r and t: u_A, u_M, xi, z+, z-), a copy of
+# the memory the vector loops read (only step changes the memory)
+(M_RUA, M_RUM, M_RXI, M_RZP, M_RZM, M_TUA, M_TUM, M_TXI, M_TZP, M_TZM, N_M) = range(11)
+# what the iterations and the end of a step need from its start
+(W_TEMP, W_XI, W_X, W_V, W_TS, W_RES, W_CUR, W_POWER, W_QAIR, W_QSH, W_QSA, W_DTEMP0, W_TPX,
+ W_SF0, W_SFX, W_AREA, W_RELAX, W_CIN, W_GIN, W_COUT, W_GOUT, W_INVCM, W_INVCA, W_UMOLD, W_UAOLD,
+ W_HEATING, W_NPOINTS, W_SLOPE0,
+ W_DXI, W_LO, W_HI, W_VNEW, W_SIGNEW, W_GAIN, W_UM, W_UA, W_ACTIVE, N_W) = range(38)
 B_CUR = N_P                        # state fields up to the memory (S_T ... S_NREV), step start
 B_NEXT = B_CUR + S_MEM             # the same fields at the step end
 B_OUT = B_NEXT + S_MEM             # outputs of the step
 B_DRIVE = B_OUT + N_O              # drive value of the step
-B_REDO = B_DRIVE + 1               # 1.0: the set needs step (written by _step_block)
-B_SIZE = B_REDO + 1
+B_REDO = B_DRIVE + 1               # 1.0: the set needs step
+B_TOP = B_REDO + 1
+B_WORK = B_TOP + N_M
+B_SIZE = B_WORK + N_W
 
 
-@njit(cache=True, error_model="numpy")
-def _step_block(b, drive_kind, dt):
-    """One step of the common case for every set of block ``b``; flags the others (B_REDO)."""
+@njit(cache=True, error_model="numpy", forceinline=True)
+def _branch(u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, ms0, mf0, as0, af0, scaled):
+    """kinetics.memory_branch with at most the top two reversal points ahead (``top``: their
+    fields, M_*): (xi, dxi/du, 1.0 if u passed t, i.e. the branch would wipe out a loop).
+
+    ``scaled`` False: no set of the block has two points, which drops the scaled branch from
+    the vector loop (every set would evaluate it otherwise).
+    """
+    if not scaled or n_points < 2.0:
+        du = u_a - ua_old if heating else u_m - um_old
+        if (du <= 0.0) if heating else (du >= 0.0):
+            return xi, 0.0, 0.0
+        return xi + slope0 * du, slope0, 0.0
+    u = u_a if heating else u_m
+    u_s = ua_old if heating else um_old
+    u_t = top[M_TUA] if heating else top[M_TUM]
+    if (u <= u_s) if heating else (u >= u_s):
+        return xi, 0.0, 0.0
+    if (u < u_t) if heating else (u > u_t):
+        xi_b, dxi = kinetics.scaled_branch(u, heating, top[M_RUA] if heating else top[M_RUM], top[M_RXI],
+                                           top[M_RZP] if heating else top[M_RZM], u_t, top[M_TXI],
+                                           top[M_TZP] if heating else top[M_TZM], ms0, mf0, as0, af0)
+        return xi_b, dxi, 0.0
+    return xi, 0.0, 1.0
+
+
+@njit(cache=True, error_model="numpy", forceinline=True)
+def _iteration(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled):
+    """One iteration of step's kinetic solve for set j of block b (its W_* fields).
+
+    Returns the updated (d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua), 1.0 while the solve
+    goes on and 1.0 if the set has to be redone by step.
+    """
+    w = B_WORK * BLOCK + j
+    heating = b[w + W_HEATING * BLOCK] > 0.0
+    xi = b[w + W_XI * BLOCK]
+    n_points = b[w + W_NPOINTS * BLOCK]
+    top = (b[(B_TOP + M_RUA) * BLOCK + j], b[(B_TOP + M_RUM) * BLOCK + j], b[(B_TOP + M_RXI) * BLOCK + j],
+           b[(B_TOP + M_RZP) * BLOCK + j], b[(B_TOP + M_RZM) * BLOCK + j], b[(B_TOP + M_TUA) * BLOCK + j],
+           b[(B_TOP + M_TUM) * BLOCK + j], b[(B_TOP + M_TXI) * BLOCK + j], b[(B_TOP + M_TZP) * BLOCK + j],
+           b[(B_TOP + M_TZM) * BLOCK + j])
+    xi_branch, dxi_du, closes = _branch(ua, um, heating, xi, b[w + W_UAOLD * BLOCK], b[w + W_UMOLD * BLOCK],
+                                        b[w + W_SLOPE0 * BLOCK], n_points, top, b[j + P_MS0 * BLOCK],
+                                        b[j + P_MF0 * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_AF0 * BLOCK], scaled)
+    r = xi + d_xi - xi_branch
+    if abs(r) <= XI_TOLERANCE:
+        return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0, closes
+    if r > 0.0:
+        hi = d_xi
+    else:
+        lo = d_xi
+    inv_cm, inv_ca = b[w + W_INVCM * BLOCK], b[w + W_INVCA * BLOCK]
+    sig_free_per_xi = b[w + W_SFX * BLOCK]
+    temp_per_xi = b[w + W_TPX * BLOCK]
+    du_dxi = temp_per_xi - sig_gain * sig_free_per_xi * (inv_ca if heating else inv_cm)
+    d_next = d_xi - r / (1.0 - dxi_du * du_dxi)
+    newton = lo < d_next < hi
+    d_xi = d_next if newton else 0.5 * (lo + hi)
+    gain_before = sig_gain
+    v_new, sig_new, sig_gain = _mechanics(b[w + W_SF0 * BLOCK] + sig_free_per_xi * d_xi, b[w + W_AREA * BLOCK],
+                                          b[w + W_RELAX * BLOCK], b[w + W_CIN * BLOCK], b[w + W_GIN * BLOCK],
+                                          b[w + W_COUT * BLOCK], b[w + W_GOUT * BLOCK])
+    um, ua = kinetics.effective_temperatures(b[w + W_TEMP * BLOCK] + b[w + W_DTEMP0 * BLOCK] + temp_per_xi * d_xi,
+                                             sig_new, inv_cm, inv_ca)
+    done = newton and n_points < 2.0 and sig_gain == gain_before
+    return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0 if done else 1.0, closes
+
+
+@njit(cache=True, error_model="numpy", forceinline=True)
+def _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active):
+    w = B_WORK * BLOCK + j
+    b[w + W_DXI * BLOCK] = d_xi
+    b[w + W_LO * BLOCK] = lo
+    b[w + W_HI * BLOCK] = hi
+    b[w + W_VNEW * BLOCK] = v_new
+    b[w + W_SIGNEW * BLOCK] = sig_new
+    b[w + W_GAIN * BLOCK] = sig_gain
+    b[w + W_UM * BLOCK] = um
+    b[w + W_UA * BLOCK] = ua
+    b[w + W_ACTIVE * BLOCK] = active
+
+
+@njit(cache=True, error_model="numpy", forceinline=True)
+def _finish_set(b, j, dt):
+    """_finish for set j of block b from its W_* fields; True if the new state is finite."""
+    w = B_WORK * BLOCK + j
+    return _finish(b, j, b, B_CUR * BLOCK + j, B_NEXT * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt,
+                   b[w + W_TEMP * BLOCK], b[w + W_XI * BLOCK], b[w + W_X * BLOCK], b[w + W_V * BLOCK],
+                   b[w + W_TS * BLOCK], b[w + W_RES * BLOCK], b[w + W_CUR * BLOCK], b[w + W_POWER * BLOCK],
+                   b[w + W_QAIR * BLOCK], b[w + W_QSH * BLOCK], b[w + W_QSA * BLOCK], b[w + W_DTEMP0 * BLOCK],
+                   b[w + W_TPX * BLOCK], b[w + W_DXI * BLOCK], b[w + W_VNEW * BLOCK], b[w + W_SIGNEW * BLOCK])
+
+
+@njit(cache=True, error_model="numpy", forceinline=True)
+def _block_begin(b, drive_kind, dt, scaled):
+    """Start of a step and the solve's first iteration for every set of block b; returns how
+    many sets need further iterations. Sets that do not are finished here."""
+    n_active = 0     # an integer count: a float sum is a reduction LLVM may not reorder
     for j in range(BLOCK):
-        pk = j
         sk = B_CUR * BLOCK + j
+        w = B_WORK * BLOCK + j
         (temp, xi, sig, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
          d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
          inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua) = _begin(
-            b, pk, b, sk, BLOCK, drive_kind, b[B_DRIVE * BLOCK + j], dt)
+            b, j, b, sk, BLOCK, drive_kind, b[B_DRIVE * BLOCK + j], dt)
         old_dir = b[sk + S_DIR * BLOCK]
         heating = ua > ua_old
         cooling = um < um_old
@@ -344,42 +451,119 @@ def _step_block(b, drive_kind, dt):
         moving = heating or cooling
         direction = 1.0 if heating else -1.0
         n_points = b[sk + S_NREV * BLOCK]
-        redo = moving and (n_points >= 2.0 or (old_dir != 0.0 and old_dir != direction))
-        # step's first Newton iteration on an outermost branch (kinetics.memory_branch with
-        # fewer than two points: the printed law's slope from the start state)
-        slope0 = kinetics.transformation_slope(ua_old, um_old, xi, heating, b[pk + P_MS0 * BLOCK],
-                                               b[pk + P_MF0 * BLOCK], b[pk + P_AS0 * BLOCK],
-                                               b[pk + P_AF0 * BLOCK])
-        du = ua - ua_old if heating else um - um_old
-        behind = du <= 0.0 if heating else du >= 0.0
-        xi_branch = xi if behind else xi + slope0 * du
-        dxi_du = 0.0 if behind else slope0
-        r = xi + 0.0 - xi_branch
-        converged = abs(r) <= XI_TOLERANCE
+        slope0 = kinetics.transformation_slope(ua_old, um_old, xi, heating, b[j + P_MS0 * BLOCK],
+                                               b[j + P_MF0 * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_AF0 * BLOCK])
+        b[w + W_TEMP * BLOCK] = temp
+        b[w + W_XI * BLOCK] = xi
+        b[w + W_X * BLOCK] = x
+        b[w + W_V * BLOCK] = v
+        b[w + W_TS * BLOCK] = t_sheath
+        b[w + W_RES * BLOCK] = res
+        b[w + W_CUR * BLOCK] = cur
+        b[w + W_POWER * BLOCK] = power
+        b[w + W_QAIR * BLOCK] = q_air
+        b[w + W_QSH * BLOCK] = q_sh
+        b[w + W_QSA * BLOCK] = q_sa
+        b[w + W_DTEMP0 * BLOCK] = d_temp0
+        b[w + W_TPX * BLOCK] = temp_per_xi
+        b[w + W_SF0 * BLOCK] = sig_free0
+        b[w + W_SFX * BLOCK] = sig_free_per_xi
+        b[w + W_AREA * BLOCK] = area
+        b[w + W_RELAX * BLOCK] = relax
+        b[w + W_CIN * BLOCK] = c_in
+        b[w + W_GIN * BLOCK] = g_in
+        b[w + W_COUT * BLOCK] = c_out
+        b[w + W_GOUT * BLOCK] = g_out
+        b[w + W_INVCM * BLOCK] = inv_cm
+        b[w + W_INVCA * BLOCK] = inv_ca
+        b[w + W_UMOLD * BLOCK] = um_old
+        b[w + W_UAOLD * BLOCK] = ua_old
+        b[w + W_HEATING * BLOCK] = 1.0 if heating else 0.0
+        b[w + W_NPOINTS * BLOCK] = n_points
+        b[w + W_SLOPE0 * BLOCK] = slope0
         lo = -xi if heating else 0.0
         hi = 0.0 if heating else 1.0 - xi
-        if r > 0.0:
-            hi = 0.0
+        d_xi1, lo1, hi1, v1, sig1, gain1, um1, ua1, active, closes = _iteration(
+            b, j, 0.0, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled)
+        redo = moving and (closes > 0.0 or (old_dir != 0.0 and old_dir != direction))
+        if moving:
+            d_xi, v_new, sig_new = d_xi1, v1, sig1
         else:
-            lo = 0.0
-        inv_c = inv_ca if heating else inv_cm
-        du_dxi = temp_per_xi - sig_gain * sig_free_per_xi * inv_c
-        d_next = 0.0 - r / (1.0 - dxi_du * du_dxi)
-        v_try, sig_try, gain_try = _mechanics(sig_free0 + sig_free_per_xi * d_next, area, relax,
-                                              c_in, g_in, c_out, g_out)
-        if moving and not converged:
-            redo = redo or not (lo < d_next < hi and gain_try == sig_gain)
-            d_xi = d_next
-            v_new = v_try
-            sig_new = sig_try
-        else:
-            d_xi = 0.0
+            d_xi, active = 0.0, 0.0
+        _store_solve(b, j, d_xi, lo1, hi1, v_new, sig_new, gain1, um1, ua1, active)
         b[B_NEXT * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
         b[B_NEXT * BLOCK + j + S_NREV * BLOCK] = n_points
-        finite = _finish(b, pk, b, sk, B_NEXT * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt, temp, xi, x, v,
-                         t_sheath, res, cur, power, q_air, q_sh, q_sa, d_temp0, temp_per_xi, d_xi, v_new,
-                         sig_new)
+        finite = _finish_set(b, j, dt)
         b[B_REDO * BLOCK + j] = 1.0 if redo or not finite else 0.0
+        n_active += 1 if active > 0.0 else 0
+    return n_active
+
+
+@njit(cache=True, error_model="numpy")
+def _block_iterate(b):
+    """One more iteration of the solve for the sets of block b that need it; how many still do."""
+    n_active = 0
+    for j in range(BLOCK):
+        w = B_WORK * BLOCK + j
+        d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active, closes = _iteration(
+            b, j, b[w + W_DXI * BLOCK], b[w + W_LO * BLOCK], b[w + W_HI * BLOCK], b[w + W_VNEW * BLOCK],
+            b[w + W_SIGNEW * BLOCK], b[w + W_GAIN * BLOCK], b[w + W_UM * BLOCK], b[w + W_UA * BLOCK], True)
+        if b[w + W_ACTIVE * BLOCK] > 0.0:
+            _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active)
+            if closes > 0.0:
+                b[B_REDO * BLOCK + j] = 1.0
+            n_active += 1 if active > 0.0 else 0
+    return n_active
+
+
+@njit(cache=True, error_model="numpy")
+def _block_finish(b, dt):
+    """End of the step for every set of block b from its solve; sets still unsolved are flagged."""
+    for j in range(BLOCK):
+        finite = _finish_set(b, j, dt)
+        if b[B_WORK * BLOCK + j + W_ACTIVE * BLOCK] > 0.0 or not finite:
+            b[B_REDO * BLOCK + j] = 1.0
+
+
+@njit(cache=True, error_model="numpy")
+def _block_begin_outer(b, drive_kind, dt):
+    """_block_begin for a block whose sets have fewer than two reversal points each."""
+    return _block_begin(b, drive_kind, dt, False)
+
+
+@njit(cache=True, error_model="numpy")
+def _block_begin_scaled(b, drive_kind, dt):
+    """_block_begin for a block with a set on a scaled branch."""
+    return _block_begin(b, drive_kind, dt, True)
+
+
+@njit(cache=True, error_model="numpy")
+def _step_block(b, drive_kind, dt):
+    """One step of every set of block b; flags (B_REDO) the sets step has to redo."""
+    n_scaled = 0
+    for j in range(BLOCK):
+        n_scaled += 1 if b[(B_CUR + S_NREV) * BLOCK + j] >= 2.0 else 0
+    if n_scaled > 0:
+        n_active = _block_begin_scaled(b, drive_kind, dt)
+    else:
+        n_active = _block_begin_outer(b, drive_kind, dt)
+    if n_active > 0:
+        for _ in range(BLOCK_ITERATIONS - 1):
+            if _block_iterate(b) == 0:
+                break
+        _block_finish(b, dt)
+
+
+@njit(cache=True, error_model="numpy")
+def _copy_top(b, j, s):
+    """The top two reversal points of state row s into block b's copy for set j."""
+    n_points = int(s[S_NREV])
+    if n_points >= 2:
+        r = S_MEM + kinetics.POINT_SIZE * (n_points - 1)
+        t = r - kinetics.POINT_SIZE
+        for f in range(kinetics.POINT_SIZE):
+            b[(B_TOP + f) * BLOCK + j] = s[r + f]
+            b[(B_TOP + M_TUA + f) * BLOCK + j] = s[t + f]
 
 
 @njit(cache=True, error_model="numpy")
@@ -395,6 +579,7 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
             b[f * BLOCK + j] = params[i, f]
         for f in range(S_MEM):
             b[(B_CUR + f) * BLOCK + j] = states[i, f]
+        _copy_top(b, j, states[i])
     for j in range(count):
         failed_at[first + j] = -1
     r = 0
@@ -415,6 +600,7 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
                 b[(B_NEXT + f) * BLOCK + j] = s[f]
             for f in range(N_O):
                 b[(B_OUT + f) * BLOCK + j] = out[f]
+            _copy_top(b, j, s)
             if not finite:
                 failed_at[i] = k
         countdown -= 1

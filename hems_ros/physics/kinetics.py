@@ -173,8 +173,8 @@ def transformation_slope(u_a, u_m, xi, heating, m_s, m_f, a_s, a_f):
     return slope * ratio
 
 
-@njit(cache=True, error_model="numpy")
-def _scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_s, m_f, a_s, a_f):
+@njit(cache=True, error_model="numpy", forceinline=True)
+def scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_s, m_f, a_s, a_f):
     """Major branch scaled through reversal point r and target t, for u strictly between.
 
     Returns xi and dxi/du. Where the active branch is flat to machine precision between the
@@ -217,7 +217,7 @@ def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, 
         if (u <= u_s) if heating else (u >= u_s):
             return xi_s, 0.0, closed
         if (u < u_t) if heating else (u > u_t):
-            xi, dxi = _scaled_branch(u, heating, memory[r + col], memory[r + 2], memory[r + zcol],
+            xi, dxi = scaled_branch(u, heating, memory[r + col], memory[r + 2], memory[r + zcol],
                                      u_t, memory[t + 2], memory[t + zcol], m_s, m_f, a_s, a_f)
             return xi, dxi, closed
         xi_s, ua_s, um_s = memory[t + 2], memory[t], memory[t + 1]
