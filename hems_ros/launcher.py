@@ -77,6 +77,16 @@ def executable_path(executable: str) -> list[str]:
     return [sys.executable, "-m", f"hems_ros.nodes.{executable}"]
 
 
+def warm_physics_cache(env: dict[str, str]) -> None:
+    """Compile (or load) the numba physics kernel once before the units start.
+
+    Without it, after a fresh install or a physics change, every actuation unit compiles the
+    kernel at the same time, which starves the whole graph of CPU for tens of seconds.
+    """
+    subprocess.run([sys.executable, "-c", "from hems_ros.physics import ActuationUnit; ActuationUnit().step(duty=0.0)"],
+                   env=env, check=True)
+
+
 class Graph:
     """The running graph: child processes, started by :meth:`start`, ended by :meth:`stop`."""
 
@@ -104,6 +114,7 @@ class Graph:
 
     def start(self) -> None:
         env = child_environment()
+        warm_physics_cache(env)
         for name, command in self.commands().items():
             self.processes[name] = subprocess.Popen(command, env=env, preexec_fn=_die_with_parent)
 

@@ -72,8 +72,12 @@ class ActuationUnitNode(Node):
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
 
     def on_duty(self, message: DutyCommand) -> None:
+        now = seconds(self)
+        # integrate up to the arrival with the old duty first, so the new duty takes effect
+        # when it arrives rather than at the next tick
+        self.advance_to(now)
         try:
-            self.driver.command(message.duty_percent, seconds(self), from_msg(message.measurement_stamp))
+            self.driver.command(message.duty_percent, now, from_msg(message.measurement_stamp))
         except ValueError as error:
             self.get_logger().error(f"{self.finger}: {error}; applying 0 %")
 
@@ -85,8 +89,12 @@ class ActuationUnitNode(Node):
             self.publish_state()  # the moment heating stopped, for the record
 
     def on_tick(self) -> None:
+        self.advance_to(seconds(self))
+
+    def advance_to(self, now: float) -> None:
+        """Integrate the physics up to ``now``; publish the encoder samples that fell due."""
         was_tripped = self.driver.watchdog_tripped
-        samples = self.driver.advance(seconds(self))
+        samples = self.driver.advance(now)
         if self.driver.watchdog_tripped != was_tripped:
             self.publish_state()
         for sample in samples:

@@ -11,7 +11,7 @@ Subscribes
   /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only while ENABLED)
 Publishes
   /hems/<finger>/duty              hems_msgs/DutyCommand      reliable, one per feedback sample
-  /hems/<finger>/controller_status hems_msgs/ControllerStatus reliable, with every second duty (50 Hz heartbeat), and
+  /hems/<finger>/controller_status hems_msgs/ControllerStatus reliable, with every duty (heartbeat; carries the latest encoder and force readings), and
                                    every idle_status_period_s while no feedback arrives
 
 An invalid setpoint (non-finite, outside the tendon stroke or force range, unknown mode) is
@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import fields
 
+from builtin_interfaces.msg import Time
 from rclpy.node import Node
 
 from hems_msgs.msg import ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
@@ -51,6 +52,10 @@ PARAMETERS = [
 ]
 
 
+def nan_if_none(value: float | None) -> float:
+    return float("nan") if value is None else value
+
+
 def _non_negative(value) -> str | None:
     return None if isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0 else "must be >= 0"
 
@@ -75,6 +80,8 @@ class FingerControllerNode(Node):
         self.setpoint = Setpoint(p["mode"], 0.0)
         self.enabled = False
         self.wire_position: float | None = None
+        self.encoder_stamp = Time()
+        self.force_stamp = Time()
         self.wire_force: float | None = None
         self.duty = 0.0
         self.rejected = 0
@@ -119,11 +126,13 @@ class FingerControllerNode(Node):
 
     def on_encoder(self, message: EncoderReading) -> None:
         self.wire_position = message.position
+        self.encoder_stamp = message.header.stamp
         if self.setpoint.mode == "position":
             self.control(message.header.stamp)
 
     def on_force(self, message: WireForce) -> None:
         self.wire_force = message.force
+        self.force_stamp = message.header.stamp
         if self.setpoint.mode == "force":
             self.control(message.header.stamp)
 
@@ -148,8 +157,7 @@ class FingerControllerNode(Node):
         command.header.stamp = now.to_msg()
         self.duty_pub.publish(command)
         self.last_control_s = now.nanoseconds * 1e-9
-        if self.sequence % 2 == 0:  # a 50 Hz heartbeat is ample for the 50 ms stale check
-            self.publish_status()
+        self.publish_status()
 
     def publish_idle_status(self) -> None:
         if self.get_clock().now().nanoseconds * 1e-9 - self.last_control_s >= self.idle_status_period_s:
@@ -167,7 +175,9 @@ class FingerControllerNode(Node):
         status = ControllerStatus(
             finger=self.finger, strategy=self.controller.strategy, mode=self.setpoint.mode, active=self.enabled,
             setpoint=self.setpoint.value, measurement=tendon, error=self.setpoint.value - tendon,
-            duty_percent=self.duty, fault=self.controller.fault or "", rejected_setpoints=self.rejected,
+            duty_percent=self.duty, fault=self.controller.fault or "", encoder_stamp=self.encoder_stamp,
+            wire_position=nan_if_none(self.wire_position), force_stamp=self.force_stamp,
+            wire_force=nan_if_none(self.wire_force), rejected_setpoints=self.rejected,
             last_rejection=self.last_rejection, sequence=self.status_sequence)
         status.header.stamp = self.get_clock().now().to_msg()
         self.status_pub.publish(status)

@@ -42,7 +42,7 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
         # freezing them keeps the collector's pauses far below the 10 ms control period.
         gc.collect()
         gc.freeze()
-        (spin or spin_events)(node)
+        (spin or rclpy.spin)(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RuntimeError:
@@ -57,23 +57,6 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
             node.destroy_node()
         rclpy.try_shutdown()
     return 0
-
-
-def spin_events(node) -> None:
-    """Spin on rclpy's C++ events executor until shutdown.
-
-    Measured here: about 100 us of CPU per received message against about 300 us for the
-    Python single-threaded executor, the difference between sixteen 100 Hz nodes fitting on
-    two cores or not. ``HEMS_EXECUTOR=single`` selects the Python executor instead.
-    """
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.experimental import EventsExecutor
-
-    executor = SingleThreadedExecutor() if os.environ.get("HEMS_EXECUTOR") == "single" else EventsExecutor()
-    executor.add_node(node)
-    while rclpy.ok():
-        executor.spin_once(timeout_sec=0.1)
 
 
 def node_help(make_node: Callable[[], object], program: str) -> str:

@@ -26,7 +26,7 @@ def graph(venv):
                 client.spin_for(1.0)
         assert ok, f"graph did not become ready: {message}"
         client.call("disable")
-        client.spin_for(3.0)  # let start-up load (imports, JIT cache loads) pass
+        client.spin_for(10.0)  # let start-up load (imports, numba cache loads or compiles) pass
         client.call("reset")
         for finger in names.FINGERS:  # create every endpoint the tests use before they start
             client.send_setpoint(finger, "position", 0.0)
