@@ -60,8 +60,8 @@ _invalidate_stale_cache()
  P_VSUP, P_ILIM,
  P_MASS, P_DAMP, P_K, P_F0, P_G, P_N,
  P_SHEATH, P_GWS, P_GSA, P_CS,
- P_CAPSTAN, P_COULOMB,
- P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, N_P) = range(45)
+ P_A_IN, P_F_IN, P_A_OUT, P_F_OUT,
+ P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, N_P) = range(48)
 
 # ---------------------------------------------------------------- state row
 STATE_NAMES = (
@@ -119,12 +119,14 @@ def pack(params: UnitParams) -> np.ndarray:
         p[P_GWS] = 1.0 / r.wire_to_sheath
         p[P_GSA] = 1.0 / r.sheath_to_air
         p[P_CS] = params.sheath.heat_capacity_j_per_k
+        p[P_INV_CS] = 1.0 / p[P_CS]
     # reciprocals the step would otherwise divide by several times per step
     p[P_INV_CW], p[P_INV_L0] = 1.0 / p[P_CW], 1.0 / w.length_m
     p[P_INV_CM], p[P_INV_CA] = 1.0 / ki.cm_pa_per_c, 1.0 / ki.ca_pa_per_c
     cap = params.capstan
-    p[P_CAPSTAN] = friction.capstan_ratio(cap.friction_coefficient, cap.bend_angle_rad) if cap.enabled else 1.0
-    p[P_COULOMB] = params.glove_friction.force_n if params.glove_friction.enabled else 0.0
+    capstan = friction.capstan_ratio(cap.friction_coefficient, cap.bend_angle_rad) if cap.enabled else 1.0
+    coulomb = params.glove_friction.force_n if params.glove_friction.enabled else 0.0
+    p[P_A_IN], p[P_F_IN], p[P_A_OUT], p[P_F_OUT] = loads.transmission(capstan, ld.pulley_ratio, coulomb)
     return p
 
 
@@ -199,7 +201,8 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     relax = modulus * dt * inv_l0                  # stress drop per slider velocity
     c_in, g_in, c_out, g_out = loads.slider_response(
         area * modulus * inv_l0, x, v, dt, p[pk + P_MASS * n], p[pk + P_DAMP * n], p[pk + P_K * n],
-        p[pk + P_F0 * n], p[pk + P_G * n], p[pk + P_N * n], p[pk + P_CAPSTAN * n], p[pk + P_COULOMB * n])
+        p[pk + P_F0 * n], p[pk + P_G * n], p[pk + P_N * n], p[pk + P_A_IN * n], p[pk + P_F_IN * n],
+        p[pk + P_A_OUT * n], p[pk + P_F_OUT * n])
 
     inv_cm, inv_ca = p[pk + P_INV_CM * n], p[pk + P_INV_CA * n]
     um_old, ua_old = kinetics.effective_temperatures(temp, sig, inv_cm, inv_ca)
@@ -223,11 +226,10 @@ def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, res, cur
     s[dk + S_SIG * n] = sig_new
     s[dk + S_X * n] = x_new
     s[dk + S_V * n] = v_new
-    c_s = p[pk + P_CS * n]
-    d_ts = (q_sh - q_sa) * dt / c_s
+    d_ts = (q_sh - q_sa) * dt * p[pk + P_INV_CS * n]
     sheathed = p[pk + P_SHEATH * n] > 0.0
     s[dk + S_TS * n] = t_sheath + d_ts if sheathed else t_sheath
-    s[dk + S_ESHSTORED * n] = s[sk + S_ESHSTORED * n] + c_s * d_ts if sheathed else s[sk + S_ESHSTORED * n]
+    s[dk + S_ESHSTORED * n] = s[sk + S_ESHSTORED * n] + p[pk + P_CS * n] * d_ts if sheathed else s[sk + S_ESHSTORED * n]
     s[dk + S_EJ * n] = s[sk + S_EJ * n] + power * dt
     s[dk + S_ESTORED * n] = s[sk + S_ESTORED * n] + p[pk + P_CW * n] * d_temp
     s[dk + S_ECONV * n] = s[sk + S_ECONV * n] + q_air * dt

@@ -138,15 +138,17 @@ def _logistic(a):
 @njit(cache=True, error_model="numpy", forceinline=True)
 def heating_branch(temperature_c, a_s, a_f):
     """z+(T) = 1/2 tanh[2((As - T)/(Af - As) + 1/2)] + 1/2 and dz+/dT (eqs. 4.17, 4.20)."""
-    z, sech2 = _logistic(2.0 * ((a_s - temperature_c) / (a_f - a_s) + 0.5))
-    return z, -sech2 / (a_f - a_s)
+    inv_width = 1.0 / (a_f - a_s)
+    z, sech2 = _logistic(2.0 * ((a_s - temperature_c) * inv_width + 0.5))
+    return z, -sech2 * inv_width
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
 def cooling_branch(temperature_c, m_s, m_f):
     """z-(T) = 1/2 tanh[2((Mf - T)/(Ms - Mf) + 1/2)] + 1/2 and dz-/dT (eqs. 4.18, 4.21)."""
-    z, sech2 = _logistic(2.0 * ((m_f - temperature_c) / (m_s - m_f) + 0.5))
-    return z, -sech2 / (m_s - m_f)
+    inv_width = 1.0 / (m_s - m_f)
+    z, sech2 = _logistic(2.0 * ((m_f - temperature_c) * inv_width + 0.5))
+    return z, -sech2 * inv_width
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -162,12 +164,9 @@ def transformation_slope(u_a, u_m, xi, heating, m_s, m_f, a_s, a_f):
     zp, dzp = heating_branch(u_a, a_s, a_f)
     zm, dzm = cooling_branch(u_m, m_s, m_f)
     gap = zp - zm
-    if heating:
-        ratio = (xi - zm) / gap if gap > BRANCH_GAP_FLOOR else 1.0
-        slope = dzp
-    else:
-        ratio = (zp - xi) / gap if gap > BRANCH_GAP_FLOOR else 1.0
-        slope = dzm
+    inside = xi - zm if heating else zp - xi
+    ratio = inside / gap if gap > BRANCH_GAP_FLOOR else 1.0
+    slope = dzp if heating else dzm
     if ratio < 0.0:
         ratio = 0.0
     return slope * ratio

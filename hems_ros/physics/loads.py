@@ -22,26 +22,31 @@ from hems_ros.physics.friction import transmitted_force
 
 
 @njit(cache=True, error_model="numpy")
+def transmission(capstan, pulley, coulomb):
+    """(a_in, f_in, a_out, f_out): the load receives F_L = a F_wire + f while the slider moves
+    in / out (friction.transmitted_force), constants of a parameter set (kernel.pack)."""
+    return (transmitted_force(1.0, 1.0, capstan, pulley, 0.0), transmitted_force(0.0, 1.0, capstan, pulley, coulomb),
+            transmitted_force(1.0, -1.0, capstan, pulley, 0.0), transmitted_force(0.0, -1.0, capstan, pulley, coulomb))
+
+
+@njit(cache=True, error_model="numpy")
 def slider_response(wire_stiffness, x, v, dt, mass, damping, stiffness, pretension, gravity, pulley,
-                    capstan, coulomb):
+                    a_in, f_in, a_out, f_out):
     """Slider velocity at the end of the step as v = c + g W0, per direction of motion.
 
-    Returns (c_in, g_in, c_out, g_out) for motion inward and outward (eqs. 4.32-4.35 with
-    friction.transmitted_force). They depend on the state at the start of the step only, so
-    the kernel computes them once and evaluates :func:`slider_velocity` for each W0 its
-    kinetic-mechanical solve tries.
+    Returns (c_in, g_in, c_out, g_out) for motion inward and outward (eqs. 4.32-4.35 with the
+    :func:`transmission` coefficients). They depend on the state at the start of the step
+    only, so the kernel computes them once and evaluates :func:`slider_velocity` for each W0
+    its kinetic-mechanical solve tries.
     """
     n = pulley
-    inertia = mass * n / dt + damping * n + stiffness * n * dt
-    rest = mass * n * v / dt - mass * gravity - pretension - stiffness * n * x
+    inv_dt = 1.0 / dt      # one division per batch loop (dt is the same for every set)
+    inertia = mass * n * inv_dt + damping * n + stiffness * n * dt
+    rest = mass * n * v * inv_dt - mass * gravity - pretension - stiffness * n * x
     # F_L(dir) = a_dir * (w0 - K dt v) + f_dir, linear in v
-    a_in = transmitted_force(1.0, 1.0, capstan, n, 0.0)
-    f_in = transmitted_force(0.0, 1.0, capstan, n, coulomb)
-    den_in = inertia + a_in * wire_stiffness * dt
-    a_out = transmitted_force(1.0, -1.0, capstan, n, 0.0)
-    f_out = transmitted_force(0.0, -1.0, capstan, n, coulomb)
-    den_out = inertia + a_out * wire_stiffness * dt
-    return (rest + f_in) / den_in, a_in / den_in, (rest + f_out) / den_out, a_out / den_out
+    inv_den_in = 1.0 / (inertia + a_in * wire_stiffness * dt)
+    inv_den_out = 1.0 / (inertia + a_out * wire_stiffness * dt)
+    return (rest + f_in) * inv_den_in, a_in * inv_den_in, (rest + f_out) * inv_den_out, a_out * inv_den_out
 
 
 @njit(cache=True, error_model="numpy")
@@ -64,5 +69,6 @@ def slider_velocity(w0, c_in, g_in, c_out, g_out):
 def load_force(v_new, v_old, x_new, dt, mass, damping, stiffness, pretension, gravity, pulley):
     """Force the load receives (load coordinates), from its own equation of motion (4.33)."""
     n = pulley
-    return (mass * n * (v_new - v_old) / dt + mass * gravity + damping * n * v_new
+    inv_dt = 1.0 / dt
+    return (mass * n * (v_new - v_old) * inv_dt + mass * gravity + damping * n * v_new
             + pretension + stiffness * n * x_new)
