@@ -623,17 +623,49 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
                 states[first + j, f] = b[(B_CUR + f) * BLOCK + j]
 
 
+@njit(cache=True, error_model="numpy")
+def _run_sets(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at, first, count):
+    """Sets first .. first + count - 1 of run_batch one after the other, through step alone."""
+    n_steps = drives.shape[1]
+    n_ch = channels.shape[0]
+    out = np.zeros(N_O)
+    for i in range(first, first + count):
+        s = states[i]
+        p = params[i]
+        r = 0
+        countdown = record_every
+        failed_at[i] = -1
+        for k in range(n_steps):
+            if not step(p, s, drive_kind, drives[i, k], dt, out):
+                failed_at[i] = k
+                break
+            countdown -= 1
+            if countdown == 0:
+                countdown = record_every
+                for c in range(n_ch):
+                    ch = channels[c]
+                    records[c, i, r] = s[ch] if ch < N_S else out[ch - N_S]
+                r += 1
+
+
 @njit(cache=True, parallel=True, error_model="numpy")
 def run_batch(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at):
     """Run every set (row of ``params``/``states``/``drives``) over its drive row.
 
     ``channels`` indexes the concatenation (state, outputs); ``records[c, i, r]`` holds
     channel c of set i after step (r + 1) * record_every. ``failed_at[i]`` is the first step whose
-    state was not finite (the set stops there), else -1. Blocks of BLOCK sets run in parallel.
+    state was not finite (the set stops there), else -1. Blocks of BLOCK sets run in parallel;
+    a block of fewer than BLOCK / 4 sets runs set by set (the vector loops would compute all
+    BLOCK lanes for them).
     """
     n_sets = drives.shape[0]
     n_blocks = (n_sets + BLOCK - 1) // BLOCK
     for blk in prange(n_blocks):
         first = blk * BLOCK
-        _run_block(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at,
-                   first, min(BLOCK, n_sets - first))
+        count = min(BLOCK, n_sets - first)
+        if 4 * count < BLOCK:
+            _run_sets(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at,
+                      first, count)
+        else:
+            _run_block(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at,
+                       first, count)

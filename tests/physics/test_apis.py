@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from hems_ros.physics import ActuationUnit, simulate
+from hems_ros.physics import ActuationUnit, kernel, simulate
 from hems_ros.physics.batch import CHANNELS
 from hems_ros.physics.params import load_params
 
@@ -50,6 +50,30 @@ def test_batch_of_many_sets_matches_single_runs_and_record_every():
         one = simulate(p, 1e-3, current=cur)
         assert np.array_equal(many.slider_position_m[i], one.slider_position_m[0, 9::10])
     assert many.slider_position_m[0].max() > many.slider_position_m[2].max()
+
+
+def test_vectorised_blocks_match_set_by_set_runs_bit_for_bit():
+    # 40 sets: one full SIMD block of kernel.BLOCK sets and a partial one, against each set
+    # run alone (kernel.step set by set); pulses of rising length drive reversals, nested
+    # minor loops and loop closures, over the three load kinds of the named sets
+    names = ("sheathed_calibrated", "ch6_hems_index", "table41")
+    sets = [load_params(names[i % 3]).replace({"kinetics.as0_c": 84.0 + 0.2 * i}) for i in range(40)]
+    t = np.arange(12000) * 1e-3
+    duty = np.where((t % 2.0) < 0.3 + 0.1 * np.floor(t / 2.0), 80.0, 0.0)
+    many = simulate(sets, 1e-3, duty=duty, record_every=3)
+    for i, p in enumerate(sets):
+        one = simulate(p, 1e-3, duty=duty, record_every=3)
+        for name in CHANNELS:
+            assert np.array_equal(many[name][i], one[name][0]), (i, name)
+    assert np.ptp(many.martensite_fraction) > 0.5
+
+
+def test_a_failing_set_in_a_block_is_named():
+    p = load_params("table41")
+    volts = np.zeros((kernel.BLOCK, 100))
+    volts[5] = 1e200
+    with pytest.raises(FloatingPointError, match="parameter set 5"):
+        simulate([p] * kernel.BLOCK, 1e-3, voltage=volts)
 
 
 def test_sensors_quantise_and_flag_saturation():
