@@ -541,7 +541,8 @@ def _block_begin_scaled(b, drive_kind, dt):
 
 @njit(cache=True, error_model="numpy")
 def _step_block(b, drive_kind, dt):
-    """One step of every set of block b; flags (B_REDO) the sets step has to redo."""
+    """One step of every set of block b; flags (B_REDO) the sets step has to redo and returns
+    how many there are."""
     n_scaled = 0
     for j in range(BLOCK):
         n_scaled += 1 if b[(B_CUR + S_NREV) * BLOCK + j] >= 2.0 else 0
@@ -554,6 +555,10 @@ def _step_block(b, drive_kind, dt):
             if _block_iterate(b) == 0:
                 break
         _block_finish(b, dt)
+    n_redo = 0
+    for j in range(BLOCK):
+        n_redo += 1 if b[B_REDO * BLOCK + j] > 0.0 else 0
+    return n_redo
 
 
 @njit(cache=True, error_model="numpy")
@@ -589,8 +594,7 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
     for k in range(n_steps):
         for j in range(count):
             b[B_DRIVE * BLOCK + j] = drives[first + j, k]
-        _step_block(b, drive_kind, dt)
-        for j in range(count):
+        for j in range(count if _step_block(b, drive_kind, dt) > 0 else 0):
             i = first + j
             if b[B_REDO * BLOCK + j] == 0.0 or failed_at[i] >= 0:
                 continue
