@@ -5,7 +5,10 @@ Prints measured numbers and ratios side by side (not a pass/fail test; floors fr
   through the batch API (one set) and the stepping API (what a node calls every 1 ms);
 - batch, 256 parameter sets x 30 s: simulated unit-seconds per wall second (floor 1e5), at the
   1 kHz step and at the 100 Hz control period (Ts = 10 ms, digest section 4), with the
-  trajectory difference between the two steps;
+  trajectory difference between the two steps, the CPU time and the threads numba used;
+- the same batch on one thread, CPU time per set-step: the SIMD blocks of kernel.run_batch
+  against the sets run one by one through kernel.step, and what each gives on idle cores
+  (the wall figures depend on what else the machine runs);
 - baseline: scipy.integrate.solve_ivp(method="LSODA") on the same equations (right-hand side
   built from the same equation functions), integrated piecewise between input changes.
 
@@ -15,10 +18,12 @@ Run: python benchmarks/bench_physics.py
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -27,12 +32,23 @@ from scipy.integrate import solve_ivp  # noqa: E402
 
 from hems_ros.physics import ActuationUnit, constitutive, electrical, heat, kinetics, load_params, sheath, simulate  # noqa: E402
 from hems_ros.physics import kernel as K  # noqa: E402
+from hems_ros.physics.electrical import DRIVE_NAMES  # noqa: E402
 
 
 def current_profile(total_s: float, dt: float) -> np.ndarray:
     """4 A for 2 s every 10 s: full heat/transform/cool cycles."""
     t = np.arange(int(round(total_s / dt))) * dt
     return np.where((t % 10.0) < 2.0, 4.0, 0.0)
+
+
+def timed_cpu(fn, repeat: int = 3) -> tuple[float, float]:
+    """(wall, process CPU) seconds of the fastest of ``repeat`` runs."""
+    best = (math.inf, math.inf)
+    for _ in range(repeat):
+        start, cpu = time.perf_counter(), time.process_time()
+        fn()
+        best = min(best, (time.perf_counter() - start, time.process_time() - cpu))
+    return best
 
 
 def timed(fn, repeat: int = 3) -> float:
@@ -103,6 +119,21 @@ def run_lsoda(params, current: np.ndarray, dt: float) -> np.ndarray:
     return out
 
 
+def set_by_set(sets, current: np.ndarray, every: int) -> np.ndarray:
+    """Slider position and wire force of every set, the sets one after the other through
+    kernel.step on one thread (kernel._run_sets, what run_batch did for every set before the
+    SIMD blocks)."""
+    packed = np.stack([K.pack(p) for p in sets])
+    states = np.stack([K.initial_state(p) for p in sets])
+    drives = np.ascontiguousarray(np.broadcast_to(current, (len(sets), current.size)))
+    channels = np.array([K.S_X, K.N_S + K.O_FW])
+    records = np.zeros((2, len(sets), current.size // every))
+    failed_at = np.zeros(len(sets), dtype=np.int64)
+    K._run_sets(packed, states, DRIVE_NAMES["current"], drives, 1e-3, every, channels, records, failed_at, 0,
+                len(sets))
+    return records
+
+
 def main() -> int:
     params = load_params("sheathed_calibrated")
     dt = 1e-3
@@ -133,16 +164,36 @@ def main() -> int:
           f"kernel / LSODA speed {lsoda_s / (t_batch1 / 2):.0f}x; max |x_kernel - x_LSODA| = {diff:.2%} of stroke")
 
     sets = [params.replace({"sheath.heat_capacity_j_per_k": c}) for c in np.linspace(2.0, 6.0, 256)]
+    threads = numba.get_num_threads()
     for step in (1e-3, 1e-2):
         cur = current_profile(30.0, step)
         every = max(1, int(round(0.01 / step)))
-        simulate(sets[:2], step, current=cur[:10])
-        t = timed(lambda: simulate(sets, step, current=cur, record_every=every,
-                                   channels=["slider_position_m", "wire_force_n"]))
+        simulate(sets, step, current=cur[:10])
+        t, cpu = timed_cpu(lambda: simulate(sets, step, current=cur, record_every=every,
+                                            channels=["slider_position_m", "wire_force_n"]))
         rate = 256 * 30.0 / t
         print(f"batch 256 sets x 30 s, dt {step * 1e3:4.0f} ms : {t * 1e3:8.1f} ms  {rate:10.0f} unit-s per wall-s "
               f"(floor 1e5: {rate / 1e5:.2f} x floor; LSODA at this rate: {30 / lsoda_s:.1f}, "
-              f"ratio {rate / (30 / lsoda_s):.0f}x)")
+              f"ratio {rate / (30 / lsoda_s):.0f}x); CPU {cpu * 1e3:.0f} ms on {threads} threads "
+              f"({numba.threading_layer()}), {cpu / (256 * cur.size) * 1e9:.1f} ns per set-step")
+
+    # Per-thread cost, one thread (CPU time: robust to other load on the machine): the SIMD
+    # blocks against the same sets run one by one through kernel.step (the batch before blocks)
+    cur = current_profile(30.0, 1e-3)
+    numba.set_num_threads(1)
+    _, cpu_blocks = timed_cpu(lambda: simulate(sets, 1e-3, current=cur, record_every=10,
+                                               channels=["slider_position_m", "wire_force_n"]))
+    numba.set_num_threads(threads)
+    _, cpu_sets = timed_cpu(lambda: set_by_set(sets, cur, 10), repeat=1)
+    per_step = {name: c / (256 * cur.size) for name, c in (("blocks", cpu_blocks), ("sets", cpu_sets))}
+    cores = os.cpu_count() or 1
+    print(f"one thread, dt 1 ms, ns per set-step: SIMD blocks {per_step['blocks'] * 1e9:.1f}, set by set "
+          f"{per_step['sets'] * 1e9:.1f} (ratio {per_step['sets'] / per_step['blocks']:.1f}x); on {cores} idle cores "
+          f"that is {cores * 1e-3 / per_step['blocks']:.0f} vs {cores * 1e-3 / per_step['sets']:.0f} unit-s per wall-s "
+          f"(floor 1e5: {cores * 1e-3 / per_step['blocks'] / 1e5:.2f} x floor)")
+    load = os.getloadavg()[0]
+    print(f"load average (1 min) at the end: {load:.1f} on {cores} cores; wall figures need idle cores, the "
+          f"one-thread CPU figures much less so")
     fine = simulate(params, 1e-3, current=cur30, record_every=10).slider_position_m[0]
     coarse = simulate(params, 1e-2, current=current_profile(30.0, 1e-2)).slider_position_m[0]
     print(f"dt 10 ms vs 1 ms trajectory difference: {np.max(np.abs(fine - coarse)) / np.ptp(fine):.2%} of stroke")
