@@ -4,8 +4,9 @@
     res.slider_position_m          # (n_sets, n_records) array; also res["wire_force_n"]
     res.time                       # (n_records,) s, time at the end of each recorded step
 
-Parameter sets are packed into a (n_sets, N_P) float64 array and run in parallel by one
-numba loop (kernel.run_batch) around the same single-step kernel the stepping API uses.
+Parameter sets are packed into a (n_sets, N_P) float64 array and run in parallel by
+kernel.run_batch, in blocks of sets whose step arithmetic is vectorised across the sets; a set
+gives the same bits as the stepping API's kernel.step.
 ``record_every`` keeps every k-th step; ``channels`` limits what is stored (memory for big
 batches). Sensor channels (encoder, force reading with the seeded noise of each set) are
 derived on first access from the recorded truth, with the same functions and noise draws as

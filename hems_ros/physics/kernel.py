@@ -15,6 +15,12 @@ The coupled update is a scalar root (safeguarded Newton, see :func:`step`).
 
 The state row carries, after the named states, the kinetics' reversal-point memory.
 
+The batch (run_batch) runs blocks of sets with the step's arithmetic vectorised across the
+sets of a block (see "batch" below); step and the batch give bit-identical results. All
+kernel functions use numba's numpy error model: a division by zero gives inf or nan, which
+the finite-state check reports, instead of a per-division test that would keep the batch
+loops from vectorising.
+
 Numba's on-disk cache only tracks this file, while the kernel inlines the equation
 modules; :func:`_invalidate_stale_cache` drops the cached kernel when any of them changed.
 """
@@ -317,7 +323,7 @@ def step(p, s, drive_kind, drive_value, dt, out):
 # them, _block_finish the end of the step for those sets. They take step's arithmetic in step's
 # order, so a set gives the same bits in both APIs. Sets that push or wipe out reversal points,
 # or need more than BLOCK_ITERATIONS iterations, or turn non-finite, are flagged (B_REDO) and
-# redone from their old state by step itself (a few per mille of the steps of a pulse train).
+# redone from their old state by step itself (0.04 % of the steps of the benchmark's pulse train).
 # One float64 buffer holds the block, field f of set j at f * BLOCK + j: the constant offsets
 # let LLVM prove that a loop's loads and stores do not overlap.
 BLOCK = 32
