@@ -16,12 +16,12 @@ Duty watchdog: no duty command for three control periods sets the duty to 0 and 
 from __future__ import annotations
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rclpy.node import Node
 
 from hems_msgs.msg import ActuatorState, DutyCommand, EncoderReading, SupervisorStatus, WireForce
 from hems_ros.graph import names
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
+from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.clock_time import from_msg, seconds, to_msg
 from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
@@ -42,7 +42,7 @@ PARAMETERS = [
 ]
 
 
-class ActuationUnitNode(Node):
+class ActuationUnitNode(LeanNode):
     """Simulated HEMS actuation unit (see the module documentation for topics)."""
 
     def __init__(self, **node_kwargs) -> None:

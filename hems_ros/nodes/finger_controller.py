@@ -24,7 +24,6 @@ from __future__ import annotations
 from dataclasses import fields
 
 from builtin_interfaces.msg import Time
-from rclpy.node import Node
 
 from hems_msgs.msg import ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
 from hems_ros.control import STRATEGIES, TABLE_5_1, make_controller
@@ -32,6 +31,7 @@ from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, Setpoint, SetpointError, SetpointLimits, validate
 from hems_ros.nodes import qos
+from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
 
@@ -60,7 +60,7 @@ def _non_negative(value) -> str | None:
     return None if isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0 else "must be >= 0"
 
 
-class FingerControllerNode(Node):
+class FingerControllerNode(LeanNode):
     """Per-finger BPID/PID/PI-PD controller (see the module documentation)."""
 
     def __init__(self, **node_kwargs) -> None:

@@ -10,11 +10,11 @@ Each reading carries ``saturated`` (clipped at 0 or the range) and ``over_force`
 
 from __future__ import annotations
 
-from rclpy.node import Node
 
 from hems_msgs.msg import WireForce
 from hems_ros.graph import names
 from hems_ros.nodes import qos
+from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import sensors
@@ -37,7 +37,7 @@ PARAMETERS = [
 ]
 
 
-class ShoulderModuleNode(Node):
+class ShoulderModuleNode(LeanNode):
     """Two wire-force sensors of one shoulder module (see the module documentation)."""
 
     def __init__(self, **node_kwargs) -> None:

@@ -21,7 +21,6 @@ state. FAULT and ESTOP latch until reset.
 from __future__ import annotations
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
@@ -29,6 +28,7 @@ from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
 from hems_ros.graph import names, transmission
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.nodes import qos
+from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.clock_time import from_msg, seconds
 from hems_ros.nodes.params import Spec, declare, positive
 from hems_ros.nodes.runner import run_node
@@ -54,7 +54,7 @@ PARAMETERS = [
 ]
 
 
-class SupervisorNode(Node):
+class SupervisorNode(LeanNode):
     """Safety supervisor of the HEMS graph (see the module documentation)."""
 
     def __init__(self, **node_kwargs) -> None:
