@@ -32,7 +32,8 @@ PARAMETERS = [
     Spec("physics_config", "ch6_hems_index",
          "physics parameter set: a name in config/physics/ or a YAML path", None, True),
     Spec("physics_dt_s", 0.001, "physics integration step, s (1 kHz default)", positive, True),
-    Spec("tick_period_s", 0.005, "wall/sim period of the integration timer, s", positive, True),
+    Spec("tick_period_s", 0.01, "period of the integration and encoder-publishing timer, s "
+         "(a duty command also integrates up to its arrival)", positive, True),
     Spec("encoder_period_s", 0.01, "encoder and wire-tension publishing period, s (100 Hz)", positive, True),
     Spec("state_period_s", 0.05, "simulation-truth state publishing period, s (20 Hz)", positive, True),
     Spec("control_period_s", 0.01, "controller period Ts, s; the watchdog trips after three", positive, True),
