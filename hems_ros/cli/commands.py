@@ -6,7 +6,7 @@ import argparse
 import math
 import sys
 
-from hems_ros.graph import names
+from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
 
 UNITS = {"mm": ("position", 1e-3), "m": ("position", 1.0), "N": ("force", 1.0)}
@@ -106,7 +106,7 @@ def format_status(snap) -> str:
         unit = "mm" if c.mode == "position" else "N"
         setpoint = 1e3 * c.setpoint if c.mode == "position" else c.setpoint
         position = 1e3 * s.tendon_position if s is not None else math.nan
-        force = f.force / 2.0 if f is not None else math.nan
+        force = transmission.tendon_force(f.force) if f is not None else math.nan
         faults = [c.fault] if c.fault else []
         if s is not None and s.watchdog_tripped:
             faults.append("watchdog")

@@ -32,7 +32,7 @@ from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, Setpoint, SetpointError, SetpointLimits, validate
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.params import Spec, declare, one_of, positive
+from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
 
 PARAMETERS = [
@@ -56,10 +56,6 @@ def nan_if_none(value: float | None) -> float:
     return float("nan") if value is None else value
 
 
-def _non_negative(value) -> str | None:
-    return None if isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0 else "must be >= 0"
-
-
 class FingerControllerNode(LeanNode):
     """Per-finger BPID/PID/PI-PD controller (see the module documentation)."""
 
@@ -69,7 +65,7 @@ class FingerControllerNode(LeanNode):
         table = TABLE_5_1[p["strategy"]]
         gain_specs = [Spec(f"gains.{f.name}", float(getattr(table, f.name)),
                            f"{p['strategy']} gain {f.name} (default Table 5.1; errors scaled per the gains' "
-                           "position_scale / force_scale)", _non_negative, True) for f in fields(table)]
+                           "position_scale / force_scale)", non_negative, True) for f in fields(table)]
         gains = declare(self, gain_specs)
         self.finger = p["finger"]
         self.ratio = p["pulley_ratio"]

@@ -15,16 +15,12 @@ from hems_msgs.msg import WireForce
 from hems_ros.graph import names
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.params import Spec, declare, one_of, positive
+from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import sensors
 from hems_ros.physics.params import ForceSensor
 
 _SENSOR = ForceSensor()
-
-
-def non_negative(value) -> str | None:
-    return None if isinstance(value, (int, float)) and value >= 0 else "must be >= 0"
 
 
 PARAMETERS = [
