@@ -80,6 +80,7 @@ def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Itera
            start_delay: float = 1.0, wait_subscribers: float = 0.0) -> ReplayResult:
     """Republish ``bag`` on the live graph (rclpy must not be initialised by the caller)."""
     import rclpy
+    from rclpy.duration import Duration
     from rclpy.node import Node
     from rosgraph_msgs.msg import Clock
 
@@ -138,6 +139,10 @@ def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Itera
             if not loop:
                 break
         result.wall_s = time.perf_counter() - started
+        # Destroying a publisher drops what reliable readers have not acknowledged yet,
+        # so the last messages of a bag would otherwise be lost.
+        for publisher in publishers.values():
+            publisher.wait_for_all_acked(Duration(seconds=2.0))
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
