@@ -74,10 +74,11 @@ class SimResult:
 
 
 def _drive_array(kind: str, values, n_sets: int) -> np.ndarray:
+    """(n_sets, n_steps), or (1, n_steps) when every set gets the same input."""
     arr = np.asarray(values, dtype=np.float64)
     if arr.ndim == 1:
-        arr = np.broadcast_to(arr, (n_sets, arr.shape[0]))
-    if arr.ndim != 2 or arr.shape[0] != n_sets:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[0] not in (1, n_sets):
         raise ValueError(f"{kind}: expected shape (n_steps,) or ({n_sets}, n_steps), got {np.shape(values)}")
     if arr.shape[1] == 0:
         raise ValueError(f"{kind}: no steps")
@@ -118,7 +119,7 @@ def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
         raise ValueError(f"unknown channel {unknown[0]!r} (known: {', '.join(CHANNELS)})")
     index = np.array([CHANNELS.index(c) for c in wanted], dtype=np.int64)
 
-    n_sets, n_steps = drives.shape
+    n_sets, n_steps = len(plist), drives.shape[1]
     n_rec = n_steps // record_every
     packed = np.ascontiguousarray(np.stack([kernel.pack(p) for p in plist]))
     states = np.ascontiguousarray(np.stack([kernel.initial_state(p) for p in plist]))

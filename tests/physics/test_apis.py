@@ -68,6 +68,17 @@ def test_vectorised_blocks_match_set_by_set_runs_bit_for_bit():
     assert np.ptp(many.martensite_fraction) > 0.5
 
 
+def test_each_set_of_a_block_gets_its_own_drive_row():
+    p = load_params("sheathed_calibrated")
+    amps = np.linspace(2.0, 4.0, 40)
+    cur = np.where(np.arange(3000) < 1500, 1.0, 0.0)[None, :] * amps[:, None]
+    many = simulate([p] * 40, 1e-3, current=cur, record_every=10, channels=["wire_temperature_c"])
+    for i in (0, 17, 39):
+        one = simulate(p, 1e-3, current=cur[i], record_every=10, channels=["wire_temperature_c"])
+        assert np.array_equal(many.wire_temperature_c[i], one.wire_temperature_c[0])
+    assert many.wire_temperature_c[39].max() > many.wire_temperature_c[0].max() + 20.0
+
+
 def test_a_failing_set_in_a_block_is_named():
     p = load_params("table41")
     volts = np.zeros((kernel.BLOCK, 100))
