@@ -79,10 +79,10 @@ def run(args: argparse.Namespace) -> int:
                 print(f"demo: could not enable the graph: {message}", file=sys.stderr)
                 return 1
             print(f"demo: {message}", flush=True)
-            traces, t_start, statuses = grasp.run_grasp(client, plan, options.fingers)
+            traces, phase_starts, statuses = grasp.run_grasp(client, plan, options.fingers)
             client.call("disable")
             client.spin_for(0.3)  # the DISABLED status and the cooling start reach the bag
-        grasp.report(traces, plan, t_start, args.plot)
+        grasp.report(traces, plan, phase_starts, args.plot)
         problem = grasp.fault_report(statuses)
         if problem:
             print(f"demo: not a valid run: {problem}", file=sys.stderr)

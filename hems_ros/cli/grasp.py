@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from hems_ros.graph import names
-from hems_ros.graph.grasp import FingerTrace, GraspPlan, format_summary, plot, summarize
+from hems_ros.graph.grasp import FingerTrace, GraspPlan, PhaseTracker, format_summary, plot, summarize
 from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
 
 
@@ -40,13 +40,15 @@ def plan_from(args: argparse.Namespace) -> GraspPlan:
 
 
 def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
-    """Drive the phases on ``fingers``; return (traces, start time, supervisor statuses seen)."""
+    """Drive the phases on ``fingers``; return (traces, phase starts per finger, supervisor
+    statuses seen)."""
     from sensor_msgs.msg import JointState
 
-    from hems_msgs.msg import ActuatorState, DutyCommand, SupervisorStatus
+    from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
     from hems_ros.nodes import qos
 
     traces = {f: FingerTrace.empty() for f in fingers}
+    phases = {f: PhaseTracker() for f in fingers}
     node = client.node
 
     def on_joints(message: JointState) -> None:
@@ -58,12 +60,17 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
                 traces[name].force_n.append(f)
 
     def on_state(finger: str, message: ActuatorState) -> None:
-        traces[finger].power_t.append(message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec)
-        traces[finger].power_w.append(message.electrical_power)
+        traces[finger].energy_t.append(message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec)
+        traces[finger].energy_j.append(message.electrical_energy)
 
-    def on_duty(finger: str, message: DutyCommand) -> None:
-        traces[finger].duty_t.append(message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec)
+    def seconds(stamp) -> float:
+        return stamp.sec + 1e-9 * stamp.nanosec
+
+    def on_status(finger: str, message: ControllerStatus) -> None:
+        traces[finger].duty_t.append(seconds(message.header.stamp))
         traces[finger].duty_percent.append(message.duty_percent)
+        phases[finger].feed(message.mode, message.setpoint, message.active, seconds(message.encoder_stamp),
+                            seconds(message.force_stamp))
 
     statuses = []
     subs = [node.create_subscription(JointState, names.JOINT_STATES_TOPIC, on_joints, qos.SENSOR),
@@ -71,10 +78,9 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
     for finger in fingers:
         subs.append(node.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
                                              lambda m, f=finger: on_state(f, m), qos.SENSOR))
-        subs.append(node.create_subscription(DutyCommand, names.topic(finger, "duty"),
-                                             lambda m, f=finger: on_duty(f, m), qos.COMMAND))
+        subs.append(node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
+                                             lambda m, f=finger: on_status(f, m), qos.COMMAND))
     client.spin_for(0.5)
-    t_start = node.get_clock().now().nanoseconds * 1e-9
     for phase, mode, value, duration in plan.phases():
         print(f"grasp: {phase}: {mode} {value:g} {'m' if mode == 'position' else 'N'} for {duration:g} s", flush=True)
         missing = [f for f in fingers if not client.send_setpoint(f, mode, value)]
@@ -83,7 +89,7 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
         client.spin_for(duration)
     for sub in subs:
         node.destroy_subscription(sub)
-    return traces, t_start, statuses
+    return traces, {f: tracker.starts for f, tracker in phases.items()}, statuses
 
 
 def fault_report(statuses) -> str | None:
@@ -96,11 +102,17 @@ def fault_report(statuses) -> str | None:
     return None
 
 
-def report(traces, plan: GraspPlan, t_start: float, plot_path: Path) -> list:
-    rows = [summarize(f, trace, plan, t_start) for f, trace in traces.items()]
+def report(traces, plan: GraspPlan, phase_starts: dict[str, list[float]], plot_path: Path) -> list:
+    complete = [f for f in traces if len(phase_starts[f]) == len(plan.phases())]
+    for finger in traces:
+        if finger not in complete:
+            print(f"grasp: {finger}: its controller never ran every phase (inactive?): no summary", file=sys.stderr)
+    rows = [summarize(f, traces[f], plan, phase_starts[f]) for f in complete]
     print(format_summary(rows, plan))
+    if not complete:
+        return rows
     plot_path.parent.mkdir(parents=True, exist_ok=True)
-    plot(traces, plan, t_start, plot_path)
+    plot(traces, plan, min(phase_starts[f][0] for f in complete), plot_path)
     print(f"grasp: plot written to {plot_path}")
     return rows
 
@@ -115,11 +127,11 @@ def run(args: argparse.Namespace) -> int:
 
     with GraphClient("hems_grasp") as client:
         try:
-            traces, t_start, statuses = run_grasp(client, plan)
+            traces, phase_starts, statuses = run_grasp(client, plan)
         except RuntimeError as error:
             print(f"grasp: {error}", file=sys.stderr)
             return 1
-    report(traces, plan, t_start, args.plot)
+    report(traces, plan, phase_starts, args.plot)
     problem = fault_report(statuses)
     if problem:
         print(f"grasp: not a valid run: {problem}", file=sys.stderr)

@@ -2,8 +2,13 @@
 
 Phases per finger (tendon side): approach in position mode to ``approach_m``, hold
 ``force_n`` in force mode, release to position 0. The summary of a recorded run gives per
-finger: position tracking error over the end of the approach, force tracking error over the
-end of the hold, peak tendon force, and the electrical energy spent.
+finger: position tracking error over the approach and over its end, force tracking error
+over the hold and over its end, peak tendon force, and the electrical energy spent.
+
+Each phase is measured from the sample whose control step first used its setpoint, found in
+the controller status (:class:`PhaseTracker`). Windows counted from the time the setpoint was
+sent caught the transient up to one control period early or late, which moved a whole-phase
+error by a few per cent from run to run.
 """
 
 from __future__ import annotations
@@ -31,13 +36,13 @@ class GraspPlan:
 
 @dataclass
 class FingerTrace:
-    """Time series of one finger (s, tendon m, tendon N, %, W) gathered during the run."""
+    """Time series of one finger (s, tendon m, tendon N, J, %) gathered during the run."""
 
     t: list[float]
     position_m: list[float]
     force_n: list[float]
-    power_t: list[float]
-    power_w: list[float]
+    energy_t: list[float]
+    energy_j: list[float]      # the unit's Joule heat since it started
     duty_t: list[float]
     duty_percent: list[float]
 
@@ -49,38 +54,69 @@ class FingerTrace:
 @dataclass(frozen=True)
 class FingerSummary:
     finger: str
-    position_rmse_mm: float
-    force_rmse_n: float
+    position_rmse_mm: float      # over the last settle window of the approach
+    force_rmse_n: float          # over the last settle window of the hold
     peak_force_n: float
     energy_j: float
+    approach_rmse_mm: float      # over the whole approach, rise included
+    hold_rmse_n: float           # over the whole hold, force build-up included
 
 
 def _window_rmse(t: np.ndarray, y: np.ndarray, target: float, start: float, end: float) -> float:
-    mask = (t >= start) & (t < end)
+    # half a microsecond of slack: stamps pass through float seconds on both sides
+    mask = (t >= start - 5e-7) & (t < end - 5e-7)
     return float(np.sqrt(np.mean((y[mask] - target) ** 2))) if mask.any() else float("nan")
 
 
-def summarize(finger: str, trace: FingerTrace, plan: GraspPlan, t_start: float) -> FingerSummary:
-    t = np.asarray(trace.t) - t_start
+class PhaseTracker:
+    """Phase starts of one finger from its controller status stream, message by message."""
+
+    def __init__(self) -> None:
+        self.starts: list[float] = []
+        self._phase: tuple[str, float] | None = None
+
+    def feed(self, mode: str, setpoint: float, active: bool, encoder_stamp_s: float, force_stamp_s: float) -> None:
+        """One status: a new (mode, setpoint) while active starts a phase at the stamp of the
+        reading that step used; steps before the first non-zero setpoint are not the grasp."""
+        phase = (mode, float(setpoint))
+        if not active or phase == self._phase or (self._phase is None and phase[1] <= 0.0):
+            return
+        self._phase = phase
+        self.starts.append(encoder_stamp_s if mode == "position" else force_stamp_s)
+
+
+def phase_windows(plan: GraspPlan, phase_starts: list[float]) -> list[tuple[float, float]]:
+    """(start, end) of each phase: to the next phase's start (the last lasts its planned duration)."""
+    durations = [p[3] for p in plan.phases()]
+    ends = phase_starts[1:] + [phase_starts[-1] + durations[len(phase_starts) - 1]]
+    return list(zip(phase_starts, ends))
+
+
+def summarize(finger: str, trace: FingerTrace, plan: GraspPlan, phase_starts: list[float]) -> FingerSummary:
+    """``phase_starts``: stamps (s) of the samples that began the approach, hold and release
+    (:class:`PhaseTracker`)."""
+    t = np.asarray(trace.t)
     x = np.asarray(trace.position_m)
     f = np.asarray(trace.force_n)
-    approach_end = plan.approach_s
-    hold_end = approach_end + plan.hold_s
-    pos = _window_rmse(t, x, plan.approach_m, approach_end - plan.settle_window_s, approach_end)
-    force = _window_rmse(t, f, plan.force_n, hold_end - plan.settle_window_s, hold_end)
-    tp = np.asarray(trace.power_t)
-    energy = float(np.trapezoid(trace.power_w, tp)) if len(tp) > 1 else 0.0
+    (a0, a1), (h0, h1) = phase_windows(plan, phase_starts)[:2]
+    settle = plan.settle_window_s
+    pos = _window_rmse(t, x, plan.approach_m, a1 - settle, a1)
+    force = _window_rmse(t, f, plan.force_n, h1 - settle, h1)
+    # from the unit's own accumulator: integrating sampled power aliases the 100 Hz duty changes
+    energy = trace.energy_j[-1] - trace.energy_j[0] if len(trace.energy_j) > 1 else 0.0
     peak = float(np.nanmax(f)) if len(f) else float("nan")
-    return FingerSummary(finger, 1e3 * pos, force, peak, energy)
+    return FingerSummary(finger, 1e3 * pos, force, peak, energy, 1e3 * _window_rmse(t, x, plan.approach_m, a0, a1),
+                         _window_rmse(t, f, plan.force_n, h0, h1))
 
 
 def format_summary(rows: list[FingerSummary], plan: GraspPlan) -> str:
     lines = [f"grasp: approach {1e3 * plan.approach_m:g} mm, hold {plan.force_n:g} N, release "
-             f"(tracking errors are RMS over the last {plan.settle_window_s:g} s of each phase)",
-             f"{'finger':<16} {'pos err mm':>10} {'force err N':>11} {'peak N':>7} {'energy J':>9}"]
+             f"(tracking errors are RMS over the whole phase and over its last {plan.settle_window_s:g} s)",
+             f"{'finger':<16} {'approach mm':>11} {'pos err mm':>10} {'hold N':>7} {'force err N':>11} "
+             f"{'peak N':>7} {'energy J':>9}"]
     for r in rows:
-        lines.append(f"{r.finger:<16} {r.position_rmse_mm:>10.3f} {r.force_rmse_n:>11.3f} {r.peak_force_n:>7.2f} "
-                     f"{r.energy_j:>9.1f}")
+        lines.append(f"{r.finger:<16} {r.approach_rmse_mm:>11.3f} {r.position_rmse_mm:>10.3f} {r.hold_rmse_n:>7.3f} "
+                     f"{r.force_rmse_n:>11.3f} {r.peak_force_n:>7.2f} {r.energy_j:>9.1f}")
     return "\n".join(lines)
 
 

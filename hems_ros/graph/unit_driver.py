@@ -5,11 +5,20 @@ driver integrates the physics in fixed 1 ms steps up to that time, so the model 
 1 kHz of simulated time whatever the timer rate, and returns the encoder samples that fell
 due on the way (every ``sample_period_s``, stamped with their own time).
 
-Safety gates on the applied duty, checked at every physics step:
+A duty command that answers the latest encoder sample (its measurement stamp) and arrives
+before the next sample takes effect from that sample's instant: the driver keeps a snapshot
+of the unit at every sample and re-integrates from it. The HEMS board computes and applies
+a duty within microseconds of its sample (the lockstep loop of the control experiments
+does the same); over DDS the command comes 1-3 ms later, and applying it on arrival made
+the loop's overshoot depend on that transport jitter, so a run on /clock could not repeat
+a wall-clock run. A later command (a stalled controller) takes effect on arrival.
+
+Safety gates on the applied duty, checked at every physics step (re-integration included):
 - duty watchdog: no command for ``watchdog_timeout_s`` (three control periods) -> 0 duty,
   flagged, until the next command;
 - heating permission from the supervisor (ENABLED only), which also lapses when the
-  supervisor's status is older than ``permission_timeout_s``;
+  supervisor's status is older than ``permission_timeout_s`` and never reaches back before
+  the status that granted it;
 - an invalid command (non-finite, outside 0-100 %) is rejected and applies 0 duty.
 """
 
@@ -43,6 +52,7 @@ class UnitDriver:
         self.commanded_duty = 0.0
         self.last_command_s: float | None = None
         self.permission_s: float | None = None
+        self.permitted_since_s: float | None = None
         self.watchdog_tripped = True
         self.applied_duty = 0.0
         self.rejected_commands = 0
@@ -50,7 +60,9 @@ class UnitDriver:
         self.missed_periods = 0
         self.latencies_s: deque[float] = deque(maxlen=latency_window)
         self.last_result: StepResult | None = None
+        self.late_commands = 0
         self._samples_taken = 0
+        self._sample_snapshot: tuple | None = None   # (time, unit snapshot, result) at the latest sample
 
     @property
     def time_s(self) -> float:
@@ -58,30 +70,50 @@ class UnitDriver:
         return self.start_time_s + self.unit.time
 
     def command(self, duty_percent: float, now_s: float, measurement_stamp_s: float | None = None) -> None:
-        """Accept a duty command; ValueError (and 0 duty) for a non-finite or out-of-range one."""
+        """Accept a duty command; ValueError (and 0 duty) for a non-finite or out-of-range one.
+
+        Call :meth:`advance` up to ``now_s`` first and again afterwards: a command answering
+        the latest sample rewinds the physics to that sample (see the module documentation).
+        """
         if not (math.isfinite(duty_percent) and 0.0 <= duty_percent <= 100.0):
             self.rejected_commands += 1
             self.commanded_duty = 0.0
             raise ValueError(f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %")
+        effective_s = now_s
+        if self._answers_latest_sample(measurement_stamp_s):
+            effective_s, snapshot, result = self._sample_snapshot
+            self.unit.restore(snapshot)
+            self.last_result = result
+        elif measurement_stamp_s is not None and measurement_stamp_s > 0:
+            self.late_commands += 1
         if self.last_command_s is not None:
-            gap_periods = round((now_s - self.last_command_s) / self.sample_period_s)
+            gap_periods = round((effective_s - self.last_command_s) / self.sample_period_s)
             self.missed_periods += max(0, gap_periods - 1)
         self.commands += 1
         self.commanded_duty = float(duty_percent)
-        self.last_command_s = now_s
+        self.last_command_s = effective_s
         if measurement_stamp_s is not None and measurement_stamp_s > 0:
             self.latencies_s.append(now_s - measurement_stamp_s)
 
+    def _answers_latest_sample(self, measurement_stamp_s: float | None) -> bool:
+        return (measurement_stamp_s is not None and self._sample_snapshot is not None
+                and abs(measurement_stamp_s - self._sample_snapshot[0]) < 0.5 * self.unit.dt)
+
     def permit_heating(self, allowed: bool, now_s: float) -> None:
         """Supervisor's word: heating allowed (ENABLED) or not; refreshed by every status."""
-        self.permission_s = now_s if allowed else None
-        if not allowed:
+        if allowed:
+            if self.permission_s is None:
+                self.permitted_since_s = now_s
+            self.permission_s = now_s
+        else:
+            self.permission_s = self.permitted_since_s = None
             self.applied_duty = 0.0
 
     def heating_allowed(self, now_s: float) -> bool:
         if not self.require_permission:
             return True
-        return self.permission_s is not None and now_s - self.permission_s <= self.permission_timeout_s
+        return (self.permission_s is not None and self.permitted_since_s <= now_s + 1e-9
+                and now_s - self.permission_s <= self.permission_timeout_s)
 
     def gate(self, now_s: float) -> float:
         """The duty the PWM stage applies at ``now_s`` after the safety gates."""
@@ -105,6 +137,7 @@ class UnitDriver:
             if self.time_s >= due - 1e-9:
                 self._samples_taken += 1
                 samples.append(Sample(self.time_s, self.last_result))
+                self._sample_snapshot = (self.time_s, self.unit.snapshot(), self.last_result)
         return samples
 
     def latency_percentiles(self) -> tuple[float, float, float]:

@@ -54,8 +54,13 @@ class ActuationUnitNode(LeanNode):
             physics = load_params(p["physics_config"])
         except (OSError, ValueError) as error:
             raise ValueError(f"parameter 'physics_config' = {p['physics_config']!r}: {error}") from None
+        tick = self.create_timer(p["tick_period_s"], self.on_tick)
+        # The physics starts one period before the first tick, so encoder samples fall due on
+        # the ticks and go out at once; a grid shifted from the timer's held each sample back
+        # for up to a period, and the duties answering it often came after the next one.
+        start_s = seconds(self) + tick.time_until_next_call() * 1e-9 - p["tick_period_s"]
         self.driver = UnitDriver(
-            ActuationUnit(physics, dt=p["physics_dt_s"]), start_time_s=seconds(self),
+            ActuationUnit(physics, dt=p["physics_dt_s"]), start_time_s=start_s,
             sample_period_s=p["encoder_period_s"], watchdog_timeout_s=3 * p["control_period_s"],
             permission_timeout_s=p["supervisor_timeout_s"], require_permission=p["require_supervisor"])
         self.resolution = physics.encoder.resolution_m
@@ -67,20 +72,20 @@ class ActuationUnitNode(LeanNode):
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
         self.create_subscription(DutyCommand, names.topic(self.finger, "duty"), self.on_duty, qos.COMMAND)
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
-        self.create_timer(p["tick_period_s"], self.on_tick)
         self.create_timer(p["state_period_s"], self.publish_state)
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
 
     def on_duty(self, message: DutyCommand) -> None:
         now = seconds(self)
-        # integrate up to the arrival with the old duty first, so the new duty takes effect
-        # when it arrives rather than at the next tick
+        # up to the arrival with the old duty (publishing a sample that fell due), then again
+        # with the new one: from the sample it answers, or from now if it came late
         self.advance_to(now)
         try:
             self.driver.command(message.duty_percent, now, from_msg(message.measurement_stamp))
         except ValueError as error:
             self.get_logger().error(f"{self.finger}: {error}; applying 0 %")
+        self.advance_to(now)
 
     def on_supervisor(self, message: SupervisorStatus) -> None:
         now = seconds(self)
@@ -119,7 +124,7 @@ class ActuationUnitNode(LeanNode):
             finger=self.finger, duty_percent=self.driver.applied_duty,
             watchdog_tripped=self.driver.watchdog_tripped, wire_temperature_c=r.wire_temperature_c,
             martensite_fraction=r.martensite_fraction, resistance=r.resistance_ohm, current=r.current_a,
-            electrical_power=r.electrical_power_w, stress=r.stress_pa, strain=r.strain,
+            electrical_power=r.electrical_power_w, electrical_energy=r.energy_joule_j, stress=r.stress_pa, strain=r.strain,
             sheath_temperature_c=r.sheath_temperature_c, slider_position=r.slider_position_m,
             slider_velocity=r.slider_velocity_m_s, tendon_position=r.tendon_position_m,
             tendon_force=r.tendon_force_n, wire_force=r.wire_force_n, sequence=self.state_sequence)
@@ -131,7 +136,8 @@ class ActuationUnitNode(LeanNode):
         p50, p99, worst = d.latency_percentiles()
         values = {"applied_duty_percent": d.applied_duty, "watchdog_tripped": d.watchdog_tripped,
                   "duty_commands": d.commands, "rejected_commands": d.rejected_commands,
-                  "missed_control_periods": d.missed_periods, "latency_p50_s": p50, "latency_p99_s": p99,
+                  "missed_control_periods": d.missed_periods, "late_commands": d.late_commands,
+                  "latency_p50_s": p50, "latency_p99_s": p99,
                   "latency_max_s": worst, "simulated_time_s": d.unit.time}
         status = DiagnosticStatus(
             level=DiagnosticStatus.WARN if d.watchdog_tripped else DiagnosticStatus.OK,

@@ -39,6 +39,7 @@ class StepResult:
     resistance_ohm: float
     current_a: float
     electrical_power_w: float
+    energy_joule_j: float        # Joule heat delivered since reset
     stress_pa: float
     strain: float
     sheath_temperature_c: float
@@ -86,6 +87,18 @@ class ActuationUnit:
         self._steps = 0
         self._rng = sensors.noise_generator(self.params.force_sensor.seed)
 
+    def snapshot(self) -> tuple:
+        """Everything :meth:`restore` needs to continue from here (state, time, noise draws)."""
+        return self._s.copy(), self._out.copy(), self._steps, self._rng.bit_generator.state
+
+    def restore(self, snapshot: tuple) -> None:
+        """Go back to a :meth:`snapshot` of this unit: the next steps repeat from there."""
+        state, out, steps, rng_state = snapshot
+        self._s[:] = state
+        self._out[:] = out
+        self._steps = steps
+        self._rng.bit_generator.state = rng_state
+
     @property
     def time(self) -> float:
         """Simulated time since the last reset, s."""
@@ -129,6 +142,7 @@ class ActuationUnit:
             resistance_ohm=float(o[kernel.O_R]),
             current_a=float(o[kernel.O_I]),
             electrical_power_w=float(o[kernel.O_P]),
+            energy_joule_j=float(s[kernel.S_EJ]),
             stress_pa=float(s[kernel.S_SIG]),
             strain=float(s[kernel.S_X]) / prm.wire.length_m,
             sheath_temperature_c=float(s[kernel.S_TS]),

@@ -11,7 +11,7 @@ import numpy as np
 
 from hems_ros.bag import iter_messages, load_bag
 from hems_ros.graph import names, transmission
-from hems_ros.graph.grasp import FingerTrace, GraspPlan, summarize
+from hems_ros.graph.grasp import FingerTrace, GraspPlan, PhaseTracker, summarize
 from hems_ros.launcher import GraphOptions, executable_path, ros_arguments
 from hems_ros.rosenv import child_environment
 
@@ -211,7 +211,7 @@ def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]
     return replayed, recorded[start:start + len(replayed)]
 
 
-def grasp_metrics(bag_path: Path, finger: str, plan: GraspPlan, t_start: float):
+def grasp_metrics(bag_path: Path, finger: str, plan: GraspPlan, phase_starts: list[float]):
     """The demo's per-finger summary computed from a bag: tendon position and force from the
     encoder and wire-force streams (matched by stamp), power from the actuator state."""
     bag = load_bag(bag_path, topics=[names.topic(finger, "encoder"), names.topic(finger, "wire_force"),
@@ -221,11 +221,16 @@ def grasp_metrics(bag_path: Path, finger: str, plan: GraspPlan, t_start: float):
     common, ei, fi = np.intersect1d(stamp_ns(encoder), stamp_ns(force), return_indices=True)
     trace = FingerTrace(list(common * 1e-9), list(transmission.tendon_position(encoder["position"][ei])),
                         list(transmission.tendon_force(force["force"][fi])), list(state.stamp),
-                        list(state["electrical_power"]), list(duty.stamp), list(duty["duty_percent"]))
-    return summarize(finger, trace, plan, t_start)
+                        list(state["electrical_energy"]), list(duty.stamp), list(duty["duty_percent"]))
+    return summarize(finger, trace, plan, phase_starts)
 
 
-def first_setpoint_stamp(bag_path: Path, finger: str) -> float:
-    """Header stamp (s) of the grasp's first setpoint (the approach), the start of its phases."""
-    data = load_bag(bag_path, topics=[names.topic(finger, "setpoint")])[names.topic(finger, "setpoint")]
-    return float(data.stamp[np.flatnonzero(data["value"] > 0)[0]])
+def phase_stamps(bag_path: Path, finger: str) -> list[float]:
+    """When each phase of the recorded grasp began (:class:`hems_ros.graph.grasp.PhaseTracker`)."""
+    topic = names.topic(finger, "controller_status")
+    status = load_bag(bag_path, topics=[topic])[topic]
+    tracker = PhaseTracker()
+    encoder, force = stamp_ns(status, "encoder_stamp") * 1e-9, stamp_ns(status, "force_stamp") * 1e-9
+    for i in range(len(status.stamp)):
+        tracker.feed(status["mode"][i], status["setpoint"][i], bool(status["active"][i]), encoder[i], force[i])
+    return tracker.starts

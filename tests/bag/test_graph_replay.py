@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from graph_bags import REFERENCES, first_setpoint_stamp, grasp_metrics, replay_into_controller, start_node, stop
+from graph_bags import REFERENCES, grasp_metrics, phase_stamps, replay_into_controller, start_node, stop
 
 from hems_ros.bag import BagWriter, iter_messages
 from hems_ros.bag.recording import RecorderProcess
@@ -37,7 +37,7 @@ def test_controller_reproduces_the_recorded_duty_stream(ros_domain_id: int, name
     assert duty.max() == 100.0 and np.count_nonzero(duty) > 300   # the run heated and saturated
 
 
-def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000_000_000) -> tuple[Path, int]:
+def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000_000_000) -> Path:
     """``topics`` of ``source`` copied into a new bag with log times shifted to begin at ``start_ns``."""
     messages = sorted(iter_messages(source, topics=topics), key=lambda m: m.log_time_ns)
     offset = messages[0].log_time_ns - start_ns
@@ -45,37 +45,38 @@ def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000
         for m in messages:
             channel = writer.add_topic(m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or [])
             writer.write(channel, m.log_time_ns - offset, m.data)
-    return target, offset
+    return target
 
 
-# Out of the default run: the plant is simulated anew, and the position limit cycle, the
-# peak force and the energy depend on when each duty lands relative to the unit's 5 ms
-# tick, which the /clock replay does not reproduce. Measured once here: force RMSE 0.0364 vs
-# 0.0365 N (0.2 %), position RMSE 0.062 vs 0.046 mm (+35 %), peak 10.56 vs 10.87 N (-3 %),
-# energy 291 vs 272 J (+7 %).
+# Out of the default run with the other real-time graph tests (tests/graph/README.md). The
+# plant is simulated anew; it repeats the original because a unit applies each duty from the
+# sample it answers (hems_ros/graph/unit_driver.py), whatever the transport delay. The force
+# sensor's noise is drawn per sample from the shoulder module's start, which lies at another
+# point of the grasp in each run, so the error over the last second of the hold (mostly that
+# noise) is compared within its sampling spread, not within 2 %.
 @pytest.mark.slow
 @pytest.mark.graph_realtime
 def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_domain_id: int, tmp_path: Path) -> None:
     reference = REFERENCES["demo_grasp_index"]
     finger = reference.finger
     plan = GraspPlan()   # what `hems demo` ran (its default phases)
-    t_start = first_setpoint_stamp(reference.path, finger)
-    original = grasp_metrics(reference.path, finger, plan, t_start)
+    starts = phase_stamps(reference.path, finger)
+    original = grasp_metrics(reference.path, finger, plan, starts)
 
     # A node reads its clock as 0 while it is constructed (no /clock taken yet), and the
     # actuation unit's simulation starts there; it catches up with a clock near 0 (as with
     # `hems up --sim-time`, which starts at 1 s) but not with wall-clock epoch times. So the
     # replayed streams are re-based to start at 1 s of simulated time.
-    inputs, offset = rebased(reference.path, tmp_path / "inputs",
-                             [names.topic(finger, "setpoint"), names.SUPERVISOR_STATUS_TOPIC])
-    t_live = t_start - offset * 1e-9
+    inputs = rebased(reference.path, tmp_path / "inputs",
+                     [names.topic(finger, "setpoint"), names.SUPERVISOR_STATUS_TOPIC])
     sim_time = ("-p", "use_sim_time:=true")
     # No supervisor: the replayed status is the original run's; a live one would decide anew.
     nodes = [start_node("actuation_unit", f"actuation_unit_{finger}", {"finger": finger}, sim_time),
              start_node("shoulder_module", "shoulder_module_index_middle", {"module": "index_middle"}, sim_time),
              start_node("finger_controller", f"finger_controller_{finger}", {"finger": finger}, sim_time)]
     output = tmp_path / "replayed"
-    recorder = RecorderProcess(output, topics=[names.topic(finger, s) for s in ("encoder", "wire_force", "duty")]
+    recorder = RecorderProcess(output, topics=[names.topic(finger, s)
+                                               for s in ("encoder", "wire_force", "duty", "controller_status")]
                                + [names.sim_topic(finger, "state")])
     try:
         recorder.wait_for_topics([names.topic(finger, "encoder"), names.topic(finger, "duty")], timeout=60)
@@ -90,7 +91,8 @@ def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_do
         for node in nodes:
             stop(node)
     assert info.topics[names.topic(finger, "encoder")].count > 1500
-    live = grasp_metrics(output, finger, plan, t_live)
+    live = grasp_metrics(output, finger, plan, phase_stamps(output, finger))
     print(f"original {original}\nreplayed {live}")
-    for field in ("position_rmse_mm", "force_rmse_n", "peak_force_n", "energy_j"):
+    for field in ("approach_rmse_mm", "position_rmse_mm", "hold_rmse_n", "peak_force_n", "energy_j"):
         assert getattr(live, field) == pytest.approx(getattr(original, field), rel=0.02), field
+    assert live.force_rmse_n == pytest.approx(original.force_rmse_n, rel=0.15)

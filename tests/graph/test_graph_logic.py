@@ -2,9 +2,11 @@
 
 import math
 
+import numpy as np
 import pytest
 
 from hems_ros.graph import names
+from hems_ros.graph.grasp import FingerTrace, GraspPlan, PhaseTracker, summarize
 from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.graph.unit_driver import UnitDriver
@@ -116,8 +118,80 @@ def test_unit_driver_publishes_one_sample_per_encoder_period_at_1khz_physics():
     assert driver.unit.time == pytest.approx(0.1)
 
 
+def _driven(arrival_delay_s: float, stamp_offset_s: float | None = 0.0, permit_at_s: float = 5.0) -> UnitDriver:
+    """A driver heated by 60 % answers to the samples at 5.01, 5.02, ... each arriving
+    ``arrival_delay_s`` after its sample and stamped ``stamp_offset_s`` off it (None: no stamp)."""
+    driver = UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=5.0)
+    driver.permit_heating(True, permit_at_s)
+    for k in range(1, 31):
+        sample_s = 5.0 + 0.01 * k
+        driver.advance(sample_s + arrival_delay_s)
+        driver.permit_heating(True, max(permit_at_s, sample_s + arrival_delay_s))
+        driver.command(60.0, sample_s + arrival_delay_s,
+                       None if stamp_offset_s is None else sample_s + stamp_offset_s)
+        driver.advance(sample_s + arrival_delay_s)
+    driver.advance(5.35)
+    return driver
+
+
+def test_a_duty_answering_the_latest_sample_takes_effect_at_that_sample():
+    on_time = _driven(0.0)
+    for delay in (0.0012, 0.0037, 0.0099):   # transport delays within one control period
+        delayed = _driven(delay)
+        assert delayed.unit.state == on_time.unit.state
+        assert delayed.last_result == on_time.last_result    # the same sensor noise draws too
+        assert delayed.late_commands == 0 and delayed.missed_periods == 0
+    assert on_time.unit.state["energy_joule_j"] > 1.0
+
+
+def test_a_late_duty_takes_effect_on_arrival_and_is_counted():
+    late = _driven(0.003, stamp_offset_s=-0.01)     # answers the sample before the latest one
+    assert late.late_commands == 30
+    assert late.unit.state == _driven(0.003, stamp_offset_s=None).unit.state
+    assert late.unit.state != _driven(0.0).unit.state
+
+
+def test_rewinding_to_a_sample_never_heats_before_the_supervisor_allowed_it():
+    # permission comes 4 ms after the first sample; that sample's duty arrives 5 ms after it
+    driver = UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=5.0)
+    driver.advance(5.015)
+    driver.permit_heating(True, 5.014)
+    driver.command(100.0, 5.015, 5.01)
+    joule_at = {}
+    for t in (5.011, 5.012, 5.013, 5.014, 5.015, 5.016):
+        driver.advance(t)
+        joule_at[round(t, 3)] = driver.unit.state["energy_joule_j"]
+    assert joule_at[5.011] == joule_at[5.013] == 0.0         # rewound to 5.01 but not yet allowed
+    assert joule_at[5.015] > joule_at[5.014] > 0.0
+
+
 def test_all_sixteen_nodes_are_named():
     nodes = names.node_names()
     assert len(nodes) == 16
     assert len({n for _, n, _ in nodes}) == 16
     assert {m for m in names.MODULES} == {"thumb", "index_middle", "ring_little"}
+
+
+def test_grasp_phases_start_at_the_sample_that_first_used_each_setpoint():
+    tracker = PhaseTracker()
+    tracker.feed("position", 0.0, True, 0.99, 0.0)     # before the grasp
+    tracker.feed("position", 0.02, False, 1.00, 0.0)   # not enabled: no step taken
+    tracker.feed("position", 0.02, True, 1.01, 1.009)
+    tracker.feed("position", 0.02, True, 1.02, 1.019)
+    tracker.feed("force", 10.0, True, 1.03, 1.029)
+    tracker.feed("position", 0.0, True, 1.05, 1.049)
+    assert tracker.starts == [1.01, 1.029, 1.05]
+
+
+def test_grasp_summary_numbers():
+    plan = GraspPlan(approach_s=2.0, hold_s=2.0, release_s=1.0, settle_window_s=0.5)
+    t = np.round(np.arange(0.0, 5.0, 0.01), 2)
+    position = np.where(t < 1.0, 0.0, plan.approach_m)              # reaches the target after 1 s
+    force = np.where(t < 2.5, 5.0, plan.force_n + 0.1)              # 0.1 N high once built up
+    trace = FingerTrace(list(t), list(position), list(force), [0.0, 4.9], [3.0, 45.0], [], [])
+    summary = summarize("index", trace, plan, [0.0, 2.0, 4.0])
+    assert summary.approach_rmse_mm == pytest.approx(1e3 * plan.approach_m * math.sqrt(0.5))
+    assert summary.position_rmse_mm == 0.0
+    assert summary.hold_rmse_n == pytest.approx(math.sqrt((0.5 * 25.0 + 1.5 * 0.01) / 2.0))
+    assert summary.force_rmse_n == pytest.approx(0.1)
+    assert summary.peak_force_n == pytest.approx(10.1) and summary.energy_j == 42.0

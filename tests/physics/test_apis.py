@@ -28,6 +28,7 @@ def test_step_and_batch_agree(name):
         "sheath_temperature_c": "sheath_temperature_c", "resistance_ohm": "resistance_ohm",
         "wire_force_n": "wire_force_n", "tendon_force_n": "tendon_force_n",
         "current_a": "current_a", "electrical_power_w": "electrical_power_w",
+        "energy_joule_j": "energy_joule_j",
     }
     for batch_name, step_name in pairs.items():
         a = res[batch_name][0]
