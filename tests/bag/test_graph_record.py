@@ -1,8 +1,12 @@
-"""Recording the one-finger graph (4 node processes over DDS) for 10 s with the recorder process.
+"""Recording the graph for 10 s with the recorder process: every message of every sequenced
+stream in the bag, decoded equal by three readers.
 
-The full 16-process graph does not yet hold its deadlines on a 2-core host
-(tests/graph/README.md); the index-finger graph carries every kind of stream at the same
-per-finger rates and runs reliably, so the recording is checked on it.
+In the default run on the one-finger graph (4 node processes, every kind of stream at the
+full per-finger rates). On the full 16-process graph it runs with the other real-time graph
+tests (`-m graph_realtime`, tests/graph/README.md) and does not pass reliably on a 2-core
+host yet: the graph alone needs about two cores, and when the host is saturated the
+recorder's best-effort subscriptions (the only kind that matches best-effort sensor
+publishers) lose a sample now and then (seen: one thumb_flexion encoder message in 10 s).
 """
 
 from __future__ import annotations
@@ -19,38 +23,47 @@ from hems_ros.bag.recording import RecorderProcess
 from hems_ros.cli.up import graph_topics
 from hems_ros.graph import names
 
-FINGER = "index"
-SEQUENCED = {  # topic -> field compared with what the test's own subscriber received
-    names.topic(FINGER, "encoder"): "position",
-    names.topic(FINGER, "wire_force"): "force",
-    names.sim_topic(FINGER, "wire_tension"): "force",
-    names.sim_topic(FINGER, "state"): "wire_temperature_c",
-    names.topic(FINGER, "duty"): "duty_percent",
-    names.topic(FINGER, "controller_status"): "measurement",
+FINGER = "index"   # the finger whose streams are also read back with rosbags and mcap
+STREAMS = {  # per-finger topic -> (field compared with the test's own subscriber, minimum count in 10 s)
+    "encoder": ("position", 950), "wire_force": ("force", 950), "wire_tension": ("force", 950),
+    "state": ("wire_temperature_c", 190), "duty": ("duty_percent", 950), "controller_status": ("measurement", 450),
 }
 
 
+def stream_topic(finger: str, stream: str) -> str:
+    return names.sim_topic(finger, stream) if stream in ("wire_tension", "state") else names.topic(finger, stream)
+
+
 @pytest.mark.slow
-def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int, tmp_path: Path) -> None:
+@pytest.mark.parametrize("fingers", [
+    pytest.param((FINGER,), id="one_finger"),
+    pytest.param(names.FINGERS, id="full_graph", marks=pytest.mark.graph_realtime),
+])
+def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int, tmp_path: Path, fingers) -> None:
     from hems_msgs.msg import ActuatorState, ControllerStatus, DutyCommand, EncoderReading, WireForce
     from hems_ros.cli.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
     from hems_ros.nodes import qos
 
-    types = [EncoderReading, WireForce, WireForce, ActuatorState, DutyCommand, ControllerStatus]
+    kinds = {"encoder": EncoderReading, "wire_force": WireForce, "wire_tension": WireForce, "state": ActuatorState,
+             "duty": DutyCommand, "controller_status": ControllerStatus}
+    sequenced = {stream_topic(f, s): field for f in fingers for s, (field, _) in STREAMS.items()}
+    minimum = {stream_topic(f, s): n for f in fingers for s, (_, n) in STREAMS.items()}
+    types = [kinds[s] for _ in fingers for s in STREAMS]
     output = tmp_path / "graph10s"
-    graph = Graph(GraphOptions(fingers=(FINGER,), log_level="warn"))
+    graph = Graph(GraphOptions(fingers=tuple(fingers), log_level="warn"))
     graph.start()
     recorder = None
-    received: dict[str, list] = {topic: [] for topic in SEQUENCED}
+    received: dict[str, list] = {topic: [] for topic in sequenced}
     try:
         with GraphClient("hems_test_record") as client:
-            for topic, msg_type in zip(SEQUENCED, types):
+            for topic, msg_type in zip(sequenced, types):
                 client.node.create_subscription(msg_type, topic, received[topic].append,
                                                 qos.COMMAND if msg_type in (DutyCommand, ControllerStatus) else qos.SENSOR)
-            assert client.send_setpoint(FINGER, "position", 0.0, timeout=60)
+            for finger in fingers:
+                assert client.send_setpoint(finger, "position", 0.0, timeout=60)
             recorder = RecorderProcess(output, flush_period=0.2)
-            recorder.wait_for_topics(graph_topics((FINGER,)) + list(SEQUENCED), timeout=30)
+            recorder.wait_for_topics(graph_topics(tuple(fingers)) + list(sequenced), timeout=30)
             deadline = time.monotonic() + 60
             ok = False
             while not ok and time.monotonic() < deadline:
@@ -58,7 +71,8 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
                 client.spin_for(0.5)
             assert ok, message
             started = time.monotonic()
-            client.send_setpoint(FINGER, "position", 0.015)   # values that move: heating, travel, duty
+            for finger in fingers:
+                client.send_setpoint(finger, "position", 0.015)   # values that move: heating, travel, duty
             client.spin_for(10.0 - (time.monotonic() - started))
             info = recorder.stop()
             recorder = None
@@ -72,18 +86,20 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
     assert info.reports[0].complete and (output / "metadata.yaml").is_file()
     bag = load_bag(output)
     assert (bag.end_ns - bag.start_ns) * 1e-9 >= 9.5
-    for topic, name in SEQUENCED.items():
+    for topic, name in sequenced.items():
         data = bag[topic]
         sequence = data["sequence"]
         # zero drops: every message published while the recorder listened is in the bag
         assert np.array_equal(sequence, np.arange(sequence[0], sequence[0] + len(sequence))), topic
         assert info.topics[topic].count == len(data)
-        assert len(data) >= {"/hems/sim/index/state": 190, "/hems/index/controller_status": 450}.get(topic, 950), topic
+        assert len(data) >= minimum[topic], topic
         # values: those the test's own subscriber got (it listens only while the client
         # spins, and on after the recorder stopped)
         mine = {m.sequence: getattr(m, name) for m in received[topic]}
         common = [i for i, s in enumerate(sequence.tolist()) if s in mine]
-        assert len(common) > 0.5 * len(data), topic
+        # on the full graph this one Python subscriber, taking ~3000 messages/s on a loaded
+        # 2-core host, keeps only part of the best-effort streams: the comparison covers those
+        assert len(common) > (0.5 if len(fingers) == 1 else 0.05) * len(data), (topic, len(common), len(data))
         assert np.array_equal(data[name][common], [mine[s] for s in sequence[common].tolist()], equal_nan=True), topic
     duty = bag[names.topic(FINGER, "duty")]
     assert duty["duty_percent"].max() > 0.0     # the run heated: a meaningful comparison
@@ -105,7 +121,7 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
         assert reader.get_summary().statistics.message_count == info.message_count
         by_topic: dict[str, list] = {}
-        for _, channel, _, message in reader.iter_decoded_messages(topics=list(SEQUENCED)):
+        for _, channel, _, message in reader.iter_decoded_messages(topics=list(sequenced)):
             by_topic.setdefault(channel.topic, []).append(message)
-    for topic, name in SEQUENCED.items():
+    for topic, name in sequenced.items():
         assert np.array_equal([getattr(m, name) for m in by_topic[topic]], bag[topic][name], equal_nan=True), topic
