@@ -59,10 +59,14 @@ class UnitDriver:
         self.commands = 0
         self.missed_periods = 0
         self.latencies_s: deque[float] = deque(maxlen=latency_window)
-        self.last_result: StepResult | None = None
         self.late_commands = 0
         self._samples_taken = 0
-        self._sample_snapshot: tuple | None = None   # (time, unit snapshot, result) at the latest sample
+        self._sample_snapshot: tuple | None = None   # (time, unit snapshot) at the latest sample
+
+    @property
+    def last_result(self) -> StepResult | None:
+        """Measurements and truth at :attr:`time_s` (None before the first step)."""
+        return self.unit.result() if self.unit.time > 0 else None
 
     @property
     def time_s(self) -> float:
@@ -81,9 +85,8 @@ class UnitDriver:
             raise ValueError(f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %")
         effective_s = now_s
         if self._answers_latest_sample(measurement_stamp_s):
-            effective_s, snapshot, result = self._sample_snapshot
+            effective_s, snapshot = self._sample_snapshot
             self.unit.restore(snapshot)
-            self.last_result = result
         elif measurement_stamp_s is not None and measurement_stamp_s > 0:
             self.late_commands += 1
         if self.last_command_s is not None:
@@ -132,12 +135,12 @@ class UnitDriver:
             if step_end > now_s + 1e-9:
                 break
             self.applied_duty = self.gate(step_end)
-            self.last_result = self.unit.step(duty=self.applied_duty)
+            self.unit.advance(duty=self.applied_duty)
             due = self.start_time_s + (self._samples_taken + 1) * self.sample_period_s
             if self.time_s >= due - 1e-9:
                 self._samples_taken += 1
-                samples.append(Sample(self.time_s, self.last_result))
-                self._sample_snapshot = (self.time_s, self.unit.snapshot(), self.last_result)
+                samples.append(Sample(self.time_s, self.unit.result()))
+                self._sample_snapshot = (self.time_s, self.unit.snapshot())
         return samples
 
     def latency_percentiles(self) -> tuple[float, float, float]:

@@ -11,8 +11,10 @@ Subscribes
   /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only while ENABLED)
 Publishes
   /hems/<finger>/duty              hems_msgs/DutyCommand      reliable, one per feedback sample
-  /hems/<finger>/controller_status hems_msgs/ControllerStatus reliable, with every duty (heartbeat; carries the latest encoder and force readings), and
-                                   every idle_status_period_s while no feedback arrives
+  /hems/<finger>/controller_status hems_msgs/ControllerStatus reliable, with every status_every-th duty and
+                                   at once when mode, setpoint, activity or fault change (heartbeat;
+                                   carries the latest encoder and force readings), and every
+                                   idle_status_period_s while no feedback arrives
 
 An invalid setpoint (non-finite, outside the tendon stroke or force range, unknown mode) is
 rejected with a logged error and counted in the status; the last valid setpoint stays.
@@ -49,6 +51,8 @@ PARAMETERS = [
     Spec("max_force_n", SetpointLimits.max_force_n, "largest accepted tendon force setpoint, N", positive, True),
     Spec("idle_status_period_s", 0.1, "status period while no feedback arrives, s (otherwise one per duty)",
          positive, True),
+    Spec("status_every", 2, "publish the status with every n-th duty (and whenever mode, setpoint, activity or "
+         "fault change): 50 Hz keeps the supervisor's 50 ms stream checks fed at half the messages", positive, True),
 ]
 
 
@@ -84,6 +88,9 @@ class FingerControllerNode(LeanNode):
         self.last_rejection = ""
         self.sequence = 0
         self.status_sequence = 0
+        self.status_every = p["status_every"]
+        self._steps_since_status = 0
+        self._reported: tuple | None = None
         self.duty_pub = self.create_publisher(DutyCommand, names.topic(self.finger, "duty"), qos.COMMAND)
         self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status"),
                                                 qos.COMMAND)
@@ -153,7 +160,12 @@ class FingerControllerNode(LeanNode):
         command.header.stamp = now.to_msg()
         self.duty_pub.publish(command)
         self.last_control_s = now.nanoseconds * 1e-9
-        self.publish_status()
+        self._steps_since_status += 1
+        if self._steps_since_status >= self.status_every or self._status_key() != self._reported:
+            self.publish_status()
+
+    def _status_key(self) -> tuple:
+        return self.setpoint.mode, self.setpoint.value, self.enabled, self.controller.fault
 
     def publish_idle_status(self) -> None:
         if self.get_clock().now().nanoseconds * 1e-9 - self.last_control_s >= self.idle_status_period_s:
@@ -168,6 +180,8 @@ class FingerControllerNode(LeanNode):
         else:
             tendon = transmission.tendon_force(measurement, self.ratio)
         self.status_sequence += 1
+        self._steps_since_status = 0
+        self._reported = self._status_key()
         status = ControllerStatus(
             finger=self.finger, strategy=self.controller.strategy, mode=self.setpoint.mode, active=self.enabled,
             setpoint=self.setpoint.value, measurement=tendon, error=self.setpoint.value - tendon,

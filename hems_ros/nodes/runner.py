@@ -42,7 +42,11 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
         # freezing them keeps the collector's pauses far below the 10 ms control period.
         gc.collect()
         gc.freeze()
-        (spin or rclpy.spin)(node)
+        if spin is None:
+            from hems_ros.nodes import lean_spin
+
+            spin = lean_spin.spin if lean_spin.can_spin(node) else rclpy.spin
+        spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RuntimeError:

@@ -86,18 +86,20 @@ class ActuationUnit:
         self._out[:] = 0.0
         self._steps = 0
         self._rng = sensors.noise_generator(self.params.force_sensor.seed)
+        self._noise = 0.0
 
     def snapshot(self) -> tuple:
         """Everything :meth:`restore` needs to continue from here (state, time, noise draws)."""
-        return self._s.copy(), self._out.copy(), self._steps, self._rng.bit_generator.state
+        return self._s.copy(), self._out.copy(), self._steps, self._rng.bit_generator.state, self._noise
 
     def restore(self, snapshot: tuple) -> None:
         """Go back to a :meth:`snapshot` of this unit: the next steps repeat from there."""
-        state, out, steps, rng_state = snapshot
+        state, out, steps, rng_state, noise = snapshot
         self._s[:] = state
         self._out[:] = out
         self._steps = steps
         self._rng.bit_generator.state = rng_state
+        self._noise = noise
 
     @property
     def time(self) -> float:
@@ -117,17 +119,24 @@ class ActuationUnit:
     def step(self, duty: float | None = None, current: float | None = None,
              voltage: float | None = None) -> StepResult:
         """Advance by dt with one drive: duty %, current A or voltage V."""
+        self.advance(duty, current, voltage)
+        return self.result()
+
+    def advance(self, duty: float | None = None, current: float | None = None,
+                voltage: float | None = None) -> None:
+        """:meth:`step` without building its result: a node integrating at 1 kHz reads only
+        the steps that end on a sensor sample (:meth:`result`)."""
         kind, value = select_drive(duty, current, voltage)
         value = float(value)
         check_drive(kind, value)
         if not kernel.step(self._p, self._s, DRIVE_NAMES[kind], value, self.dt, self._out):
             raise FloatingPointError(f"state became non-finite at t = {self.time + self.dt:.6f} s ({self.state})")
         self._steps += 1
-        noise = self._rng.standard_normal()
-        return self._result(noise)
+        self._noise = self._rng.standard_normal()
 
-    def _result(self, noise: float) -> StepResult:
-        s, o, prm = self._s, self._out, self.params
+    def result(self) -> StepResult:
+        """Measurements and truth after the last step: what that :meth:`step` returned."""
+        s, o, prm, noise = self._s, self._out, self.params, self._noise
         counts = sensors.encoder_counts(s[kernel.S_X], prm.encoder.resolution_m)
         fs = prm.force_sensor
         reading, saturated = sensors.force_reading(o[kernel.O_FW], noise * fs.noise_std_n, fs.range_max_n, fs.resolution_n)

@@ -111,6 +111,17 @@ def test_force_noise_is_seeded():
     assert np.std(s1) > 0.2
 
 
+def test_advance_then_result_is_step():
+    p = load_params("ch6_hems_index")
+    stepped, advanced = ActuationUnit(p), ActuationUnit(p)
+    for d in _drive(500):
+        last = stepped.step(duty=d)
+        advanced.advance(duty=d)
+    assert advanced.result() == last
+    with pytest.raises(ValueError, match="0-100"):
+        advanced.advance(duty=101.0)
+
+
 def test_reset_and_state():
     u = ActuationUnit(load_params("table41"))
     for _ in range(500):

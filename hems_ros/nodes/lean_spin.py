@@ -1,0 +1,84 @@
+"""A lean spin loop for one node whose entities are all created before it spins.
+
+rclpy's executors rebuild a wait set on every wake-up (a new rcl wait set, entity counts,
+callback-group checks, a Task and a coroutine per callback); for our nodes, which wake a few
+hundred times a second, that machinery cost more CPU than their own work. This loop
+allocates one wait set, and on each wake-up re-adds the handles, waits, takes what is ready
+and calls the callbacks directly, in the order rclpy uses (timers, subscriptions, services).
+
+It serves nodes with timers, subscriptions and services only (no clients, guard conditions
+or waitables such as QoS event handlers: see lean_node.py), callbacks that are plain
+functions (a timer callback gets no TimerInfo), and entities that do not change after the
+node is built. :func:`can_spin` tells; other nodes spin with ``rclpy.spin``.
+"""
+
+from __future__ import annotations
+
+import inspect
+from contextlib import ExitStack
+
+from rclpy.executors import ExternalShutdownException
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.signals import SignalHandlerGuardCondition
+
+WAIT_TIMEOUT_NS = 100_000_000   # re-check the context now and then even without work
+
+
+def can_spin(node) -> bool:
+    """True if :func:`spin` handles every entity of ``node``."""
+    from rclpy.subscription import Subscription
+
+    return (not (list(node.clients) or list(node.guards) or list(node.waitables))
+            and all(s._callback_type is Subscription.CallbackType.MessageOnly for s in node.subscriptions)
+            and all(not inspect.signature(t.callback).parameters for t in node.timers))
+
+
+def spin(node) -> None:
+    """Spin ``node`` until its context shuts down (then ExternalShutdownException, as rclpy.spin)."""
+    if not can_spin(node):
+        raise ValueError(f"node {node.get_name()} has clients, guard conditions or waitables: use rclpy.spin")
+    context = node.context
+    timers, subscriptions, services = list(node.timers), list(node.subscriptions), list(node.services)
+    sigint = SignalHandlerGuardCondition(context)   # wakes the wait on Ctrl-C / SIGTERM
+    try:
+        with ExitStack() as stack:
+            for entity in timers + subscriptions + services + [sigint]:
+                stack.enter_context(entity.handle)
+            stack.enter_context(context.handle)
+            wait_set = _rclpy.WaitSet(len(subscriptions), 1, len(timers), 0, len(services), 0, context.handle)
+            while context.ok():
+                wait_set.clear_entities()
+                for subscription in subscriptions:
+                    wait_set.add_subscription(subscription.handle)
+                for service in services:
+                    wait_set.add_service(service.handle)
+                for timer in timers:
+                    wait_set.add_timer(timer.handle)
+                wait_set.add_guard_condition(sigint.handle)
+                wait_set.wait(WAIT_TIMEOUT_NS)
+                if not context.ok():
+                    break
+                _run_ready(wait_set, timers, subscriptions, services)
+    finally:
+        sigint.destroy()
+    raise ExternalShutdownException()
+
+
+def _run_ready(wait_set, timers, subscriptions, services) -> None:
+    ready = wait_set.get_ready_entities("timer")
+    for timer in timers:
+        if timer.handle.pointer in ready and timer.handle.is_timer_ready():
+            timer.handle.call_timer()
+            timer.callback()
+    ready = wait_set.get_ready_entities("subscription")
+    for subscription in subscriptions:
+        if subscription.handle.pointer in ready:
+            taken = subscription.handle.take_message(subscription.msg_type, subscription.raw)
+            if taken is not None:
+                subscription.callback(taken[0])
+    ready = wait_set.get_ready_entities("service")
+    for service in services:
+        if service.handle.pointer in ready:
+            request, header = service.handle.service_take_request(service.srv_type.Request)
+            if header is not None:
+                service.send_response(service.callback(request, service.srv_type.Response()), header)
