@@ -15,6 +15,7 @@ node is built. :func:`can_spin` tells; other nodes spin with ``rclpy.spin``.
 from __future__ import annotations
 
 import inspect
+import time
 from contextlib import ExitStack
 
 from rclpy.executors import ExternalShutdownException
@@ -58,7 +59,15 @@ def spin(node) -> None:
                 wait_set.wait(WAIT_TIMEOUT_NS)
                 if not context.ok():
                     break
-                _run_ready(wait_set, timers, subscriptions, services)
+                try:
+                    _run_ready(wait_set, timers, subscriptions, services)
+                except RuntimeError:
+                    # Ctrl-C shuts the context down from rclpy's signal thread, possibly while
+                    # a take is under way here, which then fails; not an error of the node
+                    time.sleep(0.05)
+                    if context.ok():
+                        raise
+                    break
     finally:
         sigint.destroy()
     raise ExternalShutdownException()

@@ -49,15 +49,17 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
              "duty": DutyCommand, "controller_status": ControllerStatus}
     sequenced = {stream_topic(f, s): field for f in fingers for s, (field, _) in STREAMS.items()}
     minimum = {stream_topic(f, s): n for f in fingers for s, (_, n) in STREAMS.items()}
-    types = [kinds[s] for _ in fingers for s in STREAMS]
+    # the test's own subscriber (the witness of the published values) takes FINGER's streams:
+    # all 36 would load this Python process more than the graph's nodes
+    witnessed = {stream_topic(FINGER, s): kinds[s] for s in STREAMS}
     output = tmp_path / "graph10s"
     graph = Graph(GraphOptions(fingers=tuple(fingers), log_level="warn"))
     graph.start()
     recorder = None
-    received: dict[str, list] = {topic: [] for topic in sequenced}
+    received: dict[str, list] = {topic: [] for topic in witnessed}
     try:
         with GraphClient("hems_test_record") as client:
-            for topic, msg_type in zip(sequenced, types):
+            for topic, msg_type in witnessed.items():
                 client.node.create_subscription(msg_type, topic, received[topic].append,
                                                 qos.COMMAND if msg_type in (DutyCommand, ControllerStatus) else qos.SENSOR)
             for finger in fingers:
@@ -93,14 +95,14 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
         assert np.array_equal(sequence, np.arange(sequence[0], sequence[0] + len(sequence))), topic
         assert info.topics[topic].count == len(data)
         assert len(data) >= minimum[topic], topic
-        # values: those the test's own subscriber got (it listens only while the client
-        # spins, and on after the recorder stopped)
-        mine = {m.sequence: getattr(m, name) for m in received[topic]}
-        common = [i for i, s in enumerate(sequence.tolist()) if s in mine]
-        # on the full graph this one Python subscriber, taking ~3000 messages/s on a loaded
-        # 2-core host, keeps only part of the best-effort streams: the comparison covers those
-        assert len(common) > (0.5 if len(fingers) == 1 else 0.05) * len(data), (topic, len(common), len(data))
-        assert np.array_equal(data[name][common], [mine[s] for s in sequence[common].tolist()], equal_nan=True), topic
+        if topic in witnessed:
+            # values: those the test's own subscriber got (it listens only while the client
+            # spins, and on after the recorder stopped)
+            mine = {m.sequence: getattr(m, name) for m in received[topic]}
+            common = [i for i, s in enumerate(sequence.tolist()) if s in mine]
+            assert len(common) > 0.5 * len(data), topic
+            assert np.array_equal(data[name][common], [mine[s] for s in sequence[common].tolist()],
+                                  equal_nan=True), topic
     duty = bag[names.topic(FINGER, "duty")]
     assert duty["duty_percent"].max() > 0.0     # the run heated: a meaningful comparison
     assert set(bag[names.SUPERVISOR_STATUS_TOPIC]["state_name"]) >= {"ENABLED"}
