@@ -92,7 +92,8 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
         data = bag[topic]
         sequence = data["sequence"]
         # zero drops: every message published while the recorder listened is in the bag
-        assert np.array_equal(sequence, np.arange(sequence[0], sequence[0] + len(sequence))), topic
+        gaps = [(int(a), int(b - a - 1)) for a, b in zip(sequence[:-1], sequence[1:]) if b != a + 1]
+        assert not gaps, (topic, "lost after sequence (number lost):", gaps)
         assert info.topics[topic].count == len(data)
         assert len(data) >= minimum[topic], topic
         if topic in witnessed:
