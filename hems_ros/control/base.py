@@ -155,18 +155,23 @@ class Controller:
         self._bias = 0.0
         self._reset_state()
 
-    def set_mode(self, mode: str, measurement: float) -> None:
-        """Switch to ``mode`` without a jump in duty.
+    def set_mode(self, mode: str, measurement: float, gains=None) -> None:
+        """Switch to ``mode`` without a jump in duty, with that mode's ``gains`` if given.
 
         ``measurement`` is the current value in the new mode's SI unit.
         """
         check_mode(mode)
+        if gains is not None and not isinstance(gains, self.gains_type):
+            raise TypeError(f"{self.strategy} needs {self.gains_type.__name__}, got {type(gains).__name__}")
         y = float(measurement)
         if not math.isfinite(y):
             self._trip(f"measurement is {y} at switch to {mode} mode")
             return
         if mode == self.mode:
             return
+        if gains is not None:
+            self.gains = gains
+            self._setup()
         self.mode = mode
         self._scale = self.gains.scale_for(mode)
         self._reset_state()

@@ -28,7 +28,7 @@ from dataclasses import fields
 from builtin_interfaces.msg import Time
 
 from hems_msgs.msg import ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
-from hems_ros.control import STRATEGIES, TABLE_5_1, make_controller
+from hems_ros.control import FORCE_MODE_BPID, STRATEGIES, TABLE_5_1, make_controller
 from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, Setpoint, SetpointError, SetpointLimits, validate
@@ -67,16 +67,23 @@ class FingerControllerNode(LeanNode):
         super().__init__("finger_controller", namespace=names.NAMESPACE, **node_kwargs)
         p = declare(self, PARAMETERS)
         table = TABLE_5_1[p["strategy"]]
+        force_table = FORCE_MODE_BPID if p["strategy"] == "bpid" else table
         gain_specs = [Spec(f"gains.{f.name}", float(getattr(table, f.name)),
-                           f"{p['strategy']} gain {f.name} (default Table 5.1; errors scaled per the gains' "
-                           "position_scale / force_scale)", non_negative, True) for f in fields(table)]
+                           f"{p['strategy']} position-mode gain {f.name} (default Table 5.1; errors scaled per "
+                           "the gains' position_scale)", non_negative, True) for f in fields(table)]
+        gain_specs += [Spec(f"force_gains.{f.name}", float(getattr(force_table, f.name)),
+                            f"{p['strategy']} force-mode gain {f.name} (default: the chapter 6 force set for BPID, "
+                            "Table 5.1 otherwise; errors scaled per force_scale)", non_negative, True)
+                       for f in fields(table)]
         gains = declare(self, gain_specs)
+        self.mode_gains = {mode: type(table)(**{k.split(".", 1)[1]: v for k, v in gains.items()
+                                                if k.split(".", 1)[0] == prefix})
+                           for mode, prefix in (("position", "gains"), ("force", "force_gains"))}
         self.finger = p["finger"]
         self.ratio = p["pulley_ratio"]
         self.limits = SetpointLimits(p["max_position_m"], p["max_force_n"])
-        self.controller = make_controller(
-            p["strategy"], p["mode"], type(table)(**{k.split(".", 1)[1]: v for k, v in gains.items()}),
-            ts=p["ts"], n_filter=p["n_filter"])
+        self.controller = make_controller(p["strategy"], p["mode"], self.mode_gains[p["mode"]],
+                                          ts=p["ts"], n_filter=p["n_filter"])
         self.setpoint = Setpoint(p["mode"], 0.0)
         self.enabled = False
         self.wire_position: float | None = None
@@ -115,7 +122,8 @@ class FingerControllerNode(LeanNode):
             return
         if setpoint.mode != self.controller.mode:
             measurement = self._wire_measurement(setpoint.mode)
-            self.controller.set_mode(setpoint.mode, 0.0 if measurement is None else measurement)
+            self.controller.set_mode(setpoint.mode, 0.0 if measurement is None else measurement,
+                                     self.mode_gains[setpoint.mode])
             if measurement is None:
                 self.controller.reset()  # nothing measured yet in that mode: nothing to carry over
         self.setpoint = setpoint

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from hems_ros.control import STRATEGIES, BPIDGains, PIDGains, PIPDGains, make_controller
+from hems_ros.control import STRATEGIES, TABLE_5_1, BPIDGains, PIDGains, PIPDGains, make_controller
 
 UM = 1e-6
 
@@ -87,6 +87,23 @@ def test_bumpless_switch(strategy):
     assert c.update(5.0, 5.0) == pytest.approx(before * math.exp(-0.01 / 1.0))
     # and the new loop acts on the force error (in mN)
     assert c.update(5.001, 5.0) > before * math.exp(-0.02)
+
+
+def test_a_switch_can_bring_the_new_modes_gains():
+    from hems_ros.control import FORCE_MODE_BPID
+
+    switched = make_controller("bpid", "position")
+    for _ in range(50):
+        before = switched.update(15 * UM, 10 * UM)
+    switched.set_mode("force", 5.0, FORCE_MODE_BPID)
+    assert switched.gains is FORCE_MODE_BPID
+    assert switched.update(5.0, 5.0) == pytest.approx(before)        # still bumpless
+    fresh = make_controller("bpid", "force", FORCE_MODE_BPID)
+    reference = [fresh.update(5.5, 5.0) for _ in range(5)]
+    switched.reset()
+    assert [switched.update(5.5, 5.0) for _ in range(5)] == reference  # and the force set acts
+    with pytest.raises(TypeError, match="BPIDGains"):
+        switched.set_mode("position", 0.0, TABLE_5_1["pid"])
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)

@@ -157,7 +157,13 @@ def test_bad_setpoints_by_topic_are_rejected_and_change_nothing(graph, rec):
     running, client = graph
     enable(client)
     assert client.send_setpoint(FINGER, "position", 0.0)
-    rec.spin(0.5)
+    # the previous test left the finger warm: wait until the controller has settled at 0 duty
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        rec.spin(0.5)
+        recent = rec.since(names.topic(FINGER, "controller_status"), time.time() - 0.5)
+        if recent and all(m.duty_percent == 0.0 for _, m in recent):
+            break
     before = rec.since(names.topic(FINGER, "controller_status"), time.time() - 0.3)[-1][1]
     t0 = time.time()
     for mode, value in (("position", math.nan), ("position", -1.0), ("position", 1e9), ("force", math.inf),
