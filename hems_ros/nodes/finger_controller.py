@@ -16,6 +16,11 @@ Publishes
                                    carries the latest encoder and force readings), and every
                                    idle_status_period_s while no feedback arrives
 
+Gains per mode: ``gains.*`` in position mode (default Table 5.1) and ``force_gains.*`` in
+force mode (default for BPID the chapter 6 force set, hems_ros.control.FORCE_MODE_BPID;
+Table 5.1 for PID and PI-PD); a setpoint of the other mode switches both, without a jump
+in duty.
+
 An invalid setpoint (non-finite, outside the tendon stroke or force range, unknown mode) is
 rejected with a logged error and counted in the status; the last valid setpoint stays.
 Outside ENABLED, or after a controller fault (non-finite input), the duty sent is 0.
