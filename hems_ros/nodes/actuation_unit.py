@@ -44,7 +44,7 @@ PARAMETERS = [
 
 
 class ActuationUnitNode(LeanNode):
-    """Simulated HEMS actuation unit (see the module documentation for topics)."""
+    """Simulated HEMS actuation unit."""
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("actuation_unit", namespace=names.NAMESPACE, **node_kwargs)

@@ -66,7 +66,7 @@ def nan_if_none(value: float | None) -> float:
 
 
 class FingerControllerNode(LeanNode):
-    """Per-finger BPID/PID/PI-PD controller (see the module documentation)."""
+    """Per-finger BPID/PID/PI-PD controller."""
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("finger_controller", namespace=names.NAMESPACE, **node_kwargs)

@@ -67,7 +67,9 @@ def node_help(make_node: Callable[[], object], program: str) -> str:
     """Usage text of a node executable: its class documentation and the ROS argument form."""
     import inspect
 
-    doc = inspect.cleandoc(make_node.__doc__ or sys.modules[make_node.__module__].__doc__ or "")
+    # the class says what the node is; its module documents topics, parameters and behaviour
+    parts = [make_node.__doc__, sys.modules[make_node.__module__].__doc__]
+    doc = "\n\n".join(inspect.cleandoc(part) for part in parts if part)
     name = os.path.basename(program)
     return (f"usage: {name} [--ros-args -p <parameter>:=<value> ... | --params-file <file>]\n\n"
             f"{doc}\n\nStops cleanly on Ctrl-C (SIGINT) or SIGTERM.")

@@ -34,7 +34,7 @@ PARAMETERS = [
 
 
 class ShoulderModuleNode(LeanNode):
-    """Two wire-force sensors of one shoulder module (see the module documentation)."""
+    """Two wire-force sensors of one shoulder module."""
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("shoulder_module", namespace=names.NAMESPACE, **node_kwargs)

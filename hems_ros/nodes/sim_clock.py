@@ -24,7 +24,7 @@ PARAMETERS = [
 
 
 class SimClockNode(Node):
-    """Simulated-time source for the graph (see the module documentation)."""
+    """Simulated-time source for the graph."""
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("sim_clock", namespace="/hems", **node_kwargs)

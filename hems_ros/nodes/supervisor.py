@@ -55,7 +55,7 @@ PARAMETERS = [
 
 
 class SupervisorNode(LeanNode):
-    """Safety supervisor of the HEMS graph (see the module documentation)."""
+    """Safety supervisor of the HEMS graph."""
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("supervisor", namespace=names.NAMESPACE, **node_kwargs)
