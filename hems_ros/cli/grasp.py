@@ -46,13 +46,14 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
 
     from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
     from hems_ros.nodes import qos
+    from hems_ros.nodes.clock_time import from_msg
 
     traces = {f: FingerTrace.empty() for f in fingers}
     phases = {f: PhaseTracker() for f in fingers}
     node = client.node
 
     def on_joints(message: JointState) -> None:
-        t = message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec
+        t = from_msg(message.header.stamp)
         for name, x, f in zip(message.name, message.position, message.effort):
             if name in traces:
                 traces[name].t.append(t)
@@ -60,17 +61,13 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
                 traces[name].force_n.append(f)
 
     def on_state(finger: str, message: ActuatorState) -> None:
-        traces[finger].energy_t.append(message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec)
         traces[finger].energy_j.append(message.electrical_energy)
 
-    def seconds(stamp) -> float:
-        return stamp.sec + 1e-9 * stamp.nanosec
-
     def on_status(finger: str, message: ControllerStatus) -> None:
-        traces[finger].duty_t.append(seconds(message.header.stamp))
+        traces[finger].duty_t.append(from_msg(message.header.stamp))
         traces[finger].duty_percent.append(message.duty_percent)
-        phases[finger].feed(message.mode, message.setpoint, message.active, seconds(message.encoder_stamp),
-                            seconds(message.force_stamp))
+        phases[finger].feed(message.mode, message.setpoint, message.active, from_msg(message.encoder_stamp),
+                            from_msg(message.force_stamp))
 
     statuses = []
     subs = [node.create_subscription(JointState, names.JOINT_STATES_TOPIC, on_joints, qos.SENSOR),

@@ -17,7 +17,17 @@ from hems_ros.control.base import (
     Controller,
 )
 from hems_ros.control.bpid import BPIDController
-from hems_ros.control.gains import FORCE_MODE_BPID, FORCE_SCALE, MN_PER_N, TABLE_5_1, UM_PER_M, BPIDGains, PIDGains, PIPDGains
+from hems_ros.control.gains import (
+    FORCE_MODE_BPID,
+    FORCE_SCALE,
+    MN_PER_N,
+    TABLE_5_1,
+    UM_PER_M,
+    BPIDGains,
+    PIDGains,
+    PIPDGains,
+    mode_gains,
+)
 from hems_ros.control.pid import PIDController
 from hems_ros.control.pipd import PIPDController
 
@@ -68,6 +78,7 @@ __all__ = [
     "PIPDGains",
     "STRATEGIES",
     "TABLE_5_1",
+    "mode_gains",
     "UM_PER_M",
     "make_controller",
 ]

@@ -127,3 +127,9 @@ TABLE_5_1 = MappingProxyType(
 FORCE_MODE_BPID = BPIDGains(kp=0.8, ki=0.5, kd=0.0, kb=1.0, force_scale=100.0)
 """BPID gains for force mode on the HEMS unit (module docstring): Kp in %/(10 mN),
 Ki in %/(10 mN s), Kb in 1/(10 mN). Position mode keeps Table 5.1."""
+
+
+def mode_gains(strategy: str, mode: str):
+    """Default gains of ``strategy`` in ``mode``: Table 5.1, except BPID in force mode
+    (:data:`FORCE_MODE_BPID`); PID and PI-PD have no force-mode set of their own."""
+    return FORCE_MODE_BPID if (strategy, mode) == ("bpid", "force") else TABLE_5_1[strategy]

@@ -41,14 +41,13 @@ class FingerTrace:
     t: list[float]
     position_m: list[float]
     force_n: list[float]
-    energy_t: list[float]
-    energy_j: list[float]      # the unit's Joule heat since it started
+    energy_j: list[float]      # the unit's Joule heat since it started, at its state messages
     duty_t: list[float]
     duty_percent: list[float]
 
     @classmethod
     def empty(cls) -> "FingerTrace":
-        return cls([], [], [], [], [], [], [])
+        return cls([], [], [], [], [], [])
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ from dataclasses import fields
 from builtin_interfaces.msg import Time
 
 from hems_msgs.msg import ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
-from hems_ros.control import FORCE_MODE_BPID, STRATEGIES, TABLE_5_1, make_controller
+from hems_ros.control import STRATEGIES, make_controller, mode_gains
 from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, Setpoint, SetpointError, SetpointLimits, validate
@@ -71,19 +71,7 @@ class FingerControllerNode(LeanNode):
     def __init__(self, **node_kwargs) -> None:
         super().__init__("finger_controller", namespace=names.NAMESPACE, **node_kwargs)
         p = declare(self, PARAMETERS)
-        table = TABLE_5_1[p["strategy"]]
-        force_table = FORCE_MODE_BPID if p["strategy"] == "bpid" else table
-        gain_specs = [Spec(f"gains.{f.name}", float(getattr(table, f.name)),
-                           f"{p['strategy']} position-mode gain {f.name} (default Table 5.1; errors scaled per "
-                           "the gains' position_scale)", non_negative, True) for f in fields(table)]
-        gain_specs += [Spec(f"force_gains.{f.name}", float(getattr(force_table, f.name)),
-                            f"{p['strategy']} force-mode gain {f.name} (default: the chapter 6 force set for BPID, "
-                            "Table 5.1 otherwise; errors scaled per force_scale)", non_negative, True)
-                       for f in fields(table)]
-        gains = declare(self, gain_specs)
-        self.mode_gains = {mode: type(table)(**{k.split(".", 1)[1]: v for k, v in gains.items()
-                                                if k.split(".", 1)[0] == prefix})
-                           for mode, prefix in (("position", "gains"), ("force", "force_gains"))}
+        self.mode_gains = {mode: self._declare_gains(p["strategy"], mode) for mode in MODES}
         self.finger = p["finger"]
         self.ratio = p["pulley_ratio"]
         self.limits = SetpointLimits(p["max_position_m"], p["max_force_n"])
@@ -113,6 +101,16 @@ class FingerControllerNode(LeanNode):
         self.last_control_s = 0.0
         self.idle_status_period_s = p["idle_status_period_s"]
         self.create_timer(p["idle_status_period_s"], self.publish_idle_status)
+
+    def _declare_gains(self, strategy: str, mode: str):
+        """The ``gains.*`` (position) or ``force_gains.*`` parameters, defaults from the core."""
+        default = mode_gains(strategy, mode)
+        prefix = "gains" if mode == "position" else "force_gains"
+        values = declare(self, [Spec(f"{prefix}.{f.name}", float(getattr(default, f.name)),
+                                     f"{strategy} {mode}-mode gain {f.name} (default hems_ros.control.mode_gains; "
+                                     f"errors scaled per the gains' {mode}_scale)", non_negative, True)
+                                for f in fields(default)])
+        return type(default)(**{name.split(".", 1)[1]: value for name, value in values.items()})
 
     # inputs -------------------------------------------------------------------
     def on_setpoint(self, message: FingerSetpoint) -> None:

@@ -89,6 +89,14 @@ def test_bumpless_switch(strategy):
     assert c.update(5.001, 5.0) > before * math.exp(-0.02)
 
 
+def test_default_gains_per_mode():
+    from hems_ros.control import FORCE_MODE_BPID, mode_gains
+
+    assert mode_gains("bpid", "force") is FORCE_MODE_BPID
+    assert mode_gains("bpid", "position") is TABLE_5_1["bpid"]
+    assert mode_gains("pid", "force") is TABLE_5_1["pid"] and mode_gains("pipd", "force") is TABLE_5_1["pipd"]
+
+
 def test_a_switch_can_bring_the_new_modes_gains():
     from hems_ros.control import FORCE_MODE_BPID
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from hems_msgs.msg import ActuatorState, ControllerStatus, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
-from hems_ros.graph import names
+from hems_ros.graph import names, transmission
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import from_msg
 
@@ -67,7 +67,8 @@ def test_index_position_step_settles_without_overshoot_and_matches_lockstep(grap
     t0 = time.time()
     assert client.send_setpoint(FINGER, "position", 0.020)
     rec.spin(4.5)
-    samples = [(from_msg(m.header.stamp), 2 * m.position) for _, m in rec.since(names.topic(FINGER, "encoder"), t0)]
+    samples = [(from_msg(m.header.stamp), transmission.tendon_position(m.position))
+               for _, m in rec.since(names.topic(FINGER, "encoder"), t0)]
     t = np.array([s[0] for s in samples]) - t0
     x = np.array([s[1] for s in samples])
     assert len(x) > 350, f"only {len(x)} encoder samples in 4.5 s"
@@ -82,7 +83,7 @@ def test_index_position_step_settles_without_overshoot_and_matches_lockstep(grap
     window = (t >= 0) & (t < 4.0)
     rmse_graph = math.sqrt(np.mean((x[window] - 0.020) ** 2))
     measured, *_ = simulate_loop(np.full(400, 0.010), "bpid", "position", "ch6_hems_index")
-    rmse_lockstep = math.sqrt(np.mean((2 * np.asarray(measured) - 0.020) ** 2))
+    rmse_lockstep = math.sqrt(np.mean((transmission.tendon_position(np.asarray(measured)) - 0.020) ** 2))
     assert abs(rmse_graph - rmse_lockstep) <= 0.05 * rmse_lockstep, (
         f"RMSE graph {1e3 * rmse_graph:.3f} mm vs lockstep {1e3 * rmse_lockstep:.3f} mm")
     client.call("disable")
@@ -95,7 +96,7 @@ def test_index_force_mode_holds_10_newtons(graph, rec):
     t0 = time.time()
     assert client.send_setpoint(FINGER, "force", 10.0)
     rec.spin(7.0)
-    readings = [(t - t0, m.force / 2.0) for t, m in rec.since(names.topic(FINGER, "wire_force"), t0)]
+    readings = [(t - t0, transmission.tendon_force(m.force)) for t, m in rec.since(names.topic(FINGER, "wire_force"), t0)]
     hold = np.array([f for t, f in readings if 4.0 <= t <= 7.0])
     assert len(hold) > 200
     assert np.all(np.abs(hold - 10.0) <= 0.2), f"tendon force {hold.min():.3f}-{hold.max():.3f} N while holding"

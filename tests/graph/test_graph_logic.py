@@ -188,7 +188,7 @@ def test_grasp_summary_numbers():
     t = np.round(np.arange(0.0, 5.0, 0.01), 2)
     position = np.where(t < 1.0, 0.0, plan.approach_m)              # reaches the target after 1 s
     force = np.where(t < 2.5, 5.0, plan.force_n + 0.1)              # 0.1 N high once built up
-    trace = FingerTrace(list(t), list(position), list(force), [0.0, 4.9], [3.0, 45.0], [], [])
+    trace = FingerTrace(list(t), list(position), list(force), [3.0, 45.0], [], [])
     summary = summarize("index", trace, plan, [0.0, 2.0, 4.0])
     assert summary.approach_rmse_mm == pytest.approx(1e3 * plan.approach_m * math.sqrt(0.5))
     assert summary.position_rmse_mm == 0.0
