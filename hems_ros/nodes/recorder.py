@@ -13,6 +13,13 @@ Parameters: ``output`` (bag folder, must not exist or be empty; default
 so a SIGKILL loses at most that much), ``chunk_size`` (bytes, 262144), ``compression``
 (zstd | lz4 | none), ``queue_depth`` (1000), ``duration`` (s, 0 = until stopped).
 
+Joining a running graph: while the recorder creates its ~40 subscriptions, the topics it
+already records can miss samples, on every stream at once, for up to about half a second
+(best-effort and reliable alike: the writers keep 10 samples). In 10 recordings of the full
+graph here every loss fell before or within 0.2 s after the last subscription, none later
+(tests/bag/test_graph_record.py opens its window 2 s after it). Start the recorder with the
+graph (``hems up --record``) or give it two seconds before the part of a run that matters.
+
 Each subscribed topic is logged as ``recording <topic> [<type>] ...``; on SIGINT or SIGTERM
 (or after ``duration``) the bag is finished (summary, footer, ``metadata.yaml``) and its path
 and message counts are logged.
