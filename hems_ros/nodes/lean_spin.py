@@ -72,7 +72,7 @@ def spin_nodes(nodes) -> None:
                 wait_set.wait(WAIT_TIMEOUT_NS)
                 if not context.ok():
                     break
-                _run_ready(wait_set, timers, subscriptions, services)
+                run_ready(wait_set, timers, subscriptions, services)
             except RuntimeError:
                 # Ctrl-C shuts the context down from rclpy's signal thread, possibly while a
                 # wait or take is under way here, which then fails: not an error of the node
@@ -83,7 +83,8 @@ def spin_nodes(nodes) -> None:
     raise ExternalShutdownException()
 
 
-def _run_ready(wait_set, timers, subscriptions, services) -> None:
+def run_ready(wait_set, timers, subscriptions, services) -> None:
+    """Run the callbacks of the ready entities: timers, then subscriptions, then services."""
     ready = wait_set.get_ready_entities("timer")
     for timer in timers:
         if timer.handle.pointer in ready and timer.handle.is_timer_ready():

@@ -20,6 +20,9 @@ graph here every loss fell before or within 0.2 s after the last subscription, n
 (tests/bag/test_graph_record.py opens its window 2 s after it). Start the recorder with the
 graph (``hems up --record``) or give it two seconds before the part of a run that matters.
 
+Messages are logged at the reception time the middleware stamped on them, with the
+writer's source time as publish time (both nanoseconds since the epoch).
+
 Each subscribed topic is logged as ``recording <topic> [<type>] ...``; on SIGINT or SIGTERM
 (or after ``duration``) the bag is finished (summary, footer, ``metadata.yaml``) and its path
 and message counts are logged.
@@ -37,8 +40,11 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from hems_ros.bag import BagWriter, TopicSelection, offered_qos
 from hems_ros.bag.selection import DEFAULT_RECORD_REGEX
+from hems_ros.nodes import lean_spin
 
 READY_PREFIX = "recording "
+BATCH_S = 0.02          # recorder loop: pause after each round, so that rounds find batches
+WAIT_TIMEOUT_NS = 100_000_000
 FINISHED_PREFIX = "bag finished: "
 
 
@@ -80,6 +86,7 @@ class Recorder(Node):
             raise ValueError("chunk_size and queue_depth must be positive, duration >= 0")
         self._writer = BagWriter(output, compression=compression, chunk_size=chunk_size)
         self._recorded: dict[str, object] = {}
+        self._channels: dict[object, tuple[int, type]] = {}   # subscription -> (channel, class)
         self._skipped: set[str] = set()
         self._deadline = time.monotonic() + duration if duration > 0 else None
         self.get_logger().info(f"bag {self._writer.folder}: recording {self._selection.describe()}")
@@ -117,13 +124,33 @@ class Recorder(Node):
             return
         write = self._writer.write
 
-        # The events executor passes no MessageInfo, so publish time = receive time.
+        # only for an executor that calls back per message; spin_until_expired drains instead
         def on_message(data: bytes) -> None:
             write(channel, time.time_ns(), data)
 
-        self._recorded[topic] = self.create_subscription(cls, topic, on_message, qos, raw=True)
+        subscription = self.create_subscription(cls, topic, on_message, qos, raw=True)
+        self._recorded[topic] = subscription
+        self._channels[subscription] = (channel, cls)
         self.get_logger().info(f"{READY_PREFIX}{topic} [{type_name}] "
                                f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}")
+
+    def drain(self, subscription) -> int:
+        """Write every message waiting in ``subscription``'s queue; how many there were.
+
+        Log time is the reception time the middleware stamped, publish time the writer's
+        source time: both from the sample's message info, so a message waiting in the queue
+        loses no timing accuracy.
+        """
+        channel, cls = self._channels[subscription]
+        take, write = subscription.handle.take_message, self._writer.write
+        for count in range(self._depth):
+            taken = take(cls, True)
+            if taken is None:
+                return count
+            data, info = taken
+            received = info["received_timestamp"] or time.time_ns()   # 0: the middleware gave none
+            write(channel, received, data, info["source_timestamp"] or received)
+        return self._depth
 
     def finish(self) -> None:
         if not hasattr(self, "_writer"):  # construction failed before the bag was opened
@@ -138,15 +165,60 @@ class Recorder(Node):
         super().destroy_node()
 
 
-def spin_until_expired(node: "Recorder") -> None:
-    """The events executor (as every node), stopping also when ``duration`` has passed."""
-    import rclpy
-    from rclpy.experimental import EventsExecutor
+def spin_until_expired(node: Recorder) -> None:
+    """Spin the recorder in batches until shutdown or until ``duration`` has passed.
 
-    executor = EventsExecutor()
-    executor.add_node(node)
-    while rclpy.ok() and not node.expired:
-        executor.spin_once(timeout_sec=0.1)
+    An executor wakes the process and calls Python once per message, ~3000 times a second on
+    the full graph; this loop waits on all subscriptions at once, drains every queue that
+    has messages (Recorder.drain), runs the due timers and services (topic discovery,
+    flushing, parameters), then sleeps BATCH_S so that the next wake-up finds a batch. The
+    subscription queues (``queue_depth``) hold far more than BATCH_S of any stream.
+    """
+    from contextlib import ExitStack
+
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+
+    context = node.context
+    entered: set[int] = set()
+    sizes, wait_set = None, None
+    with ExitStack() as stack:
+        stack.enter_context(context.handle)
+        while context.ok() and not node.expired:
+            try:
+                # subscriptions appear as topics are discovered: refresh the sets each round
+                subscriptions, timers, services = list(node.subscriptions), list(node.timers), list(node.services)
+                for entity in subscriptions + timers + services:
+                    if id(entity) not in entered:
+                        stack.enter_context(entity.handle)
+                        entered.add(id(entity))
+                if sizes != (len(subscriptions), len(timers), len(services)):
+                    sizes = (len(subscriptions), len(timers), len(services))
+                    wait_set = _rclpy.WaitSet(sizes[0], 0, sizes[1], 0, sizes[2], 0, context.handle)
+                wait_set.clear_entities()
+                for subscription in subscriptions:
+                    wait_set.add_subscription(subscription.handle)
+                for timer in timers:
+                    wait_set.add_timer(timer.handle)
+                for service in services:
+                    wait_set.add_service(service.handle)
+                wait_set.wait(WAIT_TIMEOUT_NS)
+                if not context.ok():
+                    break
+                ready = wait_set.get_ready_entities("subscription")
+                for subscription in subscriptions:
+                    if subscription.handle.pointer in ready:
+                        node.drain(subscription)
+                lean_spin.run_ready(wait_set, timers, [], services)
+                time.sleep(BATCH_S)
+            except RuntimeError:
+                # a take or wait interrupted by Ctrl-C shutting the context down
+                time.sleep(0.05)
+                if context.ok():
+                    raise
+                break
+    if not node.expired:
+        raise ExternalShutdownException()
 
 
 def main(argv: list[str] | None = None) -> int:
