@@ -8,6 +8,8 @@ while it creates its ~40 subscriptions the topics it already records can lose sa
 hems_ros/nodes/recorder.py); the 10 s window therefore opens 2 s after the recorder has
 subscribed to every topic. In 10 consecutive runs here all 10 passed; 3 of them had such
 losses, all while it was subscribing or within 0.2 s after, none inside the window.
+The graph is kept heating through the window (a supervisor FAULT from a stale stream on this
+busy host is reset and re-enabled each second), so the compared values move.
 """
 
 from __future__ import annotations
@@ -81,7 +83,15 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
             started = time.monotonic()
             for finger in fingers:
                 client.send_setpoint(finger, "position", 0.015)   # values that move: heating, travel, duty
-            client.spin_for(10.0 - (time.monotonic() - started))
+            refaults = 0
+            while time.monotonic() - started < 10.0:
+                client.spin_for(min(1.0, 10.0 - (time.monotonic() - started)))
+                # a supervisor FAULT on this busy host (a stale stream, issue 5) would stop the
+                # heating for the rest of the window: re-enable, the recording goes on regardless
+                if not client.call("enable", timeout=2)[0]:
+                    refaults += 1
+                    client.call("reset", timeout=2)
+                    client.call("enable", timeout=2)
             info = recorder.stop()
             recorder = None
             client.spin_for(0.2)
@@ -112,7 +122,7 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
             assert np.array_equal(data[name][common], [mine[s] for s in everything[common].tolist()],
                                   equal_nan=True), topic
     duty = bag[names.topic(FINGER, "duty")]
-    assert duty["duty_percent"].max() > 0.0     # the run heated: a meaningful comparison
+    assert duty["duty_percent"].max() > 0.0, f"no heating ({refaults} supervisor faults re-enabled)"
     assert set(bag[names.SUPERVISOR_STATUS_TOPIC]["state_name"]) >= {"ENABLED"}
 
     from mcap.reader import make_reader
