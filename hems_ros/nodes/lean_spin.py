@@ -62,14 +62,7 @@ def spin_nodes(nodes) -> None:
         wait_set = _rclpy.WaitSet(len(subscriptions), 0, len(timers), 0, len(services), 0, context.handle)
         while context.ok():
             try:
-                wait_set.clear_entities()
-                for subscription in subscriptions:
-                    wait_set.add_subscription(subscription.handle)
-                for service in services:
-                    wait_set.add_service(service.handle)
-                for timer in timers:
-                    wait_set.add_timer(timer.handle)
-                wait_set.wait(WAIT_TIMEOUT_NS)
+                wait(wait_set, subscriptions, timers, services, WAIT_TIMEOUT_NS)
                 if not context.ok():
                     break
                 run_ready(wait_set, timers, subscriptions, services)
@@ -81,6 +74,18 @@ def spin_nodes(nodes) -> None:
                     raise
                 break
     raise ExternalShutdownException()
+
+
+def wait(wait_set, subscriptions, timers, services, timeout_ns: int) -> None:
+    """Put the entities' handles into ``wait_set`` (sized for them) and wait on it."""
+    wait_set.clear_entities()
+    for subscription in subscriptions:
+        wait_set.add_subscription(subscription.handle)
+    for service in services:
+        wait_set.add_service(service.handle)
+    for timer in timers:
+        wait_set.add_timer(timer.handle)
+    wait_set.wait(timeout_ns)
 
 
 def run_ready(wait_set, timers, subscriptions, services) -> None:

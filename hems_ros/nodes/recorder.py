@@ -195,14 +195,7 @@ def spin_until_expired(node: Recorder) -> None:
                 if sizes != (len(subscriptions), len(timers), len(services)):
                     sizes = (len(subscriptions), len(timers), len(services))
                     wait_set = _rclpy.WaitSet(sizes[0], 0, sizes[1], 0, sizes[2], 0, context.handle)
-                wait_set.clear_entities()
-                for subscription in subscriptions:
-                    wait_set.add_subscription(subscription.handle)
-                for timer in timers:
-                    wait_set.add_timer(timer.handle)
-                for service in services:
-                    wait_set.add_service(service.handle)
-                wait_set.wait(WAIT_TIMEOUT_NS)
+                lean_spin.wait(wait_set, subscriptions, timers, services, WAIT_TIMEOUT_NS)
                 if not context.ok():
                     break
                 ready = wait_set.get_ready_entities("subscription")
