@@ -1,8 +1,8 @@
 """Starting and stopping the HEMS graph as child processes (no rclpy here).
 
 Each node runs as its own process (``lib/hems_ros/<executable>`` in the prefix, like
-``ros2 run``), or all of them in one process (``--composed``, one thread per shoulder
-module and one for the supervisor: hems_ros/nodes/composed.py). Children die with the launcher even if it is killed (PR_SET_PDEATHSIG), and
+``ros2 run``), or all of them in one process on one thread (``--composed``:
+hems_ros/nodes/composed.py). Children die with the launcher even if it is killed (PR_SET_PDEATHSIG), and
 :meth:`Graph.stop` ends every child within ``grace_s`` (SIGINT, then SIGKILL).
 """
 

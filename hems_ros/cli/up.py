@@ -15,8 +15,7 @@ from hems_ros.launcher import Graph, GraphOptions, default_params_file
 
 def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--composed", action="store_true",
-                        help="run all nodes in one process (a thread per shoulder module and one for the "
-                             "supervisor) instead of one process each")
+                        help="run all nodes in one process (one thread, one wait set) instead of one process each")
     parser.add_argument("--sim-time", action="store_true",
                         help="run every node on simulated time from a /clock publisher")
     parser.add_argument("--rate", type=float, default=1.0,

@@ -1,12 +1,12 @@
-"""All nodes of the graph in one process (`hems up --composed`), on several threads.
+"""All nodes of the graph in one process (`hems up --composed`), on one thread.
 
-One thread per shoulder module (its two units, their controllers and the module) and one for
-the supervisor, each running lean_spin.spin_nodes over its nodes with one wait set: a finger's
-encoder -> controller -> duty chain stays on one thread, and the threads only meet at the
-interpreter lock, which each releases while it waits. rclpy's MultiThreadedExecutor, which
-builds a wait set, a task and a coroutine per callback, could not keep the full graph within
-its control periods here (the supervisor faulted on stale streams). A node the lean loop cannot
-serve puts every node on that executor instead.
+The nodes spin on lean_spin.spin_nodes: one wait set for all of them, callbacks called in
+turn. Python runs one thread at a time, and the callbacks are short, so threads only add
+contention for the interpreter lock. Measured on the full graph here (bench_graph.py,
+30 s): rclpy's MultiThreadedExecutor faulted within the run; a lean loop per shoulder
+module on its own thread gave p99 9.6-35 ms and 0.4-6.5 % missed periods where this one
+thread gave 4.9-5.1 ms and under 0.1 %. A node the lean loop cannot serve puts every node on
+the multi-threaded executor instead.
 
 Usage: python -m hems_ros.nodes.composed <executable>:<node name>:<k=v,...> ... [--ros-args ...]
 Each node gets its own name and parameters as node-level arguments; the global
@@ -17,9 +17,7 @@ from __future__ import annotations
 
 import gc
 import sys
-import time
 
-from hems_ros.graph import names
 from hems_ros.nodes import lean_spin
 from hems_ros.rosenv import apply_network_defaults
 
@@ -54,53 +52,6 @@ def _split_params(text: str) -> list[str]:
     return parts + [current]
 
 
-def thread_groups(nodes: list, cli_args: list[list[str]]) -> list[list]:
-    """The nodes by shoulder module (through their finger or module parameter); the rest alone."""
-    groups: dict[str, list] = {}
-    for node, args in zip(nodes, cli_args):
-        values = dict(args[i + 1].split(":=", 1) for i, arg in enumerate(args) if arg == "-p")
-        key = values.get("module") or names.MODULE_OF.get(values.get("finger", ""), node.get_name())
-        groups.setdefault(key, []).append(node)
-    return list(groups.values())
-
-
-def spin_in_threads(groups: list[list]) -> None:
-    """lean_spin.spin_nodes for each group on its own thread, until the context shuts down."""
-    import threading
-
-    from rclpy.executors import ExternalShutdownException
-
-    errors: list[BaseException] = []
-
-    def run(group: list) -> None:
-        try:
-            lean_spin.spin_nodes(group)
-        except ExternalShutdownException:
-            pass
-        except BaseException as error:  # noqa: BLE001 - handed to the main thread
-            errors.append(error)
-
-    # a thread woken by its wait set gets the interpreter lock within 1 ms, not Python's 5 ms
-    sys.setswitchinterval(0.001)
-    threads = [threading.Thread(target=run, args=(group,), name=group[0].get_name()) for group in groups]
-    for thread in threads:
-        thread.start()
-    # Ctrl-C shuts the context down (the threads leave within a wait timeout) and also raises
-    # KeyboardInterrupt here. The nodes must not be destroyed under a running thread, so the
-    # wait goes on; it polls, because an interrupted Thread.join can report a live thread as
-    # finished.
-    interrupted = False
-    while any(thread.is_alive() for thread in threads):
-        try:
-            time.sleep(0.05)
-        except KeyboardInterrupt:
-            interrupted = True
-    if interrupted:
-        raise KeyboardInterrupt
-    if errors:
-        raise errors[0]
-
-
 def main(argv: list[str] | None = None) -> int:
     apply_network_defaults()
     import importlib
@@ -122,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
         gc.collect()
         gc.freeze()     # as runner.run_node: keeps full collections short
         if all(lean_spin.can_spin(node) for node in nodes):
-            spin_in_threads(thread_groups(nodes, [parse_spec(spec)[2] for spec in specs]))
+            lean_spin.spin_nodes(nodes)
         else:
             executor = MultiThreadedExecutor(num_threads=4)
             for node in nodes:
