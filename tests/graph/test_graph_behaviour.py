@@ -99,7 +99,10 @@ def test_index_force_mode_holds_10_newtons(graph, rec):
     readings = [(t - t0, transmission.tendon_force(m.force)) for t, m in rec.since(names.topic(FINGER, "wire_force"), t0)]
     hold = np.array([f for t, f in readings if 4.0 <= t <= 7.0])
     assert len(hold) > 200
-    assert np.all(np.abs(hold - 10.0) <= 0.2), f"tendon force {hold.min():.3f}-{hold.max():.3f} N while holding"
+    status = rec.since(names.SUPERVISOR_STATUS_TOPIC, t0 - 5)
+    assert np.all(np.abs(hold - 10.0) <= 0.2), (
+        f"tendon force {hold.min():.3f}-{hold.max():.3f} N while holding; "
+        f"supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-1:]]}")
 
 
 def test_estop_zeroes_every_duty_within_30ms_and_latches(graph, rec):
