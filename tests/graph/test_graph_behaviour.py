@@ -1,6 +1,7 @@
 """The real graph in separate processes: tracking, safety paths and bad input (issue 5).
 
-The tests of this module run in order on one graph; each leaves it DISABLED or IDLE.
+The tests of this module run in order on one graph; each leaves it DISABLED or IDLE, and a
+fixture unlatches and cools it after a failure so that one failure does not cascade.
 """
 
 from __future__ import annotations
@@ -38,6 +39,17 @@ def rec(graph):
         recorder.listen(ActuatorState, names.sim_topic(finger, "state"), qos.SENSOR)
     recorder.spin(1.0)
     return recorder
+
+
+@pytest.fixture(autouse=True)
+def leaves_the_graph_unlatched_and_cool(graph, rec):
+    """A test that fails half-way (an ESTOP or FAULT latched, a hot wire) must not fail the
+    tests after it: disable, reset, and bring the index wire back to rest."""
+    yield
+    _, client = graph
+    client.call("disable")
+    client.call("reset")
+    cool_down(client, rec)
 
 
 def enable(client) -> None:
