@@ -43,12 +43,16 @@ def rec(graph):
 
 @pytest.fixture(autouse=True)
 def leaves_the_graph_unlatched_and_cool(graph, rec):
-    """A test that fails half-way (an ESTOP or FAULT latched, a hot wire) must not fail the
-    tests after it: disable, reset, and bring the index wire back to rest."""
+    """A test that fails half-way (an ESTOP or FAULT latched, a killed node, a hot wire) must
+    not fail the tests after it: restart, disable, reset, bring the index wire back to rest."""
     yield
-    _, client = graph
+    running, client = graph
+    for name in running.exited():   # a killed controller the test did not get to restart
+        running.restart(name)
     client.call("disable")
-    client.call("reset")
+    deadline = time.monotonic() + 60
+    while not client.call("reset")[0] and time.monotonic() < deadline:
+        rec.spin(1.0)   # a restarted node's streams are not back yet
     cool_down(client, rec)
 
 
