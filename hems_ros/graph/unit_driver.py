@@ -28,6 +28,8 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
+import numpy as np
+
 from hems_ros.physics import ActuationUnit, StepResult
 
 MAX_STEPS_PER_ADVANCE = 500  # a stalled process catches up over several ticks, not at once
@@ -145,8 +147,11 @@ class UnitDriver:
 
     def latency_percentiles(self) -> tuple[float, float, float]:
         """(p50, p99, max) of measurement-to-applied latency, s (nan before any command)."""
-        if not self.latencies_s:
+        n = len(self.latencies_s)
+        if not n:
             return math.nan, math.nan, math.nan
-        ordered = sorted(self.latencies_s)
-        pick = lambda q: ordered[min(len(ordered) - 1, int(q * len(ordered)))]  # noqa: E731
-        return pick(0.5), pick(0.99), ordered[-1]
+        # a partial sort in numpy: sorting the 20,000-value window in Python took ~3 ms, a
+        # stall of the node's loop once a second (of all nodes in a composed process)
+        ranks = [min(n - 1, int(q * n)) for q in (0.5, 0.99)] + [n - 1]
+        picked = np.partition(np.fromiter(self.latencies_s, float, n), ranks)[ranks]
+        return float(picked[0]), float(picked[1]), float(picked[2])

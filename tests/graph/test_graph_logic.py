@@ -195,3 +195,11 @@ def test_grasp_summary_numbers():
     assert summary.hold_rmse_n == pytest.approx(math.sqrt((0.5 * 25.0 + 1.5 * 0.01) / 2.0))
     assert summary.force_rmse_n == pytest.approx(0.1)
     assert summary.peak_force_n == pytest.approx(10.1) and summary.energy_j == 42.0
+
+
+def test_latency_percentiles_are_the_ranked_window_values():
+    driver = UnitDriver(ActuationUnit(), 0.0)
+    assert all(math.isnan(v) for v in driver.latency_percentiles())
+    values = [((7919 * k) % 1000) * 1e-5 for k in range(1000)]   # 0 .. 9.99 ms, shuffled
+    driver.latencies_s.extend(values)
+    assert driver.latency_percentiles() == (500e-5, 990e-5, 999e-5)
