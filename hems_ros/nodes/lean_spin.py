@@ -1,4 +1,4 @@
-"""A lean spin loop for one node whose entities are all created before it spins.
+"""A lean spin loop for our nodes (and, draining in batches, the recorder).
 
 rclpy's executors rebuild a wait set on every wake-up (a new rcl wait set, entity counts,
 callback-group checks, a Task and a coroutine per callback); for our nodes, which wake a few
@@ -7,9 +7,10 @@ allocates one wait set, and on each wake-up re-adds the handles, waits, takes wh
 and calls the callbacks directly, in the order rclpy uses (timers, subscriptions, services).
 
 It serves nodes with timers, subscriptions and services only (no clients, guard conditions
-or waitables such as QoS event handlers: see lean_node.py), callbacks that are plain
-functions (a timer callback gets no TimerInfo), and entities that do not change after the
-node is built. :func:`can_spin` tells; other nodes spin with ``rclpy.spin``.
+or waitables such as QoS event handlers: see lean_node.py) and callbacks that are plain
+functions (a timer callback gets no TimerInfo). :func:`spin` takes the entities as built;
+:func:`loop` also follows entities added later. :func:`can_spin` tells; other nodes spin
+with ``rclpy.spin``.
 """
 
 from __future__ import annotations
@@ -49,23 +50,42 @@ def spin_nodes(nodes) -> None:
     for node in nodes:
         if not can_spin(node):
             raise ValueError(f"node {node.get_name()} has clients, guard conditions or waitables: use rclpy.spin")
-    context = nodes[0].context
-    timers = [t for node in nodes for t in node.timers]
-    subscriptions = [s for node in nodes for s in node.subscriptions]
-    services = [s for node in nodes for s in node.services]
+    entities = ([s for node in nodes for s in node.subscriptions], [t for node in nodes for t in node.timers],
+                [s for node in nodes for s in node.services])
+    loop(nodes[0].context, lambda: entities)
+    raise ExternalShutdownException()
+
+
+def loop(context, entities, on_ready=None, keep_going=None, pause_s: float = 0.0) -> None:
+    """Wait on the entities and run what is ready until the context shuts down or
+    ``keep_going()`` turns false.
+
+    ``entities()`` gives (subscriptions, timers, services); the wait set is rebuilt when their
+    numbers change (the recorder subscribes as topics appear). ``on_ready(subscription)``
+    replaces taking one message for its callback; ``pause_s`` sleeps after each round.
+    """
     # No signal guard condition: destroying one while rclpy's signal thread still triggers it
     # crashed the process now and then; Ctrl-C is seen within one wait timeout instead.
+    sizes, wait_set = None, None
     with ExitStack() as stack:
-        for entity in timers + subscriptions + services:
-            stack.enter_context(entity.handle)
         stack.enter_context(context.handle)
-        wait_set = _rclpy.WaitSet(len(subscriptions), 0, len(timers), 0, len(services), 0, context.handle)
-        while context.ok():
+        entered: set[int] = set()
+        while context.ok() and (keep_going is None or keep_going()):
             try:
-                wait(wait_set, subscriptions, timers, services, WAIT_TIMEOUT_NS)
+                subscriptions, timers, services = entities()
+                if sizes != (len(subscriptions), len(timers), len(services)):
+                    sizes = (len(subscriptions), len(timers), len(services))
+                    for entity in (*subscriptions, *timers, *services):
+                        if id(entity) not in entered:
+                            stack.enter_context(entity.handle)
+                            entered.add(id(entity))
+                    wait_set = _rclpy.WaitSet(sizes[0], 0, sizes[1], 0, sizes[2], 0, context.handle)
+                _wait(wait_set, subscriptions, timers, services, WAIT_TIMEOUT_NS)
                 if not context.ok():
                     break
-                run_ready(wait_set, timers, subscriptions, services)
+                _run_ready(wait_set, timers, subscriptions, services, on_ready)
+                if pause_s:
+                    time.sleep(pause_s)
             except RuntimeError:
                 # Ctrl-C shuts the context down from rclpy's signal thread, possibly while a
                 # wait or take is under way here, which then fails: not an error of the node
@@ -73,10 +93,9 @@ def spin_nodes(nodes) -> None:
                 if context.ok():
                     raise
                 break
-    raise ExternalShutdownException()
 
 
-def wait(wait_set, subscriptions, timers, services, timeout_ns: int) -> None:
+def _wait(wait_set, subscriptions, timers, services, timeout_ns: int) -> None:
     """Put the entities' handles into ``wait_set`` (sized for them) and wait on it."""
     wait_set.clear_entities()
     for subscription in subscriptions:
@@ -88,8 +107,9 @@ def wait(wait_set, subscriptions, timers, services, timeout_ns: int) -> None:
     wait_set.wait(timeout_ns)
 
 
-def run_ready(wait_set, timers, subscriptions, services) -> None:
-    """Run the callbacks of the ready entities: timers, then subscriptions, then services."""
+def _run_ready(wait_set, timers, subscriptions, services, on_ready=None) -> None:
+    """Run the callbacks of the ready entities: timers, then subscriptions (one message each,
+    or ``on_ready(subscription)``), then services."""
     ready = wait_set.get_ready_entities("timer")
     for timer in timers:
         if timer.handle.pointer in ready and timer.handle.is_timer_ready():
@@ -98,6 +118,9 @@ def run_ready(wait_set, timers, subscriptions, services) -> None:
     ready = wait_set.get_ready_entities("subscription")
     for subscription in subscriptions:
         if subscription.handle.pointer in ready:
+            if on_ready is not None:
+                on_ready(subscription)
+                continue
             taken = subscription.handle.take_message(subscription.msg_type, subscription.raw)
             if taken is not None:
                 subscription.callback(taken[0])

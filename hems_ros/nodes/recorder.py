@@ -44,7 +44,6 @@ from hems_ros.nodes import lean_spin
 
 READY_PREFIX = "recording "
 BATCH_S = 0.02          # recorder loop: pause after each round, so that rounds find batches
-WAIT_TIMEOUT_NS = 100_000_000
 FINISHED_PREFIX = "bag finished: "
 
 
@@ -169,47 +168,15 @@ def spin_until_expired(node: Recorder) -> None:
     """Spin the recorder in batches until shutdown or until ``duration`` has passed.
 
     An executor wakes the process and calls Python once per message, ~3000 times a second on
-    the full graph; this loop waits on all subscriptions at once, drains every queue that
-    has messages (Recorder.drain), runs the due timers and services (topic discovery,
-    flushing, parameters), then sleeps BATCH_S so that the next wake-up finds a batch. The
-    subscription queues (``queue_depth``) hold far more than BATCH_S of any stream.
+    the full graph; this loop (lean_spin.loop) waits on all subscriptions at once, drains
+    every queue that has messages (Recorder.drain), runs the due timers and services (topic
+    discovery, flushing, parameters), then sleeps BATCH_S so that the next wake-up finds a
+    batch. The subscription queues (``queue_depth``) hold far more than BATCH_S of any stream.
     """
-    from contextlib import ExitStack
-
     from rclpy.executors import ExternalShutdownException
-    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 
-    context = node.context
-    entered: set[int] = set()
-    sizes, wait_set = None, None
-    with ExitStack() as stack:
-        stack.enter_context(context.handle)
-        while context.ok() and not node.expired:
-            try:
-                # subscriptions appear as topics are discovered: refresh the sets each round
-                subscriptions, timers, services = list(node.subscriptions), list(node.timers), list(node.services)
-                for entity in subscriptions + timers + services:
-                    if id(entity) not in entered:
-                        stack.enter_context(entity.handle)
-                        entered.add(id(entity))
-                if sizes != (len(subscriptions), len(timers), len(services)):
-                    sizes = (len(subscriptions), len(timers), len(services))
-                    wait_set = _rclpy.WaitSet(sizes[0], 0, sizes[1], 0, sizes[2], 0, context.handle)
-                lean_spin.wait(wait_set, subscriptions, timers, services, WAIT_TIMEOUT_NS)
-                if not context.ok():
-                    break
-                ready = wait_set.get_ready_entities("subscription")
-                for subscription in subscriptions:
-                    if subscription.handle.pointer in ready:
-                        node.drain(subscription)
-                lean_spin.run_ready(wait_set, timers, [], services)
-                time.sleep(BATCH_S)
-            except RuntimeError:
-                # a take or wait interrupted by Ctrl-C shutting the context down
-                time.sleep(0.05)
-                if context.ok():
-                    raise
-                break
+    lean_spin.loop(node.context, lambda: (list(node.subscriptions), list(node.timers), list(node.services)),
+                   on_ready=node.drain, keep_going=lambda: not node.expired, pause_s=BATCH_S)
     if not node.expired:
         raise ExternalShutdownException()
 
