@@ -49,12 +49,7 @@ def run(composed: bool, seconds: float) -> dict:
             client.node.create_subscription(
                 DiagnosticArray, names.DIAGNOSTICS_TOPIC,
                 lambda m: [latest.__setitem__(s.name, {kv.key: kv.value for kv in s.values}) for s in m.status], 10)
-            deadline = time.monotonic() + 90
-            ok, message = False, ""
-            while not ok and time.monotonic() < deadline:
-                client.call("reset")
-                ok, message = client.call("enable")
-                client.spin_for(1.0)
+            ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
             if not ok:
                 return {"error": f"could not enable: {message}"}
             for finger in names.FINGERS:

@@ -34,17 +34,6 @@ def register(subparsers) -> None:
                         help="bag folder the run is recorded into (default bags/demo_<date>_<time>)")
 
 
-def enable_when_ready(client, timeout: float) -> tuple[bool, str]:
-    deadline = time.monotonic() + timeout
-    ok, message = False, "no answer"
-    while time.monotonic() < deadline:
-        ok, message = client.call("enable", timeout=max(1.0, deadline - time.monotonic()))
-        if ok:
-            return ok, message
-        client.spin_for(2.0)
-    return ok, message
-
-
 def run(args: argparse.Namespace) -> int:
     try:
         options = graph_options(args)
@@ -74,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
             except (TimeoutError, RuntimeError) as error:
                 print(f"demo: {error}", file=sys.stderr)
                 return 1
-            ok, message = enable_when_ready(client, args.ready_timeout)
+            ok, message = client.enable_when_ready(args.ready_timeout)
             if not ok:
                 print(f"demo: could not enable the graph: {message}", file=sys.stderr)
                 return 1

@@ -62,6 +62,23 @@ class GraphClient:
             return False, f"{names.service(command)} did not answer within {timeout:g} s"
         return future.result().success, future.result().message
 
+    def enable_when_ready(self, timeout: float, reset: bool = False, retry_s: float = 2.0) -> tuple[bool, str]:
+        """Call ``enable`` until the supervisor accepts it (it refuses while streams are still
+        coming up) or ``timeout`` s have passed; (success, last message).
+
+        ``reset`` unlatches a fault first on every try (a start-up hiccup may have latched one).
+        """
+        deadline = time.monotonic() + timeout
+        ok, message = False, "no answer"
+        while time.monotonic() < deadline:
+            if reset:
+                self.call("reset", timeout=max(1.0, min(5.0, deadline - time.monotonic())))
+            ok, message = self.call("enable", timeout=max(1.0, min(5.0, deadline - time.monotonic())))
+            if ok:
+                break
+            self.spin_for(retry_s)
+        return ok, message
+
     def send_setpoint(self, finger: str, mode: str, value: float, timeout: float = 5.0) -> bool:
         """Publish one setpoint once the finger's controller is subscribed; False if none is."""
         publisher = self._setpoint_pubs.get(finger)

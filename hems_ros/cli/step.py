@@ -59,7 +59,6 @@ def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.
 
 def run(args: argparse.Namespace) -> int:
     from hems_ros.bag.recording import RecorderProcess
-    from hems_ros.cli.demo import enable_when_ready
     from hems_ros.cli.up import print_bag
 
     try:
@@ -88,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
                 while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
                     pass
             recorder.wait_for_topics(graph_topics(options.fingers), timeout=max(1.0, deadline - time.monotonic()))
-            ok, message = enable_when_ready(client, args.ready_timeout)
+            ok, message = client.enable_when_ready(args.ready_timeout)
             if not ok:
                 print(f"step: could not enable the graph: {message}", file=sys.stderr)
                 return 1

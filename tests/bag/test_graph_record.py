@@ -74,11 +74,7 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
             # of the last-subscribed topics now and then (see the module documentation).
             client.spin_for(2.0)
             window_ns = time.time_ns()
-            deadline = time.monotonic() + 60
-            ok = False
-            while not ok and time.monotonic() < deadline:
-                ok, message = client.call("enable", timeout=5)
-                client.spin_for(0.5)
+            ok, message = client.enable_when_ready(60, retry_s=0.5)
             assert ok, message
             started = time.monotonic()
             for finger in fingers:

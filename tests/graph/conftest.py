@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 
@@ -17,13 +15,8 @@ def graph(venv):
     running.start()
     client = GraphClient("hems_test")
     try:
-        deadline = time.monotonic() + 90
-        ok, message = False, ""
-        while time.monotonic() < deadline and not ok:
-            client.call("reset", timeout=5)  # a start-up hiccup may have latched a fault
-            ok, message = client.call("enable", timeout=5)
-            if not ok:
-                client.spin_for(1.0)
+        # reset first: a start-up hiccup may have latched a fault
+        ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
         assert ok, f"graph did not become ready: {message}"
         client.call("disable")
         client.spin_for(10.0)  # let start-up load (imports, numba cache loads or compiles) pass

@@ -37,12 +37,7 @@ def test_composed_graph_tracks_a_step_and_stops_on_ctrl_c(ros_domain_id: int) ->
             rec = Recorder(client)
             rec.listen(EncoderReading, names.topic(FINGER, "encoder"), qos.SENSOR)
             rec.listen(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
-            deadline = time.monotonic() + 60
-            ok, message = False, ""
-            while not ok and time.monotonic() < deadline:
-                client.call("reset", timeout=5)
-                ok, message = client.call("enable", timeout=5)
-                rec.spin(0.5)
+            ok, message = client.enable_when_ready(60, reset=True, retry_s=0.5)
             assert ok, message
             t0 = time.time()
             assert client.send_setpoint(FINGER, "position", 0.020)
