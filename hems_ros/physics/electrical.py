@@ -8,7 +8,7 @@ draws more power). All functions are scalar and numba-compiled; the kernel inlin
 
 from __future__ import annotations
 
-from numba import njit
+from hems_ros.physics.jit import jit
 
 DRIVE_DUTY = 0
 DRIVE_CURRENT = 1
@@ -16,31 +16,31 @@ DRIVE_VOLTAGE = 2
 DRIVE_NAMES = {"duty": DRIVE_DUTY, "current": DRIVE_CURRENT, "voltage": DRIVE_VOLTAGE}
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def phase_resistivity(rho0, t0_c, drho_dt, drho_dsigma, temperature_c, stress_pa):
     """Resistivity of one phase, eq. 4.5: rho = rho0 + (T - T0) drho/dT + sigma drho/dsigma."""
     return rho0 + (temperature_c - t0_c) * drho_dt + stress_pa * drho_dsigma
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def mixture_resistivity(xi, rho_martensite, rho_austenite):
     """Phases in series, eq. 4.4: rho = rho_M xi + rho_A (1 - xi)."""
     return rho_martensite * xi + rho_austenite * (1.0 - xi)
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def wire_resistance(resistivity, length_m, cross_section_m2):
     """R = rho l / S with the current wire length l (eqs. 4.2-4.3)."""
     return resistivity * length_m / cross_section_m2
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def current_source(current_a, resistance):
     """Ideal current source (the dissertation's validation drive): P = I^2 R (eq. 4.1)."""
     return current_a, current_a * current_a * resistance
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def pwm_stage(duty_percent, resistance, supply_v, current_limit_a):
     """HEMS PWM MOSFET stage: while on, I = min(V/R, I_limit); returns period means.
 
@@ -54,7 +54,7 @@ def pwm_stage(duty_percent, resistance, supply_v, current_limit_a):
     return d * i_on, d * i_on * i_on * resistance
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def voltage_source(voltage_v, resistance):
     """Constant voltage across the wire: I = V/R, P = V^2/R (grows as R falls: runaway)."""
     i = voltage_v / resistance

@@ -14,16 +14,16 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from hems_ros.physics.jit import jit
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def capstan_ratio(friction_coefficient, bend_angle_rad):
     """F_out / F_in = exp(-mu Theta) (eq. 3.1)."""
     return math.exp(-friction_coefficient * bend_angle_rad)
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def transmitted_force(wire_force, direction, capstan, pulley_ratio, coulomb_n):
     """Force reaching the load for motion ``direction`` (+1 pulling in, -1 paying out)."""
     if direction > 0:

@@ -11,7 +11,7 @@ appendix conditions it gives the h(22 degC) = 42.51 W/m2K of h(T) = h0 + h2 T^2.
 
 from __future__ import annotations
 
-from numba import njit
+from hems_ros.physics.jit import jit
 
 # Appendix 4.4: air at 22 degC, wire at 90 degC.
 APPENDIX_GRASHOF = 1.6947
@@ -19,13 +19,13 @@ APPENDIX_PRANDTL = 0.591
 APPENDIX_AIR_CONDUCTIVITY = 0.0257
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def convection_coefficient(temperature_c, h0, h2):
     """h(T) = h0 + h2 T^2, T in degC (eq. 4.12); h(22) = 42.51 W/m2K with Table 4.1."""
     return h0 + h2 * temperature_c * temperature_c
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def convection_loss(temperature_c, ambient_c, h0, h2, area_m2):
     """Q = h(T) A (T - T_amb) (eq. 4.10)."""
     return convection_coefficient(temperature_c, h0, h2) * area_m2 * (temperature_c - ambient_c)

@@ -19,10 +19,12 @@ The batch (run_batch) runs blocks of sets with the step's arithmetic vectorised 
 sets of a block (see "batch" below); step and the batch give bit-identical results. All
 kernel functions use numba's numpy error model: a division by zero gives inf or nan, which
 the finite-state check reports, instead of a per-division test that would keep the batch
-loops from vectorising.
+loops from vectorising (options in jit.py).
 
-Numba's on-disk cache only tracks this file, while the kernel inlines the equation
-modules; :func:`_invalidate_stale_cache` drops the cached kernel when any of them changed.
+Numba's on-disk cache only tracks each function's own file, while the kernel inlines the
+equation modules and all of them take their compilation options from jit.py;
+:func:`_invalidate_stale_cache` drops every cached physics function when any of these files
+changed.
 """
 
 from __future__ import annotations
@@ -34,20 +36,21 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
-from hems_ros.physics import constitutive, electrical, friction, heat, kinetics, loads, sheath
+from hems_ros.physics import constitutive, electrical, friction, heat, jit as jit_options, kinetics, loads, sheath
+from hems_ros.physics.jit import OPTIONS, jit, jit_inline
 from hems_ros.physics.params import UnitParams
 
 
 def _invalidate_stale_cache() -> None:
     here = Path(__file__).resolve()
     digest = hashlib.sha256()
-    for module in (constitutive, electrical, friction, heat, kinetics, loads, sheath):
+    for module in (constitutive, electrical, friction, heat, jit_options, kinetics, loads, sheath):
         digest.update(Path(module.__file__).read_bytes())
     stamp = here.parent / "__pycache__" / "kernel.deps"
     try:
         if stamp.is_file() and stamp.read_text() == digest.hexdigest():
             return
-        for cached in stamp.parent.glob("kernel.*.nb[ic]"):
+        for cached in stamp.parent.glob("*.nb[ic]"):
             cached.unlink()
         stamp.parent.mkdir(exist_ok=True)
         stamp.write_text(digest.hexdigest())
@@ -145,7 +148,7 @@ def initial_state(params: UnitParams) -> np.ndarray:
     return s
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def _mechanics(sig_free, area, relax, c_in, g_in, c_out, g_out):
     """Implicit wire + load solve for a stress at fixed strain: (v, sigma, dsigma/dsig_free)."""
     v_new, gain = loads.slider_velocity(area * sig_free, c_in, g_in, c_out, g_out)
@@ -158,7 +161,7 @@ def _mechanics(sig_free, area, relax, c_in, g_in, c_out, g_out):
 # set through (array, offset, stride): field f of the set is a[offset + f * stride]; a packed
 # row (pack, initial_state) is offset 0, stride 1, a block of BLOCK sets is stride BLOCK.
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     """Start of a step: drive, heat flows, elastic trial and the kinetic solve's coefficients."""
     temp = s[sk + S_T * n]
@@ -219,7 +222,7 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
             inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua)
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
             d_temp0, temp_per_xi, d_xi, v_new, sig_new):
     """End of a step: new state (read at sk, written at dk), accumulators, outputs; True if finite."""
@@ -254,7 +257,7 @@ def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, res, cur
     return math.isfinite(temp_new) and math.isfinite(sig_new) and math.isfinite(x_new)
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def step(p, s, drive_kind, drive_value, dt, out):
     """Advance one unit by dt in place (state ``s``); write derived outputs to ``out``.
 
@@ -346,7 +349,7 @@ B_WORK = B_TOP + N_M
 B_SIZE = B_WORK + N_W
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def _branch(u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, ms0, mf0, as0, af0, scaled):
     """kinetics.memory_branch with at most the top two reversal points ahead (``top``: their
     fields, M_*): (xi, dxi/du, 1.0 if u passed t, i.e. the branch would wipe out a loop).
@@ -372,7 +375,7 @@ def _branch(u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, ms0, m
     return xi, 0.0, 1.0
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def _iteration(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled):
     """One iteration of step's kinetic solve for set j of block b (its W_* fields).
 
@@ -414,7 +417,7 @@ def _iteration(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled):
     return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0 if done else 1.0, closes
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active):
     w = B_WORK * BLOCK + j
     b[w + W_DXI * BLOCK] = d_xi
@@ -428,7 +431,7 @@ def _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active):
     b[w + W_ACTIVE * BLOCK] = active
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def _finish_set(b, j, dt):
     """_finish for set j of block b from its W_* fields; True if the new state is finite."""
     w = B_WORK * BLOCK + j
@@ -439,7 +442,7 @@ def _finish_set(b, j, dt):
                    b[w + W_TPX * BLOCK], b[w + W_DXI * BLOCK], b[w + W_VNEW * BLOCK], b[w + W_SIGNEW * BLOCK])
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def _block_begin(b, drive_kind, dt, scaled):
     """Start of a step and the solve's first iteration for every set of block b; returns how
     many sets need further iterations. Sets that do not are finished here."""
@@ -507,7 +510,7 @@ def _block_begin(b, drive_kind, dt, scaled):
     return n_active
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _block_iterate(b):
     """One more iteration of the solve for the sets of block b that need it; how many still do."""
     n_active = 0
@@ -524,7 +527,7 @@ def _block_iterate(b):
     return n_active
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _block_finish(b, dt):
     """End of the step for every set of block b from its solve; sets still unsolved are flagged."""
     for j in range(BLOCK):
@@ -533,19 +536,19 @@ def _block_finish(b, dt):
             b[B_REDO * BLOCK + j] = 1.0
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _block_begin_outer(b, drive_kind, dt):
     """_block_begin for a block whose sets have fewer than two reversal points each."""
     return _block_begin(b, drive_kind, dt, False)
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _block_begin_scaled(b, drive_kind, dt):
     """_block_begin for a block with a set on a scaled branch."""
     return _block_begin(b, drive_kind, dt, True)
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _step_block(b, drive_kind, dt):
     """One step of every set of block b; flags (B_REDO) the sets step has to redo and returns
     how many there are."""
@@ -567,7 +570,7 @@ def _step_block(b, drive_kind, dt):
     return n_redo
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _copy_top(b, j, s):
     """The top two reversal points of state row s into block b's copy for set j."""
     n_points = int(s[S_NREV])
@@ -579,7 +582,7 @@ def _copy_top(b, j, s):
             b[(B_TOP + M_TUA + f) * BLOCK + j] = s[t + f]
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _run_block(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at, first, count):
     """Sets first .. first + count - 1 of run_batch (count <= BLOCK) through every step."""
     n_steps = drives.shape[1]
@@ -638,7 +641,7 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
                 states[first + j, f] = b[(B_CUR + f) * BLOCK + j]
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _run_sets(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at, first, count):
     """Sets first .. first + count - 1 of run_batch one after the other, through step alone."""
     n_steps = drives.shape[1]
@@ -664,7 +667,7 @@ def _run_sets(params, states, drive_kind, drives, dt, record_every, channels, re
                 r += 1
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@njit(**OPTIONS, parallel=True)
 def run_batch(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at):
     """Run every set (row of ``params``/``states``) over its row of ``drives``, or over its only
     row when every set has the same input (no copy per set: 256 sets x 30 s at 1 kHz would

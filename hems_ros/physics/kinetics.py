@@ -37,8 +37,10 @@ from __future__ import annotations
 import math
 
 from llvmlite import ir
-from numba import njit, types
+from numba import types
 from numba.extending import intrinsic
+
+from hems_ros.physics.jit import jit, jit_inline
 
 # Below this branch separation both branches coincide (far outside the loop) and the
 # scaling ratio is 0/0; the branch slope is then ~0 too, so any ratio in [0, 1] is exact.
@@ -51,7 +53,7 @@ MEMORY_DEPTH = 16
 POINT_SIZE = 5
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def effective_temperatures(temperature_c, stress_pa, inv_cm, inv_ca):
     """(u_M, u_A) = (T - sigma/C_M, T - sigma/C_A): eq. 4.25 moved onto the temperature.
 
@@ -96,7 +98,7 @@ def _bits_float(typingctx, bits):
     return types.float64(types.int64), codegen
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def exp_nonpositive(x):
     """e^x for x <= 0, in plain arithmetic (within about 1 ulp of libm's exp).
 
@@ -118,7 +120,7 @@ def exp_nonpositive(x):
     return poly * _bits_float((k + 1023) << 52) if x >= _EXP_FLOOR else 0.0
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def _logistic(a):
     """(1/2 tanh(a) + 1/2, 1 - tanh(a)^2) through one exp: 1/2 tanh(a) + 1/2 = 1/(1 + e^(-2a)).
 
@@ -135,7 +137,7 @@ def _logistic(a):
     return z, 4.0 * z * rest
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def heating_branch(temperature_c, a_s, a_f):
     """z+(T) = 1/2 tanh[2((As - T)/(Af - As) + 1/2)] + 1/2 and dz+/dT (eqs. 4.17, 4.20)."""
     inv_width = 1.0 / (a_f - a_s)
@@ -143,7 +145,7 @@ def heating_branch(temperature_c, a_s, a_f):
     return z, -sech2 * inv_width
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def cooling_branch(temperature_c, m_s, m_f):
     """z-(T) = 1/2 tanh[2((Mf - T)/(Ms - Mf) + 1/2)] + 1/2 and dz-/dT (eqs. 4.18, 4.21)."""
     inv_width = 1.0 / (m_s - m_f)
@@ -151,7 +153,7 @@ def cooling_branch(temperature_c, m_s, m_f):
     return z, -sech2 * inv_width
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def transformation_slope(u_a, u_m, xi, heating, m_s, m_f, a_s, a_f):
     """dxi/du on the printed branch (eqs. 4.22-4.24) at effective temperatures u_A, u_M.
 
@@ -172,7 +174,7 @@ def transformation_slope(u_a, u_m, xi, heating, m_s, m_f, a_s, a_f):
     return slope * ratio
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
+@jit_inline
 def scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_s, m_f, a_s, a_f):
     """Major branch scaled through reversal point r and target t, for u strictly between.
 
@@ -192,7 +194,7 @@ def scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_s, m_f, a_s, a_f
     return xi_t + (xi_r - xi_t) * frac, (xi_r - xi_t) * dfrac
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, m_s, m_f, a_s, a_f):
     """xi reached at (u_a, u_m) moving from the state (u_a0, u_m0, xi0) in one direction.
 
@@ -228,7 +230,7 @@ def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, 
     return xi_s + slope * du, slope, closed
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def push_reversal(memory, n_points, u_a, u_m, xi, m_s, m_f, a_s, a_f):
     """Record a reversal point; returns the new count. Full: forget the innermost loop first."""
     if n_points + 1 > MEMORY_DEPTH:

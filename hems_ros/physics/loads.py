@@ -16,12 +16,12 @@ with a hanging mass it is unconditionally stable (the wire-mass resonance is ~46
 
 from __future__ import annotations
 
-from numba import njit
+from hems_ros.physics.jit import jit
 
 from hems_ros.physics.friction import transmitted_force
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def transmission(capstan, pulley, coulomb):
     """(a_in, f_in, a_out, f_out): the load receives F_L = a F_wire + f while the slider moves
     in / out (friction.transmitted_force), constants of a parameter set (kernel.pack)."""
@@ -29,7 +29,7 @@ def transmission(capstan, pulley, coulomb):
             transmitted_force(1.0, -1.0, capstan, pulley, 0.0), transmitted_force(0.0, -1.0, capstan, pulley, coulomb))
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def slider_response(wire_stiffness, x, v, dt, mass, damping, stiffness, pretension, gravity, pulley,
                     a_in, f_in, a_out, f_out):
     """Slider velocity at the end of the step as v = c + g W0, per direction of motion.
@@ -49,7 +49,7 @@ def slider_response(wire_stiffness, x, v, dt, mass, damping, stiffness, pretensi
     return (rest + f_in) * inv_den_in, a_in * inv_den_in, (rest + f_out) * inv_den_out, a_out * inv_den_out
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def slider_velocity(w0, c_in, g_in, c_out, g_out):
     """Slider velocity at the end of the step and dv/dW0 (coefficients from slider_response).
 
@@ -65,7 +65,7 @@ def slider_velocity(w0, c_in, g_in, c_out, g_out):
     return 0.0, 0.0
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def load_force(v_new, v_old, x_new, dt, mass, damping, stiffness, pretension, gravity, pulley):
     """Force the load receives (load coordinates), from its own equation of motion (4.33)."""
     n = pulley

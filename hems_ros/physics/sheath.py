@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from numba import njit
+from hems_ros.physics.jit import jit
 
 
 def cylinder_conduction_resistance(inner_d_m: float, outer_d_m: float, conductivity: float,
@@ -69,7 +69,7 @@ def sheath_resistances(sheath, length_m: float) -> SheathResistances:
     )
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def sheath_heat_flows(wire_c, sheath_c, ambient_c, wire_to_sheath_w_per_k, sheath_to_air_w_per_k):
     """(wire -> sheath, sheath -> air) heat flows, W."""
     return (wire_to_sheath_w_per_k * (wire_c - sheath_c),
