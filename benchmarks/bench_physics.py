@@ -75,7 +75,7 @@ def lsoda_rhs(p):
         rho = electrical.mixture_resistivity(
             xi, electrical.phase_resistivity(p[K.P_RHO0M], p[K.P_T0M], p[K.P_DRDTM], p[K.P_DRDSM], temp, sig),
             electrical.phase_resistivity(p[K.P_RHO0A], p[K.P_T0A], p[K.P_DRDTA], p[K.P_DRDSA], temp, sig))
-        _, power = electrical.current_source(cur, electrical.wire_resistance(rho, p[K.P_L0] - x, s_area))
+        _, power = electrical.current_source(cur, electrical.wire_resistance(rho, p[K.P_L0] - x, p[K.P_INV_S]))
         if p[K.P_SHEATH] > 0:
             q_sh, q_sa = sheath.sheath_heat_flows(temp, ts, p[K.P_TAMB], p[K.P_GWS], p[K.P_GSA])
             net, dts = power - q_sh, (q_sh - q_sa) / p[K.P_CS]
@@ -89,8 +89,8 @@ def lsoda_rhs(p):
         u_m, u_a = kinetics.effective_temperatures(temp, sig, p[K.P_INV_CM], p[K.P_INV_CA])
         heating = dtemp0 - dsig0 * p[K.P_INV_CA] > 0
         inv_c = p[K.P_INV_CA] if heating else p[K.P_INV_CM]
-        slope = kinetics.transformation_slope(u_a, u_m, xi, heating, p[K.P_MS0], p[K.P_MF0], p[K.P_AS0],
-                                              p[K.P_AF0])
+        slope = kinetics.transformation_slope(u_a, u_m, xi, heating, p[K.P_MF0], p[K.P_INV_MW], p[K.P_AS0],
+                                              p[K.P_INV_AW])
         du_dxi = lat / c_w - (omega + theta * lat / c_w) * inv_c
         dxi = slope * (dtemp0 - dsig0 * inv_c) / (1.0 - slope * du_dxi)
         dtemp = dtemp0 + lat / c_w * dxi

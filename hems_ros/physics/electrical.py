@@ -29,9 +29,10 @@ def mixture_resistivity(xi, rho_martensite, rho_austenite):
 
 
 @jit
-def wire_resistance(resistivity, length_m, cross_section_m2):
-    """R = rho l / S with the current wire length l (eqs. 4.2-4.3)."""
-    return resistivity * length_m / cross_section_m2
+def wire_resistance(resistivity, length_m, inv_cross_section_per_m2):
+    """R = rho l / S with the current wire length l (eqs. 4.2-4.3); takes 1/S (a constant of
+    the parameter set that the batch would otherwise divide by in every step)."""
+    return resistivity * length_m * inv_cross_section_per_m2
 
 
 @jit

@@ -64,13 +64,13 @@ _invalidate_stale_cache()
 (P_L0, P_S, P_AREA, P_CW, P_LAT,
  P_RHO0M, P_T0M, P_DRDTM, P_DRDSM, P_RHO0A, P_T0A, P_DRDTA, P_DRDSA,
  P_H0, P_H2, P_TAMB,
- P_MS0, P_MF0, P_AS0, P_AF0,
+ P_MF0, P_INV_MW, P_AS0, P_INV_AW,
  P_EM, P_EA, P_ALM, P_ALA, P_EPSL, P_NU,
  P_VSUP, P_ILIM,
  P_MASS, P_DAMP, P_K, P_F0, P_G, P_N,
  P_SHEATH, P_GWS, P_GSA, P_CS,
  P_A_IN, P_F_IN, P_A_OUT, P_F_OUT,
- P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, N_P) = range(48)
+ P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, N_P) = range(49)
 
 # ---------------------------------------------------------------- state row
 STATE_NAMES = (
@@ -115,7 +115,7 @@ def pack(params: UnitParams) -> np.ndarray:
     p[P_RHO0A], p[P_T0A] = el.rho0_austenite_ohm_m, el.t0_austenite_c
     p[P_DRDTA], p[P_DRDSA] = el.drho_dt_austenite_ohm_m_per_c, el.drho_dsigma_austenite_ohm_m_per_pa
     p[P_H0], p[P_H2], p[P_TAMB] = th.h0_w_m2_c, th.h2_w_m2_c3, params.ambient_temperature_c
-    p[P_MS0], p[P_MF0], p[P_AS0], p[P_AF0] = ki.ms0_c, ki.mf0_c, ki.as0_c, ki.af0_c
+    p[P_MF0], p[P_INV_MW], p[P_AS0], p[P_INV_AW] = kinetics.band(ki.ms0_c, ki.mf0_c, ki.as0_c, ki.af0_c)
     p[P_EM], p[P_EA] = co.e_martensite_pa, co.e_austenite_pa
     p[P_ALM], p[P_ALA] = co.alpha_martensite_per_c, co.alpha_austenite_per_c
     p[P_EPSL], p[P_NU] = co.max_recoverable_strain, co.poisson_ratio
@@ -130,7 +130,7 @@ def pack(params: UnitParams) -> np.ndarray:
         p[P_CS] = params.sheath.heat_capacity_j_per_k
         p[P_INV_CS] = 1.0 / p[P_CS]
     # reciprocals the step would otherwise divide by several times per step
-    p[P_INV_CW], p[P_INV_L0] = 1.0 / p[P_CW], 1.0 / w.length_m
+    p[P_INV_CW], p[P_INV_L0], p[P_INV_S] = 1.0 / p[P_CW], 1.0 / w.length_m, 1.0 / w.cross_section_m2
     p[P_INV_CM], p[P_INV_CA] = 1.0 / ki.cm_pa_per_c, 1.0 / ki.ca_pa_per_c
     cap = params.capstan
     capstan = friction.capstan_ratio(cap.friction_coefficient, cap.bend_angle_rad) if cap.enabled else 1.0
@@ -176,7 +176,7 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     rho_a = electrical.phase_resistivity(p[pk + P_RHO0A * n], p[pk + P_T0A * n], p[pk + P_DRDTA * n],
                                          p[pk + P_DRDSA * n], temp, sig)
     res = electrical.wire_resistance(electrical.mixture_resistivity(xi, rho_m, rho_a), p[pk + P_L0 * n] - x,
-                                     p[pk + P_S * n])
+                                     p[pk + P_INV_S * n])
     if drive_kind == electrical.DRIVE_DUTY:
         cur, power = electrical.pwm_stage(drive_value, res, p[pk + P_VSUP * n], p[pk + P_ILIM * n])
     elif drive_kind == electrical.DRIVE_CURRENT:
@@ -281,12 +281,12 @@ def step(p, s, drive_kind, drive_value, dt, out):
         direction = 1.0 if heating else -1.0
         memory = s[S_MEM:]
         n_points = int(s[S_NREV])
-        ms0, mf0, as0, af0 = p[P_MS0], p[P_MF0], p[P_AS0], p[P_AF0]
+        mf0, inv_mw, as0, inv_aw = p[P_MF0], p[P_INV_MW], p[P_AS0], p[P_INV_AW]
         if s[S_DIR] != 0.0 and s[S_DIR] != direction:
-            n_points = kinetics.push_reversal(memory, n_points, ua_old, um_old, xi, ms0, mf0, as0, af0)
+            n_points = kinetics.push_reversal(memory, n_points, ua_old, um_old, xi, mf0, inv_mw, as0, inv_aw)
         s[S_DIR] = direction
         # the printed law's slope at the start, needed only on an outermost branch
-        slope0 = (kinetics.transformation_slope(ua_old, um_old, xi, heating, ms0, mf0, as0, af0)
+        slope0 = (kinetics.transformation_slope(ua_old, um_old, xi, heating, mf0, inv_mw, as0, inv_aw)
                   if n_points < 2 else 0.0)
         inv_c = inv_ca if heating else inv_cm
         lo = -xi if heating else 0.0
@@ -294,7 +294,7 @@ def step(p, s, drive_kind, drive_value, dt, out):
         closed = 0
         for _ in range(MAX_ITERATIONS):
             xi_branch, dxi_du, closed = kinetics.memory_branch(
-                ua, um, heating, memory, n_points, xi, ua_old, um_old, slope0, ms0, mf0, as0, af0)
+                ua, um, heating, memory, n_points, xi, ua_old, um_old, slope0, mf0, inv_mw, as0, inv_aw)
             r = xi + d_xi - xi_branch
             if abs(r) <= XI_TOLERANCE:
                 break
@@ -350,7 +350,7 @@ B_SIZE = B_WORK + N_W
 
 
 @jit_inline
-def _branch(u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, ms0, mf0, as0, af0, scaled):
+def _branch(u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, mf0, inv_mw, as0, inv_aw, scaled):
     """kinetics.memory_branch with at most the top two reversal points ahead (``top``: their
     fields, M_*): (xi, dxi/du, 1.0 if u passed t, i.e. the branch would wipe out a loop).
 
@@ -370,7 +370,7 @@ def _branch(u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, ms0, m
     if (u < u_t) if heating else (u > u_t):
         xi_b, dxi = kinetics.scaled_branch(u, heating, top[M_RUA] if heating else top[M_RUM], top[M_RXI],
                                            top[M_RZP] if heating else top[M_RZM], u_t, top[M_TXI],
-                                           top[M_TZP] if heating else top[M_TZM], ms0, mf0, as0, af0)
+                                           top[M_TZP] if heating else top[M_TZM], mf0, inv_mw, as0, inv_aw)
         return xi_b, dxi, 0.0
     return xi, 0.0, 1.0
 
@@ -391,8 +391,8 @@ def _iteration(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled):
            b[(B_TOP + M_TUM) * BLOCK + j], b[(B_TOP + M_TXI) * BLOCK + j], b[(B_TOP + M_TZP) * BLOCK + j],
            b[(B_TOP + M_TZM) * BLOCK + j])
     xi_branch, dxi_du, closes = _branch(ua, um, heating, xi, b[w + W_UAOLD * BLOCK], b[w + W_UMOLD * BLOCK],
-                                        b[w + W_SLOPE0 * BLOCK], n_points, top, b[j + P_MS0 * BLOCK],
-                                        b[j + P_MF0 * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_AF0 * BLOCK], scaled)
+                                        b[w + W_SLOPE0 * BLOCK], n_points, top, b[j + P_MF0 * BLOCK],
+                                        b[j + P_INV_MW * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_INV_AW * BLOCK], scaled)
     r = xi + d_xi - xi_branch
     if abs(r) <= XI_TOLERANCE:
         return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0, closes
@@ -462,8 +462,8 @@ def _block_begin(b, drive_kind, dt, scaled):
         moving = heating or cooling
         direction = 1.0 if heating else -1.0
         n_points = b[sk + S_NREV * BLOCK]
-        slope0 = kinetics.transformation_slope(ua_old, um_old, xi, heating, b[j + P_MS0 * BLOCK],
-                                               b[j + P_MF0 * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_AF0 * BLOCK])
+        slope0 = kinetics.transformation_slope(ua_old, um_old, xi, heating, b[j + P_MF0 * BLOCK],
+                                               b[j + P_INV_MW * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_INV_AW * BLOCK])
         b[w + W_TEMP * BLOCK] = temp
         b[w + W_XI * BLOCK] = xi
         b[w + W_X * BLOCK] = x

@@ -137,34 +137,44 @@ def _logistic(a):
     return z, 4.0 * z * rest
 
 
+@jit
+def band(m_s, m_f, a_s, a_f):
+    """The transformation band as the kinetics take it: (Mf, 1/(Ms - Mf), As, 1/(Af - As)).
+
+    The reciprocal widths are constants of a parameter set; the batch would otherwise divide
+    by each width in every step of every set (kernel.pack keeps them).
+    """
+    return m_f, 1.0 / (m_s - m_f), a_s, 1.0 / (a_f - a_s)
+
+
 @jit_inline
-def heating_branch(temperature_c, a_s, a_f):
-    """z+(T) = 1/2 tanh[2((As - T)/(Af - As) + 1/2)] + 1/2 and dz+/dT (eqs. 4.17, 4.20)."""
-    inv_width = 1.0 / (a_f - a_s)
+def heating_branch(temperature_c, a_s, inv_width):
+    """z+(T) = 1/2 tanh[2((As - T)/(Af - As) + 1/2)] + 1/2 and dz+/dT (eqs. 4.17, 4.20);
+    ``inv_width`` = 1/(Af - As)."""
     z, sech2 = _logistic(2.0 * ((a_s - temperature_c) * inv_width + 0.5))
     return z, -sech2 * inv_width
 
 
 @jit_inline
-def cooling_branch(temperature_c, m_s, m_f):
-    """z-(T) = 1/2 tanh[2((Mf - T)/(Ms - Mf) + 1/2)] + 1/2 and dz-/dT (eqs. 4.18, 4.21)."""
-    inv_width = 1.0 / (m_s - m_f)
+def cooling_branch(temperature_c, m_f, inv_width):
+    """z-(T) = 1/2 tanh[2((Mf - T)/(Ms - Mf) + 1/2)] + 1/2 and dz-/dT (eqs. 4.18, 4.21);
+    ``inv_width`` = 1/(Ms - Mf)."""
     z, sech2 = _logistic(2.0 * ((m_f - temperature_c) * inv_width + 0.5))
     return z, -sech2 * inv_width
 
 
 @jit_inline
-def transformation_slope(u_a, u_m, xi, heating, m_s, m_f, a_s, a_f):
+def transformation_slope(u_a, u_m, xi, heating, m_f, inv_m_width, a_s, inv_a_width):
     """dxi/du on the printed branch (eqs. 4.22-4.24) at effective temperatures u_A, u_M.
 
     Heating: dz+/du (xi - z-)/(z+ - z-); cooling: dz-/du (z+ - xi)/(z+ - z-), with
     zero-stress transformation temperatures. The ratio is the state's relative position
-    inside the band. It is kept >= 0 so that a state outside the band (O(du^2) step error)
+    inside the band. The band is given as :func:`band` returns it. It is kept >= 0 so that a state outside the band (O(du^2) step error)
     never transforms backwards (heating never forms martensite); above 1 it is left as
     printed, which pulls such a state back onto the active branch.
     """
-    zp, dzp = heating_branch(u_a, a_s, a_f)
-    zm, dzm = cooling_branch(u_m, m_s, m_f)
+    zp, dzp = heating_branch(u_a, a_s, inv_a_width)
+    zm, dzm = cooling_branch(u_m, m_f, inv_m_width)
     gap = zp - zm
     inside = xi - zm if heating else zp - xi
     ratio = inside / gap if gap > BRANCH_GAP_FLOOR else 1.0
@@ -175,7 +185,7 @@ def transformation_slope(u_a, u_m, xi, heating, m_s, m_f, a_s, a_f):
 
 
 @jit_inline
-def scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_s, m_f, a_s, a_f):
+def scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_f, inv_m_width, a_s, inv_a_width):
     """Major branch scaled through reversal point r and target t, for u strictly between.
 
     Returns xi and dxi/du. Where the active branch is flat to machine precision between the
@@ -183,9 +193,9 @@ def scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_s, m_f, a_s, a_f
     straight line between them, which still closes the loop at t.
     """
     if heating:
-        z, dz = heating_branch(u, a_s, a_f)
+        z, dz = heating_branch(u, a_s, inv_a_width)
     else:
-        z, dz = cooling_branch(u, m_s, m_f)
+        z, dz = cooling_branch(u, m_f, inv_m_width)
     den = z_r - z_t
     if abs(den) > BRANCH_GAP_FLOOR:
         frac, dfrac = (z - z_t) / den, dz / den
@@ -195,7 +205,8 @@ def scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_s, m_f, a_s, a_f
 
 
 @jit
-def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, m_s, m_f, a_s, a_f):
+def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, m_f, inv_m_width, a_s,
+                  inv_a_width):
     """xi reached at (u_a, u_m) moving from the state (u_a0, u_m0, xi0) in one direction.
 
     ``memory[POINT_SIZE * k + (0, 1, 2, 3, 4)]`` is reversal point k (u_A, u_M, xi, z+, z-),
@@ -219,11 +230,11 @@ def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, 
             return xi_s, 0.0, closed
         if (u < u_t) if heating else (u > u_t):
             xi, dxi = scaled_branch(u, heating, memory[r + col], memory[r + 2], memory[r + zcol],
-                                     u_t, memory[t + 2], memory[t + zcol], m_s, m_f, a_s, a_f)
+                                     u_t, memory[t + 2], memory[t + zcol], m_f, inv_m_width, a_s, inv_a_width)
             return xi, dxi, closed
         xi_s, ua_s, um_s = memory[t + 2], memory[t], memory[t + 1]
         closed += 1
-        slope = transformation_slope(ua_s, um_s, xi_s, heating, m_s, m_f, a_s, a_f)
+        slope = transformation_slope(ua_s, um_s, xi_s, heating, m_f, inv_m_width, a_s, inv_a_width)
     du = u_a - ua_s if heating else u_m - um_s
     if (du <= 0.0) if heating else (du >= 0.0):
         return xi_s, 0.0, closed
@@ -231,7 +242,7 @@ def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, 
 
 
 @jit
-def push_reversal(memory, n_points, u_a, u_m, xi, m_s, m_f, a_s, a_f):
+def push_reversal(memory, n_points, u_a, u_m, xi, m_f, inv_m_width, a_s, inv_a_width):
     """Record a reversal point; returns the new count. Full: forget the innermost loop first."""
     if n_points + 1 > MEMORY_DEPTH:
         n_points -= 2
@@ -239,6 +250,6 @@ def push_reversal(memory, n_points, u_a, u_m, xi, m_s, m_f, a_s, a_f):
     memory[k] = u_a
     memory[k + 1] = u_m
     memory[k + 2] = xi
-    memory[k + 3] = heating_branch(u_a, a_s, a_f)[0]
-    memory[k + 4] = cooling_branch(u_m, m_s, m_f)[0]
+    memory[k + 3] = heating_branch(u_a, a_s, inv_a_width)[0]
+    memory[k + 4] = cooling_branch(u_m, m_f, inv_m_width)[0]
     return n_points + 1

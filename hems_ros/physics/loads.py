@@ -44,8 +44,11 @@ def slider_response(wire_stiffness, x, v, dt, mass, damping, stiffness, pretensi
     inertia = mass * n * inv_dt + damping * n + stiffness * n * dt
     rest = mass * n * v * inv_dt - mass * gravity - pretension - stiffness * n * x
     # F_L(dir) = a_dir * (w0 - K dt v) + f_dir, linear in v
-    inv_den_in = 1.0 / (inertia + a_in * wire_stiffness * dt)
-    inv_den_out = 1.0 / (inertia + a_out * wire_stiffness * dt)
+    den_in = inertia + a_in * wire_stiffness * dt
+    den_out = inertia + a_out * wire_stiffness * dt
+    inv_both = 1.0 / (den_in * den_out)   # one division for both: the batch's costliest operation
+    inv_den_in = den_out * inv_both
+    inv_den_out = den_in * inv_both
     return (rest + f_in) * inv_den_in, a_in * inv_den_in, (rest + f_out) * inv_den_out, a_out * inv_den_out
 
 

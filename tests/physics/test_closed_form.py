@@ -45,7 +45,7 @@ def test_cold_resistance_near_measured():
     rho = electrical.mixture_resistivity(
         1.0, electrical.phase_resistivity(e.rho0_martensite_ohm_m, e.t0_martensite_c, e.drho_dt_martensite_ohm_m_per_c,
                                           e.drho_dsigma_martensite_ohm_m_per_pa, 22.0, sig), 0.0)
-    r = electrical.wire_resistance(rho, p.wire.length_m, p.wire.cross_section_m2)
+    r = electrical.wire_resistance(rho, p.wire.length_m, 1.0 / p.wire.cross_section_m2)
     assert 4.0 < r < 4.5  # digest: mean 4.17 ohm over a pulse
 
 

@@ -11,34 +11,35 @@ from hems_ros.physics.validation import mass_loops, six_pulses
 
 DT = 1e-3
 TABLE41_TEMPERATURES = (72.0, 62.0, 88.0, 98.0)   # Ms0, Mf0, As0, Af0
+BAND = kinetics.band(*TABLE41_TEMPERATURES)         # Mf0, 1/(Ms0 - Mf0), As0, 1/(Af0 - As0)
 
 
 def test_branches_and_stress_shift():
-    zp, dzp = kinetics.heating_branch(93.0, 88.0, 98.0)
-    zm, dzm = kinetics.cooling_branch(67.0, 72.0, 62.0)
+    zp, dzp = kinetics.heating_branch(93.0, 88.0, 0.1)
+    zm, dzm = kinetics.cooling_branch(67.0, 62.0, 0.1)
     assert zp == pytest.approx(0.5) and zm == pytest.approx(0.5)
     assert dzp == pytest.approx(-0.1) and dzm == pytest.approx(-0.1)  # -sech^2(0) / 10 K
     # eq. 4.25: 68.9 MPa shifts every temperature by 10 K; the branch at the effective
     # temperature T - sigma/C with zero-stress temperatures is the same number
     u_m, u_a = kinetics.effective_temperatures(103.0, 6.89e7, 1 / 6.89e6, 1 / 6.89e6)
     assert (u_m, u_a) == pytest.approx((93.0, 93.0))
-    assert kinetics.heating_branch(u_a, 88.0, 98.0)[0] == pytest.approx(kinetics.heating_branch(103.0, 98.0, 108.0)[0])
-    assert kinetics.cooling_branch(u_m, 72.0, 62.0)[0] == pytest.approx(kinetics.cooling_branch(103.0, 82.0, 72.0)[0])
+    assert kinetics.heating_branch(u_a, 88.0, 0.1)[0] == pytest.approx(kinetics.heating_branch(103.0, 98.0, 0.1)[0])
+    assert kinetics.cooling_branch(u_m, 62.0, 0.1)[0] == pytest.approx(kinetics.cooling_branch(103.0, 72.0, 0.1)[0])
 
 
 def test_slope_guard_outside_the_loop():
     # far below both branches z+ = z- = 1 exactly: 0/0 must not produce NaN
-    s = kinetics.transformation_slope(-200.0, -200.0, 1.0, True, 72, 62, 88, 98)
+    s = kinetics.transformation_slope(-200.0, -200.0, 1.0, True, *BAND)
     assert math.isfinite(s) and abs(s) < 1e-40
     # the branches far outside their bands: exactly 0 / 1, slopes finite
     for u in (-1e4, 1e4):
-        for z, dz in (kinetics.heating_branch(u, 88, 98), kinetics.cooling_branch(u, 72, 62)):
+        for z, dz in (kinetics.heating_branch(u, 88, 0.1), kinetics.cooling_branch(u, 62, 0.1)):
             assert z in (0.0, 1.0) and math.isfinite(dz)
     # on the major heating branch the slope is the branch slope; on the cooling branch zero
-    zp, dzp = kinetics.heating_branch(93.0, 88, 98)
-    assert kinetics.transformation_slope(93.0, 93.0, zp, True, 72, 62, 88, 98) == pytest.approx(dzp, rel=1e-6)
-    zm, _ = kinetics.cooling_branch(93.0, 72, 62)
-    assert kinetics.transformation_slope(93.0, 93.0, zm, True, 72, 62, 88, 98) == pytest.approx(0.0, abs=1e-9)
+    zp, dzp = kinetics.heating_branch(93.0, 88, 0.1)
+    assert kinetics.transformation_slope(93.0, 93.0, zp, True, *BAND) == pytest.approx(dzp, rel=1e-6)
+    zm, _ = kinetics.cooling_branch(93.0, 62, 0.1)
+    assert kinetics.transformation_slope(93.0, 93.0, zm, True, *BAND) == pytest.approx(0.0, abs=1e-9)
 
 
 def _follow(u_path):
@@ -48,11 +49,11 @@ def _follow(u_path):
     for u_old, u in zip(u_path[:-1], u_path[1:]):
         heating = u > u_old
         if direction and direction != (1 if heating else -1):
-            n = kinetics.push_reversal(memory, n, u_old, u_old, xi, *TABLE41_TEMPERATURES)
+            n = kinetics.push_reversal(memory, n, u_old, u_old, xi, *BAND)
         direction = 1 if heating else -1
-        slope0 = kinetics.transformation_slope(u_old, u_old, xi, heating, *TABLE41_TEMPERATURES)
+        slope0 = kinetics.transformation_slope(u_old, u_old, xi, heating, *BAND)
         xi, _, closed = kinetics.memory_branch(u, u, heating, memory, n, xi, u_old, u_old, slope0,
-                                               *TABLE41_TEMPERATURES)
+                                               *BAND)
         n -= 2 * closed
         xis.append(xi)
     return np.array(xis), n
@@ -80,13 +81,13 @@ def test_memory_depth_forgets_the_innermost_loop():
     memory = np.zeros(kinetics.POINT_SIZE * kinetics.MEMORY_DEPTH)
     n = 0
     for k in range(kinetics.MEMORY_DEPTH):
-        n = kinetics.push_reversal(memory, n, float(k), float(k), 0.5, *TABLE41_TEMPERATURES)
+        n = kinetics.push_reversal(memory, n, float(k), float(k), 0.5, *BAND)
     assert n == kinetics.MEMORY_DEPTH
-    n = kinetics.push_reversal(memory, n, 99.0, 99.0, 0.4, *TABLE41_TEMPERATURES)
+    n = kinetics.push_reversal(memory, n, 99.0, 99.0, 0.4, *BAND)
     assert n == kinetics.MEMORY_DEPTH - 1
     top = kinetics.POINT_SIZE * (n - 1)
     assert list(memory[top:top + 3]) == [99.0, 99.0, 0.4]
-    assert memory[top + 3] == kinetics.heating_branch(99.0, 88.0, 98.0)[0]
+    assert memory[top + 3] == kinetics.heating_branch(99.0, 88.0, 0.1)[0]
     assert memory[top - kinetics.POINT_SIZE] == kinetics.MEMORY_DEPTH - 3
 
 
