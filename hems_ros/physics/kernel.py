@@ -70,7 +70,7 @@ _invalidate_stale_cache()
  P_MASS, P_DAMP, P_K, P_F0, P_G, P_N,
  P_SHEATH, P_GWS, P_GSA, P_CS,
  P_A_IN, P_F_IN, P_A_OUT, P_F_OUT,
- P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, N_P) = range(49)
+ P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, P_TPX, N_P) = range(50)
 
 # ---------------------------------------------------------------- state row
 STATE_NAMES = (
@@ -131,6 +131,7 @@ def pack(params: UnitParams) -> np.ndarray:
         p[P_INV_CS] = 1.0 / p[P_CS]
     # reciprocals the step would otherwise divide by several times per step
     p[P_INV_CW], p[P_INV_L0], p[P_INV_S] = 1.0 / p[P_CW], 1.0 / w.length_m, 1.0 / w.cross_section_m2
+    p[P_TPX] = p[P_LAT] * p[P_INV_CW]   # temperature rise per unit of martensite formed (eq. 4.10)
     p[P_INV_CM], p[P_INV_CA] = 1.0 / ki.cm_pa_per_c, 1.0 / ki.ca_pa_per_c
     cap = params.capstan
     capstan = friction.capstan_ratio(cap.friction_coefficient, cap.bend_angle_rad) if cap.enabled else 1.0
@@ -197,7 +198,7 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     # eq. 4.10: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT
     inv_cw = p[pk + P_INV_CW * n]
     d_temp0 = net * dt * inv_cw
-    temp_per_xi = p[pk + P_LAT * n] * inv_cw
+    temp_per_xi = p[pk + P_TPX * n]
     modulus = constitutive.reuss_modulus(xi, p[pk + P_EM * n], p[pk + P_EA * n])
     omega = constitutive.transformation_coefficient(modulus, p[pk + P_EPSL * n])
     theta = constitutive.thermoelastic_coefficient(xi, modulus, p[pk + P_ALM * n], p[pk + P_ALA * n],
@@ -335,10 +336,12 @@ BLOCK_ITERATIONS = 8
 # the memory the vector loops read (only step changes the memory)
 (M_RUA, M_RUM, M_RXI, M_RZP, M_RZM, M_TUA, M_TUM, M_TXI, M_TZP, M_TZM, N_M) = range(11)
 # what the iterations and the end of a step need from its start
-(W_TEMP, W_XI, W_X, W_V, W_TS, W_RES, W_CUR, W_POWER, W_QAIR, W_QSH, W_QSA, W_DTEMP0, W_TPX,
- W_SF0, W_SFX, W_AREA, W_RELAX, W_CIN, W_GIN, W_COUT, W_GOUT, W_INVCM, W_INVCA, W_UMOLD, W_UAOLD,
+# (the state at the start of the step and the set's constants are read where they are, at
+# B_CUR and in the packed parameters)
+(W_RES, W_CUR, W_POWER, W_QAIR, W_QSH, W_QSA, W_DTEMP0,
+ W_SF0, W_SFX, W_RELAX, W_CIN, W_GIN, W_COUT, W_GOUT, W_UMOLD, W_UAOLD,
  W_HEATING, W_NPOINTS, W_SLOPE0,
- W_DXI, W_LO, W_HI, W_VNEW, W_SIGNEW, W_GAIN, W_UM, W_UA, W_ACTIVE, N_W) = range(38)
+ W_DXI, W_LO, W_HI, W_VNEW, W_SIGNEW, W_GAIN, W_UM, W_UA, W_ACTIVE, N_W) = range(29)
 B_CUR = N_P                        # state fields up to the memory (S_T ... S_NREV), step start
 B_NEXT = B_CUR + S_MEM             # the same fields at the step end
 B_OUT = B_NEXT + S_MEM             # outputs of the step
@@ -383,8 +386,9 @@ def _iteration(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled):
     goes on and 1.0 if the set has to be redone by step.
     """
     w = B_WORK * BLOCK + j
+    c = B_CUR * BLOCK + j
     heating = b[w + W_HEATING * BLOCK] > 0.0
-    xi = b[w + W_XI * BLOCK]
+    xi = b[c + S_XI * BLOCK]
     n_points = b[w + W_NPOINTS * BLOCK]
     top = (b[(B_TOP + M_RUA) * BLOCK + j], b[(B_TOP + M_RUM) * BLOCK + j], b[(B_TOP + M_RXI) * BLOCK + j],
            b[(B_TOP + M_RZP) * BLOCK + j], b[(B_TOP + M_RZM) * BLOCK + j], b[(B_TOP + M_TUA) * BLOCK + j],
@@ -400,18 +404,18 @@ def _iteration(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled):
         hi = d_xi
     else:
         lo = d_xi
-    inv_cm, inv_ca = b[w + W_INVCM * BLOCK], b[w + W_INVCA * BLOCK]
+    inv_cm, inv_ca = b[j + P_INV_CM * BLOCK], b[j + P_INV_CA * BLOCK]
     sig_free_per_xi = b[w + W_SFX * BLOCK]
-    temp_per_xi = b[w + W_TPX * BLOCK]
+    temp_per_xi = b[j + P_TPX * BLOCK]
     du_dxi = temp_per_xi - sig_gain * sig_free_per_xi * (inv_ca if heating else inv_cm)
     d_next = d_xi - r / (1.0 - dxi_du * du_dxi)
     newton = lo < d_next < hi
     d_xi = d_next if newton else 0.5 * (lo + hi)
     gain_before = sig_gain
-    v_new, sig_new, sig_gain = _mechanics(b[w + W_SF0 * BLOCK] + sig_free_per_xi * d_xi, b[w + W_AREA * BLOCK],
+    v_new, sig_new, sig_gain = _mechanics(b[w + W_SF0 * BLOCK] + sig_free_per_xi * d_xi, b[j + P_S * BLOCK],
                                           b[w + W_RELAX * BLOCK], b[w + W_CIN * BLOCK], b[w + W_GIN * BLOCK],
                                           b[w + W_COUT * BLOCK], b[w + W_GOUT * BLOCK])
-    um, ua = kinetics.effective_temperatures(b[w + W_TEMP * BLOCK] + b[w + W_DTEMP0 * BLOCK] + temp_per_xi * d_xi,
+    um, ua = kinetics.effective_temperatures(b[c + S_T * BLOCK] + b[w + W_DTEMP0 * BLOCK] + temp_per_xi * d_xi,
                                              sig_new, inv_cm, inv_ca)
     done = newton and n_points < 2.0 and sig_gain == gain_before
     return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0 if done else 1.0, closes
@@ -435,11 +439,12 @@ def _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active):
 def _finish_set(b, j, dt):
     """_finish for set j of block b from its W_* fields; True if the new state is finite."""
     w = B_WORK * BLOCK + j
-    return _finish(b, j, b, B_CUR * BLOCK + j, B_NEXT * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt,
-                   b[w + W_TEMP * BLOCK], b[w + W_XI * BLOCK], b[w + W_X * BLOCK], b[w + W_V * BLOCK],
-                   b[w + W_TS * BLOCK], b[w + W_RES * BLOCK], b[w + W_CUR * BLOCK], b[w + W_POWER * BLOCK],
+    c = B_CUR * BLOCK + j
+    return _finish(b, j, b, c, B_NEXT * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt,
+                   b[c + S_T * BLOCK], b[c + S_XI * BLOCK], b[c + S_X * BLOCK], b[c + S_V * BLOCK],
+                   b[c + S_TS * BLOCK], b[w + W_RES * BLOCK], b[w + W_CUR * BLOCK], b[w + W_POWER * BLOCK],
                    b[w + W_QAIR * BLOCK], b[w + W_QSH * BLOCK], b[w + W_QSA * BLOCK], b[w + W_DTEMP0 * BLOCK],
-                   b[w + W_TPX * BLOCK], b[w + W_DXI * BLOCK], b[w + W_VNEW * BLOCK], b[w + W_SIGNEW * BLOCK])
+                   b[j + P_TPX * BLOCK], b[w + W_DXI * BLOCK], b[w + W_VNEW * BLOCK], b[w + W_SIGNEW * BLOCK])
 
 
 @jit_inline
@@ -464,11 +469,6 @@ def _block_begin(b, drive_kind, dt, scaled):
         n_points = b[sk + S_NREV * BLOCK]
         slope0 = kinetics.transformation_slope(ua_old, um_old, xi, heating, b[j + P_MF0 * BLOCK],
                                                b[j + P_INV_MW * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_INV_AW * BLOCK])
-        b[w + W_TEMP * BLOCK] = temp
-        b[w + W_XI * BLOCK] = xi
-        b[w + W_X * BLOCK] = x
-        b[w + W_V * BLOCK] = v
-        b[w + W_TS * BLOCK] = t_sheath
         b[w + W_RES * BLOCK] = res
         b[w + W_CUR * BLOCK] = cur
         b[w + W_POWER * BLOCK] = power
@@ -476,17 +476,13 @@ def _block_begin(b, drive_kind, dt, scaled):
         b[w + W_QSH * BLOCK] = q_sh
         b[w + W_QSA * BLOCK] = q_sa
         b[w + W_DTEMP0 * BLOCK] = d_temp0
-        b[w + W_TPX * BLOCK] = temp_per_xi
         b[w + W_SF0 * BLOCK] = sig_free0
         b[w + W_SFX * BLOCK] = sig_free_per_xi
-        b[w + W_AREA * BLOCK] = area
         b[w + W_RELAX * BLOCK] = relax
         b[w + W_CIN * BLOCK] = c_in
         b[w + W_GIN * BLOCK] = g_in
         b[w + W_COUT * BLOCK] = c_out
         b[w + W_GOUT * BLOCK] = g_out
-        b[w + W_INVCM * BLOCK] = inv_cm
-        b[w + W_INVCA * BLOCK] = inv_ca
         b[w + W_UMOLD * BLOCK] = um_old
         b[w + W_UAOLD * BLOCK] = ua_old
         b[w + W_HEATING * BLOCK] = 1.0 if heating else 0.0
@@ -504,7 +500,8 @@ def _block_begin(b, drive_kind, dt, scaled):
         _store_solve(b, j, d_xi, lo1, hi1, v_new, sig_new, gain1, um1, ua1, active)
         b[B_NEXT * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
         b[B_NEXT * BLOCK + j + S_NREV * BLOCK] = n_points
-        finite = _finish_set(b, j, dt)
+        finite = _finish(b, j, b, sk, B_NEXT * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt, temp, xi, x, v,
+                         t_sheath, res, cur, power, q_air, q_sh, q_sa, d_temp0, temp_per_xi, d_xi, v_new, sig_new)
         b[B_REDO * BLOCK + j] = 1.0 if redo or not finite else 0.0
         n_active += 1 if active > 0.0 else 0
     return n_active
