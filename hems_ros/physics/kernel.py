@@ -379,24 +379,22 @@ def _branch(u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, mf0, i
 
 
 @jit_inline
-def _iteration(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled):
-    """One iteration of step's kinetic solve for set j of block b (its W_* fields).
+def _solve_iteration(b, j, heating, xi, n_points, ua_old, um_old, slope0, temp, d_temp0, sig_free0,
+                     sig_free_per_xi, relax, c_in, g_in, c_out, g_out, d_xi, lo, hi, v_new, sig_new, sig_gain,
+                     um, ua, scaled):
+    """One iteration of step's kinetic solve for set j of block b, from the start-of-step
+    values given (the set's constants and reversal points are read from b).
 
     Returns the updated (d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua), 1.0 while the solve
     goes on and 1.0 if the set has to be redone by step.
     """
-    w = B_WORK * BLOCK + j
-    c = B_CUR * BLOCK + j
-    heating = b[w + W_HEATING * BLOCK] > 0.0
-    xi = b[c + S_XI * BLOCK]
-    n_points = b[w + W_NPOINTS * BLOCK]
     top = (b[(B_TOP + M_RUA) * BLOCK + j], b[(B_TOP + M_RUM) * BLOCK + j], b[(B_TOP + M_RXI) * BLOCK + j],
            b[(B_TOP + M_RZP) * BLOCK + j], b[(B_TOP + M_RZM) * BLOCK + j], b[(B_TOP + M_TUA) * BLOCK + j],
            b[(B_TOP + M_TUM) * BLOCK + j], b[(B_TOP + M_TXI) * BLOCK + j], b[(B_TOP + M_TZP) * BLOCK + j],
            b[(B_TOP + M_TZM) * BLOCK + j])
-    xi_branch, dxi_du, closes = _branch(ua, um, heating, xi, b[w + W_UAOLD * BLOCK], b[w + W_UMOLD * BLOCK],
-                                        b[w + W_SLOPE0 * BLOCK], n_points, top, b[j + P_MF0 * BLOCK],
-                                        b[j + P_INV_MW * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_INV_AW * BLOCK], scaled)
+    xi_branch, dxi_du, closes = _branch(ua, um, heating, xi, ua_old, um_old, slope0, n_points, top,
+                                        b[j + P_MF0 * BLOCK], b[j + P_INV_MW * BLOCK], b[j + P_AS0 * BLOCK],
+                                        b[j + P_INV_AW * BLOCK], scaled)
     r = xi + d_xi - xi_branch
     if abs(r) <= XI_TOLERANCE:
         return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0, closes
@@ -405,20 +403,31 @@ def _iteration(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled):
     else:
         lo = d_xi
     inv_cm, inv_ca = b[j + P_INV_CM * BLOCK], b[j + P_INV_CA * BLOCK]
-    sig_free_per_xi = b[w + W_SFX * BLOCK]
     temp_per_xi = b[j + P_TPX * BLOCK]
     du_dxi = temp_per_xi - sig_gain * sig_free_per_xi * (inv_ca if heating else inv_cm)
     d_next = d_xi - r / (1.0 - dxi_du * du_dxi)
     newton = lo < d_next < hi
     d_xi = d_next if newton else 0.5 * (lo + hi)
     gain_before = sig_gain
-    v_new, sig_new, sig_gain = _mechanics(b[w + W_SF0 * BLOCK] + sig_free_per_xi * d_xi, b[j + P_S * BLOCK],
-                                          b[w + W_RELAX * BLOCK], b[w + W_CIN * BLOCK], b[w + W_GIN * BLOCK],
-                                          b[w + W_COUT * BLOCK], b[w + W_GOUT * BLOCK])
-    um, ua = kinetics.effective_temperatures(b[c + S_T * BLOCK] + b[w + W_DTEMP0 * BLOCK] + temp_per_xi * d_xi,
-                                             sig_new, inv_cm, inv_ca)
+    v_new, sig_new, sig_gain = _mechanics(sig_free0 + sig_free_per_xi * d_xi, b[j + P_S * BLOCK], relax,
+                                          c_in, g_in, c_out, g_out)
+    um, ua = kinetics.effective_temperatures(temp + d_temp0 + temp_per_xi * d_xi, sig_new, inv_cm, inv_ca)
     done = newton and n_points < 2.0 and sig_gain == gain_before
     return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0 if done else 1.0, closes
+
+
+@jit_inline
+def _iteration(b, j, scaled):
+    """_solve_iteration for set j of block b from its work area (W_* fields)."""
+    w = B_WORK * BLOCK + j
+    c = B_CUR * BLOCK + j
+    return _solve_iteration(
+        b, j, b[w + W_HEATING * BLOCK] > 0.0, b[c + S_XI * BLOCK], b[w + W_NPOINTS * BLOCK],
+        b[w + W_UAOLD * BLOCK], b[w + W_UMOLD * BLOCK], b[w + W_SLOPE0 * BLOCK], b[c + S_T * BLOCK],
+        b[w + W_DTEMP0 * BLOCK], b[w + W_SF0 * BLOCK], b[w + W_SFX * BLOCK], b[w + W_RELAX * BLOCK],
+        b[w + W_CIN * BLOCK], b[w + W_GIN * BLOCK], b[w + W_COUT * BLOCK], b[w + W_GOUT * BLOCK],
+        b[w + W_DXI * BLOCK], b[w + W_LO * BLOCK], b[w + W_HI * BLOCK], b[w + W_VNEW * BLOCK],
+        b[w + W_SIGNEW * BLOCK], b[w + W_GAIN * BLOCK], b[w + W_UM * BLOCK], b[w + W_UA * BLOCK], scaled)
 
 
 @jit_inline
@@ -448,9 +457,14 @@ def _finish_set(b, j, dt):
 
 
 @jit_inline
-def _block_begin(b, drive_kind, dt, scaled):
+def _block_begin(b, drive_kind, dt, scaled, keep):
     """Start of a step and the solve's first iteration for every set of block b; returns how
-    many sets need further iterations. Sets that do not are finished here."""
+    many sets need further iterations. Sets that do not are finished here.
+
+    ``keep`` False: the work area is not written, so no set may iterate further (the caller
+    runs the step again with ``keep`` when one needs to); most steps need no further
+    iteration and save the stores.
+    """
     n_active = 0     # an integer count: a float sum is a reduction LLVM may not reorder
     for j in range(BLOCK):
         sk = B_CUR * BLOCK + j
@@ -469,35 +483,38 @@ def _block_begin(b, drive_kind, dt, scaled):
         n_points = b[sk + S_NREV * BLOCK]
         slope0 = kinetics.transformation_slope(ua_old, um_old, xi, heating, b[j + P_MF0 * BLOCK],
                                                b[j + P_INV_MW * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_INV_AW * BLOCK])
-        b[w + W_RES * BLOCK] = res
-        b[w + W_CUR * BLOCK] = cur
-        b[w + W_POWER * BLOCK] = power
-        b[w + W_QAIR * BLOCK] = q_air
-        b[w + W_QSH * BLOCK] = q_sh
-        b[w + W_QSA * BLOCK] = q_sa
-        b[w + W_DTEMP0 * BLOCK] = d_temp0
-        b[w + W_SF0 * BLOCK] = sig_free0
-        b[w + W_SFX * BLOCK] = sig_free_per_xi
-        b[w + W_RELAX * BLOCK] = relax
-        b[w + W_CIN * BLOCK] = c_in
-        b[w + W_GIN * BLOCK] = g_in
-        b[w + W_COUT * BLOCK] = c_out
-        b[w + W_GOUT * BLOCK] = g_out
-        b[w + W_UMOLD * BLOCK] = um_old
-        b[w + W_UAOLD * BLOCK] = ua_old
-        b[w + W_HEATING * BLOCK] = 1.0 if heating else 0.0
-        b[w + W_NPOINTS * BLOCK] = n_points
-        b[w + W_SLOPE0 * BLOCK] = slope0
+        if keep:
+            b[w + W_RES * BLOCK] = res
+            b[w + W_CUR * BLOCK] = cur
+            b[w + W_POWER * BLOCK] = power
+            b[w + W_QAIR * BLOCK] = q_air
+            b[w + W_QSH * BLOCK] = q_sh
+            b[w + W_QSA * BLOCK] = q_sa
+            b[w + W_DTEMP0 * BLOCK] = d_temp0
+            b[w + W_SF0 * BLOCK] = sig_free0
+            b[w + W_SFX * BLOCK] = sig_free_per_xi
+            b[w + W_RELAX * BLOCK] = relax
+            b[w + W_CIN * BLOCK] = c_in
+            b[w + W_GIN * BLOCK] = g_in
+            b[w + W_COUT * BLOCK] = c_out
+            b[w + W_GOUT * BLOCK] = g_out
+            b[w + W_UMOLD * BLOCK] = um_old
+            b[w + W_UAOLD * BLOCK] = ua_old
+            b[w + W_HEATING * BLOCK] = 1.0 if heating else 0.0
+            b[w + W_NPOINTS * BLOCK] = n_points
+            b[w + W_SLOPE0 * BLOCK] = slope0
         lo = -xi if heating else 0.0
         hi = 0.0 if heating else 1.0 - xi
-        d_xi1, lo1, hi1, v1, sig1, gain1, um1, ua1, active, closes = _iteration(
-            b, j, 0.0, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled)
+        d_xi1, lo1, hi1, v1, sig1, gain1, um1, ua1, active, closes = _solve_iteration(
+            b, j, heating, xi, n_points, ua_old, um_old, slope0, temp, d_temp0, sig_free0, sig_free_per_xi, relax,
+            c_in, g_in, c_out, g_out, 0.0, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled)
         redo = moving and (closes > 0.0 or (old_dir != 0.0 and old_dir != direction))
         if moving:
             d_xi, v_new, sig_new = d_xi1, v1, sig1
         else:
             d_xi, active = 0.0, 0.0
-        _store_solve(b, j, d_xi, lo1, hi1, v_new, sig_new, gain1, um1, ua1, active)
+        if keep:
+            _store_solve(b, j, d_xi, lo1, hi1, v_new, sig_new, gain1, um1, ua1, active)
         b[B_NEXT * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
         b[B_NEXT * BLOCK + j + S_NREV * BLOCK] = n_points
         finite = _finish(b, j, b, sk, B_NEXT * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt, temp, xi, x, v,
@@ -513,9 +530,7 @@ def _block_iterate(b):
     n_active = 0
     for j in range(BLOCK):
         w = B_WORK * BLOCK + j
-        d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active, closes = _iteration(
-            b, j, b[w + W_DXI * BLOCK], b[w + W_LO * BLOCK], b[w + W_HI * BLOCK], b[w + W_VNEW * BLOCK],
-            b[w + W_SIGNEW * BLOCK], b[w + W_GAIN * BLOCK], b[w + W_UM * BLOCK], b[w + W_UA * BLOCK], True)
+        d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active, closes = _iteration(b, j, True)
         if b[w + W_ACTIVE * BLOCK] > 0.0:
             _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active)
             if closes > 0.0:
@@ -535,14 +550,16 @@ def _block_finish(b, dt):
 
 @jit
 def _block_begin_outer(b, drive_kind, dt):
-    """_block_begin for a block whose sets have fewer than two reversal points each."""
-    return _block_begin(b, drive_kind, dt, False)
+    """_block_begin for a block whose sets have fewer than two reversal points each, without
+    the work area (such blocks rarely iterate)."""
+    return _block_begin(b, drive_kind, dt, False, False)
 
 
 @jit
 def _block_begin_scaled(b, drive_kind, dt):
-    """_block_begin for a block with a set on a scaled branch."""
-    return _block_begin(b, drive_kind, dt, True)
+    """_block_begin for any block, keeping the work area for further iterations (the scaled
+    branch needs them in most steps)."""
+    return _block_begin(b, drive_kind, dt, True, True)
 
 
 @jit
@@ -556,6 +573,8 @@ def _step_block(b, drive_kind, dt):
         n_active = _block_begin_scaled(b, drive_kind, dt)
     else:
         n_active = _block_begin_outer(b, drive_kind, dt)
+        if n_active > 0:          # the same step again, keeping what the iterations need
+            n_active = _block_begin_scaled(b, drive_kind, dt)
     if n_active > 0:
         for _ in range(BLOCK_ITERATIONS - 1):
             if _block_iterate(b) == 0:
