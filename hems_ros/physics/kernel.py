@@ -336,15 +336,17 @@ BLOCK_ITERATIONS = 8
 # the memory the vector loops read (only step changes the memory)
 (M_RUA, M_RUM, M_RXI, M_RZP, M_RZM, M_TUA, M_TUM, M_TXI, M_TZP, M_TZM, N_M) = range(11)
 # what the iterations and the end of a step need from its start
-# (the state at the start of the step and the set's constants are read where they are, at
-# B_CUR and in the packed parameters)
+# (the state at the start of the step and the set's constants are read where they are, in the
+# s_in region and in the packed parameters)
 (W_RES, W_CUR, W_POWER, W_QAIR, W_QSH, W_QSA, W_DTEMP0,
  W_SF0, W_SFX, W_RELAX, W_CIN, W_GIN, W_COUT, W_GOUT, W_UMOLD, W_UAOLD,
  W_HEATING, W_NPOINTS, W_SLOPE0,
  W_DXI, W_LO, W_HI, W_VNEW, W_SIGNEW, W_GAIN, W_UM, W_UA, W_ACTIVE, N_W) = range(29)
-B_CUR = N_P                        # state fields up to the memory (S_T ... S_NREV), step start
-B_NEXT = B_CUR + S_MEM             # the same fields at the step end
-B_OUT = B_NEXT + S_MEM             # outputs of the step
+# state fields up to the memory (S_T ... S_NREV) in two regions: a step reads one and writes
+# the other, the next step the other way round (s_in, s_out below), instead of copying
+B_STATE0 = N_P
+B_STATE1 = B_STATE0 + S_MEM
+B_OUT = B_STATE1 + S_MEM           # outputs of the step
 B_DRIVE = B_OUT + N_O              # drive value of the step
 B_REDO = B_DRIVE + 1               # 1.0: the set needs step
 B_TOP = B_REDO + 1
@@ -417,10 +419,10 @@ def _solve_iteration(b, j, heating, xi, n_points, ua_old, um_old, slope0, temp, 
 
 
 @jit_inline
-def _iteration(b, j, scaled):
+def _iteration(b, j, s_in, scaled):
     """_solve_iteration for set j of block b from its work area (W_* fields)."""
     w = B_WORK * BLOCK + j
-    c = B_CUR * BLOCK + j
+    c = s_in * BLOCK + j
     return _solve_iteration(
         b, j, b[w + W_HEATING * BLOCK] > 0.0, b[c + S_XI * BLOCK], b[w + W_NPOINTS * BLOCK],
         b[w + W_UAOLD * BLOCK], b[w + W_UMOLD * BLOCK], b[w + W_SLOPE0 * BLOCK], b[c + S_T * BLOCK],
@@ -445,11 +447,11 @@ def _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active):
 
 
 @jit_inline
-def _finish_set(b, j, dt):
+def _finish_set(b, j, s_in, s_out, dt):
     """_finish for set j of block b from its W_* fields; True if the new state is finite."""
     w = B_WORK * BLOCK + j
-    c = B_CUR * BLOCK + j
-    return _finish(b, j, b, c, B_NEXT * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt,
+    c = s_in * BLOCK + j
+    return _finish(b, j, b, c, s_out * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt,
                    b[c + S_T * BLOCK], b[c + S_XI * BLOCK], b[c + S_X * BLOCK], b[c + S_V * BLOCK],
                    b[c + S_TS * BLOCK], b[w + W_RES * BLOCK], b[w + W_CUR * BLOCK], b[w + W_POWER * BLOCK],
                    b[w + W_QAIR * BLOCK], b[w + W_QSH * BLOCK], b[w + W_QSA * BLOCK], b[w + W_DTEMP0 * BLOCK],
@@ -457,7 +459,7 @@ def _finish_set(b, j, dt):
 
 
 @jit_inline
-def _block_begin(b, drive_kind, dt, scaled, keep):
+def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out):
     """Start of a step and the solve's first iteration for every set of block b; returns how
     many sets need further iterations. Sets that do not are finished here.
 
@@ -467,7 +469,7 @@ def _block_begin(b, drive_kind, dt, scaled, keep):
     """
     n_active = 0     # an integer count: a float sum is a reduction LLVM may not reorder
     for j in range(BLOCK):
-        sk = B_CUR * BLOCK + j
+        sk = s_in * BLOCK + j
         w = B_WORK * BLOCK + j
         (temp, xi, sig, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
          d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
@@ -515,22 +517,22 @@ def _block_begin(b, drive_kind, dt, scaled, keep):
             d_xi, active = 0.0, 0.0
         if keep:
             _store_solve(b, j, d_xi, lo1, hi1, v_new, sig_new, gain1, um1, ua1, active)
-        b[B_NEXT * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
-        b[B_NEXT * BLOCK + j + S_NREV * BLOCK] = n_points
-        finite = _finish(b, j, b, sk, B_NEXT * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt, temp, xi, x, v,
+        b[s_out * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
+        b[s_out * BLOCK + j + S_NREV * BLOCK] = n_points
+        finite = _finish(b, j, b, sk, s_out * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt, temp, xi, x, v,
                          t_sheath, res, cur, power, q_air, q_sh, q_sa, d_temp0, temp_per_xi, d_xi, v_new, sig_new)
         b[B_REDO * BLOCK + j] = 1.0 if redo or not finite else 0.0
         n_active += 1 if active > 0.0 else 0
     return n_active
 
 
-@jit
-def _block_iterate(b):
+@jit_inline
+def _block_iterate(b, s_in):
     """One more iteration of the solve for the sets of block b that need it; how many still do."""
     n_active = 0
     for j in range(BLOCK):
         w = B_WORK * BLOCK + j
-        d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active, closes = _iteration(b, j, True)
+        d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active, closes = _iteration(b, j, s_in, True)
         if b[w + W_ACTIVE * BLOCK] > 0.0:
             _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active)
             if closes > 0.0:
@@ -539,51 +541,56 @@ def _block_iterate(b):
     return n_active
 
 
-@jit
-def _block_finish(b, dt):
+@jit_inline
+def _block_finish(b, dt, s_in, s_out):
     """End of the step for every set of block b from its solve; sets still unsolved are flagged."""
     for j in range(BLOCK):
-        finite = _finish_set(b, j, dt)
+        finite = _finish_set(b, j, s_in, s_out, dt)
         if b[B_WORK * BLOCK + j + W_ACTIVE * BLOCK] > 0.0 or not finite:
             b[B_REDO * BLOCK + j] = 1.0
 
 
-@jit
-def _block_begin_outer(b, drive_kind, dt):
-    """_block_begin for a block whose sets have fewer than two reversal points each, without
-    the work area (such blocks rarely iterate)."""
-    return _block_begin(b, drive_kind, dt, False, False)
+@jit_inline
+def _step_block(b, drive_kind, dt, s_in, s_out):
+    """One step of every set of block b from state region s_in into s_out; flags (B_REDO) the sets
+    step has to redo and returns how many there are.
 
-
-@jit
-def _block_begin_scaled(b, drive_kind, dt):
-    """_block_begin for any block, keeping the work area for further iterations (the scaled
-    branch needs them in most steps)."""
-    return _block_begin(b, drive_kind, dt, True, True)
-
-
-@jit
-def _step_block(b, drive_kind, dt):
-    """One step of every set of block b; flags (B_REDO) the sets step has to redo and returns
-    how many there are."""
+    A block whose sets have fewer than two reversal points each rarely iterates: its step
+    first runs without the work area; one with a set on a scaled branch needs iterations in
+    most steps and keeps it at once (scaled=True is the general form).
+    """
     n_scaled = 0
     for j in range(BLOCK):
-        n_scaled += 1 if b[(B_CUR + S_NREV) * BLOCK + j] >= 2.0 else 0
+        n_scaled += 1 if b[(s_in + S_NREV) * BLOCK + j] >= 2.0 else 0
     if n_scaled > 0:
-        n_active = _block_begin_scaled(b, drive_kind, dt)
+        n_active = _block_begin(b, drive_kind, dt, True, True, s_in, s_out)
     else:
-        n_active = _block_begin_outer(b, drive_kind, dt)
+        n_active = _block_begin(b, drive_kind, dt, False, False, s_in, s_out)
         if n_active > 0:          # the same step again, keeping what the iterations need
-            n_active = _block_begin_scaled(b, drive_kind, dt)
+            n_active = _block_begin(b, drive_kind, dt, True, True, s_in, s_out)
     if n_active > 0:
         for _ in range(BLOCK_ITERATIONS - 1):
-            if _block_iterate(b) == 0:
+            if _block_iterate(b, s_in) == 0:
                 break
-        _block_finish(b, dt)
+        _block_finish(b, dt, s_in, s_out)
     n_redo = 0
     for j in range(BLOCK):
         n_redo += 1 if b[B_REDO * BLOCK + j] > 0.0 else 0
     return n_redo
+
+
+# the two directions as separate functions: constant region offsets let LLVM prove that the
+# vector loops' loads and stores do not overlap
+@jit
+def _step_block_even(b, drive_kind, dt):
+    """_step_block from region 0 into region 1."""
+    return _step_block(b, drive_kind, dt, B_STATE0, B_STATE1)
+
+
+@jit
+def _step_block_odd(b, drive_kind, dt):
+    """_step_block from region 1 into region 0."""
+    return _step_block(b, drive_kind, dt, B_STATE1, B_STATE0)
 
 
 @jit
@@ -611,12 +618,13 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
         for f in range(N_P):
             b[f * BLOCK + j] = params[i, f]
         for f in range(S_MEM):
-            b[(B_CUR + f) * BLOCK + j] = states[i, f]
+            b[(B_STATE0 + f) * BLOCK + j] = states[i, f]
         _copy_top(b, j, states[i])
     for j in range(count):
         failed_at[first + j] = -1
     r = 0
     countdown = record_every
+    s_in, s_out = B_STATE0, B_STATE1
     for k in range(n_steps):
         if shared:
             for j in range(count):
@@ -624,16 +632,17 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
         else:
             for j in range(count):
                 b[B_DRIVE * BLOCK + j] = drives[first + j, k]
-        for j in range(count if _step_block(b, drive_kind, dt) > 0 else 0):
+        n_redo = _step_block_even(b, drive_kind, dt) if s_in == B_STATE0 else _step_block_odd(b, drive_kind, dt)
+        for j in range(count if n_redo > 0 else 0):
             i = first + j
             if b[B_REDO * BLOCK + j] == 0.0 or failed_at[i] >= 0:
                 continue
             s = states[i]
             for f in range(S_MEM):
-                s[f] = b[(B_CUR + f) * BLOCK + j]
+                s[f] = b[(s_in + f) * BLOCK + j]
             finite = step(params[i], s, drive_kind, drives[0 if shared else i, k], dt, out)
             for f in range(S_MEM):
-                b[(B_NEXT + f) * BLOCK + j] = s[f]
+                b[(s_out + f) * BLOCK + j] = s[f]
             for f in range(N_O):
                 b[(B_OUT + f) * BLOCK + j] = out[f]
             _copy_top(b, j, s)
@@ -644,17 +653,16 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
             countdown = record_every
             for c in range(n_ch):
                 ch = channels[c]
-                base = (B_NEXT + ch) * BLOCK if ch < N_S else (B_OUT + ch - N_S) * BLOCK
+                base = (s_out + ch) * BLOCK if ch < N_S else (B_OUT + ch - N_S) * BLOCK
                 for j in range(count):
                     if failed_at[first + j] < 0:
                         records[c, first + j, r] = b[base + j]
             r += 1
-        for q in range(S_MEM * BLOCK):     # a failed set's row in states keeps its last state
-            b[B_CUR * BLOCK + q] = b[B_NEXT * BLOCK + q]
+        s_in, s_out = s_out, s_in
     for j in range(count):
-        if failed_at[first + j] < 0:
+        if failed_at[first + j] < 0:       # a failed set's row in states keeps its last state
             for f in range(S_MEM):
-                states[first + j, f] = b[(B_CUR + f) * BLOCK + j]
+                states[first + j, f] = b[(s_in + f) * BLOCK + j]
 
 
 @jit
