@@ -128,12 +128,9 @@ def _logistic(a):
     come without cancellation. One exp is cheaper than tanh, the kernel's largest cost.
     """
     e = exp_nonpositive(-2.0 * abs(a))
-    if a >= 0.0:
-        z = 1.0 / (1.0 + e)
-        rest = e * z
-    else:
-        rest = 1.0 / (1.0 + e)
-        z = e * rest
+    d = 1.0 / (1.0 + e)      # once: written per branch, the vector code divided on both sides
+    z = d if a >= 0.0 else e * d
+    rest = e * d if a >= 0.0 else d
     return z, 4.0 * z * rest
 
 
