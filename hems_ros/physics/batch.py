@@ -6,9 +6,10 @@
 
 Parameter sets are packed into a (n_sets, N_P) float64 array and run in parallel by
 kernel.run_batch, in blocks of sets whose step arithmetic is vectorised across the sets; a set
-gives the same bits as the stepping API's kernel.step.
+gives the same bits as the stepping API's kernel.step (to rounding when no energy channel is
+recorded: the blocks then skip the energy accumulators, a tenth of their work).
 ``record_every`` keeps every k-th step; ``channels`` limits what is stored (memory for big
-batches). Sensor channels (encoder, force reading with the seeded noise of each set) are
+batches) and, for the energy channels, what is computed. Sensor channels (encoder, force reading with the seeded noise of each set) are
 derived on first access from the recorded truth, with the same functions and noise draws as
 the stepping API.
 """

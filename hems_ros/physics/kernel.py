@@ -16,7 +16,8 @@ The coupled update is a scalar root (safeguarded Newton, see :func:`step`).
 The state row carries, after the named states, the kinetics' reversal-point memory.
 
 The batch (run_batch) runs blocks of sets with the step's arithmetic vectorised across the
-sets of a block (see "batch" below); step and the batch give bit-identical results. All
+sets of a block (see "batch" below); step and the batch give bit-identical results while the
+batch keeps the energy accumulators, and agree to rounding when it skips them. All
 kernel functions use numba's numpy error model: a division by zero gives inf or nan, which
 the finite-state check reports, instead of a per-division test that would keep the batch
 loops from vectorising (options in jit.py).
@@ -158,7 +159,7 @@ def _mechanics(sig_free, area, relax, c_in, g_in, c_out, g_out):
 
 # The step is split into _begin (electrical, heat flows, elastic trial), the kinetic solve and
 # _finish (state update, accumulators, outputs) so that step and the batch's SIMD block path
-# (_step_block) share the arithmetic and give bit-identical results. Both halves address a
+# (_step_block) share the arithmetic and give the same results. Both halves address a
 # set through (array, offset, stride): field f of the set is a[offset + f * stride]; a packed
 # row (pack, initial_state) is offset 0, stride 1, a block of BLOCK sets is stride BLOCK.
 
@@ -225,8 +226,9 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
 
 @jit_inline
 def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
-            d_temp0, temp_per_xi, d_xi, v_new, sig_new):
-    """End of a step: new state (read at sk, written at dk), accumulators, outputs; True if finite."""
+            d_temp0, temp_per_xi, d_xi, v_new, sig_new, energy):
+    """End of a step: new state (read at sk, written at dk), outputs and, with ``energy``, the
+    energy accumulators; True if finite."""
     d_temp = d_temp0 + temp_per_xi * d_xi
     x_new = x + v_new * dt
     temp_new = temp + d_temp
@@ -239,13 +241,15 @@ def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, res, cur
     d_ts = (q_sh - q_sa) * dt * p[pk + P_INV_CS * n]
     sheathed = p[pk + P_SHEATH * n] > 0.0
     s[dk + S_TS * n] = t_sheath + d_ts if sheathed else t_sheath
-    s[dk + S_ESHSTORED * n] = s[sk + S_ESHSTORED * n] + p[pk + P_CS * n] * d_ts if sheathed else s[sk + S_ESHSTORED * n]
-    s[dk + S_EJ * n] = s[sk + S_EJ * n] + power * dt
-    s[dk + S_ESTORED * n] = s[sk + S_ESTORED * n] + p[pk + P_CW * n] * d_temp
-    s[dk + S_ECONV * n] = s[sk + S_ECONV * n] + q_air * dt
-    s[dk + S_ELAT * n] = s[sk + S_ELAT * n] - p[pk + P_LAT * n] * d_xi
-    s[dk + S_ESH * n] = s[sk + S_ESH * n] + q_sh * dt
-    s[dk + S_ESHCONV * n] = s[sk + S_ESHCONV * n] + q_sa * dt
+    if energy:
+        s[dk + S_ESHSTORED * n] = (s[sk + S_ESHSTORED * n] + p[pk + P_CS * n] * d_ts if sheathed
+                                   else s[sk + S_ESHSTORED * n])
+        s[dk + S_EJ * n] = s[sk + S_EJ * n] + power * dt
+        s[dk + S_ESTORED * n] = s[sk + S_ESTORED * n] + p[pk + P_CW * n] * d_temp
+        s[dk + S_ECONV * n] = s[sk + S_ECONV * n] + q_air * dt
+        s[dk + S_ELAT * n] = s[sk + S_ELAT * n] - p[pk + P_LAT * n] * d_xi
+        s[dk + S_ESH * n] = s[sk + S_ESH * n] + q_sh * dt
+        s[dk + S_ESHCONV * n] = s[sk + S_ESHCONV * n] + q_sa * dt
 
     pulley = p[pk + P_N * n]
     out[ok + O_R * n] = res
@@ -317,7 +321,7 @@ def step(p, s, drive_kind, drive_value, dt, out):
                 break
         s[S_NREV] = n_points - 2 * closed
     return _finish(p, 0, s, 0, 0, 1, out, 0, dt, temp, xi, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
-                   d_temp0, temp_per_xi, d_xi, v_new, sig_new)
+                   d_temp0, temp_per_xi, d_xi, v_new, sig_new, True)
 
 
 # ---------------------------------------------------------------- batch
@@ -325,7 +329,8 @@ def step(p, s, drive_kind, drive_value, dt, out):
 # of the block that LLVM vectorises (SIMD): _block_begin does the start of the step and the
 # kinetic solve's first iteration, _block_iterate the further iterations while any set needs
 # them, _block_finish the end of the step for those sets. They take step's arithmetic in step's
-# order, so a set gives the same bits in both APIs. Sets that push or wipe out reversal points,
+# order, so a set gives the same bits in both APIs (without the energy accumulators, the same
+# to rounding: LLVM may fuse a multiply-add differently). Sets that push or wipe out reversal points,
 # or need more than BLOCK_ITERATIONS iterations, or turn non-finite, are flagged (B_REDO) and
 # redone from their old state by step itself (0.04 % of the steps of the benchmark's pulse train).
 # One float64 buffer holds the block, field f of set j at f * BLOCK + j: the constant offsets
@@ -447,7 +452,7 @@ def _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active):
 
 
 @jit_inline
-def _finish_set(b, j, s_in, s_out, dt):
+def _finish_set(b, j, s_in, s_out, dt, energy):
     """_finish for set j of block b from its W_* fields; True if the new state is finite."""
     w = B_WORK * BLOCK + j
     c = s_in * BLOCK + j
@@ -455,11 +460,12 @@ def _finish_set(b, j, s_in, s_out, dt):
                    b[c + S_T * BLOCK], b[c + S_XI * BLOCK], b[c + S_X * BLOCK], b[c + S_V * BLOCK],
                    b[c + S_TS * BLOCK], b[w + W_RES * BLOCK], b[w + W_CUR * BLOCK], b[w + W_POWER * BLOCK],
                    b[w + W_QAIR * BLOCK], b[w + W_QSH * BLOCK], b[w + W_QSA * BLOCK], b[w + W_DTEMP0 * BLOCK],
-                   b[j + P_TPX * BLOCK], b[w + W_DXI * BLOCK], b[w + W_VNEW * BLOCK], b[w + W_SIGNEW * BLOCK])
+                   b[j + P_TPX * BLOCK], b[w + W_DXI * BLOCK], b[w + W_VNEW * BLOCK], b[w + W_SIGNEW * BLOCK],
+                   energy)
 
 
 @jit_inline
-def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out):
+def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
     """Start of a step and the solve's first iteration for every set of block b; returns how
     many sets need further iterations. Sets that do not are finished here.
 
@@ -520,7 +526,8 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out):
         b[s_out * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
         b[s_out * BLOCK + j + S_NREV * BLOCK] = n_points
         finite = _finish(b, j, b, sk, s_out * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt, temp, xi, x, v,
-                         t_sheath, res, cur, power, q_air, q_sh, q_sa, d_temp0, temp_per_xi, d_xi, v_new, sig_new)
+                         t_sheath, res, cur, power, q_air, q_sh, q_sa, d_temp0, temp_per_xi, d_xi, v_new, sig_new,
+                         energy)
         b[B_REDO * BLOCK + j] = 1.0 if redo or not finite else 0.0
         n_active += 1 if active > 0.0 else 0
     return n_active
@@ -542,37 +549,38 @@ def _block_iterate(b, s_in):
 
 
 @jit_inline
-def _block_finish(b, dt, s_in, s_out):
+def _block_finish(b, dt, s_in, s_out, energy):
     """End of the step for every set of block b from its solve; sets still unsolved are flagged."""
     for j in range(BLOCK):
-        finite = _finish_set(b, j, s_in, s_out, dt)
+        finite = _finish_set(b, j, s_in, s_out, dt, energy)
         if b[B_WORK * BLOCK + j + W_ACTIVE * BLOCK] > 0.0 or not finite:
             b[B_REDO * BLOCK + j] = 1.0
 
 
 @jit_inline
-def _step_block(b, drive_kind, dt, s_in, s_out):
+def _step_block(b, drive_kind, dt, s_in, s_out, energy):
     """One step of every set of block b from state region s_in into s_out; flags (B_REDO) the sets
     step has to redo and returns how many there are.
 
     A block whose sets have fewer than two reversal points each rarely iterates: its step
     first runs without the work area; one with a set on a scaled branch needs iterations in
-    most steps and keeps it at once (scaled=True is the general form).
+    most steps and keeps it at once (scaled=True is the general form). ``energy`` False skips
+    the energy accumulators (about a tenth of a step) when no energy channel is recorded.
     """
     n_scaled = 0
     for j in range(BLOCK):
         n_scaled += 1 if b[(s_in + S_NREV) * BLOCK + j] >= 2.0 else 0
     if n_scaled > 0:
-        n_active = _block_begin(b, drive_kind, dt, True, True, s_in, s_out)
+        n_active = _block_begin(b, drive_kind, dt, True, True, s_in, s_out, energy)
     else:
-        n_active = _block_begin(b, drive_kind, dt, False, False, s_in, s_out)
+        n_active = _block_begin(b, drive_kind, dt, False, False, s_in, s_out, energy)
         if n_active > 0:          # the same step again, keeping what the iterations need
-            n_active = _block_begin(b, drive_kind, dt, True, True, s_in, s_out)
+            n_active = _block_begin(b, drive_kind, dt, True, True, s_in, s_out, energy)
     if n_active > 0:
         for _ in range(BLOCK_ITERATIONS - 1):
             if _block_iterate(b, s_in) == 0:
                 break
-        _block_finish(b, dt, s_in, s_out)
+        _block_finish(b, dt, s_in, s_out, energy)
     n_redo = 0
     for j in range(BLOCK):
         n_redo += 1 if b[B_REDO * BLOCK + j] > 0.0 else 0
@@ -584,13 +592,25 @@ def _step_block(b, drive_kind, dt, s_in, s_out):
 @jit
 def _step_block_even(b, drive_kind, dt):
     """_step_block from region 0 into region 1."""
-    return _step_block(b, drive_kind, dt, B_STATE0, B_STATE1)
+    return _step_block(b, drive_kind, dt, B_STATE0, B_STATE1, True)
 
 
 @jit
 def _step_block_odd(b, drive_kind, dt):
     """_step_block from region 1 into region 0."""
-    return _step_block(b, drive_kind, dt, B_STATE1, B_STATE0)
+    return _step_block(b, drive_kind, dt, B_STATE1, B_STATE0, True)
+
+
+@jit
+def _step_block_even_no_energy(b, drive_kind, dt):
+    """_step_block from region 0 into region 1 without the energy accumulators."""
+    return _step_block(b, drive_kind, dt, B_STATE0, B_STATE1, False)
+
+
+@jit
+def _step_block_odd_no_energy(b, drive_kind, dt):
+    """_step_block from region 1 into region 0 without the energy accumulators."""
+    return _step_block(b, drive_kind, dt, B_STATE1, B_STATE0, False)
 
 
 @jit
@@ -611,6 +631,9 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
     n_steps = drives.shape[1]
     shared = drives.shape[0] == 1
     n_ch = channels.shape[0]
+    energy = False
+    for c in range(n_ch):
+        energy = energy or S_EJ <= channels[c] <= S_ESHCONV
     b = np.zeros(B_SIZE * BLOCK)
     out = np.zeros(N_O)
     for j in range(BLOCK):
@@ -632,7 +655,11 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
         else:
             for j in range(count):
                 b[B_DRIVE * BLOCK + j] = drives[first + j, k]
-        n_redo = _step_block_even(b, drive_kind, dt) if s_in == B_STATE0 else _step_block_odd(b, drive_kind, dt)
+        if energy:
+            n_redo = _step_block_even(b, drive_kind, dt) if s_in == B_STATE0 else _step_block_odd(b, drive_kind, dt)
+        else:
+            n_redo = (_step_block_even_no_energy(b, drive_kind, dt) if s_in == B_STATE0
+                      else _step_block_odd_no_energy(b, drive_kind, dt))
         for j in range(count if n_redo > 0 else 0):
             i = first + j
             if b[B_REDO * BLOCK + j] == 0.0 or failed_at[i] >= 0:
