@@ -3,9 +3,11 @@
 Prints measured numbers and ratios side by side (not a pass/fail test; floors from issue 3):
 - one unit, full model (calibrated sheathed rig), 60 s at 1 kHz: real-time factor (floor 1000x),
   through the batch API (one set) and the stepping API (what a node calls every 1 ms);
-- batch, 256 parameter sets x 30 s: simulated unit-seconds per wall second (floor 1e5), at the
-  1 kHz step and at the 100 Hz control period (Ts = 10 ms, digest section 4), with the
-  trajectory difference between the two steps, the CPU time and the threads numba used;
+- batch, 256 parameter sets x 30 s, recording slider position and wire force (what a fit
+  compares): simulated unit-seconds per wall second (floor 1e5), at the 1 kHz step and at the
+  100 Hz control period (Ts = 10 ms, digest section 4), with the trajectory difference between
+  the two steps, the CPU time and the threads numba used; and at 1 kHz recording every channel
+  (the energy accumulators cost about a tenth more);
 - the same batch on one thread, CPU time per set-step: the SIMD blocks of kernel.run_batch
   against the sets run one by one through kernel.step, and what each gives on idle cores
   (the wall figures depend on what else the machine runs);
@@ -41,14 +43,16 @@ def current_profile(total_s: float, dt: float) -> np.ndarray:
     return np.where((t % 10.0) < 2.0, 4.0, 0.0)
 
 
-def timed_cpu(fn, repeat: int = 3) -> tuple[float, float]:
-    """(wall, process CPU) seconds of the fastest of ``repeat`` runs."""
-    best = (math.inf, math.inf)
+def timed_cpu(fn, repeat: int = 3) -> tuple[float, float, float]:
+    """(wall, process CPU) seconds of the fastest of ``repeat`` runs, and the median wall time
+    (this host's neighbours make single runs vary by tens of per cent)."""
+    runs = []
     for _ in range(repeat):
         start, cpu = time.perf_counter(), time.process_time()
         fn()
-        best = min(best, (time.perf_counter() - start, time.process_time() - cpu))
-    return best
+        runs.append((time.perf_counter() - start, time.process_time() - cpu))
+    wall, cpu = min(runs)
+    return wall, cpu, float(np.median([w for w, _ in runs]))
 
 
 def timed(fn, repeat: int = 3) -> float:
@@ -68,7 +72,7 @@ def lsoda_rhs(p):
     solved together as in the kernel.
     """
     c_w, lat, s_area = p[K.P_CW], p[K.P_LAT], p[K.P_S]
-    mass, n = p[K.P_MASS], p[K.P_N]
+    n = p[K.P_N]
 
     def rhs(_t, y, cur):
         temp, xi, sig, x, v, ts = y
@@ -96,7 +100,7 @@ def lsoda_rhs(p):
         dtemp = dtemp0 + lat / c_w * dxi
         dsig = dsig0 + omega * dxi + theta * lat / c_w * dxi
         force = s_area * sig / n
-        acc = (force - mass * p[K.P_G] - p[K.P_DAMP] * n * v - p[K.P_F0] - p[K.P_K] * n * x) / (mass * n)
+        acc = (force - p[K.P_FSTAT] - p[K.P_BN] * v - p[K.P_KN] * x) / p[K.P_MN]
         return [dtemp, dxi, dsig, v, acc, dts]
 
     return rhs
@@ -169,22 +173,27 @@ def main() -> int:
         cur = current_profile(30.0, step)
         every = max(1, int(round(0.01 / step)))
         simulate(sets, step, current=cur[:10])
-        t, cpu = timed_cpu(lambda: simulate(sets, step, current=cur, record_every=every,
-                                            channels=["slider_position_m", "wire_force_n"]))
+        t, cpu, t_median = timed_cpu(lambda: simulate(sets, step, current=cur, record_every=every,
+                                                      channels=["slider_position_m", "wire_force_n"]), repeat=7)
         rate = 256 * 30.0 / t
         print(f"batch 256 sets x 30 s, dt {step * 1e3:4.0f} ms : {t * 1e3:8.1f} ms  {rate:10.0f} unit-s per wall-s "
-              f"(floor 1e5: {rate / 1e5:.2f} x floor; LSODA at this rate: {30 / lsoda_s:.1f}, "
-              f"ratio {rate / (30 / lsoda_s):.0f}x); CPU {cpu * 1e3:.0f} ms on {threads} threads "
-              f"({numba.threading_layer()}), {cpu / (256 * cur.size) * 1e9:.1f} ns per set-step")
+              f"(floor 1e5: {rate / 1e5:.2f} x floor; fastest of 7, median {256 * 30.0 / t_median / 1e5:.2f} x floor; "
+              f"LSODA at this rate: {30 / lsoda_s:.1f}, ratio {rate / (30 / lsoda_s):.0f}x); CPU {cpu * 1e3:.0f} ms "
+              f"on {threads} threads ({numba.threading_layer()}), {cpu / (256 * cur.size) * 1e9:.1f} ns per set-step")
+
+    cur = current_profile(30.0, 1e-3)
+    t_all, _, _ = timed_cpu(lambda: simulate(sets, 1e-3, current=cur, record_every=10), repeat=5)
+    print(f"the same at dt 1 ms recording every channel (energy accumulators on): {256 * 30.0 / t_all:10.0f} "
+          f"unit-s per wall-s ({256 * 30.0 / t_all / 1e5:.2f} x floor, fastest of 5)")
 
     # Per-thread cost, one thread (CPU time: robust to other load on the machine): the SIMD
     # blocks against the same sets run one by one through kernel.step (the batch before blocks)
     cur = current_profile(30.0, 1e-3)
     numba.set_num_threads(1)
-    _, cpu_blocks = timed_cpu(lambda: simulate(sets, 1e-3, current=cur, record_every=10,
-                                               channels=["slider_position_m", "wire_force_n"]))
+    _, cpu_blocks, _ = timed_cpu(lambda: simulate(sets, 1e-3, current=cur, record_every=10,
+                                                  channels=["slider_position_m", "wire_force_n"]), repeat=7)
     numba.set_num_threads(threads)
-    _, cpu_sets = timed_cpu(lambda: set_by_set(sets, cur, 10), repeat=1)
+    _, cpu_sets, _ = timed_cpu(lambda: set_by_set(sets, cur, 10), repeat=1)
     per_step = {name: c / (256 * cur.size) for name, c in (("blocks", cpu_blocks), ("sets", cpu_sets))}
     cores = os.cpu_count() or 1
     print(f"one thread, dt 1 ms, ns per set-step: SIMD blocks {per_step['blocks'] * 1e9:.1f}, set by set "

@@ -68,10 +68,10 @@ _invalidate_stale_cache()
  P_MF0, P_INV_MW, P_AS0, P_INV_AW,
  P_EM, P_EA, P_ALM, P_ALA, P_EPSL, P_NU,
  P_VSUP, P_ILIM,
- P_MASS, P_DAMP, P_K, P_F0, P_G, P_N,
+ P_MN, P_BN, P_KN, P_FSTAT, P_N,
  P_SHEATH, P_GWS, P_GSA, P_CS,
  P_A_IN, P_F_IN, P_A_OUT, P_F_OUT,
- P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, P_TPX, N_P) = range(50)
+ P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, P_TPX, N_P) = range(49)
 
 # ---------------------------------------------------------------- state row
 STATE_NAMES = (
@@ -121,8 +121,9 @@ def pack(params: UnitParams) -> np.ndarray:
     p[P_ALM], p[P_ALA] = co.alpha_martensite_per_c, co.alpha_austenite_per_c
     p[P_EPSL], p[P_NU] = co.max_recoverable_strain, co.poisson_ratio
     p[P_VSUP], p[P_ILIM] = params.drive.supply_voltage_v, params.drive.current_limit_a
-    p[P_MASS], p[P_DAMP], p[P_K] = ld.mass_kg, ld.damping_n_s_per_m, ld.stiffness_n_per_m
-    p[P_F0], p[P_G], p[P_N] = ld.pretension_n, ld.gravity_m_s2, ld.pulley_ratio
+    p[P_MN], p[P_BN], p[P_KN], p[P_FSTAT] = loads.referred_load(
+        ld.mass_kg, ld.damping_n_s_per_m, ld.stiffness_n_per_m, ld.pretension_n, ld.gravity_m_s2, ld.pulley_ratio)
+    p[P_N] = ld.pulley_ratio
     if params.sheath.enabled:
         r = sheath.sheath_resistances(params.sheath, w.length_m)
         p[P_SHEATH] = 1.0
@@ -211,8 +212,8 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     inv_l0 = p[pk + P_INV_L0 * n]
     relax = modulus * dt * inv_l0                  # stress drop per slider velocity
     c_in, g_in, c_out, g_out = loads.slider_response(
-        area * modulus * inv_l0, x, v, dt, p[pk + P_MASS * n], p[pk + P_DAMP * n], p[pk + P_K * n],
-        p[pk + P_F0 * n], p[pk + P_G * n], p[pk + P_N * n], p[pk + P_A_IN * n], p[pk + P_F_IN * n],
+        area * modulus * inv_l0, x, v, dt, p[pk + P_MN * n], p[pk + P_BN * n], p[pk + P_KN * n],
+        p[pk + P_FSTAT * n], p[pk + P_A_IN * n], p[pk + P_F_IN * n],
         p[pk + P_A_OUT * n], p[pk + P_F_OUT * n])
 
     inv_cm, inv_ca = p[pk + P_INV_CM * n], p[pk + P_INV_CA * n]
@@ -251,14 +252,13 @@ def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, res, cur
         s[dk + S_ESH * n] = s[sk + S_ESH * n] + q_sh * dt
         s[dk + S_ESHCONV * n] = s[sk + S_ESHCONV * n] + q_sa * dt
 
-    pulley = p[pk + P_N * n]
     out[ok + O_R * n] = res
     out[ok + O_I * n] = cur
     out[ok + O_P * n] = power
     out[ok + O_FW * n] = p[pk + P_S * n] * sig_new
-    out[ok + O_FT * n] = loads.load_force(v_new, v, x_new, dt, p[pk + P_MASS * n], p[pk + P_DAMP * n],
-                                          p[pk + P_K * n], p[pk + P_F0 * n], p[pk + P_G * n], pulley)
-    out[ok + O_XT * n] = pulley * x_new
+    out[ok + O_FT * n] = loads.load_force(v_new, v, x_new, dt, p[pk + P_MN * n], p[pk + P_BN * n],
+                                          p[pk + P_KN * n], p[pk + P_FSTAT * n])
+    out[ok + O_XT * n] = p[pk + P_N * n] * x_new
     return math.isfinite(temp_new) and math.isfinite(sig_new) and math.isfinite(x_new)
 
 

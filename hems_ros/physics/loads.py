@@ -30,23 +30,30 @@ def transmission(capstan, pulley, coulomb):
 
 
 @jit
-def slider_response(wire_stiffness, x, v, dt, mass, damping, stiffness, pretension, gravity, pulley,
+def referred_load(mass, damping, stiffness, pretension, gravity, pulley):
+    """The load's coefficients in eq. 4.33 written for the slider (x_L = n x):
+    (m n, b n, k n, m g + F_0), so that m n x'' = F_L - (m g + F_0) - b n x' - k n x.
+    Constants of a parameter set (kernel.pack), so a step does not multiply them again."""
+    return mass * pulley, damping * pulley, stiffness * pulley, mass * gravity + pretension
+
+
+@jit
+def slider_response(wire_stiffness, x, v, dt, mass_n, damping_n, stiffness_n, static_force,
                     a_in, f_in, a_out, f_out):
     """Slider velocity at the end of the step as v = c + g W0, per direction of motion.
 
     Returns (c_in, g_in, c_out, g_out) for motion inward and outward (eqs. 4.32-4.35 with the
     :func:`transmission` coefficients). They depend on the state at the start of the step
     only, so the kernel computes them once and evaluates :func:`slider_velocity` for each W0
-    its kinetic-mechanical solve tries.
+    its kinetic-mechanical solve tries. The load comes as :func:`referred_load` gives it.
     """
-    n = pulley
     inv_dt = 1.0 / dt      # one division per batch loop (dt is the same for every set)
-    inertia = mass * n * inv_dt + damping * n + stiffness * n * dt
-    rest = mass * n * v * inv_dt - mass * gravity - pretension - stiffness * n * x
+    inertia = mass_n * inv_dt + damping_n + stiffness_n * dt
+    rest = mass_n * v * inv_dt - static_force - stiffness_n * x
     # F_L(dir) = a_dir * (w0 - K dt v) + f_dir, linear in v
     den_in = inertia + a_in * wire_stiffness * dt
     den_out = inertia + a_out * wire_stiffness * dt
-    inv_both = 1.0 / (den_in * den_out)   # one division for both: the batch's costliest operation
+    inv_both = 1.0 / (den_in * den_out)   # one division for both directions
     inv_den_in = den_out * inv_both
     inv_den_out = den_in * inv_both
     return (rest + f_in) * inv_den_in, a_in * inv_den_in, (rest + f_out) * inv_den_out, a_out * inv_den_out
@@ -69,9 +76,7 @@ def slider_velocity(w0, c_in, g_in, c_out, g_out):
 
 
 @jit
-def load_force(v_new, v_old, x_new, dt, mass, damping, stiffness, pretension, gravity, pulley):
-    """Force the load receives (load coordinates), from its own equation of motion (4.33)."""
-    n = pulley
-    inv_dt = 1.0 / dt
-    return (mass * n * (v_new - v_old) * inv_dt + mass * gravity + damping * n * v_new
-            + pretension + stiffness * n * x_new)
+def load_force(v_new, v_old, x_new, dt, mass_n, damping_n, stiffness_n, static_force):
+    """Force the load receives (load coordinates), from its own equation of motion (4.33),
+    with the load as :func:`referred_load` gives it."""
+    return mass_n * (v_new - v_old) * (1.0 / dt) + static_force + damping_n * v_new + stiffness_n * x_new
