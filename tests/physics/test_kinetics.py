@@ -140,3 +140,14 @@ def test_resistance_hysteresis_against_temperature():
     cool_t, cool_r = temp[~heat_mask][::-1], r[~heat_mask][::-1]   # increasing temperature
     down = np.interp(grid, cool_t, cool_r)
     assert np.max(np.abs(up - down)) > 0.2   # ohm, same temperature, different phase mix
+
+
+def test_vectorisable_exp_is_within_one_ulp_of_libm():
+    # kinetics' own exp replaces libm's inside the batch's vector loops (see its comment)
+    rng = np.random.default_rng(1)
+    xs = np.concatenate([-rng.uniform(0.0, 708.0, 20000), -rng.uniform(0.0, 1.0, 20000), [0.0, -1e-300, -708.0]])
+    got = np.array([kinetics.exp_nonpositive(x) for x in xs])
+    ref = np.array([math.exp(x) for x in xs])
+    assert np.max(np.abs(got - ref) / np.spacing(ref)) <= 1.0
+    assert np.mean(got == ref) > 0.85
+    assert kinetics.exp_nonpositive(-709.0) == 0.0 and kinetics.exp_nonpositive(-1e308) == 0.0
