@@ -587,29 +587,17 @@ def _step_block(b, drive_kind, dt, s_in, s_out, energy):
     return n_redo
 
 
-# the two directions as separate functions: constant region offsets let LLVM prove that the
-# vector loops' loads and stores do not overlap
 @jit
-def _step_block_even(b, drive_kind, dt):
-    """_step_block from region 0 into region 1."""
-    return _step_block(b, drive_kind, dt, B_STATE0, B_STATE1, True)
-
-
-@jit
-def _step_block_odd(b, drive_kind, dt):
-    """_step_block from region 1 into region 0."""
-    return _step_block(b, drive_kind, dt, B_STATE1, B_STATE0, True)
-
-
-@jit
-def _step_block_even_no_energy(b, drive_kind, dt):
-    """_step_block from region 0 into region 1 without the energy accumulators."""
-    return _step_block(b, drive_kind, dt, B_STATE0, B_STATE1, False)
-
-
-@jit
-def _step_block_odd_no_energy(b, drive_kind, dt):
-    """_step_block from region 1 into region 0 without the energy accumulators."""
+def _step_block_variant(b, drive_kind, dt, even, energy):
+    """_step_block with the state regions and the energy flag as constants in each branch: a
+    constant region offset lets LLVM prove that the vector loops' loads and stores do not
+    overlap. ``even``: from region 0 into region 1, else back."""
+    if energy:
+        if even:
+            return _step_block(b, drive_kind, dt, B_STATE0, B_STATE1, True)
+        return _step_block(b, drive_kind, dt, B_STATE1, B_STATE0, True)
+    if even:
+        return _step_block(b, drive_kind, dt, B_STATE0, B_STATE1, False)
     return _step_block(b, drive_kind, dt, B_STATE1, B_STATE0, False)
 
 
@@ -655,11 +643,7 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
         else:
             for j in range(count):
                 b[B_DRIVE * BLOCK + j] = drives[first + j, k]
-        if energy:
-            n_redo = _step_block_even(b, drive_kind, dt) if s_in == B_STATE0 else _step_block_odd(b, drive_kind, dt)
-        else:
-            n_redo = (_step_block_even_no_energy(b, drive_kind, dt) if s_in == B_STATE0
-                      else _step_block_odd_no_energy(b, drive_kind, dt))
+        n_redo = _step_block_variant(b, drive_kind, dt, s_in == B_STATE0, energy)
         for j in range(count if n_redo > 0 else 0):
             i = first + j
             if b[B_REDO * BLOCK + j] == 0.0 or failed_at[i] >= 0:
