@@ -7,7 +7,7 @@ Prints measured numbers and ratios side by side (not a pass/fail test; floors fr
   compares): simulated unit-seconds per wall second (floor 1e5), at the 1 kHz step and at the
   100 Hz control period (Ts = 10 ms, digest section 4), with the trajectory difference between
   the two steps, the CPU time and the threads numba used; and at 1 kHz recording every channel
-  (the energy accumulators cost about a tenth more);
+  (mostly the cost of writing 117 MB of records, plus the energy accumulators);
 - the same batch on one thread, CPU time per set-step: the SIMD blocks of kernel.run_batch
   against the sets run one by one through kernel.step, and what each gives on idle cores
   (the wall figures depend on what else the machine runs);
@@ -34,6 +34,7 @@ from scipy.integrate import solve_ivp  # noqa: E402
 
 from hems_ros.physics import ActuationUnit, constitutive, electrical, heat, kinetics, load_params, sheath, simulate  # noqa: E402
 from hems_ros.physics import kernel as K  # noqa: E402
+from hems_ros.physics.batch import CHANNELS  # noqa: E402
 from hems_ros.physics.electrical import DRIVE_NAMES  # noqa: E402
 
 
@@ -183,8 +184,10 @@ def main() -> int:
 
     cur = current_profile(30.0, 1e-3)
     t_all, _, _ = timed_cpu(lambda: simulate(sets, 1e-3, current=cur, record_every=10), repeat=5)
-    print(f"the same at dt 1 ms recording every channel (energy accumulators on): {256 * 30.0 / t_all:10.0f} "
-          f"unit-s per wall-s ({256 * 30.0 / t_all / 1e5:.2f} x floor, fastest of 5)")
+    mb = len(CHANNELS) * 256 * (cur.size // 10) * 8 / 1e6
+    print(f"the same at dt 1 ms recording every channel ({len(CHANNELS)} channels, {mb:.0f} MB of records, energy "
+          f"accumulators on): {256 * 30.0 / t_all:10.0f} unit-s per wall-s "
+          f"({256 * 30.0 / t_all / 1e5:.2f} x floor, fastest of 5)")
 
     # Per-thread cost, one thread (CPU time: robust to other load on the machine): the SIMD
     # blocks against the same sets run one by one through kernel.step (the batch before blocks)
