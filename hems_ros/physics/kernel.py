@@ -17,10 +17,8 @@ The state row carries, after the named states, the kinetics' reversal-point memo
 
 The batch (run_batch) runs blocks of sets with the step's arithmetic vectorised across the
 sets of a block (see "batch" below); step and the batch give bit-identical results while the
-batch keeps the energy accumulators, and agree to rounding when it skips them. All
-kernel functions use numba's numpy error model: a division by zero gives inf or nan, which
-the finite-state check reports, instead of a per-division test that would keep the batch
-loops from vectorising (options in jit.py).
+batch keeps the energy accumulators, and agree to rounding when it skips them. Compilation
+options (error model, multiply-add contraction) are in jit.py.
 
 Numba's on-disk cache only tracks each function's own file, while the kernel inlines the
 equation modules and all of them take their compilation options from jit.py;
@@ -121,9 +119,9 @@ def pack(params: UnitParams) -> np.ndarray:
     p[P_ALM], p[P_ALA] = co.alpha_martensite_per_c, co.alpha_austenite_per_c
     p[P_EPSL], p[P_NU] = co.max_recoverable_strain, co.poisson_ratio
     p[P_VSUP], p[P_ILIM] = params.drive.supply_voltage_v, params.drive.current_limit_a
-    p[P_MN], p[P_BN], p[P_KN], p[P_FSTAT] = loads.referred_load(
-        ld.mass_kg, ld.damping_n_s_per_m, ld.stiffness_n_per_m, ld.pretension_n, ld.gravity_m_s2, ld.pulley_ratio)
-    p[P_N] = ld.pulley_ratio
+    p[P_MN], p[P_BN], p[P_KN] = loads.referred_load(ld.mass_kg, ld.damping_n_s_per_m, ld.stiffness_n_per_m,
+                                                    ld.pulley_ratio)
+    p[P_FSTAT], p[P_N] = ld.static_force_n(), ld.pulley_ratio
     if params.sheath.enabled:
         r = sheath.sheath_resistances(params.sheath, w.length_m)
         p[P_SHEATH] = 1.0

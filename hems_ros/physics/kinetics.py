@@ -130,7 +130,7 @@ def _logistic(a):
     come without cancellation. One exp is cheaper than tanh, the kernel's largest cost.
     """
     e = exp_nonpositive(-2.0 * abs(a))
-    d = 1.0 / (1.0 + e)      # once: written per branch, the vector code divided on both sides
+    d = 1.0 / (1.0 + e)
     z = d if a >= 0.0 else e * d
     rest = e * d if a >= 0.0 else d
     return z, 4.0 * z * rest
@@ -167,10 +167,11 @@ def transformation_slope(u_a, u_m, xi, heating, m_f, inv_m_width, a_s, inv_a_wid
     """dxi/du on the printed branch (eqs. 4.22-4.24) at effective temperatures u_A, u_M.
 
     Heating: dz+/du (xi - z-)/(z+ - z-); cooling: dz-/du (z+ - xi)/(z+ - z-), with
-    zero-stress transformation temperatures. The ratio is the state's relative position
-    inside the band. The band is given as :func:`band` returns it. It is kept >= 0 so that a state outside the band (O(du^2) step error)
-    never transforms backwards (heating never forms martensite); above 1 it is left as
-    printed, which pulls such a state back onto the active branch.
+    zero-stress transformation temperatures, the band as :func:`band` gives it. The ratio is
+    the state's relative position inside the band. It is kept >= 0 so that a state outside
+    the band (O(du^2) step error) never transforms backwards (heating never forms
+    martensite); above 1 it is left as printed, which pulls such a state back onto the
+    active branch.
     """
     zp, dzp = heating_branch(u_a, a_s, inv_a_width)
     zm, dzm = cooling_branch(u_m, m_f, inv_m_width)

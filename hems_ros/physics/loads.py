@@ -30,11 +30,12 @@ def transmission(capstan, pulley, coulomb):
 
 
 @jit
-def referred_load(mass, damping, stiffness, pretension, gravity, pulley):
-    """The load's coefficients in eq. 4.33 written for the slider (x_L = n x):
-    (m n, b n, k n, m g + F_0), so that m n x'' = F_L - (m g + F_0) - b n x' - k n x.
-    Constants of a parameter set (kernel.pack), so a step does not multiply them again."""
-    return mass * pulley, damping * pulley, stiffness * pulley, mass * gravity + pretension
+def referred_load(mass, damping, stiffness, pulley):
+    """The load's coefficients in eq. 4.33 written for the slider (x_L = n x): (m n, b n, k n),
+    so that m n x'' = F_L - F_static - b n x' - k n x with F_static = m g + F_0
+    (params.Load.static_force_n). Constants of a parameter set (kernel.pack), so a step does
+    not multiply them again."""
+    return mass * pulley, damping * pulley, stiffness * pulley
 
 
 @jit
@@ -45,7 +46,8 @@ def slider_response(wire_stiffness, x, v, dt, mass_n, damping_n, stiffness_n, st
     Returns (c_in, g_in, c_out, g_out) for motion inward and outward (eqs. 4.32-4.35 with the
     :func:`transmission` coefficients). They depend on the state at the start of the step
     only, so the kernel computes them once and evaluates :func:`slider_velocity` for each W0
-    its kinetic-mechanical solve tries. The load comes as :func:`referred_load` gives it.
+    its kinetic-mechanical solve tries. The load comes as :func:`referred_load` gives it, with
+    the static force m g + F_0.
     """
     inv_dt = 1.0 / dt      # one division per batch loop (dt is the same for every set)
     inertia = mass_n * inv_dt + damping_n + stiffness_n * dt
@@ -78,5 +80,5 @@ def slider_velocity(w0, c_in, g_in, c_out, g_out):
 @jit
 def load_force(v_new, v_old, x_new, dt, mass_n, damping_n, stiffness_n, static_force):
     """Force the load receives (load coordinates), from its own equation of motion (4.33),
-    with the load as :func:`referred_load` gives it."""
+    with the load as :func:`referred_load` gives it and the static force m g + F_0."""
     return mass_n * (v_new - v_old) * (1.0 / dt) + static_force + damping_n * v_new + stiffness_n * x_new
