@@ -373,9 +373,11 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, cal, cal_objective) -> str:
           "`kernel.step` first makes an elastic trial (no transformation) whose change of u picks heating, "
           "cooling or neither, then solves the scalar equation xi + dxi = X(u(dxi)) for dxi, where u(dxi) "
           "follows from the heat balance, the constitutive increment and the implicit load solve, and X is "
-          "the branch. u rises with dxi and X never rises with u, so the root is unique; a safeguarded "
-          "Newton iteration finds it in one or two steps (bisection fallback). Lagging the stress by one "
-          "step instead had made the hanging-mass case unstable.",
+          "the branch. u rises with dxi and X never rises with u, so the root is unique. The step keeps the "
+          "first Newton step from the trial when it stays inside the bracket (linearly implicit Euler): on "
+          "an outermost branch that is the root, on a scaled branch it leaves a second-order residual that "
+          "the next step takes up; otherwise Newton iterates to 1e-12 in xi (bisection fallback). Lagging "
+          "the stress by one step instead had made the hanging-mass case unstable.",
           "- **Return-point memory.** The printed law is a first-order Duhem law whose state is (u, xi) "
           "only: re-heating from inside the band follows its own curve and, in this scenario, passed the "
           "previous peak up to 0.045 away from it. The kinetics keep a stack of reversal points "
