@@ -147,19 +147,24 @@ def band(m_s, m_f, a_s, a_f):
 
 
 @jit_inline
+def _tanh_branch(temperature_c, start_c, inv_width):
+    """z = 1/2 tanh[2((start - T) inv_width + 1/2)] + 1/2 and dz/dT: both branches' form."""
+    z, sech2 = _logistic(2.0 * ((start_c - temperature_c) * inv_width + 0.5))
+    return z, -sech2 * inv_width
+
+
+@jit_inline
 def heating_branch(temperature_c, a_s, inv_width):
     """z+(T) = 1/2 tanh[2((As - T)/(Af - As) + 1/2)] + 1/2 and dz+/dT (eqs. 4.17, 4.20);
     ``inv_width`` = 1/(Af - As)."""
-    z, sech2 = _logistic(2.0 * ((a_s - temperature_c) * inv_width + 0.5))
-    return z, -sech2 * inv_width
+    return _tanh_branch(temperature_c, a_s, inv_width)
 
 
 @jit_inline
 def cooling_branch(temperature_c, m_f, inv_width):
     """z-(T) = 1/2 tanh[2((Mf - T)/(Ms - Mf) + 1/2)] + 1/2 and dz-/dT (eqs. 4.18, 4.21);
     ``inv_width`` = 1/(Ms - Mf)."""
-    z, sech2 = _logistic(2.0 * ((m_f - temperature_c) * inv_width + 0.5))
-    return z, -sech2 * inv_width
+    return _tanh_branch(temperature_c, m_f, inv_width)
 
 
 @jit_inline
@@ -192,10 +197,8 @@ def scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_f, inv_m_width, 
     two points (both far outside its band) the scaling is 0/0; the branch is then the
     straight line between them, which still closes the loop at t.
     """
-    if heating:
-        z, dz = heating_branch(u, a_s, inv_a_width)
-    else:
-        z, dz = cooling_branch(u, m_f, inv_m_width)
+    # the band is picked before the exp, so the batch's vector loop evaluates one branch, not both
+    z, dz = _tanh_branch(u, a_s if heating else m_f, inv_a_width if heating else inv_m_width)
     den = z_r - z_t
     if abs(den) > BRANCH_GAP_FLOOR:
         frac, dfrac = (z - z_t) / den, dz / den
