@@ -21,6 +21,8 @@ Three measurements carry the evidence:
 * :func:`wire_mass_mode`: frequency and damping ratio of the 4 kg mass on the elastic wire.
 * :func:`force_noise_free`: the chapter 6 force steps without sensor noise, to tell the
   approach overshoot from the hold ripple the noise drives.
+* :func:`perturbation_spread`: how far the step and staircase figures move when the
+  ambient temperature moves by 1e-6 degC, the run-to-run spread of a closed-loop cell.
 """
 
 from __future__ import annotations
@@ -138,6 +140,28 @@ def force_noise_free(gains=FORCE_MODE_BPID) -> dict[str, float]:
             for name in ("ch6_force_step", "ch6_force_staircase")}
 
 
+SPREAD_SHIFT_C = 1e-6
+
+
+def perturbation_spread(ch5: dict, params: UnitParams, protocols=STEP_PROTOCOLS,
+                        metrics=("rmse", "macsi")) -> dict[str, float]:
+    """Largest relative change of each of ``metrics`` over ``protocols`` and the three
+    controllers (Table 5.1 gains) when the ambient temperature moves by SPREAD_SHIFT_C.
+
+    No lab holds anything that constant, yet the 1 um encoder counts and the saturating duty
+    turn the difference into other switching decisions, and the hysteresis keeps their
+    consequences: this is the spread a cell of the tables carries from run to run.
+    """
+    shifted = params.replace({"ambient_temperature_c": params.ambient_temperature_c + SPREAD_SHIFT_C})
+    spread = dict.fromkeys(metrics, 0.0)
+    for p in protocols:
+        for s in ("pid", "pipd", "bpid"):
+            moved = run_protocol(p, s, shifted).metrics
+            for k in metrics:
+                spread[k] = max(spread[k], abs(moved[k] / ch5[p, s].metrics[k] - 1.0))
+    return spread
+
+
 def ratios(ch5: dict, metric: str, protocols=FACTOR_2_PROTOCOLS) -> dict[tuple[str, str], float]:
     """Ours / dissertation for ``metric`` (a CH5_TABLES key) per (protocol, strategy)."""
     _, _, table, factor = CH5_TABLES[metric]
@@ -147,8 +171,8 @@ def ratios(ch5: dict, metric: str, protocols=FACTOR_2_PROTOCOLS) -> dict[tuple[s
 
 MARGIN = 0.05
 """A ranking counts only if the winner leads the runner-up by this fraction: BPID and PID run
-nearly the same loop here (:func:`bilinear_activity`) and their chattering alone moves their
-RMSE and MACSI by a few per cent, while the dissertation's BPID leads by 7-19 % (RMSE) and
+nearly the same loop here (:func:`bilinear_activity`) and any difference between two runs,
+however small, moves their RMSE and MACSI by a few per cent (:func:`perturbation_spread`), while the dissertation's BPID leads by 7-19 % (RMSE) and
 2.6-3x (MACSI)."""
 
 
@@ -211,26 +235,30 @@ def ch5_findings(ch5: dict, params: UnitParams) -> list[Finding]:
         all(s == "pipd" for s in low.values()),
         ", ".join(f"{p[4:]}: lowest {s}" for p, s in low.items())))
     activity = {p: bilinear_activity(ch5[p, "bpid"]) for p in STEP_PROTOCOLS}
-    why_bpid = (
+    macsi_ok = all(_leads(ch5, p, "macsi", "bpid", highest=True) for p in STEP_PROTOCOLS)
+    rmse_ok = all(_leads(ch5, p, "rmse", "bpid", highest=False) for p in STEP_PROTOCOLS)
+    spread = perturbation_spread(ch5, params) if not (macsi_ok and rmse_ok) else {}
+    why_bpid = "" if not spread else (
         "Not a plant difference alone: the eq 5.36 factor (1 + Kb r)/(1 + Kb y(k-1)) with Kb = 1/um "
         "is about r/y, so it is far from 1 only while y is far below r, where the error exceeds "
         "the 125 um that already saturates the duty at Kp = 0.8 %/um; in the unsaturated band it is "
         "1 within 1 %. The factor changed BPID's output on "
         + ", ".join(f"{100 * a:.2f} % of the {p[4:]} samples" for p, a in activity.items())
         + ", so BPID and PID run nearly the same loop and their MACSI and RMSE differ by "
-        "less than the run-to-run spread. The dissertation's distinct BPID figures need an "
+        "less than the run-to-run spread: moving the ambient temperature by "
+        f"{SPREAD_SHIFT_C:g} degC moves the step and staircase RMSE of the three controllers by up to "
+        f"{100 * spread.get('rmse', math.nan):.1f} % and their MACSI by up to "
+        f"{100 * spread.get('macsi', math.nan):.1f} %. The dissertation's distinct BPID figures need an "
         "error scale or gain set other than Table 5.1 in micrometres.")
-    ok = all(_leads(ch5, p, "macsi", "bpid", highest=True) for p in STEP_PROTOCOLS)
     out.append(Finding(
-        "bpid_highest_macsi", "BPID has the highest MACSI on the step and the staircase (by > 5 %)", ok,
+        "bpid_highest_macsi", "BPID has the highest MACSI on the step and the staircase (by > 5 %)", macsi_ok,
         ", ".join(f"{p[4:]}: " + ", ".join(f"{s} {ch5[p, s].metrics['macsi']:.2f}" for s in ("pid", "pipd", "bpid"))
-                  for p in STEP_PROTOCOLS), "" if ok else why_bpid))
-    ok = all(_leads(ch5, p, "rmse", "bpid", highest=False) for p in STEP_PROTOCOLS)
+                  for p in STEP_PROTOCOLS), "" if macsi_ok else why_bpid))
     out.append(Finding(
-        "bpid_lowest_rmse", "BPID has the lowest RMSE on the step and the staircase (by > 5 %)", ok,
+        "bpid_lowest_rmse", "BPID has the lowest RMSE on the step and the staircase (by > 5 %)", rmse_ok,
         ", ".join(f"{p[4:]}: " + ", ".join(f"{s} {ch5[p, s].metrics['rmse']:.2f} mm" for s in ("pid", "pipd", "bpid"))
                   for p in STEP_PROTOCOLS),
-        "" if ok else why_bpid))
+        "" if rmse_ok else why_bpid))
     for metric in ("rmse", "iae", "apc_w"):
         rat = ratios(ch5, metric)
         bad = {k: v for k, v in rat.items() if not 0.5 <= v <= 2.0}
