@@ -106,7 +106,8 @@ class Graph:
                          for exe, node, params in specs]
             commands["composed"] = ([sys.executable, "-m", "hems_ros.nodes.composed", *spec_args]
                                     + ros_arguments("", {}, self.options)[:3]
-                                    + (["-p", "use_sim_time:=true"] if self.options.sim_time else []))
+                                    + (["-p", "use_sim_time:=true"] if self.options.sim_time else [])
+                                    + list(self.options.extra_ros_args))
         else:
             for executable, node, params in specs:
                 commands[node] = executable_path(executable) + ros_arguments(node, params, self.options)

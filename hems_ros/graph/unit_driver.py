@@ -44,7 +44,7 @@ class Sample:
 class UnitDriver:
     def __init__(self, unit: ActuationUnit, start_time_s: float, sample_period_s: float = 0.01,
                  watchdog_timeout_s: float = 0.03, permission_timeout_s: float = 0.5,
-                 require_permission: bool = True, latency_window: int = 20000) -> None:
+                 require_permission: bool = True, latency_window_s: float = 60.0) -> None:
         self.unit = unit
         self.start_time_s = start_time_s
         self.sample_period_s = sample_period_s
@@ -60,7 +60,11 @@ class UnitDriver:
         self.rejected_commands = 0
         self.commands = 0
         self.missed_periods = 0
-        self.latencies_s: deque[float] = deque(maxlen=latency_window)
+        # one latency per duty command, one command per sample period: the window holds the
+        # commands of the last latency_window_s, so the statistics describe the graph now,
+        # not its start-up (discovery stalls of seconds would otherwise stay in them)
+        self.latency_window_s = latency_window_s
+        self.latencies_s: deque[float] = deque(maxlen=max(1, round(latency_window_s / sample_period_s)))
         self.late_commands = 0
         self._samples_taken = 0
         self._sample_snapshot: tuple | None = None   # (time, unit snapshot) at the latest sample
@@ -146,11 +150,12 @@ class UnitDriver:
         return samples
 
     def latency_percentiles(self) -> tuple[float, float, float]:
-        """(p50, p99, max) of measurement-to-applied latency, s (nan before any command)."""
+        """(p50, p99, max) of measurement-to-applied latency over the duty commands of the last
+        ``latency_window_s``, s (nan before any command)."""
         n = len(self.latencies_s)
         if not n:
             return math.nan, math.nan, math.nan
-        # a partial sort in numpy: sorting the 20,000-value window in Python took ~3 ms, a
+        # a partial sort in numpy: sorting a 20,000-value window in Python took ~3 ms, a
         # stall of the node's loop once a second (of all nodes in a composed process)
         ranks = [min(n - 1, int(q * n)) for q in (0.5, 0.99)] + [n - 1]
         picked = np.partition(np.fromiter(self.latencies_s, float, n), ranks)[ranks]

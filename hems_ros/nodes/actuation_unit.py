@@ -40,6 +40,8 @@ PARAMETERS = [
     Spec("require_supervisor", True, "heat only while the supervisor reports ENABLED", None, True),
     Spec("supervisor_timeout_s", 0.5, "supervisor status older than this withdraws heating permission, s",
          positive, True),
+    Spec("latency_window_s", 60.0, "the latency figures in /diagnostics cover the duty commands of the last "
+         "this many seconds", positive, True),
 ]
 
 
@@ -62,7 +64,8 @@ class ActuationUnitNode(LeanNode):
         self.driver = UnitDriver(
             ActuationUnit(physics, dt=p["physics_dt_s"]), start_time_s=start_s,
             sample_period_s=p["encoder_period_s"], watchdog_timeout_s=3 * p["control_period_s"],
-            permission_timeout_s=p["supervisor_timeout_s"], require_permission=p["require_supervisor"])
+            permission_timeout_s=p["supervisor_timeout_s"], require_permission=p["require_supervisor"],
+            latency_window_s=p["latency_window_s"])
         self.resolution = physics.encoder.resolution_m
         self.sequence = 0
         self.state_sequence = 0
@@ -138,7 +141,7 @@ class ActuationUnitNode(LeanNode):
                   "duty_commands": d.commands, "rejected_commands": d.rejected_commands,
                   "missed_control_periods": d.missed_periods, "late_commands": d.late_commands,
                   "latency_p50_s": p50, "latency_p99_s": p99,
-                  "latency_max_s": worst, "simulated_time_s": d.unit.time}
+                  "latency_max_s": worst, "latency_window_s": d.latency_window_s, "simulated_time_s": d.unit.time}
         status = DiagnosticStatus(
             level=DiagnosticStatus.WARN if d.watchdog_tripped else DiagnosticStatus.OK,
             name=f"hems/actuation_unit/{self.finger}", hardware_id=f"actuation_unit_{self.finger}",

@@ -11,6 +11,7 @@ from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.physics import ActuationUnit, load_params
+from hems_ros.launcher import Graph, GraphOptions
 
 
 @pytest.mark.parametrize("mode, value, reason", [
@@ -197,9 +198,25 @@ def test_grasp_summary_numbers():
     assert summary.peak_force_n == pytest.approx(10.1) and summary.energy_j == 42.0
 
 
+def test_latency_window_holds_the_commands_of_its_last_seconds():
+    # 1 s at 10 ms per command: 100 latencies; start-up stalls older than that drop out
+    driver = UnitDriver(ActuationUnit(), 0.0, sample_period_s=0.01, latency_window_s=1.0)
+    driver.latencies_s.extend([2.4] * 50 + [1e-3] * 99 + [3e-3])
+    assert len(driver.latencies_s) == 100
+    assert driver.latency_percentiles() == (1e-3, 3e-3, 3e-3)
+
+
 def test_latency_percentiles_are_the_ranked_window_values():
     driver = UnitDriver(ActuationUnit(), 0.0)
     assert all(math.isnan(v) for v in driver.latency_percentiles())
     values = [((7919 * k) % 1000) * 1e-5 for k in range(1000)]   # 0 .. 9.99 ms, shuffled
     driver.latencies_s.extend(values)
     assert driver.latency_percentiles() == (500e-5, 990e-5, 999e-5)
+
+
+def test_extra_ros_args_reach_every_node_separate_or_composed():
+    extra = ("-p", "latency_window_s:=5")
+    separate = Graph(GraphOptions(extra_ros_args=extra)).commands()
+    composed = Graph(GraphOptions(extra_ros_args=extra, composed=True)).commands()
+    assert len(separate) == 16 and all(cmd[-2:] == list(extra) for cmd in separate.values())
+    assert list(composed) == ["composed"] and composed["composed"][-2:] == list(extra)
