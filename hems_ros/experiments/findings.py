@@ -2,7 +2,7 @@
 
 Each :class:`Finding` states a claim of chapter 5 or 6 (issue 4 "must show"), whether the
 simulation reproduces it, our numbers, and, for a miss, what in the plant explains it.
-Three measurements carry the evidence:
+These measurements carry the evidence:
 
 * :func:`authority_split`: where the actuator is saturated the controller has already
   given all it can; an error while the duty is 0 and the wire is above the reference is
@@ -203,8 +203,8 @@ def ratios(ch5: dict, metric: str, protocols=FACTOR_2_PROTOCOLS) -> dict[tuple[s
 MARGIN = 0.05
 """A ranking counts only if the winner leads the runner-up by this fraction: BPID and PID run
 nearly the same loop here (:func:`bilinear_activity`) and any difference between two runs,
-however small, moves their RMSE and MACSI by a few per cent (:func:`perturbation_spread`), while the dissertation's BPID leads by 7-19 % (RMSE) and
-2.6-3x (MACSI)."""
+however small, moves their RMSE and MACSI by a few per cent (:func:`perturbation_spread`),
+while the dissertation's BPID leads by 7-19 % (RMSE) and 2.6-3x (MACSI)."""
 
 
 def _ranked(ch5, protocol, metric):
@@ -290,13 +290,15 @@ def ch5_findings(ch5: dict, params: UnitParams) -> list[Finding]:
         ", ".join(f"{p[4:]}: " + ", ".join(f"{s} {ch5[p, s].metrics['rmse']:.2f} mm" for s in ("pid", "pipd", "bpid"))
                   for p in STEP_PROTOCOLS),
         "" if rmse_ok else why_bpid))
+    mass = None
     for metric in ("rmse", "iae", "apc_w"):
         rat = ratios(ch5, metric)
         bad = {k: v for k, v in rat.items() if not 0.5 <= v <= 2.0}
         evidence = ""
         if bad:
             splits = {k: authority_split(ch5[k]) for k in bad}
-            mass = sheath_mass_check(ch5, params) if metric in ("rmse", "iae") else None
+            if metric in ("rmse", "iae") and mass is None:
+                mass = sheath_mass_check(ch5, params)
             evidence = (
                 "Plant: the misses are sine 0.125 Hz runs, whose error is made where the actuator is "
                 "saturated: " + "; ".join(
@@ -307,8 +309,8 @@ def ch5_findings(ch5: dict, params: UnitParams) -> list[Finding]:
                 + ". The model's sheathed wire cools more slowly once its sheath has warmed "
                 "(docs/validation.md: cooling 1.9 -> 4.8 s over repeated cycles) and needs a longer "
                 "first heating (1.0 s pulse row), so the descents of the sine lag behind.")
-            if mass:
-                _, unit, table, factor = CH5_TABLES[metric]
+            if metric in ("rmse", "iae"):
+                _, unit, table, _ = CH5_TABLES[metric]
                 evidence += (
                     f" The sheath is why: one lumped node of {mass['calibrated_j_per_k']:.2f} J/K (the part "
                     "that follows the wire within a pulse, calibrated on single pulses) warms from "
