@@ -76,16 +76,19 @@ def lsoda_rhs(p):
     n = p[K.P_N]
 
     def rhs(_t, y, cur):
-        temp, xi, sig, x, v, ts = y
+        temp, xi, sig, x, v, ts, th = y
         rho = electrical.mixture_resistivity(
             xi, electrical.phase_resistivity(p[K.P_RHO0M], p[K.P_T0M], p[K.P_DRDTM], p[K.P_DRDSM], temp, sig),
             electrical.phase_resistivity(p[K.P_RHO0A], p[K.P_T0A], p[K.P_DRDTA], p[K.P_DRDSA], temp, sig))
         _, power = electrical.current_source(cur, electrical.wire_resistance(rho, p[K.P_L0] - x, p[K.P_INV_S]))
         if p[K.P_SHEATH] > 0:
-            q_sh, q_sa = sheath.sheath_heat_flows(temp, ts, p[K.P_TAMB], p[K.P_GWS], p[K.P_GSA])
-            net, dts = power - q_sh, (q_sh - q_sa) / p[K.P_CS]
+            q_sh, q_sa = sheath.sheath_heat_flows(temp, ts, th if p[K.P_HELIX] > 0 else p[K.P_TAMB], p[K.P_GWS],
+                                                  p[K.P_GSA])
+            q_ha = sheath.helix_heat_loss(th, p[K.P_TAMB], p[K.P_GHA])
+            net, dts, dth = power - q_sh, (q_sh - q_sa) / p[K.P_CS], (q_sa - q_ha) * p[K.P_INV_CH]
         else:
-            net, dts = power - heat.convection_loss(temp, p[K.P_TAMB], p[K.P_H0], p[K.P_H2], p[K.P_AREA]), 0.0
+            net = power - heat.convection_loss(temp, p[K.P_TAMB], p[K.P_H0], p[K.P_H2], p[K.P_AREA])
+            dts = dth = 0.0
         e = constitutive.reuss_modulus(xi, p[K.P_EM], p[K.P_EA])
         omega = constitutive.transformation_coefficient(e, p[K.P_EPSL])
         theta = constitutive.thermoelastic_coefficient(xi, e, p[K.P_ALM], p[K.P_ALA], p[K.P_NU])
@@ -102,7 +105,7 @@ def lsoda_rhs(p):
         dsig = dsig0 + omega * dxi + theta * lat / c_w * dxi
         force = s_area * sig / n
         acc = (force - p[K.P_FSTAT] - p[K.P_BN] * v - p[K.P_KN] * x) / p[K.P_MN]
-        return [dtemp, dxi, dsig, v, acc, dts]
+        return [dtemp, dxi, dsig, v, acc, dts, dth]
 
     return rhs
 
@@ -111,14 +114,14 @@ def run_lsoda(params, current: np.ndarray, dt: float) -> np.ndarray:
     """Slider position at the kernel's sample times, integrating between input changes."""
     p = K.pack(params)
     rhs = lsoda_rhs(p)
-    y = K.initial_state(params)[:6].copy()
+    y = K.initial_state(params)[:7].copy()
     edges = np.flatnonzero(np.diff(current)) + 1
     bounds = np.concatenate([[0], edges, [current.size]])
     out = np.empty(current.size)
     for a, b in zip(bounds[:-1], bounds[1:]):
         t_eval = (np.arange(a, b) + 1) * dt
         sol = solve_ivp(rhs, (a * dt, b * dt), y, method="LSODA", t_eval=t_eval, args=(current[a],),
-                        rtol=1e-6, atol=[1e-6, 1e-8, 1.0, 1e-9, 1e-9, 1e-6])
+                        rtol=1e-6, atol=[1e-6, 1e-8, 1.0, 1e-9, 1e-9, 1e-6, 1e-6])
         out[a:b] = sol.y[3]
         y = sol.y[:, -1]
     return out

@@ -68,18 +68,18 @@ _invalidate_stale_cache()
  P_EM, P_EA, P_ALM, P_ALA, P_EPSL, P_NU,
  P_VSUP, P_ILIM,
  P_MN, P_BN, P_KN, P_FSTAT, P_N,
- P_SHEATH, P_GWS, P_GSA, P_CS,
+ P_SHEATH, P_GWS, P_GSA, P_CS, P_GHA, P_CH, P_INV_CH, P_HELIX,
  P_A_IN, P_F_IN, P_A_OUT, P_F_OUT,
- P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, P_TPX, N_P) = range(49)
+ P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, P_TPX, N_P) = range(53)
 
 # ---------------------------------------------------------------- state row
 STATE_NAMES = (
     "wire_temperature_c", "martensite_fraction", "stress_pa", "slider_position_m",
-    "slider_velocity_m_s", "sheath_temperature_c",
+    "slider_velocity_m_s", "sheath_temperature_c", "sheath_helix_temperature_c",
     "energy_joule_j", "energy_stored_j", "energy_convected_j", "energy_latent_j",
     "energy_to_sheath_j", "energy_sheath_stored_j", "energy_sheath_convected_j",
 )
-(S_T, S_XI, S_SIG, S_X, S_V, S_TS,
+(S_T, S_XI, S_SIG, S_X, S_V, S_TS, S_TH,
  S_EJ, S_ESTORED, S_ECONV, S_ELAT, S_ESH, S_ESHSTORED, S_ESHCONV) = range(len(STATE_NAMES))
 N_S = len(STATE_NAMES)
 # kinetics memory: last direction (+1 heating, -1 cooling, 0 none yet), number of reversal
@@ -124,12 +124,22 @@ def pack(params: UnitParams) -> np.ndarray:
                                                     ld.pulley_ratio)
     p[P_FSTAT], p[P_N] = ld.static_force_n(), ld.pulley_ratio
     if params.sheath.enabled:
-        r = sheath.sheath_resistances(params.sheath, w.length_m)
+        sh = params.sheath
+        r = sheath.sheath_resistances(sh, w.length_m)
         p[P_SHEATH] = 1.0
         p[P_GWS] = 1.0 / r.wire_to_sheath
-        p[P_GSA] = 1.0 / r.sheath_to_air
-        p[P_CS] = params.sheath.heat_capacity_j_per_k
+        p[P_CS] = sh.heat_capacity_j_per_k
         p[P_INV_CS] = 1.0 / p[P_CS]
+        # one node: its outer side is the air; two: the helix node, which meets the air.
+        # The helix of a one-node sheath stays at ambient (P_INV_CH = 0) and passes nothing on.
+        if sh.helix_heat_capacity_j_per_k > 0:
+            p[P_HELIX] = 1.0
+            p[P_GSA] = 1.0 / sh.liner_helix_resistance_k_per_w
+            p[P_GHA] = 1.0 / r.sheath_to_air
+            p[P_CH] = sh.helix_heat_capacity_j_per_k
+            p[P_INV_CH] = 1.0 / p[P_CH]
+        else:
+            p[P_GSA] = 1.0 / r.sheath_to_air
     # reciprocals the step would otherwise divide by several times per step
     p[P_INV_CW], p[P_INV_L0], p[P_INV_S] = 1.0 / p[P_CW], 1.0 / w.length_m, 1.0 / w.cross_section_m2
     p[P_TPX] = p[P_LAT] * p[P_INV_CW]   # temperature rise per unit of martensite formed (eq. 4.10)
@@ -144,7 +154,7 @@ def pack(params: UnitParams) -> np.ndarray:
 def initial_state(params: UnitParams) -> np.ndarray:
     """Cold, fully martensitic wire at rest in the frictionless static balance with the load."""
     s = np.zeros(N_STATE)
-    s[S_T] = s[S_TS] = params.ambient_temperature_c
+    s[S_T] = s[S_TS] = s[S_TH] = params.ambient_temperature_c
     s[S_XI] = 1.0
     s[S_SIG] = params.load.pulley_ratio * params.load.static_force_n() / params.wire.cross_section_m2
     return s
@@ -172,6 +182,7 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     x = s[sk + S_X * n]
     v = s[sk + S_V * n]
     t_sheath = s[sk + S_TS * n]
+    t_helix = s[sk + S_TH * n]
 
     rho_m = electrical.phase_resistivity(p[pk + P_RHO0M * n], p[pk + P_T0M * n], p[pk + P_DRDTM * n],
                                          p[pk + P_DRDSM * n], temp, sig)
@@ -187,13 +198,17 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
         cur, power = electrical.voltage_source(drive_value, res)
 
     t_amb = p[pk + P_TAMB * n]
-    q_sh, q_sa = sheath.sheath_heat_flows(temp, t_sheath, t_amb, p[pk + P_GWS * n], p[pk + P_GSA * n])
+    # q_sa: out of the (first) sheath node, to the air or to the helix node; q_ha: helix -> air
+    q_sh, q_sa = sheath.sheath_heat_flows(temp, t_sheath, t_helix if p[pk + P_HELIX * n] > 0.0 else t_amb,
+                                          p[pk + P_GWS * n], p[pk + P_GSA * n])
+    q_ha = sheath.helix_heat_loss(t_helix, t_amb, p[pk + P_GHA * n])
     q_air = heat.convection_loss(temp, t_amb, p[pk + P_H0 * n], p[pk + P_H2 * n], p[pk + P_AREA * n])
     if p[pk + P_SHEATH * n] > 0.0:
         q_air = 0.0
     else:
         q_sh = 0.0
         q_sa = 0.0
+        q_ha = 0.0
     net = power - q_air - q_sh
 
     # eq. 4.10: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT
@@ -219,14 +234,14 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     um_old, ua_old = kinetics.effective_temperatures(temp, sig, inv_cm, inv_ca)
     v_new, sig_new, sig_gain = _mechanics(sig_free0, area, relax, c_in, g_in, c_out, g_out)
     um, ua = kinetics.effective_temperatures(temp + d_temp0, sig_new, inv_cm, inv_ca)
-    return (temp, xi, sig, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
+    return (temp, xi, sig, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh, q_sa, q_ha,
             d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
             inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua)
 
 
 @jit_inline
-def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
-            d_temp0, temp_per_xi, d_xi, v_new, sig_new, energy):
+def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh,
+            q_sa, q_ha, d_temp0, temp_per_xi, d_xi, v_new, sig_new, energy):
     """End of a step: new state (read at sk, written at dk), outputs and, with ``energy``, the
     energy accumulators; True if finite."""
     d_temp = d_temp0 + temp_per_xi * d_xi
@@ -239,17 +254,19 @@ def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, res, cur
     s[dk + S_X * n] = x_new
     s[dk + S_V * n] = v_new
     d_ts = (q_sh - q_sa) * dt * p[pk + P_INV_CS * n]
+    d_th = (q_sa - q_ha) * dt * p[pk + P_INV_CH * n]      # 0 without a helix node
     sheathed = p[pk + P_SHEATH * n] > 0.0
     s[dk + S_TS * n] = t_sheath + d_ts if sheathed else t_sheath
+    s[dk + S_TH * n] = t_helix + d_th
     if energy:
-        s[dk + S_ESHSTORED * n] = (s[sk + S_ESHSTORED * n] + p[pk + P_CS * n] * d_ts if sheathed
-                                   else s[sk + S_ESHSTORED * n])
+        s[dk + S_ESHSTORED * n] = (s[sk + S_ESHSTORED * n] + (p[pk + P_CS * n] * d_ts + p[pk + P_CH * n] * d_th)
+                                   if sheathed else s[sk + S_ESHSTORED * n])
         s[dk + S_EJ * n] = s[sk + S_EJ * n] + power * dt
         s[dk + S_ESTORED * n] = s[sk + S_ESTORED * n] + p[pk + P_CW * n] * d_temp
         s[dk + S_ECONV * n] = s[sk + S_ECONV * n] + q_air * dt
         s[dk + S_ELAT * n] = s[sk + S_ELAT * n] - p[pk + P_LAT * n] * d_xi
         s[dk + S_ESH * n] = s[sk + S_ESH * n] + q_sh * dt
-        s[dk + S_ESHCONV * n] = s[sk + S_ESHCONV * n] + q_sa * dt
+        s[dk + S_ESHCONV * n] = s[sk + S_ESHCONV * n] + (q_ha if p[pk + P_HELIX * n] > 0.0 else q_sa) * dt
 
     out[ok + O_R * n] = res
     out[ok + O_I * n] = cur
@@ -281,7 +298,7 @@ def step(p, s, drive_kind, drive_value, dt, out):
     extra iterations cost the batch 15 % of its time). Otherwise it iterates to XI_TOLERANCE
     (Newton steps, bisection fallback). Returns False when the new state is not finite.
     """
-    (temp, xi, sig, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
+    (temp, xi, sig, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh, q_sa, q_ha,
      d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
      inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua) = _begin(
         p, 0, s, 0, 1, drive_kind, drive_value, dt)
@@ -326,8 +343,8 @@ def step(p, s, drive_kind, drive_value, dt, out):
             if newton and closed == 0 and sig_gain == gain_before:
                 break
         s[S_NREV] = n_points - 2 * closed
-    return _finish(p, 0, s, 0, 0, 1, out, 0, dt, temp, xi, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
-                   d_temp0, temp_per_xi, d_xi, v_new, sig_new, True)
+    return _finish(p, 0, s, 0, 0, 1, out, 0, dt, temp, xi, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh,
+                   q_sa, q_ha, d_temp0, temp_per_xi, d_xi, v_new, sig_new, True)
 
 
 # ---------------------------------------------------------------- batch
@@ -349,10 +366,10 @@ BLOCK_ITERATIONS = 8
 # what the iterations and the end of a step need from its start
 # (the state at the start of the step and the set's constants are read where they are, in the
 # s_in region and in the packed parameters)
-(W_RES, W_CUR, W_POWER, W_QAIR, W_QSH, W_QSA, W_DTEMP0,
+(W_RES, W_CUR, W_POWER, W_QAIR, W_QSH, W_QSA, W_QHA, W_DTEMP0,
  W_SF0, W_SFX, W_RELAX, W_CIN, W_GIN, W_COUT, W_GOUT, W_UMOLD, W_UAOLD,
  W_HEATING, W_NPOINTS, W_SLOPE0,
- W_DXI, W_LO, W_HI, W_VNEW, W_SIGNEW, W_GAIN, W_UM, W_UA, W_ACTIVE, N_W) = range(29)
+ W_DXI, W_LO, W_HI, W_VNEW, W_SIGNEW, W_GAIN, W_UM, W_UA, W_ACTIVE, N_W) = range(30)
 # state fields up to the memory (S_T ... S_NREV) in two regions: a step reads one and writes
 # the other, the next step the other way round (s_in, s_out below), instead of copying
 B_STATE0 = N_P
@@ -464,9 +481,9 @@ def _finish_set(b, j, s_in, s_out, dt, energy):
     c = s_in * BLOCK + j
     return _finish(b, j, b, c, s_out * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt,
                    b[c + S_T * BLOCK], b[c + S_XI * BLOCK], b[c + S_X * BLOCK], b[c + S_V * BLOCK],
-                   b[c + S_TS * BLOCK], b[w + W_RES * BLOCK], b[w + W_CUR * BLOCK], b[w + W_POWER * BLOCK],
-                   b[w + W_QAIR * BLOCK], b[w + W_QSH * BLOCK], b[w + W_QSA * BLOCK], b[w + W_DTEMP0 * BLOCK],
-                   b[j + P_TPX * BLOCK], b[w + W_DXI * BLOCK], b[w + W_VNEW * BLOCK], b[w + W_SIGNEW * BLOCK],
+                   b[c + S_TS * BLOCK], b[c + S_TH * BLOCK], b[w + W_RES * BLOCK], b[w + W_CUR * BLOCK],
+                   b[w + W_POWER * BLOCK], b[w + W_QAIR * BLOCK], b[w + W_QSH * BLOCK], b[w + W_QSA * BLOCK],
+                   b[w + W_QHA * BLOCK], b[w + W_DTEMP0 * BLOCK], b[j + P_TPX * BLOCK], b[w + W_DXI * BLOCK], b[w + W_VNEW * BLOCK], b[w + W_SIGNEW * BLOCK],
                    energy)
 
 
@@ -483,7 +500,7 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
     for j in range(BLOCK):
         sk = s_in * BLOCK + j
         w = B_WORK * BLOCK + j
-        (temp, xi, sig, x, v, t_sheath, res, cur, power, q_air, q_sh, q_sa,
+        (temp, xi, sig, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh, q_sa, q_ha,
          d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
          inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua) = _begin(
             b, j, b, sk, BLOCK, drive_kind, b[B_DRIVE * BLOCK + j], dt)
@@ -504,6 +521,7 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
             b[w + W_QAIR * BLOCK] = q_air
             b[w + W_QSH * BLOCK] = q_sh
             b[w + W_QSA * BLOCK] = q_sa
+            b[w + W_QHA * BLOCK] = q_ha
             b[w + W_DTEMP0 * BLOCK] = d_temp0
             b[w + W_SF0 * BLOCK] = sig_free0
             b[w + W_SFX * BLOCK] = sig_free_per_xi
@@ -532,8 +550,8 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
         b[s_out * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
         b[s_out * BLOCK + j + S_NREV * BLOCK] = n_points
         finite = _finish(b, j, b, sk, s_out * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt, temp, xi, x, v,
-                         t_sheath, res, cur, power, q_air, q_sh, q_sa, d_temp0, temp_per_xi, d_xi, v_new, sig_new,
-                         energy)
+                         t_sheath, t_helix, res, cur, power, q_air, q_sh, q_sa, q_ha, d_temp0, temp_per_xi, d_xi,
+                         v_new, sig_new, energy)
         b[B_REDO * BLOCK + j] = 1.0 if redo or not finite else 0.0
         n_active += 1 if active > 0.0 else 0
     return n_active

@@ -234,11 +234,16 @@ class Load(_Group):
 class Sheath(_Group):
     """Bowden sheath heat exchange (beyond the dissertation's model; digest Table 3.1).
 
-    Wire -> sheath conductance G = 1 / (gap_resistance + PTFE conduction); the sheath is one
-    lumped heat capacity losing heat to air through steel conduction + outer convection.
+    Wire -> sheath conductance G = 1 / (gap_resistance + PTFE conduction); the sheath node
+    (``heat_capacity_j_per_k``) loses heat to air through steel conduction + outer convection.
     When enabled the wire no longer convects to air directly (it lies inside the PTFE tube).
     ``gap_resistance_k_per_w`` (imperfect wire-PTFE contact, a thin air film) and
     ``heat_capacity_j_per_k`` are calibrated (config/physics/sheathed_calibrated.yaml).
+
+    With ``helix_heat_capacity_j_per_k`` > 0 the sheath has two nodes: the first (the liner
+    and what follows the wire within a pulse) passes heat through
+    ``liner_helix_resistance_k_per_w`` to the rest of the steel helix, a slow node that loses
+    it to air (sheath.py).
     """
 
     _GROUP = "sheath"
@@ -253,6 +258,8 @@ class Sheath(_Group):
     outer_area_m2: float = 9.77e-3
     gap_resistance_k_per_w: float = 1.80
     heat_capacity_j_per_k: float = 17.0
+    helix_heat_capacity_j_per_k: float = 0.0
+    liner_helix_resistance_k_per_w: float = 0.0
 
     def check(self) -> None:
         self._pos(
@@ -260,7 +267,10 @@ class Sheath(_Group):
             "steel_inner_diameter_m", "steel_outer_diameter_m", "steel_conductivity_w_per_m_k",
             "outer_convection_w_per_m2_k", "outer_area_m2", "heat_capacity_j_per_k",
         )
-        self._nonneg("gap_resistance_k_per_w")
+        self._nonneg("gap_resistance_k_per_w", "helix_heat_capacity_j_per_k", "liner_helix_resistance_k_per_w")
+        if self.helix_heat_capacity_j_per_k > 0 and not self.liner_helix_resistance_k_per_w > 0:
+            raise ParamError("sheath.liner_helix_resistance_k_per_w: must be > 0 when "
+                             "sheath.helix_heat_capacity_j_per_k > 0 (two sheath nodes)")
         if not self.ptfe_outer_diameter_m > self.ptfe_inner_diameter_m:
             raise ParamError("sheath.ptfe_outer_diameter_m: must be > sheath.ptfe_inner_diameter_m")
         if not self.steel_outer_diameter_m > self.steel_inner_diameter_m:

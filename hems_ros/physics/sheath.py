@@ -7,8 +7,12 @@ the steel wall (4.73e-3 K/W) and outer convection (1/(h A) = 7.48 K/W); the tota
 wire-to-air path with perfect contact is 7.89 K/W, as in Table 3.1.
 
 A cold sheath is a heat sink: it slows heating (less displacement for the same energy)
-and speeds cooling; over repeated cycles it warms up (time constant C_s * 7.48 K/W, about
-two minutes) and both effects fade.
+and speeds cooling; over repeated cycles it warms up and both effects fade.
+
+Two nodes (optional): what follows the wire within a pulse (the liner and the inner turns
+of the helix) is a small node; the rest of the steel helix is a large, slow one between it
+and the air, reached through a contact resistance. One node fitted to single pulses has
+only the small capacity, and under continuous duty it warms far faster than the sheath can.
 """
 
 from __future__ import annotations
@@ -70,7 +74,14 @@ def sheath_resistances(sheath, length_m: float) -> SheathResistances:
 
 
 @jit
-def sheath_heat_flows(wire_c, sheath_c, ambient_c, wire_to_sheath_w_per_k, sheath_to_air_w_per_k):
-    """(wire -> sheath, sheath -> air) heat flows, W."""
+def sheath_heat_flows(wire_c, sheath_c, outer_c, wire_to_sheath_w_per_k, sheath_to_outer_w_per_k):
+    """(wire -> sheath, sheath -> outer) heat flows, W; the outer side is the air for one
+    sheath node, the helix node for two."""
     return (wire_to_sheath_w_per_k * (wire_c - sheath_c),
-            sheath_to_air_w_per_k * (sheath_c - ambient_c))
+            sheath_to_outer_w_per_k * (sheath_c - outer_c))
+
+
+@jit
+def helix_heat_loss(helix_c, ambient_c, helix_to_air_w_per_k):
+    """Helix node -> air heat flow of the two-node sheath (steel wall + outer convection), W."""
+    return helix_to_air_w_per_k * (helix_c - ambient_c)

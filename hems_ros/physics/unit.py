@@ -43,6 +43,7 @@ class StepResult:
     stress_pa: float
     strain: float
     sheath_temperature_c: float
+    sheath_helix_temperature_c: float   # ambient unless the sheath has a helix node
     slider_position_m: float
     slider_velocity_m_s: float
     tendon_position_m: float
@@ -155,6 +156,7 @@ class ActuationUnit:
             stress_pa=float(s[kernel.S_SIG]),
             strain=float(s[kernel.S_X]) / prm.wire.length_m,
             sheath_temperature_c=float(s[kernel.S_TS]),
+            sheath_helix_temperature_c=float(s[kernel.S_TH]),
             slider_position_m=float(s[kernel.S_X]),
             slider_velocity_m_s=float(s[kernel.S_V]),
             tendon_position_m=float(o[kernel.O_XT]),
