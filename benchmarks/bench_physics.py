@@ -171,7 +171,7 @@ def main() -> int:
     print(f"LSODA baseline, one unit 30 s      : {lsoda_s * 1e3:8.1f} ms  real-time factor {30 / lsoda_s:9.1f}x; "
           f"kernel / LSODA speed {lsoda_s / (t_batch1 / 2):.0f}x; max |x_kernel - x_LSODA| = {diff:.2%} of stroke")
 
-    sets = [params.replace({"sheath.heat_capacity_j_per_k": c}) for c in np.linspace(2.0, 6.0, 256)]
+    sets = [params.replace({"sheath.liner_helix_resistance_k_per_w": r}) for r in np.linspace(1.0, 4.0, 256)]
     threads = numba.get_num_threads()
     for step in (1e-3, 1e-2):
         cur = current_profile(30.0, step)

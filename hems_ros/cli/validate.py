@@ -35,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
 
     start = time.perf_counter()
     if args.calibrate:
-        print("calibrating (Nelder-Mead over 4 parameters, about 10 s) ...", flush=True)
+        print(f"calibrating (Nelder-Mead over {len(calibration.FREE_PARAMETERS)} parameters, about 10 s) ...", flush=True)
         count = [0]
 
         def progress(values, cost):

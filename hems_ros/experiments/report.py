@@ -153,11 +153,11 @@ SETUP_CH5 = ("Straight sheathed actuator with a 40 N hanging mass (`config/physi
              "plant 1 kHz, controllers at 100 Hz (zero-order hold), encoder feedback (1 um counts), "
              "Table 5.1 gains with the error in micrometres, derivative filter N = 20 rad/s. One run "
              "per reference from a cold wire (the dissertation averaged three repetitions). "
-             "`config/physics/ch5_straight_40n_table32.yaml` (same rig, heating band refitted to "
-             "Table 3.2's displacement per pulse energy) serves only as an evidence run in the "
-             "findings: it reproduces the 1.0 s row and a slower rise, but loses the 2.2-2.8 s rows "
-             "(22.5-26.2 mm against 24.5-27.5 mm; calibration objective 0.51 against 0.28), so the "
-             "validated set stays the plant.")
+             "`config/physics/ch5_straight_40n_table32.yaml` (same rig on the earlier one-node sheath "
+             "calibration, heating band refitted to Table 3.2's displacement per pulse energy) serves "
+             "only as an evidence run in the findings: it reproduces the 1.0 s row and a slower rise, "
+             "but loses the 2.2-2.8 s rows (22.5-26.2 mm against 24.5-27.5 mm; calibration objective "
+             "0.51 against 0.16), so the validated set stays the plant.")
 SETUP_CH6 = ("HEMS index unit (`config/physics/ch6_hems_index.yaml`: x2 pulley, glove as a bias spring "
              "pretensioned 2 N on the tendon, capstan and glove friction), BPID with Table 5.1 gains on "
              "the encoder (position) and `FORCE_MODE_BPID` (Kp 0.8, Ki 0.5, Kd 0, Kb 1, error in 10 mN; "

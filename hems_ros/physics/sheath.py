@@ -1,18 +1,20 @@
 """Bowden-sheath thermal model (beyond the dissertation's model; digest section 2, Table 3.1).
 
 The wire inside the PTFE tube exchanges heat with the sheath through the PTFE wall
-(ln(d_o/d_i) / (2 pi k L) = 0.4038 K/W) plus a contact/air-gap resistance (calibrated);
-the sheath (PTFE + steel helix) is one lumped heat capacity that loses heat to air through
-the steel wall (4.73e-3 K/W) and outer convection (1/(h A) = 7.48 K/W); the total
-wire-to-air path with perfect contact is 7.89 K/W, as in Table 3.1.
+(ln(d_o/d_i) / (2 pi k L) = 0.4038 K/W) plus a contact/air-gap resistance (calibrated).
+The sheath loses heat to air through the steel wall (4.73e-3 K/W) and outer convection
+(1/(h A) = 7.48 K/W); the total wire-to-air path with perfect contact is 7.89 K/W, as in
+Table 3.1.
+
+The sheath's heat capacity (PTFE + steel helix, 17 J/K) sits in one node, or in two: what
+follows the wire within a pulse (the liner and the inner turns of the helix) is a small
+first node; the rest of the helix is a large, slow node between it and the air, reached
+through a contact resistance. One node fitted to single pulses keeps only the small
+capacity and under continuous duty warms far faster than the sheath does; the calibrated
+sets have two (hems_ros.physics.calibration).
 
 A cold sheath is a heat sink: it slows heating (less displacement for the same energy)
 and speeds cooling; over repeated cycles it warms up and both effects fade.
-
-Two nodes (optional): what follows the wire within a pulse (the liner and the inner turns
-of the helix) is a small node; the rest of the steel helix is a large, slow one between it
-and the air, reached through a contact resistance. One node fitted to single pulses has
-only the small capacity, and under continuous duty it warms far faster than the sheath can.
 """
 
 from __future__ import annotations
@@ -50,12 +52,12 @@ class SheathResistances:
 
     @property
     def wire_to_sheath(self) -> float:
-        """Wire to the lumped sheath node: gap + PTFE wall."""
+        """Wire to the (first) sheath node: gap + PTFE wall."""
         return self.gap + self.ptfe_conduction
 
     @property
     def sheath_to_air(self) -> float:
-        """Lumped sheath node to air: steel wall + outer convection."""
+        """The sheath node next to the air (the only one, or the helix) to air: steel wall + outer convection."""
         return self.steel_conduction + self.outer_convection
 
 
