@@ -57,7 +57,7 @@ class SheathResistances:
 
     @property
     def sheath_to_air(self) -> float:
-        """The sheath node next to the air (the only one, or the helix) to air: steel wall + outer convection."""
+        """Outer sheath node (the only one, or the helix) to air: steel wall + outer convection."""
         return self.steel_conduction + self.outer_convection
 
 
