@@ -53,7 +53,8 @@ def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000
 # sample it answers (hems_ros/graph/unit_driver.py), whatever the transport delay. The force
 # sensor's noise is drawn per sample from the shoulder module's start, which lies at another
 # point of the grasp in each run, so the error over the last second of the hold (mostly that
-# noise) is compared within its sampling spread, not within 2 %.
+# noise) is compared within its sampling spread, not within 2 %: the six fingers of one demo
+# run give 0.014-0.021 N (sd 13 %), so two runs differ by about 19 % (sd); 50 % is 2.6 sd.
 @pytest.mark.slow
 @pytest.mark.graph_realtime
 def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_domain_id: int, tmp_path: Path) -> None:
@@ -95,4 +96,4 @@ def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_do
     print(f"original {original}\nreplayed {live}")
     for field in ("approach_rmse_mm", "position_rmse_mm", "hold_rmse_n", "peak_force_n", "energy_j"):
         assert getattr(live, field) == pytest.approx(getattr(original, field), rel=0.02), field
-    assert live.force_rmse_n == pytest.approx(original.force_rmse_n, rel=0.15)
+    assert live.force_rmse_n == pytest.approx(original.force_rmse_n, rel=0.5)
