@@ -7,7 +7,7 @@ Prints measured numbers and ratios side by side (not a pass/fail test; floors fr
   compares): simulated unit-seconds per wall second (floor 1e5), at the 1 kHz step and at the
   100 Hz control period (Ts = 10 ms, digest section 4), with the trajectory difference between
   the two steps, the CPU time and the threads numba used; and at 1 kHz recording every channel
-  (mostly the cost of writing 117 MB of records, plus the energy accumulators);
+  (mostly the cost of writing 123 MB of records, plus the energy accumulators);
 - the same batch on one thread, CPU time per set-step: the SIMD blocks of kernel.run_batch
   against the sets run one by one through kernel.step, and what each gives on idle cores
   (the wall figures depend on what else the machine runs);
