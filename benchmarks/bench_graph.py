@@ -5,7 +5,8 @@ composed, enabled, every finger holding a 10 mm tendon position, and prints side
 latency from the encoder stamp to the duty applied in the unit (p50, p99, max, from each
 unit's /diagnostics, whose latency window is set to the measured interval), missed control
 periods (share of 10 ms periods without a duty command), total CPU of the graph's processes
-in share of one core, and the supervisor's final state. Floors: p99 <= 5 ms, missed < 0.5 %, CPU <= 1 core.
+in share of one core, and the supervisor's final state. Floors: p99 <= 5 ms, missed < 0.5 %,
+CPU <= 1 core.
 
 Usage: .venv/bin/python benchmarks/bench_graph.py [--seconds 60] [--modes separate,composed]
 """

@@ -82,8 +82,7 @@ def lsoda_rhs(p):
             electrical.phase_resistivity(p[K.P_RHO0A], p[K.P_T0A], p[K.P_DRDTA], p[K.P_DRDSA], temp, sig))
         _, power = electrical.current_source(cur, electrical.wire_resistance(rho, p[K.P_L0] - x, p[K.P_INV_S]))
         if p[K.P_SHEATH] > 0:
-            q_sh, q_sa = sheath.sheath_heat_flows(temp, ts, th if p[K.P_HELIX] > 0 else p[K.P_TAMB], p[K.P_GWS],
-                                                  p[K.P_GSA])
+            q_sh, q_sa = sheath.sheath_heat_flows(temp, ts, th, p[K.P_GWS], p[K.P_GSA])
             q_ha = sheath.helix_heat_loss(th, p[K.P_TAMB], p[K.P_GHA])
             net, dts, dth = power - q_sh, (q_sh - q_sa) / p[K.P_CS], (q_sa - q_ha) * p[K.P_INV_CH]
         else:

@@ -35,7 +35,8 @@ def run(args: argparse.Namespace) -> int:
 
     start = time.perf_counter()
     if args.calibrate:
-        print(f"calibrating (Nelder-Mead over {len(calibration.FREE_PARAMETERS)} parameters, about 10 s) ...", flush=True)
+        print(f"calibrating (Nelder-Mead over {len(calibration.FREE_PARAMETERS)} parameters, about 10 s) ...",
+              flush=True)
         count = [0]
 
         def progress(values, cost):

@@ -141,7 +141,8 @@ class ActuationUnitNode(LeanNode):
                   "duty_commands": d.commands, "rejected_commands": d.rejected_commands,
                   "missed_control_periods": d.missed_periods, "late_commands": d.late_commands,
                   "latency_p50_s": p50, "latency_p99_s": p99,
-                  "latency_max_s": worst, "latency_window_s": d.latency_window_s, "simulated_time_s": d.unit.time}
+                  "latency_max_s": worst, "latency_window_s": d.latency_window_s,
+                  "simulated_time_s": d.unit.time}
         status = DiagnosticStatus(
             level=DiagnosticStatus.WARN if d.watchdog_tripped else DiagnosticStatus.OK,
             name=f"hems/actuation_unit/{self.finger}", hardware_id=f"actuation_unit_{self.finger}",

@@ -54,7 +54,8 @@ def declare(node: Node, specs: list[Spec]) -> dict[str, Any]:
             values[spec.name] = node.declare_parameter(spec.name, spec.default, descriptor).value
         except InvalidParameterTypeException as error:
             # `-p physics_dt_s:=1` is an integer to ROS; say so instead of a traceback
-            hint = " (write a decimal point for a floating-point value, e.g. 1.0)" if isinstance(spec.default, float) else ""
+            hint = (" (write a decimal point for a floating-point value, e.g. 1.0)"
+                    if isinstance(spec.default, float) else "")
             raise ValueError(f"parameter '{spec.name}': wrong type: {error}{hint}") from None
         error = _error(spec, values[spec.name])
         if error:

@@ -9,9 +9,9 @@ kernel.run_batch, in blocks of sets whose step arithmetic is vectorised across t
 gives the same bits as the stepping API's kernel.step (to rounding when no energy channel is
 recorded: the blocks then skip the energy accumulators, a tenth of their work).
 ``record_every`` keeps every k-th step; ``channels`` limits what is stored (memory for big
-batches) and, for the energy channels, what is computed. Sensor channels (encoder, force reading with the seeded noise of each set) are
-derived on first access from the recorded truth, with the same functions and noise draws as
-the stepping API.
+batches) and, for the energy channels, what is computed. Sensor channels (encoder, force
+reading with the seeded noise of each set) are derived on first access from the recorded
+truth, with the same functions and noise draws as the stepping API.
 """
 
 from __future__ import annotations

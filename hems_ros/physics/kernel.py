@@ -198,9 +198,9 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
         cur, power = electrical.voltage_source(drive_value, res)
 
     t_amb = p[pk + P_TAMB * n]
-    # q_sa: out of the (first) sheath node, to the air or to the helix node; q_ha: helix -> air
-    q_sh, q_sa = sheath.sheath_heat_flows(temp, t_sheath, t_helix if p[pk + P_HELIX * n] > 0.0 else t_amb,
-                                          p[pk + P_GWS * n], p[pk + P_GSA * n])
+    # q_sa: out of the (first) sheath node to the helix node, which stays at ambient when
+    # there is none (pack); q_ha: helix -> air
+    q_sh, q_sa = sheath.sheath_heat_flows(temp, t_sheath, t_helix, p[pk + P_GWS * n], p[pk + P_GSA * n])
     q_ha = sheath.helix_heat_loss(t_helix, t_amb, p[pk + P_GHA * n])
     q_air = heat.convection_loss(temp, t_amb, p[pk + P_H0 * n], p[pk + P_H2 * n], p[pk + P_AREA * n])
     if p[pk + P_SHEATH * n] > 0.0:

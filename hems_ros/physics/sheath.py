@@ -77,8 +77,8 @@ def sheath_resistances(sheath, length_m: float) -> SheathResistances:
 
 @jit
 def sheath_heat_flows(wire_c, sheath_c, outer_c, wire_to_sheath_w_per_k, sheath_to_outer_w_per_k):
-    """(wire -> sheath, sheath -> outer) heat flows, W; the outer side is the air for one
-    sheath node, the helix node for two."""
+    """(wire -> sheath, sheath -> outer) heat flows, W; the outer side is the helix node, or
+    the air (a helix held at ambient) for a one-node sheath."""
     return (wire_to_sheath_w_per_k * (wire_c - sheath_c),
             sheath_to_outer_w_per_k * (sheath_c - outer_c))
 

@@ -53,6 +53,8 @@ def test_replace_dotted_and_double_underscore():
     ({"sheath.enabled": "yes"}, r"sheath.enabled = 'yes': must be true or false"),
     ({"force_sensor.seed": -1}, r"force_sensor.seed"),
     ({"ambient_temperature_c": 200.0}, r"ambient_temperature_c = 200.0"),
+    ({"sheath.helix_heat_capacity_j_per_k": 16.0}, r"sheath.liner_helix_resistance_k_per_w: must be > 0 when"),
+    ({"sheath.liner_helix_resistance_k_per_w": -1.0}, r"sheath.liner_helix_resistance_k_per_w = -1.0: must be >= 0"),
 ])
 def test_bad_values_raise_naming_field_and_rule(override, pattern):
     with pytest.raises(ParamError, match=pattern):
