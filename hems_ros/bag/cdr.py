@@ -1,9 +1,10 @@
-"""CDR (XCDR1, little endian) decoders generated from parsed message definitions.
+"""CDR (XCDR1, little endian) decoders and encoders generated from parsed message definitions.
 
 A decoder turns one serialized message into a flat tuple, one value per leaf field
-(``header.stamp.sec``, ``header.frame_id``, ``force``...). Nested message fields are inlined;
-runs of fixed-size fields are read with a single ``struct.unpack_from`` whose padding is
-worked out when the decoder is generated, so a typical message costs a few struct calls.
+(``header.stamp.sec``, ``header.frame_id``, ``force``...); an encoder turns such a tuple
+back into the bytes rclpy's ``serialize_message`` gives. Nested message fields are inlined;
+runs of fixed-size fields are read or written with a single ``struct`` call whose padding is
+worked out when the code is generated, so a typical message costs a few struct calls.
 Alignment is relative to the end of the 4-byte encapsulation header, as CDR requires.
 """
 
@@ -18,6 +19,7 @@ import numpy as np
 from hems_ros.bag.msgdefs import PRIMITIVES, DefinitionError, Field
 
 HEADER_SIZE = 4
+CDR_LE_HEADER = b"\x00\x01\x00\x00"
 LITTLE_ENDIAN_KINDS = (0x01, 0x03)  # CDR_LE, PL_CDR_LE
 SCALARS = {  # name: (struct code, size, numpy dtype)
     "bool": ("?", 1, np.bool_), "byte": ("B", 1, np.uint8), "char": ("B", 1, np.uint8),
@@ -93,8 +95,11 @@ class _Emitter:
                 self.phase = (self.phase + pad) % self.modulus
             return
         self.flush()
-        self.lines.append(f"o += ({HEADER_SIZE} - o) % {size}")
+        self.lines.append(self.dynamic_padding(size))
         self.modulus, self.phase = size, 0
+
+    def dynamic_padding(self, size: int) -> str:
+        return f"o += ({HEADER_SIZE} - o) % {size}"
 
     def advance(self, size: int) -> None:
         self.phase = (self.phase + size) % self.modulus
@@ -228,3 +233,64 @@ def build_decoder(type_name: str, types: dict[str, list[Field]]) -> Decoder:
             raise CdrError(f"{type_name}: {error}") from None
 
     return Decoder(type_name, tuple(emitter.columns), decode, types)
+
+
+class _EncodeEmitter(_Emitter):
+    """Generates the writer of one message type: the decoder's layout, packed instead of read.
+
+    Scalars, strings and nested messages only: the graph's hot messages have no arrays, and
+    a sequence's padding rules (see :meth:`_Emitter.primitive_array`) would need tests of
+    their own before anything is published with them.
+    """
+
+    def field(self, field: Field, prefix: str) -> None:
+        if field.array is not None:
+            raise DefinitionError(f"field {prefix}{field.name}: the encoder writes no arrays or sequences")
+        super().field(field, prefix)
+
+    def flush(self) -> None:
+        if self.pending_vars:
+            self.lines.append(f"out += pack('<{self.pending_fmt}', {', '.join(self.pending_vars)})")
+        elif self.pending_size:
+            self.lines.append(f"out += bytes({self.pending_size})")
+        self.pending_fmt, self.pending_vars, self.pending_size = "", [], 0
+
+    def dynamic_padding(self, size: int) -> str:
+        return f"out += bytes(({HEADER_SIZE} - len(out)) % {size})"
+
+    def string(self) -> str:
+        self.align(4)
+        self.flush()
+        target = self.var()
+        self.lines.append(f"t = {target}.encode('utf-8'); out += pack('<I', len(t) + 1); out += t; out += b'\\x00'")
+        self.unknown_phase()
+        return target
+
+
+@dataclass(frozen=True)
+class Encoder:
+    type_name: str
+    columns: tuple[Column, ...]
+    encode: Callable[[tuple], bytes]
+
+
+def build_encoder(type_name: str, types: dict[str, list[Field]]) -> Encoder:
+    """An encoder of ``type_name``: a flat tuple in the decoder's column order -> CDR bytes."""
+    emitter = _EncodeEmitter(types, {})
+    emitter.message(type_name)
+    source = "def encode_body(values):\n"
+    source += f"    ({''.join(v + ', ' for v in emitter.values)}) = values\n"
+    source += "    out = bytearray(HEAD)\n"
+    source += "".join(f"    {line}\n" for line in emitter.lines)
+    source += "    return bytes(out)\n"
+    namespace: dict[str, object] = {"pack": struct.pack, "HEAD": CDR_LE_HEADER}
+    exec(compile(source, f"<cdr encode {type_name}>", "exec"), namespace)  # noqa: S102 - parsed definitions only
+    body = namespace["encode_body"]
+
+    def encode(values: tuple) -> bytes:
+        try:
+            return body(values)
+        except (struct.error, ValueError, TypeError, AttributeError) as error:
+            raise CdrError(f"{type_name}: cannot encode {values!r}: {error}") from None
+
+    return Encoder(type_name, tuple(emitter.columns), encode)

@@ -11,6 +11,7 @@ Publishes
   /diagnostics                   diagnostic_msgs/DiagnosticArray  1 Hz (latency, missed periods, watchdog)
 
 Duty watchdog: no duty command for three control periods sets the duty to 0 and flags it.
+The duty, encoder, tension and state topics carry serialized messages (hems_ros.nodes.wire).
 """
 
 from __future__ import annotations
@@ -22,10 +23,13 @@ from hems_ros.graph import names
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.clock_time import from_msg, seconds, to_msg
+from hems_ros.nodes.clock_time import seconds
+from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import ActuationUnit, load_params
+
+DUTY, ENCODER, TENSION, STATE = (codec(t) for t in (DutyCommand, EncoderReading, WireForce, ActuatorState))
 
 PARAMETERS = [
     Spec("finger", "index", "finger this unit drives: " + ", ".join(names.FINGERS), one_of(*names.FINGERS), True),
@@ -73,19 +77,21 @@ class ActuationUnitNode(LeanNode):
         self.tension_pub = self.create_publisher(WireForce, names.sim_topic(self.finger, "wire_tension"), qos.SENSOR)
         self.state_pub = self.create_publisher(ActuatorState, names.sim_topic(self.finger, "state"), qos.SENSOR)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
-        self.create_subscription(DutyCommand, names.topic(self.finger, "duty"), self.on_duty, qos.COMMAND)
+        self.create_subscription(DutyCommand, names.topic(self.finger, "duty"), self.on_duty, qos.COMMAND, raw=True)
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         self.create_timer(p["state_period_s"], self.publish_state)
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
 
-    def on_duty(self, message: DutyCommand) -> None:
+    def on_duty(self, data: bytes) -> None:
         now = seconds(self)
+        message = DUTY.decode(data)
         # up to the arrival with the old duty (publishing a sample that fell due), then again
         # with the new one: from the sample it answers, or from now if it came late
         self.advance_to(now)
         try:
-            self.driver.command(message.duty_percent, now, from_msg(message.measurement_stamp))
+            self.driver.command(message.duty_percent, now,
+                                seconds_of(message.measurement_stamp_sec, message.measurement_stamp_nanosec))
         except ValueError as error:
             self.get_logger().error(f"{self.finger}: {error}; applying 0 %")
         self.advance_to(now)
@@ -108,31 +114,31 @@ class ActuationUnitNode(LeanNode):
             self.publish_state()
         for sample in samples:
             self.sequence += 1
-            stamp = to_msg(sample.time_s)
+            sec, nanosec = stamp(sample.time_s)
             r = sample.result
-            encoder = EncoderReading(finger=self.finger, counts=r.encoder_counts, position=r.encoder_position_m,
-                                     resolution=self.resolution, sequence=self.sequence)
-            encoder.header.stamp = stamp
-            self.encoder_pub.publish(encoder)
-            tension = WireForce(finger=self.finger, force=r.wire_force_n, sequence=self.sequence)
-            tension.header.stamp = stamp
-            self.tension_pub.publish(tension)
+            self.encoder_pub.publish(ENCODER.encode(ENCODER.fields(
+                header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
+                counts=r.encoder_counts, position=r.encoder_position_m, resolution=self.resolution,
+                sequence=self.sequence)))
+            self.tension_pub.publish(TENSION.encode(TENSION.fields(
+                header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
+                force=r.wire_force_n, saturated=False, over_force=False, sequence=self.sequence)))
 
     def publish_state(self) -> None:
         r = self.driver.last_result
         if r is None:
             return
         self.state_sequence += 1
-        state = ActuatorState(
+        sec, nanosec = stamp(max(self.driver.time_s, seconds(self)))
+        self.state_pub.publish(STATE.encode(STATE.fields(
+            header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="",
             finger=self.finger, duty_percent=self.driver.applied_duty,
             watchdog_tripped=self.driver.watchdog_tripped, wire_temperature_c=r.wire_temperature_c,
             martensite_fraction=r.martensite_fraction, resistance=r.resistance_ohm, current=r.current_a,
-            electrical_power=r.electrical_power_w, electrical_energy=r.energy_joule_j, stress=r.stress_pa, strain=r.strain,
-            sheath_temperature_c=r.sheath_temperature_c, slider_position=r.slider_position_m,
+            electrical_power=r.electrical_power_w, electrical_energy=r.energy_joule_j, stress=r.stress_pa,
+            strain=r.strain, sheath_temperature_c=r.sheath_temperature_c, slider_position=r.slider_position_m,
             slider_velocity=r.slider_velocity_m_s, tendon_position=r.tendon_position_m,
-            tendon_force=r.tendon_force_n, wire_force=r.wire_force_n, sequence=self.state_sequence)
-        state.header.stamp = to_msg(max(self.driver.time_s, seconds(self)))
-        self.state_pub.publish(state)
+            tendon_force=r.tendon_force_n, wire_force=r.wire_force_n, sequence=self.state_sequence)))
 
     def publish_diagnostics(self) -> None:
         d = self.driver

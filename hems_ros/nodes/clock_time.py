@@ -2,6 +2,8 @@
 
 from builtin_interfaces.msg import Time
 
+from hems_ros.nodes.wire import seconds_of, stamp
+
 
 def seconds(node) -> float:
     """The node's clock (wall or /clock sim time) in seconds."""
@@ -9,9 +11,9 @@ def seconds(node) -> float:
 
 
 def to_msg(time_s: float) -> Time:
-    nanoseconds = int(round(time_s * 1e9))
-    return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
+    sec, nanosec = stamp(time_s)
+    return Time(sec=sec, nanosec=nanosec)
 
 
-def from_msg(stamp: Time) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
+def from_msg(time: Time) -> float:
+    return seconds_of(time.sec, time.nanosec)

@@ -24,13 +24,12 @@ in duty.
 An invalid setpoint (non-finite, outside the tendon stroke or force range, unknown mode) is
 rejected with a logged error and counted in the status; the last valid setpoint stays.
 Outside ENABLED, or after a controller fault (non-finite input), the duty sent is 0.
+The encoder, force, duty and status topics carry serialized messages (hems_ros.nodes.wire).
 """
 
 from __future__ import annotations
 
 from dataclasses import fields
-
-from builtin_interfaces.msg import Time
 
 from hems_msgs.msg import ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
 from hems_ros.control import STRATEGIES, make_controller, mode_gains
@@ -41,6 +40,10 @@ from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
+from hems_ros.nodes.wire import NS_PER_S, codec
+
+ENCODER, WIRE_FORCE, DUTY, STATUS = (codec(t) for t in (EncoderReading, WireForce, DutyCommand, ControllerStatus))
+NO_STAMP = (0, 0)
 
 PARAMETERS = [
     Spec("finger", "index", "finger this controller drives: " + ", ".join(names.FINGERS), one_of(*names.FINGERS),
@@ -80,8 +83,8 @@ class FingerControllerNode(LeanNode):
         self.setpoint = Setpoint(p["mode"], 0.0)
         self.enabled = False
         self.wire_position: float | None = None
-        self.encoder_stamp = Time()
-        self.force_stamp = Time()
+        self.encoder_stamp = NO_STAMP   # (sec, nanosec) of the latest reading
+        self.force_stamp = NO_STAMP
         self.wire_force: float | None = None
         self.duty = 0.0
         self.rejected = 0
@@ -95,8 +98,10 @@ class FingerControllerNode(LeanNode):
         self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status"),
                                                 qos.COMMAND)
         self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint"), self.on_setpoint, qos.COMMAND)
-        self.create_subscription(EncoderReading, names.topic(self.finger, "encoder"), self.on_encoder, qos.SENSOR)
-        self.create_subscription(WireForce, names.topic(self.finger, "wire_force"), self.on_force, qos.SENSOR)
+        self.create_subscription(EncoderReading, names.topic(self.finger, "encoder"), self.on_encoder, qos.SENSOR,
+                                 raw=True)
+        self.create_subscription(WireForce, names.topic(self.finger, "wire_force"), self.on_force, qos.SENSOR,
+                                 raw=True)
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         self.last_control_s = 0.0
         self.idle_status_period_s = p["idle_status_period_s"]
@@ -138,17 +143,19 @@ class FingerControllerNode(LeanNode):
             self.controller.reset()
         self.enabled = enabled
 
-    def on_encoder(self, message: EncoderReading) -> None:
+    def on_encoder(self, data: bytes) -> None:
+        message = ENCODER.decode(data)
         self.wire_position = message.position
-        self.encoder_stamp = message.header.stamp
+        self.encoder_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
         if self.setpoint.mode == "position":
-            self.control(message.header.stamp)
+            self.control(self.encoder_stamp)
 
-    def on_force(self, message: WireForce) -> None:
+    def on_force(self, data: bytes) -> None:
+        message = WIRE_FORCE.decode(data)
         self.wire_force = message.force
-        self.force_stamp = message.header.stamp
+        self.force_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
         if self.setpoint.mode == "force":
-            self.control(message.header.stamp)
+            self.control(self.force_stamp)
 
     # control ------------------------------------------------------------------
     def _wire_measurement(self, mode: str) -> float | None:
@@ -159,18 +166,19 @@ class FingerControllerNode(LeanNode):
             return transmission.wire_position(self.setpoint.value, self.ratio)
         return transmission.wire_force(self.setpoint.value, self.ratio)
 
-    def control(self, stamp) -> None:
+    def control(self, measurement_stamp: tuple[int, int]) -> None:
         if self.enabled:
             self.duty = self.controller.update(self._wire_reference(), self._wire_measurement(self.setpoint.mode))
         else:
             self.duty = 0.0
         self.sequence += 1
-        command = DutyCommand(finger=self.finger, duty_percent=self.duty, measurement_stamp=stamp,
-                              sequence=self.sequence)
-        now = self.get_clock().now()
-        command.header.stamp = now.to_msg()
-        self.duty_pub.publish(command)
-        self.last_control_s = now.nanoseconds * 1e-9
+        now_ns = self.get_clock().now().nanoseconds
+        sec, nanosec = divmod(now_ns, NS_PER_S)
+        self.duty_pub.publish(DUTY.encode(DUTY.fields(
+            header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
+            duty_percent=self.duty, measurement_stamp_sec=measurement_stamp[0],
+            measurement_stamp_nanosec=measurement_stamp[1], sequence=self.sequence)))
+        self.last_control_s = now_ns * 1e-9
         self._steps_since_status += 1
         if self._steps_since_status >= self.status_every or self._status_key() != self._reported:
             self.publish_status()
@@ -193,15 +201,17 @@ class FingerControllerNode(LeanNode):
         self.status_sequence += 1
         self._steps_since_status = 0
         self._reported = self._status_key()
-        status = ControllerStatus(
+        sec, nanosec = divmod(self.get_clock().now().nanoseconds, NS_PER_S)
+        self.status_pub.publish(STATUS.encode(STATUS.fields(
+            header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="",
             finger=self.finger, strategy=self.controller.strategy, mode=self.setpoint.mode, active=self.enabled,
             setpoint=self.setpoint.value, measurement=tendon, error=self.setpoint.value - tendon,
-            duty_percent=self.duty, fault=self.controller.fault or "", encoder_stamp=self.encoder_stamp,
-            wire_position=nan_if_none(self.wire_position), force_stamp=self.force_stamp,
+            duty_percent=self.duty, fault=self.controller.fault or "",
+            encoder_stamp_sec=self.encoder_stamp[0], encoder_stamp_nanosec=self.encoder_stamp[1],
+            wire_position=nan_if_none(self.wire_position),
+            force_stamp_sec=self.force_stamp[0], force_stamp_nanosec=self.force_stamp[1],
             wire_force=nan_if_none(self.wire_force), rejected_setpoints=self.rejected,
-            last_rejection=self.last_rejection, sequence=self.status_sequence)
-        status.header.stamp = self.get_clock().now().to_msg()
-        self.status_pub.publish(status)
+            last_rejection=self.last_rejection, sequence=self.status_sequence)))
 
 
 def main() -> int:

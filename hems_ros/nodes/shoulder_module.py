@@ -5,7 +5,8 @@ Subscribes  /hems/sim/<finger>/wire_tension  hems_msgs/WireForce  best effort (p
 Publishes   /hems/<finger>/wire_force        hems_msgs/WireForce  best effort, one reading per tension sample (100 Hz)
 
 Each reading carries ``saturated`` (clipped at 0 or the range) and ``over_force``
-(reading at or above ``over_force_n``).
+(reading at or above ``over_force_n``). Both topics carry serialized messages
+(hems_ros.nodes.wire).
 """
 
 from __future__ import annotations
@@ -17,10 +18,12 @@ from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
+from hems_ros.nodes.wire import codec
 from hems_ros.physics import sensors
 from hems_ros.physics.params import ForceSensor
 
 _SENSOR = ForceSensor()
+WIRE_FORCE = codec(WireForce)
 
 
 PARAMETERS = [
@@ -48,17 +51,17 @@ class ShoulderModuleNode(LeanNode):
             self.sequences[finger] = 0
             self.rngs[finger] = sensors.noise_generator(p["seed"] + index)
             self.create_subscription(WireForce, names.sim_topic(finger, "wire_tension"),
-                                     lambda message, f=finger: self.on_tension(f, message), qos.SENSOR)
+                                     lambda data, f=finger: self.on_tension(f, data), qos.SENSOR, raw=True)
 
-    def on_tension(self, finger: str, tension: WireForce) -> None:
+    def on_tension(self, finger: str, data: bytes) -> None:
         p = self.params
+        tension = WIRE_FORCE.decode(data)
         noise = self.rngs[finger].standard_normal() * p["noise_std_n"]
         force, saturated = sensors.force_reading(tension.force, noise, p["range_max_n"], p["resolution_n"])
         self.sequences[finger] += 1
-        reading = WireForce(finger=finger, force=force, saturated=saturated,
-                            over_force=force >= p["over_force_n"], sequence=self.sequences[finger])
-        reading.header.stamp = tension.header.stamp
-        self.publishers_[finger].publish(reading)
+        self.publishers_[finger].publish(WIRE_FORCE.encode(tension._replace(
+            finger=finger, force=force, saturated=saturated, over_force=force >= p["over_force_n"],
+            sequence=self.sequences[finger])))
 
 
 def main() -> int:

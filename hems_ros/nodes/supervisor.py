@@ -15,7 +15,8 @@ Monitors: stale encoder or force streams (> stale_s, default 50 ms), controller 
 (> heartbeat_timeout_s, default 200 ms), wire
 over-force (default 50 N), tendon over-travel, duty-watchdog flags. Heating is allowed only
 in ENABLED: the units and controllers drop every duty to 0 as soon as they see any other
-state. FAULT and ESTOP latch until reset.
+state. FAULT and ESTOP latch until reset. The controller status and state topics are taken
+serialized (hems_ros.nodes.wire).
 """
 
 from __future__ import annotations
@@ -29,11 +30,14 @@ from hems_ros.graph import names, transmission
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.clock_time import from_msg, seconds
+from hems_ros.nodes.clock_time import seconds
 from hems_ros.nodes.params import Spec, declare, positive
 from hems_ros.nodes.runner import run_node
+from hems_ros.nodes.wire import codec, seconds_of
 
 _LIMITS = MonitorLimits()
+CONTROLLER_STATUS, STATE = codec(ControllerStatus), codec(ActuatorState)
+
 def _fingers(value) -> str | None:
     unknown = [f for f in value if f not in names.FINGERS]
     if not value or unknown:
@@ -73,9 +77,9 @@ class SupervisorNode(LeanNode):
         self.force_stamps = {f: None for f in self.fingers}
         for finger in self.fingers:
             self.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
-                                     lambda m, f=finger: self.on_controller(f, m), qos.COMMAND)
+                                     lambda m, f=finger: self.on_controller(f, m), qos.COMMAND, raw=True)
             self.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
-                                     lambda m, f=finger: self.on_state(f, m), qos.SENSOR)
+                                     lambda m, f=finger: self.on_state(f, m), qos.SENSOR, raw=True)
         for command in names.SUPERVISOR_SERVICES:
             self.create_service(Trigger, names.service(command),
                                 lambda request, response, c=command: self.on_command(c, response))
@@ -85,25 +89,28 @@ class SupervisorNode(LeanNode):
         self.create_timer(1.0, self.publish_diagnostics)
         self.publish_status()
 
-    def on_controller(self, finger: str, message: ControllerStatus) -> None:
+    def on_controller(self, finger: str, data: bytes) -> None:
         now = seconds(self)
+        message = CONTROLLER_STATUS.decode(data)
         self.logic.saw("heartbeat", finger, now)
         # a reading counts as fresh when its stamp moved since the last status (receive-side
         # judgement: no clock comparison between hosts)
-        encoder = (message.encoder_stamp.sec, message.encoder_stamp.nanosec)
+        encoder = (message.encoder_stamp_sec, message.encoder_stamp_nanosec)
         if encoder != (0, 0) and encoder != self.encoder_stamps[finger]:
             self.encoder_stamps[finger] = encoder
             self.position[finger] = message.wire_position
             self.logic.encoder(finger, message.wire_position, now)
-        force = (message.force_stamp.sec, message.force_stamp.nanosec)
+        force = (message.force_stamp_sec, message.force_stamp_nanosec)
         if force != (0, 0) and force != self.force_stamps[finger]:
             self.force_stamps[finger] = force
             self.force[finger] = message.wire_force
             self.logic.wire_force(finger, message.wire_force, now)
         self.publish_if_changed()
 
-    def on_state(self, finger: str, message: ActuatorState) -> None:
-        self.logic.watchdog(finger, message.watchdog_tripped, from_msg(message.header.stamp))
+    def on_state(self, finger: str, data: bytes) -> None:
+        message = STATE.decode(data)
+        self.logic.watchdog(finger, message.watchdog_tripped,
+                            seconds_of(message.header_stamp_sec, message.header_stamp_nanosec))
         self.publish_if_changed()
 
     def on_command(self, command: str, response: Trigger.Response) -> Trigger.Response:

@@ -1,0 +1,59 @@
+"""Serialized (CDR) messages for the graph's 100 Hz streams, without rclpy message objects.
+
+On the graph's hot topics (encoder, wire tension and force, duty, controller status,
+simulation state) the nodes publish bytes and subscribe with ``raw=True``: rclpy then skips
+building a Python message object and converting it field by field, which cost more than the
+nodes' own work per message (benchmarks/bench_graph.py, tests/graph/README.md). The bytes
+are exactly what a typed publisher sends, so ``ros2 topic echo``, the recorder and any other
+subscriber see ordinary messages.
+
+A codec reads and writes one message type as a named tuple of its leaf fields, nested names
+joined by ``_`` (``header_stamp_sec``, ``measurement_stamp_nanosec``); the layout comes from
+the installed ``.msg`` definitions through :mod:`hems_ros.bag.cdr`. No rclpy import here.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+
+from hems_ros.bag import cdr, msgdefs
+
+NS_PER_S = 1_000_000_000
+
+
+@dataclass(frozen=True)
+class Codec:
+    msg_type: type                     # the rosidl class, for create_publisher/create_subscription
+    fields: type                       # named tuple of the leaf fields, in CDR order
+    _encode: Callable[[tuple], bytes]
+    _decode: Callable[[bytes], tuple]
+
+    def encode(self, values: tuple) -> bytes:
+        return self._encode(values)
+
+    def decode(self, data: bytes) -> tuple:
+        """The message as :attr:`fields`; :class:`hems_ros.bag.cdr.CdrError` if malformed."""
+        return self.fields._make(self._decode(data))
+
+
+@lru_cache(maxsize=None)
+def codec(msg_type: type) -> Codec:
+    """The codec of a rosidl message class such as ``hems_msgs.msg.EncoderReading``."""
+    type_name = f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
+    types = msgdefs.parse_full_definition(type_name, msgdefs.full_definition(type_name))
+    decoder = cdr.build_decoder(type_name, types)
+    encoder = cdr.build_encoder(type_name, types)
+    fields = namedtuple(msg_type.__name__ + "Fields", [c.name.replace(".", "_") for c in decoder.columns])
+    return Codec(msg_type, fields, encoder.encode, decoder.decode)
+
+
+def stamp(time_s: float) -> tuple[int, int]:
+    """(sec, nanosec) of a builtin_interfaces/Time for ``time_s`` seconds."""
+    return divmod(int(round(time_s * NS_PER_S)), NS_PER_S)
+
+
+def seconds_of(sec: int, nanosec: int) -> float:
+    return sec + nanosec * 1e-9
