@@ -29,7 +29,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
 from hems_ros.control import DEFAULT_N_FILTER, DEFAULT_TS, make_controller
 from hems_ros.control import metrics
@@ -40,20 +39,6 @@ from hems_ros.physics.params import UnitParams, load_params
 
 DEFAULT_DT = 1e-3
 _DUTY = DRIVE_NAMES["duty"]
-
-
-@njit
-def _hold(p, s, duty, n_steps, dt, out):
-    """``n_steps`` plant steps at constant ``duty``; False if the state turned non-finite.
-
-    Not cached on disk: numba's cache would keep the kernel.step inlined at the first
-    compile and miss later edits of the physics modules (kernel.py guards its own cache
-    only), so the lockstep would silently drift from the stepping API.
-    """
-    for _ in range(n_steps):
-        if not kernel.step(p, s, _DUTY, duty, dt, out):
-            return False
-    return True
 
 
 @dataclass
@@ -136,7 +121,7 @@ def simulate_loop(
             n = k + 1
             power[k] = 0.0
             break
-        if not _hold(p, s, u, sub, dt, out):
+        if kernel.steps(p, s, _DUTY, u, dt, out, sub) < sub:
             fault = f"plant state non-finite during the hold from t = {k * ts:.2f} s"
             n = k + 1
             power[k] = math.nan

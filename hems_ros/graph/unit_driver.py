@@ -133,20 +133,36 @@ class UnitDriver:
         return self.commanded_duty
 
     def advance(self, now_s: float) -> list[Sample]:
-        """Integrate up to ``now_s``; return the encoder samples that fell due."""
-        samples = []
-        dt = self.unit.dt
-        for _ in range(MAX_STEPS_PER_ADVANCE):
-            step_end = self.time_s + dt
+        """Integrate up to ``now_s``; return the encoder samples that fell due.
+
+        The gates are checked at every 1 ms step; the steps between a change of the gated
+        duty and the next sample go to the physics in one call.
+        """
+        samples: list[Sample] = []
+        unit, dt, start = self.unit, self.unit.dt, self.start_time_s
+        first = unit.steps
+        run_duty, run = 0.0, 0
+        for k in range(first + 1, first + 1 + MAX_STEPS_PER_ADVANCE):
+            # the same float arithmetic as time_s before and after step k (epoch times leave
+            # a quarter microsecond of resolution, enough to move a gate's boundary)
+            step_end = (start + (k - 1) * dt) + dt
             if step_end > now_s + 1e-9:
                 break
-            self.applied_duty = self.gate(step_end)
-            self.unit.advance(duty=self.applied_duty)
-            due = self.start_time_s + (self._samples_taken + 1) * self.sample_period_s
-            if self.time_s >= due - 1e-9:
+            duty = self.gate(step_end)
+            if run and duty != run_duty:
+                unit.advance(duty=run_duty, steps=run)
+                run = 0
+            run_duty, run = duty, run + 1
+            if start + k * dt >= start + (self._samples_taken + 1) * self.sample_period_s - 1e-9:
+                unit.advance(duty=run_duty, steps=run)
+                run = 0
                 self._samples_taken += 1
-                samples.append(Sample(self.time_s, self.unit.result()))
-                self._sample_snapshot = (self.time_s, self.unit.snapshot())
+                samples.append(Sample(self.time_s, unit.result()))
+                self._sample_snapshot = (self.time_s, unit.snapshot())
+        if run:
+            unit.advance(duty=run_duty, steps=run)
+        if unit.steps > first:
+            self.applied_duty = run_duty
         return samples
 
     def latency_percentiles(self) -> tuple[float, float, float]:

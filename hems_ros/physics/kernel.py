@@ -347,6 +347,16 @@ def step(p, s, drive_kind, drive_value, dt, out):
                    q_sa, q_ha, d_temp0, temp_per_xi, d_xi, v_new, sig_new, True)
 
 
+@jit
+def steps(p, s, drive_kind, drive_value, dt, out, n):
+    """``n`` steps of :func:`step` at one drive, in one call (a node integrating a 10 ms
+    sample period, the lockstep holding a duty); returns how many ended finite (n if all)."""
+    for k in range(n):
+        if not step(p, s, drive_kind, drive_value, dt, out):
+            return k
+    return n
+
+
 # ---------------------------------------------------------------- batch
 # The batch runs blocks of BLOCK sets through time together, each step in loops over the sets
 # of the block that LLVM vectorises (SIMD): _block_begin does the start of the step and the

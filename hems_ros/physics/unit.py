@@ -103,6 +103,11 @@ class ActuationUnit:
         self._noise = noise
 
     @property
+    def steps(self) -> int:
+        """Steps taken since the last reset."""
+        return self._steps
+
+    @property
     def time(self) -> float:
         """Simulated time since the last reset, s."""
         return self._steps * self.dt
@@ -124,16 +129,22 @@ class ActuationUnit:
         return self.result()
 
     def advance(self, duty: float | None = None, current: float | None = None,
-                voltage: float | None = None) -> None:
-        """:meth:`step` without building its result: a node integrating at 1 kHz reads only
-        the steps that end on a sensor sample (:meth:`result`)."""
+                voltage: float | None = None, steps: int = 1) -> None:
+        """:meth:`step` without building its result, ``steps`` times with the same drive in one
+        kernel call: a node integrating at 1 kHz reads only the steps that end on a sensor
+        sample (:meth:`result`), and the drive changes only with a command."""
         kind, value = select_drive(duty, current, voltage)
         value = float(value)
         check_drive(kind, value)
-        if not kernel.step(self._p, self._s, DRIVE_NAMES[kind], value, self.dt, self._out):
+        if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
+            raise ValueError(f"steps = {steps!r}: must be a whole number >= 1")
+        done = kernel.steps(self._p, self._s, DRIVE_NAMES[kind], value, self.dt, self._out, steps)
+        self._steps += done
+        if done < steps:
             raise FloatingPointError(f"state became non-finite at t = {self.time + self.dt:.6f} s ({self.state})")
-        self._steps += 1
-        self._noise = self._rng.standard_normal()
+        # the result's force noise is the last step's draw; a block of draws continues the
+        # generator's stream exactly as single draws would
+        self._noise = self._rng.standard_normal() if steps == 1 else self._rng.standard_normal(steps)[-1]
 
     def result(self) -> StepResult:
         """Measurements and truth after the last step: what that :meth:`step` returned."""

@@ -159,6 +159,22 @@ def test_advance_then_result_is_step():
         advanced.advance(duty=101.0)
 
 
+def test_advance_in_blocks_is_the_same_steps_one_by_one():
+    # the node integrates a sample period per call; noise draws and state must not notice
+    p = load_params("ch6_hems_index").replace({"force_sensor.noise_std_n": 0.5})
+    single, blocks = ActuationUnit(p), ActuationUnit(p)
+    for d in (0.0, 80.0, 100.0, 35.0, 0.0):
+        for _ in range(137):
+            single.advance(duty=d)
+        blocks.advance(duty=d, steps=100)
+        blocks.advance(duty=d, steps=37)
+        assert blocks.result() == single.result()
+    assert np.array_equal(blocks.snapshot()[0], single.snapshot()[0]) and blocks.steps == 5 * 137
+    for bad in (0, -3, 2.5, True):
+        with pytest.raises(ValueError, match="steps"):
+            blocks.advance(duty=10.0, steps=bad)
+
+
 def test_reset_and_state():
     u = ActuationUnit(load_params("table41"))
     for _ in range(500):
