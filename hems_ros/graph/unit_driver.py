@@ -86,8 +86,7 @@ class UnitDriver:
         the latest sample rewinds the physics to that sample (see the module documentation).
         """
         if not (math.isfinite(duty_percent) and 0.0 <= duty_percent <= 100.0):
-            self.rejected_commands += 1
-            self.commanded_duty = 0.0
+            self.reject()
             raise ValueError(f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %")
         effective_s = now_s
         if self._answers_latest_sample(measurement_stamp_s):
@@ -103,6 +102,11 @@ class UnitDriver:
         self.last_command_s = effective_s
         if measurement_stamp_s is not None and measurement_stamp_s > 0:
             self.latencies_s.append(now_s - measurement_stamp_s)
+
+    def reject(self) -> None:
+        """A command that cannot be applied: counted, and 0 duty until the next valid one."""
+        self.rejected_commands += 1
+        self.commanded_duty = 0.0
 
     def _answers_latest_sample(self, measurement_stamp_s: float | None) -> bool:
         return (measurement_stamp_s is not None and self._sample_snapshot is not None

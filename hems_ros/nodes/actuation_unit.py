@@ -85,10 +85,13 @@ class ActuationUnitNode(LeanNode):
 
     def on_duty(self, data: bytes) -> None:
         now = seconds(self)
-        message = DUTY.decode(data)
+        message = self.decode(DUTY, data, names.topic(self.finger, "duty"))
         # up to the arrival with the old duty (publishing a sample that fell due), then again
         # with the new one: from the sample it answers, or from now if it came late
         self.advance_to(now)
+        if message is None:
+            self.driver.reject()
+            return
         try:
             self.driver.command(message.duty_percent, now,
                                 seconds_of(message.measurement_stamp_sec, message.measurement_stamp_nanosec))

@@ -144,14 +144,18 @@ class FingerControllerNode(LeanNode):
         self.enabled = enabled
 
     def on_encoder(self, data: bytes) -> None:
-        message = ENCODER.decode(data)
+        message = self.decode(ENCODER, data, names.topic(self.finger, "encoder"))
+        if message is None:
+            return
         self.wire_position = message.position
         self.encoder_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
         if self.setpoint.mode == "position":
             self.control(self.encoder_stamp)
 
     def on_force(self, data: bytes) -> None:
-        message = WIRE_FORCE.decode(data)
+        message = self.decode(WIRE_FORCE, data, names.topic(self.finger, "wire_force"))
+        if message is None:
+            return
         self.wire_force = message.force
         self.force_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
         if self.setpoint.mode == "force":

@@ -1,4 +1,5 @@
-"""A Node whose publishers and subscriptions carry no QoS event handlers unless asked.
+"""A Node whose publishers and subscriptions carry no QoS event handlers unless asked,
+and which reads serialized messages without letting a malformed one stop it.
 
 rclpy gives every publisher and subscription default handlers for QoS events; each is a
 waitable that the executor re-adds to its wait set on every wake-up, in Python. The graph's
@@ -7,11 +8,19 @@ nodes wake a few hundred times a second, and these handlers were most of that co
 
 from __future__ import annotations
 
+import time
+
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 
+from hems_ros.bag.cdr import CdrError
+
 
 class LeanNode(Node):
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._unreadable_logged: dict[str, float] = {}
+
     def create_publisher(self, *args, event_callbacks=None, **kwargs):
         return super().create_publisher(
             *args, event_callbacks=event_callbacks or PublisherEventCallbacks(use_default_callbacks=False), **kwargs)
@@ -20,3 +29,16 @@ class LeanNode(Node):
         return super().create_subscription(
             *args, event_callbacks=event_callbacks or SubscriptionEventCallbacks(use_default_callbacks=False),
             **kwargs)
+
+    def decode(self, codec, data: bytes, topic: str):
+        """``codec.decode(data)``, or None after logging why the message could not be read
+        (a raw publisher can send any bytes on a typed topic); at most one log line per topic
+        and second, so a bad stream neither floods the log nor hides another topic's."""
+        try:
+            return codec.decode(data)
+        except CdrError as error:
+            now = time.monotonic()
+            if now - self._unreadable_logged.get(topic, float("-inf")) >= 1.0:
+                self._unreadable_logged[topic] = now
+                self.get_logger().error(f"unreadable message on {topic} dropped: {error}")
+            return None

@@ -55,7 +55,9 @@ class ShoulderModuleNode(LeanNode):
 
     def on_tension(self, finger: str, data: bytes) -> None:
         p = self.params
-        tension = WIRE_FORCE.decode(data)
+        tension = self.decode(WIRE_FORCE, data, names.sim_topic(finger, "wire_tension"))
+        if tension is None:
+            return
         noise = self.rngs[finger].standard_normal() * p["noise_std_n"]
         force, saturated = sensors.force_reading(tension.force, noise, p["range_max_n"], p["resolution_n"])
         self.sequences[finger] += 1

@@ -90,8 +90,10 @@ class SupervisorNode(LeanNode):
         self.publish_status()
 
     def on_controller(self, finger: str, data: bytes) -> None:
+        message = self.decode(CONTROLLER_STATUS, data, names.topic(finger, "controller_status"))
+        if message is None:
+            return   # no heartbeat: a controller that only sends such messages times out
         now = seconds(self)
-        message = CONTROLLER_STATUS.decode(data)
         self.logic.saw("heartbeat", finger, now)
         # a reading counts as fresh when its stamp moved since the last status (receive-side
         # judgement: no clock comparison between hosts)
@@ -108,7 +110,9 @@ class SupervisorNode(LeanNode):
         self.publish_if_changed()
 
     def on_state(self, finger: str, data: bytes) -> None:
-        message = STATE.decode(data)
+        message = self.decode(STATE, data, names.sim_topic(finger, "state"))
+        if message is None:
+            return
         self.logic.watchdog(finger, message.watchdog_tripped,
                             seconds_of(message.header_stamp_sec, message.header_stamp_nanosec))
         self.publish_if_changed()
