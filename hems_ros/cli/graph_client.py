@@ -95,7 +95,11 @@ class GraphClient:
         publisher.publish(message)
         return True
 
-    def snapshot(self, fingers=names.FINGERS, seconds: float = 0.5) -> Snapshot:
+    def snapshot(self, fingers=names.FINGERS, seconds: float = 0.5, supervisor_wait_s: float = 5.0) -> Snapshot:
+        """Listen for ``seconds``, and up to ``supervisor_wait_s`` longer while the supervisor,
+        which republishes its status at 10 Hz, has not been heard: DDS discovery between a
+        new process and the graph now and then waits for a periodic announcement, seconds
+        later, and `hems status` reported a running supervisor as not running."""
         snap = Snapshot()
         subs = [self.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
                                               lambda m: setattr(snap, "supervisor", m), qos.STATUS)]
@@ -110,6 +114,9 @@ class GraphClient:
                 WireForce, names.topic(finger, "wire_force"), lambda m, f=finger: snap.forces.__setitem__(f, m),
                 qos.SENSOR))
         self.spin_for(seconds)
+        deadline = time.monotonic() + supervisor_wait_s
+        while snap.supervisor is None and time.monotonic() < deadline:
+            rclpy.spin_once(self.node, timeout_sec=0.05)
         for sub in subs:
             self.node.destroy_subscription(sub)
         return snap
