@@ -2,7 +2,8 @@
 
 A decoder turns one serialized message into a flat tuple, one value per leaf field
 (``header.stamp.sec``, ``header.frame_id``, ``force``...); an encoder turns such a tuple
-back into the bytes rclpy's ``serialize_message`` gives. Nested message fields are inlined;
+back into the bytes rclpy's ``serialize_message`` gives (with zeroed padding, where rclpy
+leaves whatever was in memory). Nested message fields are inlined;
 runs of fixed-size fields are read or written with a single ``struct`` call whose padding is
 worked out when the code is generated, so a typical message costs a few struct calls.
 Alignment is relative to the end of the 4-byte encapsulation header, as CDR requires.
