@@ -98,10 +98,12 @@ class FingerControllerNode(LeanNode):
         self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status"),
                                                 qos.COMMAND)
         self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint"), self.on_setpoint, qos.COMMAND)
-        self.create_subscription(EncoderReading, names.topic(self.finger, "encoder"), self.on_encoder, qos.SENSOR,
-                                 raw=True)
-        self.create_subscription(WireForce, names.topic(self.finger, "wire_force"), self.on_force, qos.SENSOR,
-                                 raw=True)
+        self.feedback = {
+            "position": self.create_subscription(EncoderReading, names.topic(self.finger, "encoder"),
+                                                 self.on_encoder, qos.SENSOR, raw=True),
+            "force": self.create_subscription(WireForce, names.topic(self.finger, "wire_force"), self.on_force,
+                                              qos.SENSOR, raw=True)}
+        self._poll_other_feedback()
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         self.last_control_s = 0.0
         self.idle_status_period_s = p["idle_status_period_s"]
@@ -117,6 +119,14 @@ class FingerControllerNode(LeanNode):
                                 for f in fields(default)])
         return type(default)(**{name.split(".", 1)[1]: value for name, value in values.items()})
 
+    def _other_feedback(self):
+        return self.feedback["force" if self.setpoint.mode == "position" else "position"]
+
+    def _poll_other_feedback(self) -> None:
+        """The stream of the other mode only feeds the status: taken when the node wakes for
+        its control stream, instead of waking it 100 times a second on its own."""
+        self.poll(self._other_feedback())
+
     # inputs -------------------------------------------------------------------
     def on_setpoint(self, message: FingerSetpoint) -> None:
         try:
@@ -129,12 +139,14 @@ class FingerControllerNode(LeanNode):
             self.publish_status()
             return
         if setpoint.mode != self.controller.mode:
+            self.drain(self._other_feedback())
             measurement = self._wire_measurement(setpoint.mode)
             self.controller.set_mode(setpoint.mode, 0.0 if measurement is None else measurement,
                                      self.mode_gains[setpoint.mode])
             if measurement is None:
                 self.controller.reset()  # nothing measured yet in that mode: nothing to carry over
         self.setpoint = setpoint
+        self._poll_other_feedback()
         self.get_logger().info(f"{self.finger}: setpoint {setpoint.mode} {setpoint.value:g}")
 
     def on_supervisor(self, message: SupervisorStatus) -> None:
@@ -171,6 +183,7 @@ class FingerControllerNode(LeanNode):
         return transmission.wire_force(self.setpoint.value, self.ratio)
 
     def control(self, measurement_stamp: tuple[int, int]) -> None:
+        self.drain(self._other_feedback())
         if self.enabled:
             self.duty = self.controller.update(self._wire_reference(), self._wire_measurement(self.setpoint.mode))
         else:
@@ -192,6 +205,7 @@ class FingerControllerNode(LeanNode):
 
     def publish_idle_status(self) -> None:
         if self.get_clock().now().nanoseconds * 1e-9 - self.last_control_s >= self.idle_status_period_s:
+            self.drain(self._other_feedback())
             self.publish_status()
 
     def publish_status(self) -> None:

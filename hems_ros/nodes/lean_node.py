@@ -1,5 +1,6 @@
 """A Node whose publishers and subscriptions carry no QoS event handlers unless asked,
-and which reads serialized messages without letting a malformed one stop it.
+which reads serialized messages without letting a malformed one stop it, and which can take
+messages it does not need at once when it wakes for something else.
 
 rclpy gives every publisher and subscription default handlers for QoS events; each is a
 waitable that the executor re-adds to its wait set on every wake-up, in Python. The graph's
@@ -20,6 +21,23 @@ class LeanNode(Node):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self._unreadable_logged: dict[str, float] = {}
+        self.polled: frozenset = frozenset()
+        self.wait_generation = 0
+
+    def poll(self, *subscriptions) -> None:
+        """Leave these subscriptions out of lean_spin's wait set from now on: the node drains
+        them itself (:meth:`drain`). In separate processes each wake-up of a sleeping node
+        costs far more CPU than the message it brings (benchmarks/bench_messages.py), so a
+        stream the node only needs now and then should not wake it."""
+        if frozenset(subscriptions) != self.polled:
+            self.polled = frozenset(subscriptions)
+            self.wait_generation += 1
+
+    def drain(self, subscription) -> None:
+        """Run ``subscription``'s callback on every message queued for it, oldest first."""
+        with subscription.handle:
+            while (taken := subscription.handle.take_message(subscription.msg_type, subscription.raw)) is not None:
+                subscription.callback(taken[0])
 
     def create_publisher(self, *args, event_callbacks=None, **kwargs):
         return super().create_publisher(

@@ -50,9 +50,21 @@ def spin_nodes(nodes) -> None:
     for node in nodes:
         if not can_spin(node):
             raise ValueError(f"node {node.get_name()} has clients, guard conditions or waitables: use rclpy.spin")
-    entities = ([s for node in nodes for s in node.subscriptions], [t for node in nodes for t in node.timers],
-                [s for node in nodes for s in node.services])
-    loop(nodes[0].context, lambda: entities)
+    timers = [t for node in nodes for t in node.timers]
+    services = [s for node in nodes for s in node.services]
+    current: dict[str, tuple] = {}
+
+    def entities() -> tuple:
+        # a LeanNode that drains some subscriptions itself (LeanNode.poll) bumps its
+        # wait_generation, and the wait set leaves them out from the next round on
+        generations = tuple(getattr(node, "wait_generation", 0) for node in nodes)
+        if current.get("generations") != generations:
+            current["generations"] = generations
+            current["entities"] = ([s for node in nodes for s in node.subscriptions
+                                    if s not in getattr(node, "polled", ())], timers, services)
+        return current["entities"]
+
+    loop(nodes[0].context, entities)
     raise ExternalShutdownException()
 
 
@@ -60,21 +72,26 @@ def loop(context, entities, on_ready=None, keep_going=None, pause_s: float = 0.0
     """Wait on the entities and run what is ready until the context shuts down or
     ``keep_going()`` turns false.
 
-    ``entities()`` gives (subscriptions, timers, services); the wait set is rebuilt when their
-    numbers change (the recorder subscribes as topics appear). ``on_ready(subscription)``
-    replaces taking one message for its callback; ``pause_s`` sleeps after each round.
+    ``entities()`` gives (subscriptions, timers, services); the wait set is rebuilt when they
+    change (the recorder subscribes as topics appear, a node takes a subscription out to
+    drain it itself). ``on_ready(subscription)`` replaces taking one message for its
+    callback; ``pause_s`` sleeps after each round.
     """
     # No signal guard condition: destroying one while rclpy's signal thread still triggers it
     # crashed the process now and then; Ctrl-C is seen within one wait timeout instead.
-    sizes, waiting = None, None
+    last, built, waiting = None, None, None
     with ExitStack() as stack:
         stack.enter_context(context.handle)
         entered: set[int] = set()
         while context.ok() and (keep_going is None or keep_going()):
             try:
-                subscriptions, timers, services = entities()
-                if sizes != (len(subscriptions), len(timers), len(services)):
-                    sizes = (len(subscriptions), len(timers), len(services))
+                current = entities()
+                if current is not last:
+                    last = current
+                    subscriptions, timers, services = current
+                    key = tuple(tuple(map(id, kind)) for kind in current)
+                if key != built:
+                    built = key
                     for entity in (*subscriptions, *timers, *services):
                         if id(entity) not in entered:
                             stack.enter_context(entity.handle)
