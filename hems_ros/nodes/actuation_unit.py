@@ -20,6 +20,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
 from hems_msgs.msg import ActuatorState, DutyCommand, EncoderReading, SupervisorStatus, WireForce
 from hems_ros.graph import names
+from hems_ros.graph.cadence import Cadence
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
@@ -39,7 +40,8 @@ PARAMETERS = [
     Spec("tick_period_s", 0.01, "period of the integration and encoder-publishing timer, s "
          "(a duty command also integrates up to its arrival)", positive, True),
     Spec("encoder_period_s", 0.01, "encoder and wire-tension publishing period, s (100 Hz)", positive, True),
-    Spec("state_period_s", 0.05, "simulation-truth state publishing period, s (20 Hz)", positive, True),
+    Spec("state_period_s", 0.05, "simulation-truth state publishing period, s (20 Hz; on the tick, so in whole "
+         "tick periods)", positive, True),
     Spec("control_period_s", 0.01, "controller period Ts, s; the watchdog trips after three", positive, True),
     Spec("require_supervisor", True, "heat only while the supervisor reports ENABLED", None, True),
     Spec("supervisor_timeout_s", 0.5, "supervisor status older than this withdraws heating permission, s",
@@ -79,7 +81,7 @@ class ActuationUnitNode(LeanNode):
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
         self.create_subscription(DutyCommand, names.topic(self.finger, "duty"), self.on_duty, qos.COMMAND, raw=True)
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
-        self.create_timer(p["state_period_s"], self.publish_state)
+        self.state_cadence = Cadence(p["state_period_s"], p["tick_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
 
@@ -107,7 +109,10 @@ class ActuationUnitNode(LeanNode):
             self.publish_state()  # the moment heating stopped, for the record
 
     def on_tick(self) -> None:
-        self.advance_to(seconds(self))
+        now = seconds(self)
+        self.advance_to(now)
+        if self.state_cadence.due(now):
+            self.publish_state()
 
     def advance_to(self, now: float) -> None:
         """Integrate the physics up to ``now``; publish the encoder samples that fell due."""

@@ -28,6 +28,7 @@ from std_srvs.srv import Trigger
 
 from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
 from hems_ros.graph import names, transmission
+from hems_ros.graph.cadence import Cadence
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
@@ -55,8 +56,9 @@ PARAMETERS = [
     Spec("max_tendon_position_m", _LIMITS.max_tendon_position_m, "tendon over-travel limit, m", positive, True),
     Spec("check_period_s", 0.01, "monitor period, s: the controller status and state messages are taken "
          "and judged at each check", positive, True),
-    Spec("status_period_s", 0.1, "status re-publishing period, s (also on every change)", positive, True),
-    Spec("joint_states_period_s", 0.02, "joint_states publishing period, s", positive, True),
+    Spec("status_period_s", 0.1, "status re-publishing period, s (also on every change; at the checks, so in "
+         "whole check periods)", positive, True),
+    Spec("joint_states_period_s", 0.02, "joint_states publishing period, s (at the checks)", positive, True),
 ]
 
 
@@ -90,8 +92,8 @@ class SupervisorNode(LeanNode):
             self.create_service(Trigger, names.service(command),
                                 lambda request, response, c=command: self.on_command(c, response))
         self.create_timer(p["check_period_s"], self.check)
-        self.create_timer(p["status_period_s"], self.publish_status)
-        self.create_timer(p["joint_states_period_s"], self.publish_joint_states)
+        self.status_cadence = Cadence(p["status_period_s"], p["check_period_s"])
+        self.joints_cadence = Cadence(p["joint_states_period_s"], p["check_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
         self.publish_status()
 
@@ -136,8 +138,14 @@ class SupervisorNode(LeanNode):
     def check(self) -> None:
         for subscription in self.monitored:
             self.drain(subscription)
-        self.logic.check_streams(seconds(self))
-        self.publish_if_changed()
+        now = seconds(self)
+        self.logic.check_streams(now)
+        if self.status_cadence.due(now):
+            self.publish_status()
+        else:
+            self.publish_if_changed()
+        if self.joints_cadence.due(now):
+            self.publish_joint_states()
 
     def publish_if_changed(self) -> None:
         if self.published != (self.logic.state, len(self.logic.faults)):

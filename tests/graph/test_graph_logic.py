@@ -220,3 +220,14 @@ def test_extra_ros_args_reach_every_node_separate_or_composed():
     composed = Graph(GraphOptions(extra_ros_args=extra, composed=True)).commands()
     assert len(separate) == 16 and all(cmd[-2:] == list(extra) for cmd in separate.values())
     assert list(composed) == ["composed"] and composed["composed"][-2:] == list(extra)
+
+
+def test_cadence_fires_every_nth_tick_despite_jitter():
+    from hems_ros.graph.cadence import Cadence
+
+    every5 = Cadence(0.05, 0.01)
+    ticks = [k * 0.01 + (0.0004 if k % 3 else -0.0004) for k in range(100)]   # jitter both ways
+    fired = [k for k, t in zip(range(100), ticks) if every5.due(t)]
+    assert fired == list(range(0, 100, 5))
+    every_tick = Cadence(0.005, 0.01)
+    assert all(every_tick.due(t) for t in ticks)

@@ -1,0 +1,30 @@
+"""Periodic work on a node's faster tick instead of a timer of its own (plain Python, no ROS).
+
+Every timer of a node in its own process wakes it, and each wake-up of a sleeping process
+costs far more CPU here than the work it does (benchmarks/bench_messages.py); a 20 Hz state
+or a 50 Hz joint-state message can ride on the 100 Hz tick the node has anyway.
+"""
+
+from __future__ import annotations
+
+import math
+
+
+class Cadence:
+    """Due about every ``period_s`` when asked at every tick of ``tick_s``.
+
+    Half a tick of slack absorbs the ticks' jitter, so a period of five ticks fires on every
+    fifth tick rather than slipping to the sixth when a tick comes a little early; a period
+    shorter than the tick fires on every tick.
+    """
+
+    def __init__(self, period_s: float, tick_s: float) -> None:
+        self.period_s = period_s
+        self.slack_s = 0.5 * min(tick_s, period_s)
+        self.next_s = -math.inf
+
+    def due(self, now_s: float) -> bool:
+        if now_s < self.next_s:
+            return False
+        self.next_s = now_s + self.period_s - self.slack_s
+        return True
