@@ -58,9 +58,15 @@ def test_lean_spin_runs_timers_subscriptions_and_services_and_stops_on_shutdown(
         deadline = time.monotonic() + 10
         while len(received) < 5 and time.monotonic() < deadline:
             time.sleep(0.01)
-        future = client.call_async(Trigger.Request())
-        executor.spin_until_future_complete(future, timeout_sec=10)
-        assert future.result().message == "5 received"
+        # a response sent before the service has matched the client's response reader is
+        # dropped by the middleware ("failed to send response (timeout)"): wait_for_service
+        # sees only the request side, so a lost first answer is asked for again
+        for _ in range(3):
+            future = client.call_async(Trigger.Request())
+            executor.spin_until_future_complete(future, timeout_sec=5)
+            if future.result() is not None:
+                break
+        assert future.result() is not None and future.result().message == "5 received"
         assert received == [0, 1, 2, 3, 4]
         spacing = sorted(b - a for a, b in zip(ticks, ticks[1:]))
         assert len(ticks) > 10 and 0.008 < spacing[len(spacing) // 2] < 0.012   # the 10 ms timer
