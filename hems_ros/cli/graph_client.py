@@ -13,6 +13,8 @@ from hems_msgs.msg import ActuatorState, ControllerStatus, FingerSetpoint, Super
 from hems_ros.graph import names
 from hems_ros.nodes import qos
 
+RETRY_S = 2.0   # a service call unanswered this long is sent again
+
 
 @dataclass
 class Snapshot:
@@ -56,11 +58,19 @@ class GraphClient:
             client = self._service_clients[command] = self.node.create_client(Trigger, names.service(command))
         if not client.wait_for_service(timeout_sec=timeout):
             return False, f"no supervisor answers {names.service(command)} (is the graph up?)"
-        future = client.call_async(Trigger.Request())
-        rclpy.spin_until_future_complete(self.node, future, timeout_sec=timeout)
-        if future.result() is None:
-            return False, f"{names.service(command)} did not answer within {timeout:g} s"
-        return future.result().success, future.result().message
+        # The middleware drops a response sent before the service has matched this client's
+        # response reader (wait_for_service sees only the request side), which a new process
+        # meets now and then: ask again. The four commands give the same answer when repeated.
+        deadline = time.monotonic() + timeout
+        while True:
+            future = client.call_async(Trigger.Request())
+            rclpy.spin_until_future_complete(self.node, future,
+                                             timeout_sec=max(0.0, min(RETRY_S, deadline - time.monotonic())))
+            if future.result() is not None:
+                return future.result().success, future.result().message
+            client.remove_pending_request(future)
+            if time.monotonic() >= deadline:
+                return False, f"{names.service(command)} did not answer within {timeout:g} s"
 
     def enable_when_ready(self, timeout: float, reset: bool = False, retry_s: float = 2.0) -> tuple[bool, str]:
         """Call ``enable`` until the supervisor accepts it (it refuses while streams are still
