@@ -30,7 +30,7 @@ from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import ActuationUnit, load_params
 
-DUTY, ENCODER, TENSION, STATE = (codec(t) for t in (DutyCommand, EncoderReading, WireForce, ActuatorState))
+ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
 
 PARAMETERS = [
     Spec("finger", "index", "finger this unit drives: " + ", ".join(names.FINGERS), one_of(*names.FINGERS), True),
@@ -79,27 +79,28 @@ class ActuationUnitNode(LeanNode):
         self.tension_pub = self.create_publisher(WireForce, names.sim_topic(self.finger, "wire_tension"), qos.SENSOR)
         self.state_pub = self.create_publisher(ActuatorState, names.sim_topic(self.finger, "state"), qos.SENSOR)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
-        self.create_subscription(DutyCommand, names.topic(self.finger, "duty"), self.on_duty, qos.COMMAND, raw=True)
+        self.subscribe_serialized(DutyCommand, names.topic(self.finger, "duty"), self.on_duty, qos.COMMAND,
+                                  on_unreadable=self.on_unreadable_duty)
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         self.state_cadence = Cadence(p["state_period_s"], p["tick_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
 
-    def on_duty(self, data: bytes) -> None:
+    def on_duty(self, message) -> None:
         now = seconds(self)
-        message = self.decode(DUTY, data, names.topic(self.finger, "duty"))
         # up to the arrival with the old duty (publishing a sample that fell due), then again
         # with the new one: from the sample it answers, or from now if it came late
         self.advance_to(now)
-        if message is None:
-            self.driver.reject()
-            return
         try:
             self.driver.command(message.duty_percent, now,
                                 seconds_of(message.measurement_stamp_sec, message.measurement_stamp_nanosec))
         except ValueError as error:
             self.get_logger().error(f"{self.finger}: {error}; applying 0 %")
         self.advance_to(now)
+
+    def on_unreadable_duty(self) -> None:
+        self.advance_to(seconds(self))
+        self.driver.reject()
 
     def on_supervisor(self, message: SupervisorStatus) -> None:
         now = seconds(self)

@@ -42,7 +42,7 @@ from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.nodes.wire import NS_PER_S, codec
 
-ENCODER, WIRE_FORCE, DUTY, STATUS = (codec(t) for t in (EncoderReading, WireForce, DutyCommand, ControllerStatus))
+DUTY, STATUS = codec(DutyCommand), codec(ControllerStatus)
 NO_STAMP = (0, 0)
 
 PARAMETERS = [
@@ -99,10 +99,10 @@ class FingerControllerNode(LeanNode):
                                                 qos.COMMAND)
         self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint"), self.on_setpoint, qos.COMMAND)
         self.feedback = {
-            "position": self.create_subscription(EncoderReading, names.topic(self.finger, "encoder"),
-                                                 self.on_encoder, qos.SENSOR, raw=True),
-            "force": self.create_subscription(WireForce, names.topic(self.finger, "wire_force"), self.on_force,
-                                              qos.SENSOR, raw=True)}
+            "position": self.subscribe_serialized(EncoderReading, names.topic(self.finger, "encoder"),
+                                                  self.on_encoder, qos.SENSOR),
+            "force": self.subscribe_serialized(WireForce, names.topic(self.finger, "wire_force"), self.on_force,
+                                               qos.SENSOR)}
         self._poll_other_feedback()
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         self.last_control_s = 0.0
@@ -155,19 +155,13 @@ class FingerControllerNode(LeanNode):
             self.controller.reset()
         self.enabled = enabled
 
-    def on_encoder(self, data: bytes) -> None:
-        message = self.decode(ENCODER, data, names.topic(self.finger, "encoder"))
-        if message is None:
-            return
+    def on_encoder(self, message) -> None:
         self.wire_position = message.position
         self.encoder_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
         if self.setpoint.mode == "position":
             self.control(self.encoder_stamp)
 
-    def on_force(self, data: bytes) -> None:
-        message = self.decode(WIRE_FORCE, data, names.topic(self.finger, "wire_force"))
-        if message is None:
-            return
+    def on_force(self, message) -> None:
         self.wire_force = message.force
         self.force_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
         if self.setpoint.mode == "force":

@@ -15,6 +15,7 @@ from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallba
 from rclpy.node import Node
 
 from hems_ros.bag.cdr import CdrError
+from hems_ros.nodes.wire import codec
 
 
 class LeanNode(Node):
@@ -48,15 +49,25 @@ class LeanNode(Node):
             *args, event_callbacks=event_callbacks or SubscriptionEventCallbacks(use_default_callbacks=False),
             **kwargs)
 
-    def decode(self, codec, data: bytes, topic: str):
-        """``codec.decode(data)``, or None after logging why the message could not be read
-        (a raw publisher can send any bytes on a typed topic); at most one log line per topic
-        and second, so a bad stream neither floods the log nor hides another topic's."""
-        try:
-            return codec.decode(data)
-        except CdrError as error:
-            now = time.monotonic()
-            if now - self._unreadable_logged.get(topic, float("-inf")) >= 1.0:
-                self._unreadable_logged[topic] = now
-                self.get_logger().error(f"unreadable message on {topic} dropped: {error}")
-            return None
+    def subscribe_serialized(self, msg_type, topic: str, callback, qos_profile, on_unreadable=None):
+        """Subscribe to ``topic`` taking serialized messages (hems_ros.nodes.wire): ``callback``
+        gets the message as the type's named tuple. A message that cannot be read (a raw
+        publisher can send any bytes on a typed topic) is logged, at most once a second per
+        topic so a bad stream neither floods the log nor hides another topic's, and dropped;
+        ``on_unreadable()`` then runs if given."""
+        decode = codec(msg_type).decode
+
+        def on_data(data: bytes) -> None:
+            try:
+                message = decode(data)
+            except CdrError as error:
+                now = time.monotonic()
+                if now - self._unreadable_logged.get(topic, float("-inf")) >= 1.0:
+                    self._unreadable_logged[topic] = now
+                    self.get_logger().error(f"unreadable message on {topic} dropped: {error}")
+                if on_unreadable is not None:
+                    on_unreadable()
+                return
+            callback(message)
+
+        return self.create_subscription(msg_type, topic, on_data, qos_profile, raw=True)

@@ -50,14 +50,11 @@ class ShoulderModuleNode(LeanNode):
             self.publishers_[finger] = self.create_publisher(WireForce, names.topic(finger, "wire_force"), qos.SENSOR)
             self.sequences[finger] = 0
             self.rngs[finger] = sensors.noise_generator(p["seed"] + index)
-            self.create_subscription(WireForce, names.sim_topic(finger, "wire_tension"),
-                                     lambda data, f=finger: self.on_tension(f, data), qos.SENSOR, raw=True)
+            self.subscribe_serialized(WireForce, names.sim_topic(finger, "wire_tension"),
+                                      lambda tension, f=finger: self.on_tension(f, tension), qos.SENSOR)
 
-    def on_tension(self, finger: str, data: bytes) -> None:
+    def on_tension(self, finger: str, tension) -> None:
         p = self.params
-        tension = self.decode(WIRE_FORCE, data, names.sim_topic(finger, "wire_tension"))
-        if tension is None:
-            return
         noise = self.rngs[finger].standard_normal() * p["noise_std_n"]
         force, saturated = sensors.force_reading(tension.force, noise, p["range_max_n"], p["resolution_n"])
         self.sequences[finger] += 1

@@ -35,11 +35,9 @@ from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.clock_time import seconds
 from hems_ros.nodes.params import Spec, declare, positive
 from hems_ros.nodes.runner import run_node
-from hems_ros.nodes.wire import codec, seconds_of
+from hems_ros.nodes.wire import seconds_of
 
 _LIMITS = MonitorLimits()
-CONTROLLER_STATUS, STATE = codec(ControllerStatus), codec(ActuatorState)
-
 def _fingers(value) -> str | None:
     unknown = [f for f in value if f not in names.FINGERS]
     if not value or unknown:
@@ -80,10 +78,10 @@ class SupervisorNode(LeanNode):
         self.encoder_stamps = {f: None for f in self.fingers}
         self.force_stamps = {f: None for f in self.fingers}
         for finger in self.fingers:
-            self.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
-                                     lambda m, f=finger: self.on_controller(f, m), qos.COMMAND, raw=True)
-            self.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
-                                     lambda m, f=finger: self.on_state(f, m), qos.SENSOR, raw=True)
+            self.subscribe_serialized(ControllerStatus, names.topic(finger, "controller_status"),
+                                      lambda m, f=finger: self.on_controller(f, m), qos.COMMAND)
+            self.subscribe_serialized(ActuatorState, names.sim_topic(finger, "state"),
+                                      lambda m, f=finger: self.on_state(f, m), qos.SENSOR)
         # 420 messages a second, each of which woke the process; the monitors judge them at
         # the check anyway, so the check takes them
         self.monitored = list(self.subscriptions)
@@ -97,10 +95,7 @@ class SupervisorNode(LeanNode):
         self.create_timer(1.0, self.publish_diagnostics)
         self.publish_status()
 
-    def on_controller(self, finger: str, data: bytes) -> None:
-        message = self.decode(CONTROLLER_STATUS, data, names.topic(finger, "controller_status"))
-        if message is None:
-            return   # no heartbeat: a controller that only sends such messages times out
+    def on_controller(self, finger: str, message) -> None:
         now = seconds(self)
         self.logic.saw("heartbeat", finger, now)
         # a reading counts as fresh when its stamp moved since the last status (receive-side
@@ -117,10 +112,7 @@ class SupervisorNode(LeanNode):
             self.logic.wire_force(finger, message.wire_force, now)
         self.publish_if_changed()
 
-    def on_state(self, finger: str, data: bytes) -> None:
-        message = self.decode(STATE, data, names.sim_topic(finger, "state"))
-        if message is None:
-            return
+    def on_state(self, finger: str, message) -> None:
         self.logic.watchdog(finger, message.watchdog_tripped,
                             seconds_of(message.header_stamp_sec, message.header_stamp_nanosec))
         self.publish_if_changed()

@@ -8,6 +8,11 @@ import pytest
 GARBAGE = b"\x00\x01\x00\x00\x05\x00"   # CDR header, then a truncated message
 
 
+def deliver(node, topic: str, data: bytes) -> None:
+    """What the spin loop does with a message taken from ``topic``."""
+    next(s for s in node.subscriptions if s.topic_name == topic).callback(data)
+
+
 @pytest.fixture
 def context(ros_domain_id):
     import rclpy
@@ -25,7 +30,7 @@ def test_unit_rejects_an_unreadable_duty_and_keeps_running(context, capfd):
     node = ActuationUnitNode(context=context)
     try:
         node.driver.commanded_duty = 40.0
-        node.on_duty(GARBAGE)
+        deliver(node, "/hems/index/duty", GARBAGE)
         assert node.driver.rejected_commands == 1 and node.driver.commanded_duty == 0.0
         node.on_tick()
         assert node.driver.applied_duty == 0.0
@@ -43,13 +48,13 @@ def test_controller_module_and_supervisor_drop_unreadable_messages(context, capf
     module = ShoulderModuleNode(context=context)
     supervisor = SupervisorNode(context=context)
     try:
-        controller.on_encoder(GARBAGE)
-        controller.on_force(GARBAGE)
+        deliver(controller, "/hems/index/encoder", GARBAGE)
+        deliver(controller, "/hems/index/wire_force", GARBAGE)
         assert controller.wire_position is None and controller.wire_force is None and controller.sequence == 0
-        module.on_tension("index", GARBAGE)
+        deliver(module, "/hems/sim/index/wire_tension", GARBAGE)
         assert module.sequences["index"] == 0
-        supervisor.on_controller("index", GARBAGE)
-        supervisor.on_state("index", GARBAGE)
+        deliver(supervisor, "/hems/index/controller_status", GARBAGE)
+        deliver(supervisor, "/hems/sim/index/state", GARBAGE)
         assert supervisor.encoder_stamps["index"] is None
     finally:
         for node in (controller, module, supervisor):
