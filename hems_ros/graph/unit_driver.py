@@ -146,6 +146,7 @@ class UnitDriver:
         unit, dt, start = self.unit, self.unit.dt, self.start_time_s
         first = unit.steps
         run_duty, run = 0.0, 0
+        due = start + (self._samples_taken + 1) * self.sample_period_s - 1e-9
         for k in range(first + 1, first + 1 + MAX_STEPS_PER_ADVANCE):
             # the same float arithmetic as time_s before and after step k (epoch times leave
             # a quarter microsecond of resolution, enough to move a gate's boundary)
@@ -157,10 +158,11 @@ class UnitDriver:
                 unit.advance(duty=run_duty, steps=run)
                 run = 0
             run_duty, run = duty, run + 1
-            if start + k * dt >= start + (self._samples_taken + 1) * self.sample_period_s - 1e-9:
+            if start + k * dt >= due:
                 unit.advance(duty=run_duty, steps=run)
                 run = 0
                 self._samples_taken += 1
+                due = start + (self._samples_taken + 1) * self.sample_period_s - 1e-9
                 samples.append(Sample(self.time_s, unit.result()))
                 self._sample_snapshot = (self.time_s, unit.snapshot())
         if run:

@@ -40,7 +40,7 @@ from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
-from hems_ros.nodes.wire import NS_PER_S, codec
+from hems_ros.nodes.wire import codec, stamp_ns
 
 DUTY, STATUS = codec(DutyCommand), codec(ControllerStatus)
 NO_STAMP = (0, 0)
@@ -184,7 +184,7 @@ class FingerControllerNode(LeanNode):
             self.duty = 0.0
         self.sequence += 1
         now_ns = self.get_clock().now().nanoseconds
-        sec, nanosec = divmod(now_ns, NS_PER_S)
+        sec, nanosec = stamp_ns(now_ns)
         self.duty_pub.publish(DUTY.encode(DUTY.fields(
             header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
             duty_percent=self.duty, measurement_stamp_sec=measurement_stamp[0],
@@ -213,7 +213,7 @@ class FingerControllerNode(LeanNode):
         self.status_sequence += 1
         self._steps_since_status = 0
         self._reported = self._status_key()
-        sec, nanosec = divmod(self.get_clock().now().nanoseconds, NS_PER_S)
+        sec, nanosec = stamp_ns(self.get_clock().now().nanoseconds)
         self.status_pub.publish(STATUS.encode(STATUS.fields(
             header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="",
             finger=self.finger, strategy=self.controller.strategy, mode=self.setpoint.mode, active=self.enabled,

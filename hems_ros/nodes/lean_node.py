@@ -15,6 +15,7 @@ from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallba
 from rclpy.node import Node
 
 from hems_ros.bag.cdr import CdrError
+from hems_ros.nodes import lean_spin
 from hems_ros.nodes.wire import codec
 
 
@@ -23,7 +24,6 @@ class LeanNode(Node):
         super().__init__(*args, **kwargs)
         self._unreadable_logged: dict[str, float] = {}
         self.polled: frozenset = frozenset()
-        self.wait_generation = 0
 
     def poll(self, *subscriptions) -> None:
         """Leave these subscriptions out of lean_spin's wait set from now on: the node drains
@@ -32,7 +32,7 @@ class LeanNode(Node):
         stream the node only needs now and then should not wake it."""
         if frozenset(subscriptions) != self.polled:
             self.polled = frozenset(subscriptions)
-            self.wait_generation += 1
+            lean_spin.polled_changed()
 
     def drain(self, subscription) -> None:
         """Run ``subscription``'s callback on every message queued for it, oldest first."""

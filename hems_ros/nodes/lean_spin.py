@@ -23,6 +23,14 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 
 WAIT_TIMEOUT_NS = 50_000_000   # how often the context is checked without work (Ctrl-C latency)
+_polled_changes = 0            # bumped whenever a node changes the subscriptions it drains itself
+
+
+def polled_changed() -> None:
+    """A node (LeanNode.poll) changed which subscriptions it drains itself: the wait sets of
+    the loops spinning it leave them out from the next round on."""
+    global _polled_changes
+    _polled_changes += 1
 
 
 def can_spin(node) -> bool:
@@ -55,11 +63,8 @@ def spin_nodes(nodes) -> None:
     current: dict[str, tuple] = {}
 
     def entities() -> tuple:
-        # a LeanNode that drains some subscriptions itself (LeanNode.poll) bumps its
-        # wait_generation, and the wait set leaves them out from the next round on
-        generations = tuple(getattr(node, "wait_generation", 0) for node in nodes)
-        if current.get("generations") != generations:
-            current["generations"] = generations
+        if current.get("changes") != _polled_changes:
+            current["changes"] = _polled_changes
             current["entities"] = ([s for node in nodes for s in node.subscriptions
                                     if s not in getattr(node, "polled", ())], timers, services)
         return current["entities"]

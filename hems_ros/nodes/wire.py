@@ -52,7 +52,12 @@ def codec(msg_type: type) -> Codec:
 
 def stamp(time_s: float) -> tuple[int, int]:
     """(sec, nanosec) of a builtin_interfaces/Time for ``time_s`` seconds."""
-    return divmod(int(round(time_s * NS_PER_S)), NS_PER_S)
+    return stamp_ns(int(round(time_s * NS_PER_S)))
+
+
+def stamp_ns(nanoseconds: int) -> tuple[int, int]:
+    """(sec, nanosec) of a builtin_interfaces/Time for an integer clock reading in ns."""
+    return divmod(nanoseconds, NS_PER_S)
 
 
 def seconds_of(sec: int, nanosec: int) -> float:
