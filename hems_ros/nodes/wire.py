@@ -26,13 +26,9 @@ NS_PER_S = 1_000_000_000
 
 @dataclass(frozen=True)
 class Codec:
-    msg_type: type                     # the rosidl class, for create_publisher/create_subscription
-    fields: type                       # named tuple of the leaf fields, in CDR order
-    _encode: Callable[[tuple], bytes]
+    fields: type                        # named tuple of the leaf fields, in CDR order
+    encode: Callable[[tuple], bytes]    # CdrError names the type and the bad value
     _decode: Callable[[bytes], tuple]
-
-    def encode(self, values: tuple) -> bytes:
-        return self._encode(values)
 
     def decode(self, data: bytes) -> tuple:
         """The message as :attr:`fields`; :class:`hems_ros.bag.cdr.CdrError` if malformed."""
@@ -47,7 +43,7 @@ def codec(msg_type: type) -> Codec:
     decoder = cdr.build_decoder(type_name, types)
     encoder = cdr.build_encoder(type_name, types)
     fields = namedtuple(msg_type.__name__ + "Fields", [c.name.replace(".", "_") for c in decoder.columns])
-    return Codec(msg_type, fields, encoder.encode, decoder.decode)
+    return Codec(fields, encoder.encode, decoder.decode)
 
 
 def stamp(time_s: float) -> tuple[int, int]:
