@@ -2,7 +2,7 @@
 glove load, slider encoder (hems_ros.physics, integrated at 1 kHz of simulated time).
 
 Subscribes
-  /hems/<finger>/duty            hems_msgs/DutyCommand    reliable
+  /hems/<finger>/duty            hems_msgs/DutyCommand    reliable (on wall-clock time taken at the ticks, see below)
   /hems/supervisor/status        hems_msgs/SupervisorStatus  transient local (heating only while ENABLED)
 Publishes
   /hems/<finger>/encoder         hems_msgs/EncoderReading  best effort, every encoder_period_s (wire side, m)
@@ -11,6 +11,14 @@ Publishes
   /diagnostics                   diagnostic_msgs/DiagnosticArray  1 Hz (latency, missed periods, watchdog)
 
 Duty watchdog: no duty command for three control periods sets the duty to 0 and flags it.
+
+On wall-clock time the unit does not wake for a duty command: it takes the commands at its
+next tick, before integrating, each at the time the middleware received it. Nothing
+observes the simulated plant between ticks, so the physics is the same as if the unit had
+woken on arrival (a command answering the latest encoder sample takes effect from that
+sample either way, hems_ros.graph.unit_driver), at one wake-up a period instead of two; the
+latency in /diagnostics is measured to the reception. On sim time (/clock) reception times
+are not in the node's clock, so commands are handled on arrival.
 The duty, encoder, tension and state topics carry serialized messages (hems_ros.nodes.wire).
 """
 
@@ -38,7 +46,7 @@ PARAMETERS = [
          "physics parameter set: a name in config/physics/ or a YAML path", None, True),
     Spec("physics_dt_s", 0.001, "physics integration step, s (1 kHz default)", positive, True),
     Spec("tick_period_s", 0.01, "period of the integration and encoder-publishing timer, s "
-         "(a duty command also integrates up to its arrival)", positive, True),
+         "(duty commands are taken at the ticks, at their reception times)", positive, True),
     Spec("encoder_period_s", 0.01, "encoder and wire-tension publishing period, s (100 Hz)", positive, True),
     Spec("state_period_s", 0.05, "simulation-truth state publishing period, s (20 Hz; on the tick, so in whole "
          "tick periods)", positive, True),
@@ -79,17 +87,20 @@ class ActuationUnitNode(LeanNode):
         self.tension_pub = self.create_publisher(WireForce, names.sim_topic(self.finger, "wire_tension"), qos.SENSOR)
         self.state_pub = self.create_publisher(ActuatorState, names.sim_topic(self.finger, "state"), qos.SENSOR)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
-        self.subscribe_serialized(DutyCommand, names.topic(self.finger, "duty"), self.on_duty, qos.COMMAND,
-                                  on_unreadable=self.on_unreadable_duty)
+        self.duty_sub = self.subscribe_serialized(DutyCommand, names.topic(self.finger, "duty"), self.on_duty,
+                                                  qos.COMMAND, on_unreadable=self.on_unreadable_duty)
+        self.duty_at_ticks = not self.get_parameter("use_sim_time").value
+        if self.duty_at_ticks:
+            self.poll(self.duty_sub)
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         self.state_cadence = Cadence(p["state_period_s"], p["tick_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
 
-    def on_duty(self, message) -> None:
-        now = seconds(self)
+    def on_duty(self, message, received_s: float | None = None) -> None:
+        now = seconds(self) if received_s is None else received_s
         # up to the arrival with the old duty (publishing a sample that fell due), then again
-        # with the new one: from the sample it answers, or from now if it came late
+        # with the new one: from the sample it answers, or from the arrival if it came late
         self.advance_to(now)
         try:
             self.driver.command(message.duty_percent, now,
@@ -98,8 +109,8 @@ class ActuationUnitNode(LeanNode):
             self.get_logger().error(f"{self.finger}: {error}; applying 0 %")
         self.advance_to(now)
 
-    def on_unreadable_duty(self) -> None:
-        self.advance_to(seconds(self))
+    def on_unreadable_duty(self, received_s: float | None = None) -> None:
+        self.advance_to(seconds(self) if received_s is None else received_s)
         self.driver.reject()
 
     def on_supervisor(self, message: SupervisorStatus) -> None:
@@ -111,6 +122,8 @@ class ActuationUnitNode(LeanNode):
 
     def on_tick(self) -> None:
         now = seconds(self)
+        if self.duty_at_ticks:
+            self.drain(self.duty_sub, with_reception_time=True)
         self.advance_to(now)
         if self.state_cadence.due(now):
             self.publish_state()

@@ -34,11 +34,18 @@ class LeanNode(Node):
             self.polled = frozenset(subscriptions)
             lean_spin.polled_changed()
 
-    def drain(self, subscription) -> None:
-        """Run ``subscription``'s callback on every message queued for it, oldest first."""
+    def drain(self, subscription, with_reception_time: bool = False) -> None:
+        """Run ``subscription``'s callback on every message queued for it, oldest first.
+
+        ``with_reception_time``: the callback also gets the time the middleware received the
+        message (s, system clock, the ROS clock without sim time): when the node took it, at
+        its own convenience, says nothing about when it came."""
         with subscription.handle:
             while (taken := subscription.handle.take_message(subscription.msg_type, subscription.raw)) is not None:
-                subscription.callback(taken[0])
+                if with_reception_time:
+                    subscription.callback(taken[0], taken[1]["received_timestamp"] * 1e-9)
+                else:
+                    subscription.callback(taken[0])
 
     def create_publisher(self, *args, event_callbacks=None, **kwargs):
         return super().create_publisher(
@@ -54,10 +61,11 @@ class LeanNode(Node):
         gets the message as the type's named tuple. A message that cannot be read (a raw
         publisher can send any bytes on a typed topic) is logged, at most once a second per
         topic so a bad stream neither floods the log nor hides another topic's, and dropped;
-        ``on_unreadable()`` then runs if given."""
+        ``on_unreadable()`` then runs if given. Arguments after the data (the reception time
+        of :meth:`drain`) pass on to both."""
         decode = codec(msg_type).decode
 
-        def on_data(data: bytes) -> None:
+        def on_data(data: bytes, *received) -> None:
             try:
                 message = decode(data)
             except CdrError as error:
@@ -66,8 +74,8 @@ class LeanNode(Node):
                     self._unreadable_logged[topic] = now
                     self.get_logger().error(f"unreadable message on {topic} dropped: {error}")
                 if on_unreadable is not None:
-                    on_unreadable()
+                    on_unreadable(*received)
                 return
-            callback(message)
+            callback(message, *received)
 
         return self.create_subscription(msg_type, topic, on_data, qos_profile, raw=True)

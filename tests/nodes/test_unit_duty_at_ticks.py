@@ -1,0 +1,85 @@
+"""On wall-clock time a unit takes its duty commands at its ticks, each at the time the
+middleware received it: the command still takes effect from the encoder sample it answers,
+and the latency in /diagnostics runs to the reception, not to the tick that took it."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from hems_ros.nodes.wire import stamp
+
+
+@pytest.fixture
+def context(ros_domain_id):
+    import rclpy
+    from rclpy.context import Context
+
+    context = Context()
+    rclpy.init(context=context)
+    yield context
+    rclpy.shutdown(context=context)
+
+
+def unit(context, use_sim_time: bool = False):
+    from rclpy.parameter import Parameter
+
+    from hems_ros.nodes.actuation_unit import ActuationUnitNode
+
+    return ActuationUnitNode(context=context, parameter_overrides=[
+        Parameter("require_supervisor", value=False), Parameter("use_sim_time", value=use_sim_time)])
+
+
+def test_duty_commands_wake_the_unit_only_on_sim_time(context):
+    for use_sim_time in (False, True):
+        node = unit(context, use_sim_time)
+        try:
+            assert (node.duty_sub in node.polled) is not use_sim_time
+        finally:
+            node.destroy_node()
+
+
+def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sample(context):
+    import rclpy
+
+    from builtin_interfaces.msg import Time
+
+    from hems_msgs.msg import DutyCommand
+    from hems_ros.nodes import qos
+
+    node = unit(context)
+    helper = rclpy.create_node("duty_sender", context=context)
+    try:
+        publisher = helper.create_publisher(DutyCommand, "/hems/index/duty", qos.COMMAND)
+        deadline = time.monotonic() + 10.0
+        while publisher.get_subscription_count() < 1:
+            assert time.monotonic() < deadline, "the unit's duty subscription was not discovered"
+            time.sleep(0.05)
+        # tick as the timer does, just after a sample falls due on the unit's 10 ms grid
+        for _ in range(3):
+            time.sleep(0.011)
+            node.on_tick()
+        next_sample_s = node.driver._sample_snapshot[0] + node.driver.sample_period_s
+        time.sleep(max(0.0, next_sample_s + 0.0005 - time.time()))
+        node.on_tick()
+        sample_s = node.driver._sample_snapshot[0]
+        assert sample_s == pytest.approx(next_sample_s, abs=1e-6)
+        sec, nanosec = stamp(sample_s)
+        publisher.publish(DutyCommand(finger="index", duty_percent=35.0,
+                                      measurement_stamp=Time(sec=sec, nanosec=nanosec)))
+        sent_s = time.time()
+        # the unit takes it at a tick that comes well after the command arrived
+        time.sleep(0.006)
+        assert node.driver.commands == 0
+        node.on_tick()
+        taken_s = time.time()
+        assert node.driver.commands == 1 and node.driver.commanded_duty == 35.0
+        # from the sample it answers, not from the tick that took it
+        assert node.driver.last_command_s == pytest.approx(sample_s, abs=1e-9)
+        assert node.driver.late_commands == 0 and node.driver.applied_duty == 35.0
+        latency = node.driver.latencies_s[-1]
+        assert sent_s - sample_s - 0.001 <= latency < taken_s - sample_s - 0.004
+    finally:
+        helper.destroy_node()
+        node.destroy_node()
