@@ -105,9 +105,9 @@ class FingerControllerNode(LeanNode):
                                                qos.SENSOR)}
         self._poll_other_feedback()
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
-        self.last_control_s = 0.0
-        self.idle_status_period_s = p["idle_status_period_s"]
-        self.create_timer(p["idle_status_period_s"], self.publish_idle_status)
+        # restarted by every control step, so it fires only while no feedback comes: a
+        # wake-up of a sleeping process costs more than the status it would send
+        self.idle_timer = self.create_timer(p["idle_status_period_s"], self.publish_idle_status)
 
     def _declare_gains(self, strategy: str, mode: str):
         """The ``gains.*`` (position) or ``force_gains.*`` parameters, defaults from the core."""
@@ -189,7 +189,7 @@ class FingerControllerNode(LeanNode):
             header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
             duty_percent=self.duty, measurement_stamp_sec=measurement_stamp[0],
             measurement_stamp_nanosec=measurement_stamp[1], sequence=self.sequence)))
-        self.last_control_s = now_ns * 1e-9
+        self.idle_timer.reset()
         self._steps_since_status += 1
         if self._steps_since_status >= self.status_every or self._status_key() != self._reported:
             self.publish_status()
@@ -198,9 +198,8 @@ class FingerControllerNode(LeanNode):
         return self.setpoint.mode, self.setpoint.value, self.enabled, self.controller.fault
 
     def publish_idle_status(self) -> None:
-        if self.get_clock().now().nanoseconds * 1e-9 - self.last_control_s >= self.idle_status_period_s:
-            self.drain(self._other_feedback())
-            self.publish_status()
+        self.drain(self._other_feedback())
+        self.publish_status()
 
     def publish_status(self) -> None:
         measurement = self._wire_measurement(self.setpoint.mode)
