@@ -6,10 +6,18 @@ Heating is allowed only in ENABLED, so every other state means zero duty.
 
 Monitors (per finger, on the receive times of the streams, in the node's clock): wire force
 at or above ``max_wire_force_n`` and tendon travel beyond ``max_tendon_position_m`` fault in
-any state; while ENABLED, an encoder or wire-force stream silent for longer than ``stale_s``,
-a controller heartbeat silent for longer than ``heartbeat_timeout_s``, and the actuation unit's duty-watchdog flag held for ``stale_s`` fault too. Outside
-ENABLED nothing heats, so a silent stream (a node starting or restarting) only blocks
-``enable`` and ``reset`` until it is back.
+any state; while ENABLED, an encoder or wire-force stream without a new reading for longer
+than ``stale_s``, a controller heartbeat silent for longer than ``heartbeat_timeout_s``, and
+the actuation unit's duty-watchdog flag held for ``stale_s`` fault too. Outside ENABLED
+nothing heats, so a silent stream (a node starting or restarting) only blocks ``enable`` and
+``reset`` until it is back.
+
+The encoder and force readings reach the supervisor inside the controller's reports
+(:meth:`SupervisorLogic.reading`), so a sensor stream is judged when a report comes: a
+report whose reading has not moved for longer than ``stale_s`` faults that stream. While
+no report comes the supervisor cannot tell a silent sensor from a late controller, and the
+controller heartbeat judges; blaming the sensor there made every controller stall of some
+40 ms on a busy host a "stale encoder" FAULT, while the encoder was running.
 """
 
 from __future__ import annotations
@@ -77,6 +85,21 @@ class SupervisorLogic:
     def saw(self, stream: str, finger: str, now: float) -> None:
         self._last_seen[(stream, finger)] = now
 
+    def reading(self, stream: str, finger: str, moved: bool, now: float) -> bool:
+        """A controller's report of its latest ``stream`` reading ("encoder" or
+        "wire_force"): ``moved`` if the reading is newer than the one reported before. A
+        reading that has not moved for longer than ``stale_s`` faults the stream while
+        ENABLED. Returns ``moved``: the caller then passes the value on
+        (:meth:`encoder`, :meth:`wire_force`)."""
+        if moved:
+            return True
+        seen = self._last_seen.get((stream, finger))
+        if self.state == State.ENABLED and seen is not None:
+            age = now - seen
+            if age > self.limits.stale_s:
+                self._fault(finger, stream, f"{stream} stale ({1e3 * age:.0f} ms without a new reading)")
+        return False
+
     def wire_force(self, finger: str, force_n: float, now: float) -> None:
         self.saw("wire_force", finger, now)
         if force_n >= self.limits.max_wire_force_n:
@@ -104,7 +127,8 @@ class SupervisorLogic:
             self._fault(finger, "watchdog", f"duty watchdog tripped for {1e3 * (stamp - since):.0f} ms: no duty commands")
 
     def check_streams(self, now: float) -> None:
-        """While ENABLED, fault every stream silent for longer than stale_s.
+        """While ENABLED, fault every controller heartbeat silent for longer than its timeout
+        (the sensor streams are judged by :meth:`reading`).
 
         When this check itself comes late (the supervisor was not scheduled for a while),
         the messages that arrived meanwhile are still queued and every stream would look
@@ -116,7 +140,7 @@ class SupervisorLogic:
             return
         for (stream, finger), seen in self._last_seen.items():
             age = now - seen
-            if age > self.limits.timeout(stream):
+            if stream == "heartbeat" and age > self.limits.timeout(stream):
                 self._fault(finger, stream, f"{stream} stale ({1e3 * age:.0f} ms without a message)")
 
     def missing_streams(self, now: float) -> list[str]:

@@ -37,26 +37,50 @@ def _ready(logic, now):
             logic.saw(stream, finger, now)
 
 
+def _report(logic, finger: str, now: float, encoder_moved: bool = True) -> None:
+    """What the supervisor node does with a controller status (fresh force reading)."""
+    logic.saw("heartbeat", finger, now)
+    if logic.reading("encoder", finger, encoder_moved, now):
+        logic.encoder(finger, 0.01, now)
+    if logic.reading("wire_force", finger, True, now):
+        logic.wire_force(finger, 4.0, now)
+
+
 def test_supervisor_enables_only_with_every_stream_alive_and_latches_faults():
     logic = SupervisorLogic(("index", "middle"))
     ok, message = logic.request("enable", 0.0)
     assert not ok and "index: no encoder yet" in message
     _ready(logic, 1.0)
     assert logic.request("enable", 1.0) == (True, "ENABLED")
-    logic.check_streams(1.02)
-    logic.check_streams(1.04)
-    assert logic.state == State.ENABLED
-    logic.saw("encoder", "index", 1.05)
-    logic.saw("wire_force", "index", 1.05)
-    logic.saw("heartbeat", "index", 1.05)
-    logic.check_streams(1.06)  # middle silent for 60 ms
-    assert logic.state == State.FAULT
-    assert {f.finger for f in logic.faults} == {"middle"}
+    # both controllers keep reporting every 20 ms; middle's encoder reading stops moving
+    for now in (1.02, 1.04, 1.06):
+        logic.check_streams(now)
+        _report(logic, "index", now)
+        _report(logic, "middle", now, encoder_moved=False)
+        assert logic.state == (State.ENABLED if now < 1.05 else State.FAULT)
+    assert [(f.finger, f.kind) for f in logic.faults] == [("middle", "encoder")]
+    assert "encoder stale (60 ms without a new reading)" in str(logic.faults[0])
     assert not logic.request("enable", 1.07)[0]
     ok, message = logic.request("reset", 1.08)
-    assert not ok and "middle" in message  # still silent
+    assert not ok and "middle: encoder stale" in message
     _ready(logic, 1.09)
     assert logic.request("reset", 1.09)[0] and logic.state == State.IDLE and not logic.faults
+
+
+def test_a_silent_controller_is_its_heartbeat_fault_not_its_sensors():
+    logic = SupervisorLogic(("index",))
+    _ready(logic, 0.0)
+    logic.request("enable", 0.0)
+    for k in range(1, 20):      # no report for 190 ms: the sensors cannot be judged
+        logic.check_streams(0.01 * k)
+    assert logic.state == State.ENABLED
+    # the controller was only late: its next report carries fresh readings
+    _report(logic, "index", 0.195)
+    logic.check_streams(0.2)
+    assert logic.state == State.ENABLED
+    for k in range(21, 42):
+        logic.check_streams(0.01 * k)
+    assert [(f.finger, f.kind) for f in logic.faults] == [("index", "heartbeat")]
 
 
 def test_a_late_check_does_not_blame_the_streams():
