@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 
+from hems_ros.graph import names
+
 
 class Cadence:
     """Due about every ``period_s`` when asked at every tick of ``tick_s``.
@@ -28,3 +30,15 @@ class Cadence:
             return False
         self.next_s = now_s + self.period_s - self.slack_s
         return True
+
+
+def tick_delay(finger: str, period_s: float, now_s: float) -> float:
+    """Seconds from ``now_s`` to the next tick instant of ``finger``'s unit on the clock's grid.
+
+    The two units of a shoulder module tick together, so their wire tensions reach the
+    module at once and one wake-up takes both; the three modules' pairs are a third of a
+    period apart, so their chains do not all compete for the cores at one instant.
+    """
+    modules = list(names.MODULES)
+    phase = modules.index(names.MODULE_OF[finger]) * period_s / len(modules)
+    return (phase - now_s) % period_s

@@ -18,17 +18,21 @@ observes the simulated plant between ticks, so the physics is the same as if the
 woken on arrival (a command answering the latest encoder sample takes effect from that
 sample either way, hems_ros.graph.unit_driver), at one wake-up a period instead of two; the
 latency in /diagnostics is measured to the reception. On sim time (/clock) reception times
-are not in the node's clock, so commands are handled on arrival.
+are not in the node's clock, so commands are handled on arrival. On wall-clock time the
+ticks also fall on the clock's grid at the shoulder module's phase
+(hems_ros.graph.cadence.tick_delay).
 The duty, encoder, tension and state topics carry serialized messages (hems_ros.nodes.wire).
 """
 
 from __future__ import annotations
 
+import time
+
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
 from hems_msgs.msg import ActuatorState, DutyCommand, EncoderReading, SupervisorStatus, WireForce
 from hems_ros.graph import names
-from hems_ros.graph.cadence import Cadence
+from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
@@ -38,6 +42,8 @@ from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import ActuationUnit, load_params
 
+TICK_PHASE_TOLERANCE_S = 0.0005
+TICK_PHASE_ATTEMPTS = 100
 ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
 
 PARAMETERS = [
@@ -70,7 +76,8 @@ class ActuationUnitNode(LeanNode):
             physics = load_params(p["physics_config"])
         except (OSError, ValueError) as error:
             raise ValueError(f"parameter 'physics_config' = {p['physics_config']!r}: {error}") from None
-        tick = self.create_timer(p["tick_period_s"], self.on_tick)
+        self.wall_clock = not self.get_parameter("use_sim_time").value
+        tick = self.create_tick_timer(p["tick_period_s"])
         # The physics starts one period before the first tick, so encoder samples fall due on
         # the ticks and go out at once; a grid shifted from the timer's held each sample back
         # for up to a period, and the duties answering it often came after the next one.
@@ -89,13 +96,26 @@ class ActuationUnitNode(LeanNode):
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
         self.duty_sub = self.subscribe_serialized(DutyCommand, names.topic(self.finger, "duty"), self.on_duty,
                                                   qos.COMMAND, on_unreadable=self.on_unreadable_duty)
-        self.duty_at_ticks = not self.get_parameter("use_sim_time").value
-        if self.duty_at_ticks:
+        if self.wall_clock:
             self.poll(self.duty_sub)
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         self.state_cadence = Cadence(p["state_period_s"], p["tick_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
+
+    def create_tick_timer(self, period_s: float):
+        """The tick timer, on wall-clock time at the finger's phase of the clock's grid
+        (:func:`hems_ros.graph.cadence.tick_delay`). A timer keeps the phase of its creation;
+        while the graph starts, sixteen processes load at once and a sleep up to the phase
+        may end late, so a timer more than TICK_PHASE_TOLERANCE_S off is made again."""
+        for _ in range(TICK_PHASE_ATTEMPTS if self.wall_clock else 0):
+            time.sleep(tick_delay(self.finger, period_s, seconds(self)))
+            tick = self.create_timer(period_s, self.on_tick)
+            off = period_s - tick_delay(self.finger, period_s, seconds(self) + tick.time_until_next_call() * 1e-9)
+            if min(off, period_s - off) <= TICK_PHASE_TOLERANCE_S:
+                return tick
+            self.destroy_timer(tick)
+        return self.create_timer(period_s, self.on_tick)
 
     def on_duty(self, message, received_s: float | None = None) -> None:
         now = seconds(self) if received_s is None else received_s
@@ -122,7 +142,7 @@ class ActuationUnitNode(LeanNode):
 
     def on_tick(self) -> None:
         now = seconds(self)
-        if self.duty_at_ticks:
+        if self.wall_clock:
             self.drain(self.duty_sub, with_reception_time=True)
         self.advance_to(now)
         if self.state_cadence.due(now):

@@ -255,3 +255,18 @@ def test_cadence_fires_every_nth_tick_despite_jitter():
     assert fired == list(range(0, 100, 5))
     every_tick = Cadence(0.005, 0.01)
     assert all(every_tick.due(t) for t in ticks)
+
+
+def test_units_of_one_shoulder_module_tick_together_and_modules_a_third_apart():
+    from hems_ros.graph.cadence import tick_delay
+
+    now = 1_795_461_707.123_456
+
+    def phase_off(finger: str, phase: float) -> float:
+        off = (now + tick_delay(finger, 0.01, now) - phase) % 0.01
+        return min(off, 0.01 - off)
+
+    for fingers, phase in ((("thumb_flexion", "thumb_abduction"), 0.0), (("index", "middle"), 0.01 / 3),
+                           (("ring", "little"), 0.02 / 3)):
+        assert all(phase_off(f, phase) < 1e-6 for f in fingers)
+    assert all(0.0 <= tick_delay(f, 0.01, now) < 0.01 for f in names.FINGERS)

@@ -83,3 +83,16 @@ def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sa
     finally:
         helper.destroy_node()
         node.destroy_node()
+
+
+def test_units_tick_at_their_shoulder_modules_phase_on_wall_clock_time(context):
+    from hems_ros.graph.cadence import tick_delay
+
+    node = unit(context)
+    try:
+        # the physics grid (and so every encoder sample) follows the tick timer
+        start = node.driver.start_time_s
+        off = tick_delay("index", 0.01, start)
+        assert min(off, 0.01 - off) <= 0.0005
+    finally:
+        node.destroy_node()
