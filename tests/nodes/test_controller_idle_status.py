@@ -5,19 +5,6 @@ from __future__ import annotations
 
 import time
 
-import pytest
-
-
-@pytest.fixture
-def context(ros_domain_id):
-    import rclpy
-    from rclpy.context import Context
-
-    context = Context()
-    rclpy.init(context=context)
-    yield context
-    rclpy.shutdown(context=context)
-
 
 def test_control_steps_hold_off_the_idle_status_and_silence_lets_it_fire(context):
     from hems_ros.nodes.finger_controller import FingerControllerNode

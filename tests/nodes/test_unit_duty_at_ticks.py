@@ -11,17 +11,6 @@ import pytest
 from hems_ros.nodes.wire import stamp
 
 
-@pytest.fixture
-def context(ros_domain_id):
-    import rclpy
-    from rclpy.context import Context
-
-    context = Context()
-    rclpy.init(context=context)
-    yield context
-    rclpy.shutdown(context=context)
-
-
 def unit(context, use_sim_time: bool = False):
     from rclpy.parameter import Parameter
 

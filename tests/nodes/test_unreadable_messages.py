@@ -3,25 +3,12 @@ running, and a unit treats an unreadable duty command as a rejected one (0 % dut
 
 from __future__ import annotations
 
-import pytest
-
 GARBAGE = b"\x00\x01\x00\x00\x05\x00"   # CDR header, then a truncated message
 
 
 def deliver(node, topic: str, data: bytes) -> None:
     """What the spin loop does with a message taken from ``topic``."""
     next(s for s in node.subscriptions if s.topic_name == topic).callback(data)
-
-
-@pytest.fixture
-def context(ros_domain_id):
-    import rclpy
-    from rclpy.context import Context
-
-    context = Context()
-    rclpy.init(context=context)
-    yield context
-    rclpy.shutdown(context=context)
 
 
 def test_unit_rejects_an_unreadable_duty_and_keeps_running(context, capfd):
