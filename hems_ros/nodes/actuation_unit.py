@@ -21,6 +21,7 @@ latency in /diagnostics is measured to the reception. On sim time (/clock) recep
 are not in the node's clock, so commands are handled on arrival. On wall-clock time the
 ticks also fall on the clock's grid at the shoulder module's phase
 (hems_ros.graph.cadence.tick_delay).
+
 The duty, encoder, tension and state topics carry serialized messages (hems_ros.nodes.wire).
 """
 
@@ -111,7 +112,7 @@ class ActuationUnitNode(LeanNode):
         for _ in range(TICK_PHASE_ATTEMPTS if self.wall_clock else 0):
             time.sleep(tick_delay(self.finger, period_s, seconds(self)))
             tick = self.create_timer(period_s, self.on_tick)
-            off = period_s - tick_delay(self.finger, period_s, seconds(self) + tick.time_until_next_call() * 1e-9)
+            off = tick_delay(self.finger, period_s, seconds(self) + tick.time_until_next_call() * 1e-9)
             if min(off, period_s - off) <= TICK_PHASE_TOLERANCE_S:
                 return tick
             self.destroy_timer(tick)
