@@ -23,6 +23,8 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 
 WAIT_TIMEOUT_NS = 50_000_000   # how often the context is checked without work (Ctrl-C latency)
+INTROSPECTION_POLL_S = 0.02    # how often the parameter and type-description services are served
+INTROSPECTION_PACKAGES = ("rcl_interfaces", "type_description_interfaces")
 _polled_changes = 0            # bumped whenever a node changes the subscriptions it drains itself
 
 
@@ -84,7 +86,7 @@ def loop(context, entities, on_ready=None, keep_going=None, pause_s: float = 0.0
     """
     # No signal guard condition: destroying one while rclpy's signal thread still triggers it
     # crashed the process now and then; Ctrl-C is seen within one wait timeout instead.
-    last, built, waiting = None, None, None
+    last, built, waiting, introspection, next_poll = None, None, None, [], 0.0
     with ExitStack() as stack:
         stack.enter_context(context.handle)
         entered: set[int] = set()
@@ -101,11 +103,21 @@ def loop(context, entities, on_ready=None, keep_going=None, pause_s: float = 0.0
                         if id(entity) not in entered:
                             stack.enter_context(entity.handle)
                             entered.add(id(entity))
-                    waiting = _WaitSet(context, subscriptions, timers, services)
+                    # Every node has seven parameter and type-description services: in the
+                    # wait set they cost each wake-up of a node a fifth of its time (a
+                    # composed graph 0.66 -> 0.55 cores), so they are served
+                    # every INTROSPECTION_POLL_S instead, which `ros2 param` does not notice.
+                    introspection = [s for s in services if _is_introspection(s)]
+                    waiting = _WaitSet(context, subscriptions, timers,
+                                       [s for s in services if not _is_introspection(s)])
                 waiting.wait(WAIT_TIMEOUT_NS)
                 if not context.ok():
                     break
                 waiting.run_ready(on_ready)
+                if introspection and (now := time.monotonic()) >= next_poll:
+                    next_poll = now + INTROSPECTION_POLL_S
+                    for service in introspection:
+                        _serve(service)
                 if pause_s:
                     time.sleep(pause_s)
             except RuntimeError:
@@ -115,6 +127,19 @@ def loop(context, entities, on_ready=None, keep_going=None, pause_s: float = 0.0
                 if context.ok():
                     raise
                 break
+
+
+def _is_introspection(service) -> bool:
+    return service.srv_type.__module__.split(".", 1)[0] in INTROSPECTION_PACKAGES
+
+
+def _serve(service) -> None:
+    """Answer every request queued for ``service``."""
+    while True:
+        request, header = service.handle.service_take_request(service.srv_type.Request)
+        if header is None:
+            return
+        service.send_response(service.callback(request, service.srv_type.Response()), header)
 
 
 class _WaitSet:
@@ -164,7 +189,4 @@ class _WaitSet:
             if taken is not None:
                 subscription.callback(taken[0])
         for pointer in wait_set.get_ready_entities("service"):
-            service = self.services[pointer]
-            request, header = service.handle.service_take_request(service.srv_type.Request)
-            if header is not None:
-                service.send_response(service.callback(request, service.srv_type.Response()), header)
+            _serve(self.services[pointer])
