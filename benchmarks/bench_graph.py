@@ -90,7 +90,8 @@ def run(composed: bool, seconds: float) -> dict:
     return {"p50_ms": 1e3 * p50, "p99_ms": 1e3 * p99, "max_ms": 1e3 * worst,
             "missed_pct": 100 * missed / periods, "cpu_cores": sum(sum(v) for v in by_kind.values()),
             "cpu_by_kind": by_kind,
-            "supervisor": state.state_name if state else "no status"}
+            "supervisor": state.state_name if state else "no status",
+            "faults": list(state.faults) if state else []}
 
 
 def main() -> None:
@@ -112,6 +113,8 @@ def main() -> None:
         print(" " * 10 + " CPU cores by node: " + ", ".join(
             f"{kind} {sum(v):.2f}" + (f" ({len(v)} x {sum(v) / len(v):.3f})" if len(v) > 1 else "")
             for kind, v in sorted(r["cpu_by_kind"].items(), key=lambda kv: -sum(kv[1]))))
+        if r["faults"]:
+            print(" " * 10 + " supervisor faults: " + "; ".join(r["faults"]))
     print("floors: p99 <= 5 ms, missed < 0.5 %, CPU <= 1 core (a ratio above 1 misses its floor)")
 
 
