@@ -13,7 +13,7 @@ nothing heats, so a silent stream (a node starting or restarting) only blocks ``
 ``reset`` until it is back.
 
 The encoder and force readings reach the supervisor inside the controller's reports
-(:meth:`SupervisorLogic.reading`), so a sensor stream is judged when a report comes: a
+(:meth:`SupervisorLogic.unchanged`), so a sensor stream is judged when a report comes: a
 report whose reading has not moved for longer than ``stale_s`` faults that stream. While
 no report comes the supervisor cannot tell a silent sensor from a late controller, and the
 controller heartbeat judges; blaming the sensor there made every controller stall of some
@@ -85,20 +85,13 @@ class SupervisorLogic:
     def saw(self, stream: str, finger: str, now: float) -> None:
         self._last_seen[(stream, finger)] = now
 
-    def reading(self, stream: str, finger: str, moved: bool, now: float) -> bool:
-        """A controller's report of its latest ``stream`` reading ("encoder" or
-        "wire_force"): ``moved`` if the reading is newer than the one reported before. A
-        reading that has not moved for longer than ``stale_s`` faults the stream while
-        ENABLED. Returns ``moved``: the caller then passes the value on
-        (:meth:`encoder`, :meth:`wire_force`)."""
-        if moved:
-            return True
+    def unchanged(self, stream: str, finger: str, now: float) -> None:
+        """A controller reported the same ``stream`` reading ("encoder" or "wire_force") as
+        before (a new one goes to :meth:`encoder` or :meth:`wire_force`): while ENABLED, a
+        reading unchanged for longer than ``stale_s`` faults the stream."""
         seen = self._last_seen.get((stream, finger))
-        if self.state == State.ENABLED and seen is not None:
-            age = now - seen
-            if age > self.limits.stale_s:
-                self._fault(finger, stream, f"{stream} stale ({1e3 * age:.0f} ms without a new reading)")
-        return False
+        if self.state == State.ENABLED and seen is not None and now - seen > self.limits.stale_s:
+            self._fault(finger, stream, f"{stream} stale ({1e3 * (now - seen):.0f} ms without a new reading)")
 
     def wire_force(self, finger: str, force_n: float, now: float) -> None:
         self.saw("wire_force", finger, now)
@@ -128,7 +121,7 @@ class SupervisorLogic:
 
     def check_streams(self, now: float) -> None:
         """While ENABLED, fault every controller heartbeat silent for longer than its timeout
-        (the sensor streams are judged by :meth:`reading`).
+        (the sensor streams are judged by :meth:`unchanged`).
 
         When this check itself comes late (the supervisor was not scheduled for a while),
         the messages that arrived meanwhile are still queued and every stream would look
@@ -138,10 +131,10 @@ class SupervisorLogic:
         self._last_check = now
         if self.state != State.ENABLED or late:
             return
-        for (stream, finger), seen in self._last_seen.items():
-            age = now - seen
-            if stream == "heartbeat" and age > self.limits.timeout(stream):
-                self._fault(finger, stream, f"{stream} stale ({1e3 * age:.0f} ms without a message)")
+        for finger in self.fingers:
+            seen = self._last_seen.get(("heartbeat", finger))
+            if seen is not None and now - seen > self.limits.heartbeat_timeout_s:
+                self._fault(finger, "heartbeat", f"heartbeat stale ({1e3 * (now - seen):.0f} ms without a message)")
 
     def missing_streams(self, now: float) -> list[str]:
         """Streams never seen or currently stale: the reasons enabling is refused."""

@@ -101,15 +101,19 @@ class SupervisorNode(LeanNode):
         # a reading counts as fresh when its stamp moved since the last status (receive-side
         # judgement: no clock comparison between hosts)
         encoder = (message.encoder_stamp_sec, message.encoder_stamp_nanosec)
-        if self.logic.reading("encoder", finger, encoder != (0, 0) and encoder != self.encoder_stamps[finger], now):
+        if encoder != (0, 0) and encoder != self.encoder_stamps[finger]:
             self.encoder_stamps[finger] = encoder
             self.position[finger] = message.wire_position
             self.logic.encoder(finger, message.wire_position, now)
+        else:
+            self.logic.unchanged("encoder", finger, now)
         force = (message.force_stamp_sec, message.force_stamp_nanosec)
-        if self.logic.reading("wire_force", finger, force != (0, 0) and force != self.force_stamps[finger], now):
+        if force != (0, 0) and force != self.force_stamps[finger]:
             self.force_stamps[finger] = force
             self.force[finger] = message.wire_force
             self.logic.wire_force(finger, message.wire_force, now)
+        else:
+            self.logic.unchanged("wire_force", finger, now)
         self.publish_if_changed()
 
     def on_state(self, finger: str, message) -> None:

@@ -40,10 +40,11 @@ def _ready(logic, now):
 def _report(logic, finger: str, now: float, encoder_moved: bool = True) -> None:
     """What the supervisor node does with a controller status (fresh force reading)."""
     logic.saw("heartbeat", finger, now)
-    if logic.reading("encoder", finger, encoder_moved, now):
+    if encoder_moved:
         logic.encoder(finger, 0.01, now)
-    if logic.reading("wire_force", finger, True, now):
-        logic.wire_force(finger, 4.0, now)
+    else:
+        logic.unchanged("encoder", finger, now)
+    logic.wire_force(finger, 4.0, now)
 
 
 def test_supervisor_enables_only_with_every_stream_alive_and_latches_faults():
