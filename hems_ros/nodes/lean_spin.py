@@ -109,8 +109,7 @@ def loop(context, entities, on_ready=None, keep_going=None, pause_s: float = 0.0
                     # 0.55 cores), so they are served every INTROSPECTION_POLL_S instead,
                     # which `ros2 param` does not notice.
                     introspection = [s for s in services if _is_introspection(s)]
-                    waiting = _WaitSet(context, subscriptions, timers,
-                                       [s for s in services if not _is_introspection(s)])
+                    waiting = _WaitSet(context, subscriptions, timers, [s for s in services if s not in introspection])
                 waiting.wait(WAIT_TIMEOUT_NS)
                 if not context.ok():
                     break
