@@ -17,8 +17,10 @@ next tick, before integrating, each at the time the middleware received it. Noth
 observes the simulated plant between ticks, so the physics is the same as if the unit had
 woken on arrival (a command answering the latest encoder sample takes effect from that
 sample either way, hems_ros.graph.unit_driver), at one wake-up a period instead of two; the
-latency in /diagnostics is measured to the reception. On sim time (/clock) reception times
-are not in the node's clock, so commands are handled on arrival. On wall-clock time the
+latency in /diagnostics is measured to the reception. The supervisor's status (about 10 Hz)
+wakes the unit: the commands received before it are taken first, so an ESTOP stops the
+heating when it comes. On sim time (/clock) reception times are not in the node's clock,
+so commands are handled on arrival. On wall-clock time the
 ticks also fall on the clock's grid at the shoulder module's phase
 (hems_ros.graph.cadence.tick_delay).
 
@@ -136,6 +138,13 @@ class ActuationUnitNode(LeanNode):
 
     def on_supervisor(self, message: SupervisorStatus) -> None:
         now = seconds(self)
+        # commands that came before this status act first, and the plant runs with the old
+        # permission up to it: taken at the next tick instead, a command answering the latest
+        # sample would integrate again from that sample under the new permission, and stop
+        # (or start) the heating before the status came
+        if self.wall_clock:
+            self.drain(self.duty_sub, with_reception_time=True)
+        self.advance_to(now)
         was_allowed = self.driver.heating_allowed(now)
         self.driver.permit_heating(message.state == SupervisorStatus.ENABLED, now)
         if was_allowed and not self.driver.heating_allowed(now):

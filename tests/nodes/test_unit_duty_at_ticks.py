@@ -11,13 +11,13 @@ import pytest
 from hems_ros.nodes.wire import stamp
 
 
-def unit(context, use_sim_time: bool = False):
+def unit(context, use_sim_time: bool = False, require_supervisor: bool = False):
     from rclpy.parameter import Parameter
 
     from hems_ros.nodes.actuation_unit import ActuationUnitNode
 
     return ActuationUnitNode(context=context, parameter_overrides=[
-        Parameter("require_supervisor", value=False), Parameter("use_sim_time", value=use_sim_time)])
+        Parameter("require_supervisor", value=require_supervisor), Parameter("use_sim_time", value=use_sim_time)])
 
 
 def test_duty_commands_wake_the_unit_only_on_sim_time(context):
@@ -84,4 +84,48 @@ def test_units_tick_at_their_shoulder_modules_phase_on_wall_clock_time(context):
         off = tick_delay("index", 0.01, start)
         assert min(off, 0.01 - off) <= 0.0005
     finally:
+        node.destroy_node()
+
+
+def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(context):
+    """An ESTOP stops the heating when it comes: a command that came earlier still heats from
+    the sample it answers up to the ESTOP, not only until the unit's previous tick."""
+    import rclpy
+
+    from builtin_interfaces.msg import Time
+
+    from hems_msgs.msg import DutyCommand, SupervisorStatus
+    from hems_ros.nodes import qos
+    from hems_ros.physics import kernel
+
+    node = unit(context, require_supervisor=True)
+    helper = rclpy.create_node("duty_sender", context=context)
+    try:
+        publisher = helper.create_publisher(DutyCommand, "/hems/index/duty", qos.COMMAND)
+        deadline = time.monotonic() + 10.0
+        while publisher.get_subscription_count() < 1:
+            assert time.monotonic() < deadline, "the unit's duty subscription was not discovered"
+            time.sleep(0.05)
+        node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
+        for _ in range(3):
+            time.sleep(0.011)
+            node.on_tick()
+        sample_s, snapshot = node.driver._sample_snapshot
+        energy_at_sample = snapshot[0][kernel.S_EJ]
+        sec, nanosec = stamp(sample_s)
+        publisher.publish(DutyCommand(finger="index", duty_percent=100.0,
+                                      measurement_stamp=Time(sec=sec, nanosec=nanosec)))
+        time.sleep(0.004)
+        node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ESTOP))
+        estop_s = node.driver.time_s
+        assert node.driver.commands == 1 and node.driver.applied_duty == 0.0
+        time.sleep(0.011)
+        node.on_tick()
+        heated = node.driver.last_result.energy_joule_j - energy_at_sample
+        # 100 % duty is 4 A into about 4.2 ohm (digest section 2): about 67 W from the sample to the ESTOP
+        heating_s = estop_s - sample_s
+        assert heating_s >= 0.003
+        assert heated == pytest.approx(67.0 * heating_s, rel=0.25)
+    finally:
+        helper.destroy_node()
         node.destroy_node()
