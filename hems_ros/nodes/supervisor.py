@@ -52,8 +52,9 @@ PARAMETERS = [
          positive, True),
     Spec("max_wire_force_n", _LIMITS.max_wire_force_n, "wire over-force limit, N", positive, True),
     Spec("max_tendon_position_m", _LIMITS.max_tendon_position_m, "tendon over-travel limit, m", positive, True),
-    Spec("check_period_s", 0.01, "monitor period, s: the controller status and state messages are taken "
-         "and judged at each check", positive, True),
+    Spec("check_period_s", 0.02, "monitor period, s: the controller status and state messages are taken "
+         "and judged at each check (the controllers' statuses, which carry their readings, come at 50 Hz)",
+         positive, True),
     Spec("status_period_s", 0.1, "status re-publishing period, s (also on every change; at the checks, so in "
          "whole check periods)", positive, True),
     Spec("joint_states_period_s", 0.02, "joint_states publishing period, s (at the checks)", positive, True),
