@@ -20,6 +20,19 @@ def unit(context, use_sim_time: bool = False, require_supervisor: bool = False):
         Parameter("require_supervisor", value=require_supervisor), Parameter("use_sim_time", value=use_sim_time)])
 
 
+def duty_publisher(helper):
+    """A publisher of the index unit's duty commands, once the unit's subscription is discovered."""
+    from hems_msgs.msg import DutyCommand
+    from hems_ros.nodes import qos
+
+    publisher = helper.create_publisher(DutyCommand, "/hems/index/duty", qos.COMMAND)
+    deadline = time.monotonic() + 10.0
+    while publisher.get_subscription_count() < 1:
+        assert time.monotonic() < deadline, "the unit's duty subscription was not discovered"
+        time.sleep(0.05)
+    return publisher
+
+
 def test_duty_commands_wake_the_unit_only_on_sim_time(context):
     for use_sim_time in (False, True):
         node = unit(context, use_sim_time)
@@ -35,16 +48,11 @@ def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sa
     from builtin_interfaces.msg import Time
 
     from hems_msgs.msg import DutyCommand
-    from hems_ros.nodes import qos
 
     node = unit(context)
     helper = rclpy.create_node("duty_sender", context=context)
     try:
-        publisher = helper.create_publisher(DutyCommand, "/hems/index/duty", qos.COMMAND)
-        deadline = time.monotonic() + 10.0
-        while publisher.get_subscription_count() < 1:
-            assert time.monotonic() < deadline, "the unit's duty subscription was not discovered"
-            time.sleep(0.05)
+        publisher = duty_publisher(helper)
         # tick as the timer does, just after a sample falls due on the unit's 10 ms grid
         for _ in range(3):
             time.sleep(0.011)
@@ -95,17 +103,12 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
     from builtin_interfaces.msg import Time
 
     from hems_msgs.msg import DutyCommand, SupervisorStatus
-    from hems_ros.nodes import qos
     from hems_ros.physics import kernel
 
     node = unit(context, require_supervisor=True)
     helper = rclpy.create_node("duty_sender", context=context)
     try:
-        publisher = helper.create_publisher(DutyCommand, "/hems/index/duty", qos.COMMAND)
-        deadline = time.monotonic() + 10.0
-        while publisher.get_subscription_count() < 1:
-            assert time.monotonic() < deadline, "the unit's duty subscription was not discovered"
-            time.sleep(0.05)
+        publisher = duty_publisher(helper)
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         for _ in range(3):
             time.sleep(0.011)
