@@ -107,7 +107,7 @@ class FingerControllerNode(LeanNode):
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         # restarted by every control step, so it fires only while no feedback comes: a
         # wake-up of a sleeping process costs more than the status it would send
-        self.idle_timer = self.create_timer(p["idle_status_period_s"], self.publish_idle_status)
+        self.idle_timer = self.create_timer(p["idle_status_period_s"], self.publish_status)
 
     def _declare_gains(self, strategy: str, mode: str):
         """The ``gains.*`` (position) or ``force_gains.*`` parameters, defaults from the core."""
@@ -123,8 +123,9 @@ class FingerControllerNode(LeanNode):
         return self.feedback["force" if self.setpoint.mode == "position" else "position"]
 
     def _poll_other_feedback(self) -> None:
-        """The stream of the other mode only feeds the status: taken when the node wakes for
-        its control stream, instead of waking it 100 times a second on its own."""
+        """The stream of the other mode only feeds the status: taken when a status goes out
+        (every status_every-th control step, or the idle status), instead of waking the node
+        100 times a second on its own."""
         self.poll(self._other_feedback())
 
     # inputs -------------------------------------------------------------------
@@ -177,7 +178,6 @@ class FingerControllerNode(LeanNode):
         return transmission.wire_force(self.setpoint.value, self.ratio)
 
     def control(self, measurement_stamp: tuple[int, int]) -> None:
-        self.drain(self._other_feedback())
         if self.enabled:
             self.duty = self.controller.update(self._wire_reference(), self._wire_measurement(self.setpoint.mode))
         else:
@@ -197,11 +197,8 @@ class FingerControllerNode(LeanNode):
     def _status_key(self) -> tuple:
         return self.setpoint.mode, self.setpoint.value, self.enabled, self.controller.fault
 
-    def publish_idle_status(self) -> None:
-        self.drain(self._other_feedback())
-        self.publish_status()
-
     def publish_status(self) -> None:
+        self.drain(self._other_feedback())
         measurement = self._wire_measurement(self.setpoint.mode)
         if measurement is None:
             tendon = float("nan")

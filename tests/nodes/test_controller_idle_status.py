@@ -21,7 +21,36 @@ def test_control_steps_hold_off_the_idle_status_and_silence_lets_it_fire(context
         time.sleep(0.12)
         assert node.idle_timer.is_ready()
         sent = node.status_sequence
-        node.publish_idle_status()
+        node.idle_timer.callback()
         assert node.status_sequence == sent + 1
     finally:
+        node.destroy_node()
+
+
+def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context):
+    import rclpy
+
+    from hems_msgs.msg import WireForce
+    from hems_ros.nodes import qos
+    from hems_ros.nodes.finger_controller import FingerControllerNode
+
+    node = FingerControllerNode(context=context)
+    helper = rclpy.create_node("force_sender", context=context)
+    try:
+        assert node.setpoint.mode == "position" and node.status_every == 2
+        publisher = helper.create_publisher(WireForce, "/hems/index/wire_force", qos.SENSOR)
+        deadline = time.monotonic() + 10.0
+        while publisher.get_subscription_count() < 1:
+            assert time.monotonic() < deadline, "the controller's force subscription was not discovered"
+            time.sleep(0.05)
+        node.wire_position = 0.0
+        node.control((0, 0))   # the first step reports at once (a new status key)
+        publisher.publish(WireForce(finger="index", force=7.5))
+        time.sleep(0.05)
+        node.control((0, 0))   # no status at this step: the force stays queued
+        assert node.wire_force is None
+        node.control((0, 0))   # the second step since the last status sends one, with the force
+        assert node.wire_force == 7.5
+    finally:
+        helper.destroy_node()
         node.destroy_node()
