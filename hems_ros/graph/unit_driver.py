@@ -35,6 +35,10 @@ from hems_ros.physics import ActuationUnit, StepResult
 MAX_STEPS_PER_ADVANCE = 500  # a stalled process catches up over several ticks, not at once
 
 
+def _valid_duty(duty_percent: float) -> bool:
+    return math.isfinite(duty_percent) and 0.0 <= duty_percent <= 100.0
+
+
 @dataclass(frozen=True)
 class Sample:
     time_s: float
@@ -85,7 +89,7 @@ class UnitDriver:
         Call :meth:`advance` up to ``now_s`` first and again afterwards: a command answering
         the latest sample rewinds the physics to that sample (see the module documentation).
         """
-        if not (math.isfinite(duty_percent) and 0.0 <= duty_percent <= 100.0):
+        if not _valid_duty(duty_percent):
             self.reject()
             raise ValueError(f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %")
         effective_s = now_s
@@ -107,6 +111,14 @@ class UnitDriver:
         """A command that cannot be applied: counted, and 0 duty until the next valid one."""
         self.rejected_commands += 1
         self.commanded_duty = 0.0
+
+    def will_rewind(self, duty_percent: float, measurement_stamp_s: float | None, now_s: float) -> bool:
+        """This command, given at ``now_s``, takes effect from the latest sample: it is valid,
+        answers that sample, and the next one does not fall due by ``now_s`` (1 us to spare for
+        the rounding of epoch times). Integrating up to ``now_s`` before it is then wasted."""
+        due = self.start_time_s + (self._samples_taken + 1) * self.sample_period_s - 1e-9
+        return (_valid_duty(duty_percent) and self._answers_latest_sample(measurement_stamp_s)
+                and now_s < due - 1e-6)
 
     def _answers_latest_sample(self, measurement_stamp_s: float | None) -> bool:
         return (measurement_stamp_s is not None and self._sample_snapshot is not None

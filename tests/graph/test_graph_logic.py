@@ -271,3 +271,38 @@ def test_units_of_one_shoulder_module_tick_together_and_modules_a_third_apart():
                            (("ring", "little"), 0.02 / 3)):
         assert all(phase_off(f, phase) < 1e-6 for f in fingers)
     assert all(0.0 <= tick_delay(f, 0.01, now) < 0.01 for f in names.FINGERS)
+
+
+def test_skipping_the_integration_a_rewinding_command_undoes_changes_no_bit():
+    """A unit integrates up to a command's arrival before applying it, except when the command
+    will rewind to the latest sample anyway (UnitDriver.will_rewind): same state, same samples."""
+    import random
+
+    import numpy as np
+
+    rng = random.Random(7)
+    start = 1_795_000_000.123
+    full, lean = (UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=start,
+                             require_permission=False) for _ in range(2))
+    now, skipped, kept = start, 0, 0
+    for _ in range(600):
+        now += 0.01 + rng.uniform(-0.002, 0.002)
+        assert [(s.time_s, s.result) for s in full.advance(now)] == [(s.time_s, s.result) for s in lean.advance(now)]
+        latest = full._sample_snapshot[0] if full._sample_snapshot else None
+        stamp = rng.choice([latest, latest, latest, now - 0.02, None])
+        duty = rng.choice([30.0, 80.0, rng.uniform(0, 100), float("nan"), 150.0])
+        received = now + rng.choice([rng.uniform(0, 0.004), rng.uniform(0.008, 0.012)])
+        rewinds = lean.will_rewind(duty, stamp, received)
+        skipped, kept = skipped + rewinds, kept + (not rewinds)
+        for driver, integrate_first in ((full, True), (lean, not rewinds)):
+            got = driver.advance(received) if integrate_first else []
+            try:
+                driver.command(duty, received, stamp)
+            except ValueError:
+                pass
+            driver.got = [(s.time_s, s.result) for s in got + driver.advance(received)]
+        assert full.got == lean.got
+        assert np.array_equal(full.unit._s, lean.unit._s) and full.unit.steps == lean.unit.steps
+        assert (full.applied_duty, full.late_commands, full.rejected_commands) == (
+            lean.applied_duty, lean.late_commands, lean.rejected_commands)
+    assert skipped > 50 and kept > 200
