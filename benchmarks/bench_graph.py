@@ -94,12 +94,23 @@ def run(composed: bool, seconds: float) -> dict:
             "faults": list(state.faults) if state else []}
 
 
+def host_speed_s() -> float:
+    """Seconds a fixed pure-Python loop (three million additions) takes now. The speed of a
+    shared host swings by half within minutes; runs are comparable only at similar values."""
+    start, total = time.perf_counter(), 0
+    for i in range(3_000_000):
+        total += i
+    return time.perf_counter() - start
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=60.0)
-    parser.add_argument("--modes", default="separate,composed")
+    parser.add_argument("--seconds", type=float, default=60.0, help="measured time per mode, s (default 60)")
+    parser.add_argument("--modes", default="separate,composed",
+                        help="comma-separated modes to run: separate, composed (default both)")
     args = parser.parse_args()
-    print(f"graph benchmark, {args.seconds:g} s per mode, load average {os.getloadavg()[0]:.1f}")
+    print(f"graph benchmark, {args.seconds:g} s per mode, load average {os.getloadavg()[0]:.1f}, "
+          f"host speed {host_speed_s():.2f} s (a 3-million-addition Python loop; lower is quicker)")
     print(f"{'mode':<10} {'p50 ms':>7} {'p99 ms':>7} {'max ms':>7} {'missed %':>9} {'CPU cores':>10}  "
           f"{'p99/floor':>9} {'missed/floor':>12} {'CPU/floor':>9}  supervisor")
     for mode in args.modes.split(","):
@@ -115,6 +126,7 @@ def main() -> None:
             for kind, v in sorted(r["cpu_by_kind"].items(), key=lambda kv: -sum(kv[1]))))
         if r["faults"]:
             print(" " * 10 + " supervisor faults: " + "; ".join(r["faults"]))
+        print(" " * 10 + f" host speed after the run {host_speed_s():.2f} s")
     print("floors: p99 <= 5 ms, missed < 0.5 %, CPU <= 1 core (a ratio above 1 misses its floor)")
 
 
