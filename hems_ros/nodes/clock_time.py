@@ -1,13 +1,27 @@
-"""Conversions between rclpy times and float seconds."""
+"""The nodes' clock read cheaply, and conversions between rclpy times and float seconds."""
+
+import time
 
 from builtin_interfaces.msg import Time
 
 from hems_ros.nodes.wire import seconds_of, stamp
 
 
+def now_ns(node) -> int:
+    """The node's clock (wall or /clock sim time) in integer nanoseconds.
+
+    Without sim time a node's ROS clock reads the system clock, which ``time.time_ns`` reads
+    for a tenth of the cost of ``Clock.now()`` (7 us: it builds and checks a Time object);
+    the nodes read their clock several times per 10 ms period."""
+    clock = node.get_clock()
+    if clock.ros_time_is_active:
+        return clock.now().nanoseconds
+    return time.time_ns()
+
+
 def seconds(node) -> float:
     """The node's clock (wall or /clock sim time) in seconds."""
-    return node.get_clock().now().nanoseconds * 1e-9
+    return now_ns(node) * 1e-9
 
 
 def to_msg(time_s: float) -> Time:

@@ -37,6 +37,7 @@ from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, Setpoint, SetpointError, SetpointLimits, validate
 from hems_ros.nodes import qos
+from hems_ros.nodes.clock_time import now_ns
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
@@ -183,8 +184,7 @@ class FingerControllerNode(LeanNode):
         else:
             self.duty = 0.0
         self.sequence += 1
-        now_ns = self.get_clock().now().nanoseconds
-        sec, nanosec = stamp_ns(now_ns)
+        sec, nanosec = stamp_ns(now_ns(self))
         self.duty_pub.publish(DUTY.encode(DUTY.fields(
             header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
             duty_percent=self.duty, measurement_stamp_sec=measurement_stamp[0],
@@ -209,7 +209,7 @@ class FingerControllerNode(LeanNode):
         self.status_sequence += 1
         self._steps_since_status = 0
         self._reported = self._status_key()
-        sec, nanosec = stamp_ns(self.get_clock().now().nanoseconds)
+        sec, nanosec = stamp_ns(now_ns(self))
         self.status_pub.publish(STATUS.encode(STATUS.fields(
             header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="",
             finger=self.finger, strategy=self.controller.strategy, mode=self.setpoint.mode, active=self.enabled,
