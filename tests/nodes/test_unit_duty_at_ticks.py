@@ -102,6 +102,8 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
 
     from builtin_interfaces.msg import Time
 
+    from rclpy.duration import Duration
+
     from hems_msgs.msg import DutyCommand, SupervisorStatus
     from hems_ros.physics import kernel
 
@@ -118,7 +120,9 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
         sec, nanosec = stamp(sample_s)
         publisher.publish(DutyCommand(finger="index", duty_percent=100.0,
                                       measurement_stamp=Time(sec=sec, nanosec=nanosec)))
-        time.sleep(0.004)
+        # in the unit's queue before the ESTOP comes, however loaded the host
+        assert publisher.wait_for_all_acked(Duration(seconds=5))
+        time.sleep(max(0.0, sample_s + 0.004 - time.time()))
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ESTOP))
         estop_s = node.driver.time_s
         assert node.driver.commands == 1 and node.driver.applied_duty == 0.0
