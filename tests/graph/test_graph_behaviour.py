@@ -15,6 +15,8 @@ import time
 import numpy as np
 import pytest
 
+from diagnostic_msgs.msg import DiagnosticArray
+
 from hems_msgs.msg import ActuatorState, ControllerStatus, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
 from hems_ros.graph import names, transmission
 from hems_ros.nodes import qos
@@ -35,6 +37,7 @@ def rec(graph):
     recorder.listen(WireForce, names.topic(FINGER, "wire_force"), qos.SENSOR)
     recorder.listen(ControllerStatus, names.topic(FINGER, "controller_status"), qos.COMMAND)
     recorder.listen(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
+    recorder.listen(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
     for finger in names.FINGERS:
         recorder.listen(ActuatorState, names.sim_topic(finger, "state"), qos.SENSOR)
     recorder.spin(1.0)
@@ -54,6 +57,26 @@ def leaves_the_graph_unlatched_and_cool(graph, rec):
     while not client.call("reset")[0] and time.monotonic() < deadline:
         rec.spin(1.0)   # a restarted node's streams are not back yet
     cool_down(client, rec)
+
+
+def unit_diagnostics(rec, finger: str = FINGER) -> dict[str, str]:
+    """The unit's latest /diagnostics values (1 Hz), empty if none came yet."""
+    for _, array in reversed(rec.since(names.DIAGNOSTICS_TOPIC, 0.0)):
+        for status in array.status:
+            if status.name == f"hems/actuation_unit/{finger}":
+                return {v.key: v.value for v in status.values}
+    return {}
+
+
+def command_timing(before: dict[str, str], after: dict[str, str]) -> str:
+    """For a failure message: a step that overshoots or stops short on a busy host had late
+    or missing duty commands. Counts between two diagnostics a second apart at most."""
+    if not before or not after:
+        return "unit diagnostics missing"
+    counts = {key: int(after[key]) - int(before[key]) for key in ("late_commands", "missed_control_periods")}
+    return (f"unit during the step: {counts['late_commands']} late duty commands, "
+            f"{counts['missed_control_periods']} missed periods; latency over the last minute "
+            f"p99 {float(after['latency_p99_s']) * 1e3:.1f} ms, max {float(after['latency_max_s']) * 1e3:.1f} ms")
 
 
 def enable(client) -> None:
@@ -80,9 +103,11 @@ def test_index_position_step_settles_without_overshoot_and_matches_lockstep(grap
 
     _, client = graph
     enable(client)
+    before = unit_diagnostics(rec)
     t0 = time.time()
     assert client.send_setpoint(FINGER, "position", 0.020)
     rec.spin(4.5)
+    timing = command_timing(before, unit_diagnostics(rec))
     samples = [(from_msg(m.header.stamp), transmission.tendon_position(m.position))
                for _, m in rec.since(names.topic(FINGER, "encoder"), t0)]
     t = np.array([s[0] for s in samples]) - t0
@@ -93,8 +118,8 @@ def test_index_position_step_settles_without_overshoot_and_matches_lockstep(grap
     assert x.max() > 0.0, f"no motion; supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-2:]]}"
     assert np.all(np.abs(x[late] - 0.020) <= 1e-4), (
         f"tendon {1e3 * x[late].min():.3f}-{1e3 * x[late].max():.3f} mm after 3 s; "
-        f"supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-1:]]}")
-    assert x.max() <= 0.020 + 1e-4, f"overshoot to {1e3 * x.max():.3f} mm"
+        f"supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-1:]]}; {timing}")
+    assert x.max() <= 0.020 + 1e-4, f"overshoot to {1e3 * x.max():.3f} mm; {timing}"
 
     window = (t >= 0) & (t < 4.0)
     rmse_graph = math.sqrt(np.mean((x[window] - 0.020) ** 2))
