@@ -86,8 +86,9 @@ class UnitDriver:
     def command(self, duty_percent: float, now_s: float, measurement_stamp_s: float | None = None) -> None:
         """Accept a duty command; ValueError (and 0 duty) for a non-finite or out-of-range one.
 
-        Call :meth:`advance` up to ``now_s`` first and again afterwards: a command answering
-        the latest sample rewinds the physics to that sample (see the module documentation).
+        Call :meth:`advance` up to ``now_s`` first (needless when :meth:`will_rewind`) and again
+        afterwards: a command answering the latest sample rewinds the physics to that sample
+        (see the module documentation).
         """
         if not _valid_duty(duty_percent):
             self.reject()
@@ -116,9 +117,12 @@ class UnitDriver:
         """This command, given at ``now_s``, takes effect from the latest sample: it is valid,
         answers that sample, and the next one does not fall due by ``now_s`` (1 us to spare for
         the rounding of epoch times). Integrating up to ``now_s`` before it is then wasted."""
-        due = self.start_time_s + (self._samples_taken + 1) * self.sample_period_s - 1e-9
         return (_valid_duty(duty_percent) and self._answers_latest_sample(measurement_stamp_s)
-                and now_s < due - 1e-6)
+                and now_s < self._next_sample_due_s() - 1e-6)
+
+    def _next_sample_due_s(self) -> float:
+        """Clock time of the next encoder sample (a nanosecond early against float rounding)."""
+        return self.start_time_s + (self._samples_taken + 1) * self.sample_period_s - 1e-9
 
     def _answers_latest_sample(self, measurement_stamp_s: float | None) -> bool:
         return (measurement_stamp_s is not None and self._sample_snapshot is not None
@@ -158,7 +162,7 @@ class UnitDriver:
         unit, dt, start = self.unit, self.unit.dt, self.start_time_s
         first = unit.steps
         run_duty, run = 0.0, 0
-        due = start + (self._samples_taken + 1) * self.sample_period_s - 1e-9
+        due = self._next_sample_due_s()
         for k in range(first + 1, first + 1 + MAX_STEPS_PER_ADVANCE):
             # the same float arithmetic as time_s before and after step k (epoch times leave
             # a quarter microsecond of resolution, enough to move a gate's boundary)
@@ -174,7 +178,7 @@ class UnitDriver:
                 unit.advance(duty=run_duty, steps=run)
                 run = 0
                 self._samples_taken += 1
-                due = start + (self._samples_taken + 1) * self.sample_period_s - 1e-9
+                due = self._next_sample_due_s()
                 samples.append(Sample(self.time_s, unit.result()))
                 self._sample_snapshot = (self.time_s, unit.snapshot())
         if run:
