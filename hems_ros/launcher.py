@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from hems_ros.graph import names
+from hems_ros.paths import config_path
 from hems_ros.rosenv import child_environment
 
 PR_SET_PDEATHSIG = 1
@@ -24,10 +25,7 @@ PR_SET_PDEATHSIG = 1
 
 def default_params_file() -> Path:
     """config/hems.yaml of the source tree, or of share/hems_ros when installed elsewhere."""
-    source = Path(__file__).resolve().parent.parent / "config" / "hems.yaml"
-    if source.is_file():
-        return source
-    return Path(sys.prefix) / "share" / "hems_ros" / "config" / "hems.yaml"
+    return config_path("hems.yaml")
 
 
 def _die_with_parent() -> None:

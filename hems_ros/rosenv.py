@@ -1,9 +1,11 @@
 """Environment defaults every process of the project starts with.
 
 Fast DDS multicasts discovery on every interface unless told otherwise, so the project keeps
-all DDS traffic on the loopback interface unless the user explicitly chose a range. The
-venv is also made an ament prefix so that package lookups (``ros2 run``, share folders)
-find ``hems_ros`` and ``hems_msgs`` without sourcing anything.
+all DDS traffic on the loopback interface unless the user explicitly chose a range. Fast DDS
+reads the project's writer settings from ``config/fastdds_profiles.xml`` unless the user
+named a profiles file of their own. The venv is also made an ament prefix so that package
+lookups (``ros2 run``, share folders) find ``hems_ros`` and ``hems_msgs`` without sourcing
+anything.
 """
 
 from __future__ import annotations
@@ -11,14 +13,19 @@ from __future__ import annotations
 import os
 import sys
 
+from hems_ros.paths import config_path
+
 DISCOVERY_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 DEFAULT_DISCOVERY_RANGE = "LOCALHOST"
+PROFILES_VARIABLE = "FASTDDS_DEFAULT_PROFILES_FILE"
 
 
 def apply_network_defaults(env: dict[str, str] | os._Environ | None = None):
-    """Set ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (unless set) and the ament prefix."""
+    """Set ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and the Fast DDS profiles file (each
+    unless set) and the ament prefix."""
     target = os.environ if env is None else env
     target.setdefault(DISCOVERY_VARIABLE, DEFAULT_DISCOVERY_RANGE)
+    target.setdefault(PROFILES_VARIABLE, str(config_path("fastdds_profiles.xml")))
     prefixes = [p for p in target.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
     if sys.prefix not in prefixes:
         target["AMENT_PREFIX_PATH"] = os.pathsep.join(prefixes + [sys.prefix])

@@ -22,12 +22,13 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Mapping
 
 import yaml
+
+from hems_ros.paths import config_path
 
 LOAD_KINDS = ("hanging_mass", "bias_spring", "hems_finger")
 
@@ -449,10 +450,7 @@ def _coerce(cls: type, key: str, value: Any) -> Any:
 # --------------------------------------------------------------------- files
 def config_dir() -> Path:
     """``config/physics`` of the checkout, else ``share/hems_ros/config/physics`` of the install."""
-    repo = Path(__file__).resolve().parents[2] / "config" / "physics"
-    if repo.is_dir():
-        return repo
-    return Path(sys.prefix) / "share" / "hems_ros" / "config" / "physics"
+    return config_path("physics")
 
 
 def available_configs() -> list[str]:

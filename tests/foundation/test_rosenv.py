@@ -21,3 +21,12 @@ def test_child_environment_carries_the_test_domain(ros_domain_id):
     assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
     assert env["EXTRA"] == "1"
     assert 11 <= ros_domain_id <= 100
+
+
+def test_fast_dds_reads_the_project_profiles_unless_the_user_named_a_file():
+    from hems_ros.rosenv import PROFILES_VARIABLE
+
+    path = apply_network_defaults({})[PROFILES_VARIABLE]
+    assert path.endswith("config/fastdds_profiles.xml")
+    assert "<nack_supression_duration>" in open(path).read()
+    assert apply_network_defaults({PROFILES_VARIABLE: "/tmp/mine.xml"})[PROFILES_VARIABLE] == "/tmp/mine.xml"
