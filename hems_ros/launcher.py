@@ -103,7 +103,8 @@ class Graph:
             spec_args = [f"{exe}:{node}:" + ",".join(f"{k}={v}" for k, v in params.items())
                          for exe, node, params in specs]
             commands["composed"] = ([sys.executable, "-m", "hems_ros.nodes.composed", *spec_args]
-                                    + ros_arguments("", {}, self.options)[:3]
+                                    + ["--ros-args", "--params-file", str(self.options.params_file),
+                                       "--log-level", self.options.log_level]
                                     + (["-p", "use_sim_time:=true"] if self.options.sim_time else [])
                                     + list(self.options.extra_ros_args))
         else:

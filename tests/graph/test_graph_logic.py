@@ -247,6 +247,12 @@ def test_extra_ros_args_reach_every_node_separate_or_composed():
     assert list(composed) == ["composed"] and composed["composed"][-2:] == list(extra)
 
 
+def test_the_log_level_reaches_every_node_separate_or_composed():
+    for composed in (False, True):
+        commands = Graph(GraphOptions(composed=composed, log_level="error")).commands()
+        assert all("--log-level error" in " ".join(cmd) for cmd in commands.values())
+
+
 def test_cadence_fires_every_nth_tick_despite_jitter():
     from hems_ros.graph.cadence import Cadence
 
