@@ -32,23 +32,13 @@ class Cadence:
         return True
 
 
-def module_phase_s(module: str, period_s: float) -> float:
-    """Offset of ``module``'s instants on the clock's ``period_s`` grid: the three shoulder
-    modules' pairs of units tick a third of a period apart, so their chains do not all
-    compete for the cores at one instant."""
-    modules = list(names.MODULES)
-    return modules.index(module) * period_s / len(modules)
-
-
-def grid_delay(phase_s: float, period_s: float, now_s: float) -> float:
-    """Seconds from ``now_s`` to the next instant ``phase_s`` past a multiple of ``period_s``."""
-    return (phase_s - now_s) % period_s
-
-
 def tick_delay(finger: str, period_s: float, now_s: float) -> float:
     """Seconds from ``now_s`` to the next tick instant of ``finger``'s unit on the clock's grid.
 
     The two units of a shoulder module tick together, so their wire tensions reach the
-    module at about the same time and its sampling instant a little later takes both.
+    module at once and one wake-up takes both; the three modules' pairs are a third of a
+    period apart, so their chains do not all compete for the cores at one instant.
     """
-    return grid_delay(module_phase_s(names.MODULE_OF[finger], period_s), period_s, now_s)
+    modules = list(names.MODULES)
+    phase = modules.index(names.MODULE_OF[finger]) * period_s / len(modules)
+    return (phase - now_s) % period_s

@@ -29,21 +29,24 @@ The duty, encoder, tension and state topics carry serialized messages (hems_ros.
 
 from __future__ import annotations
 
+import time
+
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
 from hems_msgs.msg import ActuatorState, DutyCommand, EncoderReading, SupervisorStatus, WireForce
 from hems_ros.graph import names
-from hems_ros.graph.cadence import Cadence, module_phase_s
+from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.clock_time import seconds
-from hems_ros.nodes.grid_timer import create_grid_timer
 from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import ActuationUnit, load_params
 
+TICK_PHASE_TOLERANCE_S = 0.0005
+TICK_PHASE_ATTEMPTS = 100
 ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
 
 PARAMETERS = [
@@ -104,12 +107,18 @@ class ActuationUnitNode(LeanNode):
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
 
     def create_tick_timer(self, period_s: float):
-        """The tick timer; on wall-clock time at the phase of the finger's shoulder module on
-        the clock's grid (:func:`hems_ros.graph.cadence.module_phase_s`)."""
-        if not self.wall_clock:
-            return self.create_timer(period_s, self.on_tick)
-        return create_grid_timer(self, period_s, module_phase_s(names.MODULE_OF[self.finger], period_s),
-                                 self.on_tick)
+        """The tick timer, on wall-clock time at the finger's phase of the clock's grid
+        (:func:`hems_ros.graph.cadence.tick_delay`). A timer keeps the phase of its creation;
+        while the graph starts, sixteen processes load at once and a sleep up to the phase
+        may end late, so a timer more than TICK_PHASE_TOLERANCE_S off is made again."""
+        for _ in range(TICK_PHASE_ATTEMPTS if self.wall_clock else 0):
+            time.sleep(tick_delay(self.finger, period_s, seconds(self)))
+            tick = self.create_timer(period_s, self.on_tick)
+            off = tick_delay(self.finger, period_s, seconds(self) + tick.time_until_next_call() * 1e-9)
+            if min(off, period_s - off) <= TICK_PHASE_TOLERANCE_S:
+                return tick
+            self.destroy_timer(tick)
+        return self.create_timer(period_s, self.on_tick)
 
     def on_duty(self, message, received_s: float | None = None) -> None:
         now = seconds(self) if received_s is None else received_s

@@ -5,24 +5,16 @@ Subscribes  /hems/sim/<finger>/wire_tension  hems_msgs/WireForce  best effort (p
 Publishes   /hems/<finger>/wire_force        hems_msgs/WireForce  best effort, one reading per tension sample (100 Hz)
 
 Each reading carries ``saturated`` (clipped at 0 or the range) and ``over_force``
-(reading at or above ``over_force_n``); its stamp is the tension sample's. Both topics carry
-serialized messages (hems_ros.nodes.wire).
-
-On wall-clock time the module samples at its own 100 Hz instants, ``sample_delay_s`` after
-its two units' tick on the clock's grid (hems_ros.graph.cadence.module_phase_s), and turns
-every tension sample received since the last instant into a reading: one wake-up a period
-for both sensors, where waking for each tension took one or two (the units are separate
-processes, and their tensions often came apart). A tension that arrives after the instant
-is read at the next one. On sim time (/clock) each tension is read when it arrives.
+(reading at or above ``over_force_n``). Both topics carry serialized messages
+(hems_ros.nodes.wire).
 """
 
 from __future__ import annotations
 
+
 from hems_msgs.msg import WireForce
 from hems_ros.graph import names
-from hems_ros.graph.cadence import module_phase_s
 from hems_ros.nodes import qos
-from hems_ros.nodes.grid_timer import create_grid_timer
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
@@ -41,10 +33,6 @@ PARAMETERS = [
     Spec("noise_std_n", _SENSOR.noise_std_n, "force sensor noise standard deviation, N", non_negative, True),
     Spec("seed", _SENSOR.seed, "seed of the noise generator (each sensor adds its index)", None, True),
     Spec("over_force_n", 50.0, "over-force flag threshold, N (wire side)", positive, True),
-    Spec("sample_period_s", 0.01, "sampling period on wall-clock time, s (the units' encoder period)", positive,
-         True),
-    Spec("sample_delay_s", 0.002, "sampling instant after the units' tick on the clock's grid, s (wall-clock "
-         "time; room for both tensions to arrive)", non_negative, True),
 ]
 
 
@@ -58,26 +46,12 @@ class ShoulderModuleNode(LeanNode):
         self.publishers_ = {}
         self.sequences = {}
         self.rngs = {}
-        self.tension_subs = []
         for index, finger in enumerate(names.MODULES[p["module"]]):
             self.publishers_[finger] = self.create_publisher(WireForce, names.topic(finger, "wire_force"), qos.SENSOR)
             self.sequences[finger] = 0
             self.rngs[finger] = sensors.noise_generator(p["seed"] + index)
-            self.tension_subs.append(self.subscribe_serialized(
-                WireForce, names.sim_topic(finger, "wire_tension"),
-                lambda tension, f=finger: self.on_tension(f, tension), qos.SENSOR))
-        self.sample_timer = None
-        if not self.get_parameter("use_sim_time").value:
-            if p["sample_delay_s"] >= p["sample_period_s"]:
-                raise ValueError(f"parameter 'sample_delay_s' = {p['sample_delay_s']!r}: must be shorter than "
-                                 f"sample_period_s ({p['sample_period_s']!r})")
-            self.poll(*self.tension_subs)
-            phase_s = module_phase_s(p["module"], p["sample_period_s"]) + p["sample_delay_s"]
-            self.sample_timer = create_grid_timer(self, p["sample_period_s"], phase_s, self.sample)
-
-    def sample(self) -> None:
-        for subscription in self.tension_subs:
-            self.drain(subscription)
+            self.subscribe_serialized(WireForce, names.sim_topic(finger, "wire_tension"),
+                                      lambda tension, f=finger: self.on_tension(f, tension), qos.SENSOR)
 
     def on_tension(self, finger: str, tension) -> None:
         p = self.params
