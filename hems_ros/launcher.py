@@ -58,9 +58,13 @@ def node_specs(options: GraphOptions) -> list[tuple[str, str, dict[str, str]]]:
     return specs
 
 
+def common_ros_arguments(options: GraphOptions) -> list[str]:
+    """The ROS arguments every node process gets, separate or composed."""
+    return ["--ros-args", "--params-file", str(options.params_file), "--log-level", options.log_level]
+
+
 def ros_arguments(node: str, params: dict[str, str], options: GraphOptions) -> list[str]:
-    args = ["--ros-args", "--params-file", str(options.params_file), "-r", f"__node:={node}",
-            "--log-level", options.log_level]
+    args = common_ros_arguments(options) + ["-r", f"__node:={node}"]
     for key, value in params.items():
         args += ["-p", f"{key}:={value}"]
     if options.sim_time:
@@ -103,8 +107,7 @@ class Graph:
             spec_args = [f"{exe}:{node}:" + ",".join(f"{k}={v}" for k, v in params.items())
                          for exe, node, params in specs]
             commands["composed"] = ([sys.executable, "-m", "hems_ros.nodes.composed", *spec_args]
-                                    + ["--ros-args", "--params-file", str(self.options.params_file),
-                                       "--log-level", self.options.log_level]
+                                    + common_ros_arguments(self.options)
                                     + (["-p", "use_sim_time:=true"] if self.options.sim_time else [])
                                     + list(self.options.extra_ros_args))
         else:
