@@ -15,10 +15,10 @@ Each node gets its own name and parameters as node-level arguments; the global
 
 from __future__ import annotations
 
-import gc
 import sys
 
 from hems_ros.nodes import lean_spin
+from hems_ros.nodes.runner import prepare_to_spin
 from hems_ros.rosenv import apply_network_defaults
 
 NODE_CLASSES = {
@@ -70,8 +70,7 @@ def main(argv: list[str] | None = None) -> int:
             executable, node_name, cli_args = parse_spec(spec)
             module, cls = NODE_CLASSES[executable]
             nodes.append(getattr(importlib.import_module(module), cls)(cli_args=cli_args))
-        gc.collect()
-        gc.freeze()     # as runner.run_node: keeps full collections short
+        prepare_to_spin()
         if all(lean_spin.can_spin(node) for node in nodes):
             lean_spin.spin_nodes(nodes)
         else:

@@ -7,6 +7,7 @@ import os
 import sys
 from collections.abc import Callable
 
+from hems_ros.nodes.middleware_threads import defer_middleware_threads
 from hems_ros.rosenv import apply_network_defaults
 
 
@@ -37,11 +38,7 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     node = None
     try:
         node = make_node()
-        # Imports (numpy, numba, the physics kernel) leave ~10^5 long-lived objects that every
-        # full garbage collection would walk, pausing the node for tens of milliseconds;
-        # freezing them keeps the collector's pauses far below the 10 ms control period.
-        gc.collect()
-        gc.freeze()
+        prepare_to_spin()
         if spin is None:
             from hems_ros.nodes import lean_spin
 
@@ -61,6 +58,16 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
             node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def prepare_to_spin() -> None:
+    """What a node process does between building its nodes and spinning them."""
+    # Imports (numpy, numba, the physics kernel) leave ~10^5 long-lived objects that every
+    # full garbage collection would walk, pausing the node for tens of milliseconds;
+    # freezing them keeps the collector's pauses far below the 10 ms control period.
+    gc.collect()
+    gc.freeze()
+    defer_middleware_threads()
 
 
 def node_help(make_node: Callable[[], object], program: str) -> str:
