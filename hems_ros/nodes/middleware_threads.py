@@ -7,7 +7,9 @@ counted about 1,600 such preemptions a second (tests/graph/README.md). A SCHED_B
 does not preempt on wake-up: it runs once the sender sleeps (a few hundred microseconds at
 most here) or at once on an idle core. The nodes' main threads keep the default policy, so a
 node woken for its data still preempts whatever runs. Five alternating 20 s runs of the
-separate graph: 1.15-1.25 against 1.22-1.32 cores, each run lower.
+separate graph: 1.15-1.25 against 1.22-1.32 cores, each run lower. Node processes started
+by :func:`hems_ros.nodes.runner.run_node` do this; the composed process does not (its nodes
+share one participant and reach each other without a listener thread).
 """
 
 from __future__ import annotations

@@ -38,7 +38,8 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     node = None
     try:
         node = make_node()
-        prepare_to_spin()
+        freeze_long_lived_objects()
+        defer_middleware_threads()
         if spin is None:
             from hems_ros.nodes import lean_spin
 
@@ -60,14 +61,14 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     return 0
 
 
-def prepare_to_spin() -> None:
-    """What a node process does between building its nodes and spinning them."""
-    # Imports (numpy, numba, the physics kernel) leave ~10^5 long-lived objects that every
-    # full garbage collection would walk, pausing the node for tens of milliseconds;
-    # freezing them keeps the collector's pauses far below the 10 ms control period.
+def freeze_long_lived_objects() -> None:
+    """Exempt everything alive now from garbage collection; call once the nodes exist.
+
+    Imports (numpy, numba, the physics kernel) leave ~10^5 long-lived objects that every
+    full collection would walk, pausing the node for tens of milliseconds; frozen, the
+    collector's pauses stay far below the 10 ms control period."""
     gc.collect()
     gc.freeze()
-    defer_middleware_threads()
 
 
 def node_help(make_node: Callable[[], object], program: str) -> str:
