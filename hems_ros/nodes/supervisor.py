@@ -123,6 +123,10 @@ class SupervisorNode(LeanNode):
         self.publish_if_changed()
 
     def on_command(self, command: str, response: Trigger.Response) -> Trigger.Response:
+        # judge enable and reset on every report received so far: the last check's view can
+        # be a check period older, and a stream then near 50 ms old looked stale to an enable
+        # that came right after a successful reset
+        self.take_reports()
         response.success, response.message = self.logic.request(command, seconds(self))
         # rclpy ties a severity to each logging call site, so the two levels need two calls
         if command == "estop" or not response.success:
@@ -132,9 +136,13 @@ class SupervisorNode(LeanNode):
         self.publish_status()
         return response
 
-    def check(self) -> None:
+    def take_reports(self) -> None:
+        """Take the controller status and unit state messages received since the last take."""
         for subscription in self.monitored:
             self.drain(subscription)
+
+    def check(self) -> None:
+        self.take_reports()
         now = seconds(self)
         self.logic.check_streams(now)
         if self.status_cadence.due(now):

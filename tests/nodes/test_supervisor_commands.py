@@ -1,0 +1,40 @@
+"""The supervisor judges enable and reset on every controller report received before the
+call, not only on what its last check took."""
+
+from __future__ import annotations
+
+import time
+
+
+def test_enable_judges_the_reports_received_since_the_last_check(context):
+    import rclpy
+    from rclpy.duration import Duration
+    from rclpy.parameter import Parameter
+    from std_srvs.srv import Trigger
+
+    from hems_msgs.msg import ControllerStatus
+    from hems_ros.nodes import qos
+    from hems_ros.nodes.clock_time import to_msg
+    from hems_ros.nodes.supervisor import SupervisorNode
+
+    supervisor = SupervisorNode(context=context, parameter_overrides=[Parameter("fingers", value=["index"])])
+    helper = rclpy.create_node("controller_reports", context=context)
+    try:
+        publisher = helper.create_publisher(ControllerStatus, "/hems/index/controller_status", qos.COMMAND)
+        deadline = time.monotonic() + 10.0
+        while publisher.get_subscription_count() < 1:
+            assert time.monotonic() < deadline, "the supervisor's status subscription was not discovered"
+            time.sleep(0.05)
+        # a controller's report with fresh readings, queued while no check runs (the node is
+        # not spun, so its 20 ms check never takes it)
+        now = to_msg(time.time())
+        publisher.publish(ControllerStatus(finger="index", mode="position", wire_position=0.001, wire_force=4.0,
+                                           encoder_stamp=now, force_stamp=now))
+        assert publisher.wait_for_all_acked(Duration(seconds=5))
+        response = supervisor.on_command("enable", Trigger.Response())
+        assert response.success, response.message
+        assert supervisor.logic.state.name == "ENABLED"
+    finally:
+        helper.destroy_node()
+        supervisor.destroy_node()
+
