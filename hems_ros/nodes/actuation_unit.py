@@ -39,7 +39,7 @@ from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.clock_time import seconds
+from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
@@ -208,7 +208,7 @@ class ActuationUnitNode(LeanNode):
             message="duty watchdog tripped: duty 0" if d.watchdog_tripped else "running",
             values=[KeyValue(key=k, value=str(v)) for k, v in values.items()])
         array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
+        array.header.stamp = stamp_now(self)
         self.diagnostics_pub.publish(array)
 
 

@@ -4,7 +4,7 @@ import time
 
 from builtin_interfaces.msg import Time
 
-from hems_ros.nodes.wire import seconds_of, stamp
+from hems_ros.nodes.wire import seconds_of, stamp, stamp_ns
 
 
 def now_ns(node) -> int:
@@ -22,6 +22,12 @@ def now_ns(node) -> int:
 def seconds(node) -> float:
     """The node's clock (wall or /clock sim time) in seconds."""
     return now_ns(node) * 1e-9
+
+
+def stamp_now(node) -> Time:
+    """The node's clock as a message stamp (what ``get_clock().now().to_msg()`` gives)."""
+    sec, nanosec = stamp_ns(now_ns(node))
+    return Time(sec=sec, nanosec=nanosec)
 
 
 def to_msg(time_s: float) -> Time:

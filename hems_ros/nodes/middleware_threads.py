@@ -19,19 +19,15 @@ import os
 THREAD_PREFIXES = ("dds.shm.", "dds.udp.", "dds.ev.")   # Fast DDS names its threads so
 
 
-def defer_middleware_threads() -> int:
+def defer_middleware_threads() -> None:
     """Put this process's Fast DDS listener and event threads under SCHED_BATCH. Call it once
-    the nodes exist (their participant starts the threads). Returns how many were changed."""
+    the nodes exist (their participant starts the threads)."""
     if not hasattr(os, "SCHED_BATCH") or not os.path.isdir("/proc/self/task"):
-        return 0
-    changed = 0
+        return
     for tid in os.listdir("/proc/self/task"):
         try:
             with open(f"/proc/self/task/{tid}/comm") as comm:
-                if not comm.read().startswith(THREAD_PREFIXES):
-                    continue
-            os.sched_setscheduler(int(tid), os.SCHED_BATCH, os.sched_param(0))
-            changed += 1
+                if comm.read().startswith(THREAD_PREFIXES):
+                    os.sched_setscheduler(int(tid), os.SCHED_BATCH, os.sched_param(0))
         except OSError:
             continue  # the thread ended meanwhile
-    return changed

@@ -32,7 +32,7 @@ from hems_ros.graph.cadence import Cadence
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.clock_time import seconds
+from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.params import Spec, declare, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.nodes.wire import seconds_of
@@ -168,7 +168,7 @@ class SupervisorNode(LeanNode):
         status = SupervisorStatus(state=int(logic.state), state_name=logic.state.name,
                                   faults=[str(f) for f in logic.faults],
                                   fault_fingers=sorted({f.finger for f in logic.faults if f.finger}))
-        status.header.stamp = self.get_clock().now().to_msg()
+        status.header.stamp = stamp_now(self)
         self.status_pub.publish(status)
 
     def publish_joint_states(self) -> None:
@@ -178,7 +178,7 @@ class SupervisorNode(LeanNode):
                             position=[transmission.tendon_position(self.position[f]) for f in self.fingers],
                             velocity=[float("nan")] * len(self.fingers),
                             effort=[transmission.tendon_force(self.force[f]) for f in self.fingers])
-        joints.header.stamp = self.get_clock().now().to_msg()
+        joints.header.stamp = stamp_now(self)
         self.joints_pub.publish(joints)
 
     def publish_diagnostics(self) -> None:
@@ -191,7 +191,7 @@ class SupervisorNode(LeanNode):
             values=[KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
             + [KeyValue(key="not ready", value=m) for m in missing])
         array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
+        array.header.stamp = stamp_now(self)
         self.diagnostics_pub.publish(array)
 
 

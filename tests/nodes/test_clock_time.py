@@ -10,7 +10,7 @@ def test_now_ns_is_the_system_clock_until_ros_time_is_active(context):
     import rclpy
     from rclpy.time import Time
 
-    from hems_ros.nodes.clock_time import now_ns, seconds
+    from hems_ros.nodes.clock_time import now_ns, seconds, stamp_now
 
     node = rclpy.create_node("clock_reader", context=context)
     try:
@@ -24,5 +24,6 @@ def test_now_ns_is_the_system_clock_until_ros_time_is_active(context):
         clock.set_ros_time_override(Time(seconds=123, nanoseconds=456))
         assert now_ns(node) == 123_000_000_456
         assert seconds(node) == 123_000_000_456 * 1e-9
+        assert (stamp_now(node).sec, stamp_now(node).nanosec) == (123, 456)
     finally:
         node.destroy_node()
