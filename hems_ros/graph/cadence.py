@@ -32,6 +32,11 @@ class Cadence:
         return True
 
 
+def grid_delay(phase_s: float, period_s: float, now_s: float) -> float:
+    """Seconds from ``now_s`` to the next instant ``phase_s`` past a multiple of ``period_s``."""
+    return (phase_s - now_s) % period_s
+
+
 def tick_delay(finger: str, period_s: float, now_s: float) -> float:
     """Seconds from ``now_s`` to the next tick instant of ``finger``'s unit on the clock's grid.
 
@@ -40,5 +45,20 @@ def tick_delay(finger: str, period_s: float, now_s: float) -> float:
     period apart, so their chains do not all compete for the cores at one instant.
     """
     modules = list(names.MODULES)
-    phase = modules.index(names.MODULE_OF[finger]) * period_s / len(modules)
-    return (phase - now_s) % period_s
+    return grid_delay(modules.index(names.MODULE_OF[finger]) * period_s / len(modules), period_s, now_s)
+
+
+def supervisor_check_delay(period_s: float, now_s: float, unit_tick_s: float = 0.01) -> float:
+    """Seconds from ``now_s`` to the supervisor's next check instant on the clock's grid.
+
+    The status sent at a check wakes every unit at once; at a phase left to chance it
+    landed on a module pair's tick in some runs and doubled that pair's latency p99. The
+    check therefore runs SUPERVISOR_PHASE_OF_TICK of a unit tick after the first pair's
+    tick, so its status (taking the reports first costs about 0.7 ms) goes out after that
+    pair's chain (encoder, controller, duty: about 1.2 ms at the median) and the units have
+    handled it before the next pair ticks (tests/graph/README.md).
+    """
+    return grid_delay(SUPERVISOR_PHASE_OF_TICK * unit_tick_s, period_s, now_s)
+
+
+SUPERVISOR_PHASE_OF_TICK = 0.12

@@ -29,8 +29,6 @@ The duty, encoder, tension and state topics carry serialized messages (hems_ros.
 
 from __future__ import annotations
 
-import time
-
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
 from hems_msgs.msg import ActuatorState, DutyCommand, EncoderReading, SupervisorStatus, WireForce
@@ -38,6 +36,7 @@ from hems_ros.graph import names
 from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
+from hems_ros.nodes.grid_timer import create_grid_timer
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.wire import codec, seconds_of, stamp
@@ -45,8 +44,6 @@ from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import ActuationUnit, load_params
 
-TICK_PHASE_TOLERANCE_S = 0.0005
-TICK_PHASE_ATTEMPTS = 100
 ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
 
 PARAMETERS = [
@@ -80,7 +77,8 @@ class ActuationUnitNode(LeanNode):
         except (OSError, ValueError) as error:
             raise ValueError(f"parameter 'physics_config' = {p['physics_config']!r}: {error}") from None
         self.wall_clock = not self.get_parameter("use_sim_time").value
-        tick = self.create_tick_timer(p["tick_period_s"])
+        tick = create_grid_timer(self, p["tick_period_s"],
+                                 lambda now: tick_delay(self.finger, p["tick_period_s"], now), self.on_tick)
         # The physics starts one period before the first tick, so encoder samples fall due on
         # the ticks and go out at once; a grid shifted from the timer's held each sample back
         # for up to a period, and the duties answering it often came after the next one.
@@ -106,20 +104,6 @@ class ActuationUnitNode(LeanNode):
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
 
-    def create_tick_timer(self, period_s: float):
-        """The tick timer, on wall-clock time at the finger's phase of the clock's grid
-        (:func:`hems_ros.graph.cadence.tick_delay`). A timer keeps the phase of its creation;
-        while the graph starts, sixteen processes load at once and a sleep up to the phase
-        may end late, so a timer more than TICK_PHASE_TOLERANCE_S off is made again."""
-        for _ in range(TICK_PHASE_ATTEMPTS if self.wall_clock else 0):
-            time.sleep(tick_delay(self.finger, period_s, seconds(self)))
-            tick = self.create_timer(period_s, self.on_tick)
-            off = tick_delay(self.finger, period_s, seconds(self) + tick.time_until_next_call() * 1e-9)
-            if min(off, period_s - off) <= TICK_PHASE_TOLERANCE_S:
-                return tick
-            self.destroy_timer(tick)
-        return self.create_timer(period_s, self.on_tick)
-
     def on_duty(self, message, received_s: float | None = None) -> None:
         now = seconds(self) if received_s is None else received_s
         measured = seconds_of(message.measurement_stamp_sec, message.measurement_stamp_nanosec)
@@ -139,6 +123,13 @@ class ActuationUnitNode(LeanNode):
 
     def on_supervisor(self, message: SupervisorStatus) -> None:
         now = seconds(self)
+        enabled = message.state == SupervisorStatus.ENABLED
+        if enabled and self.driver.heating_allowed(now):
+            # the periodic ENABLED that keeps the permission alive: allowed without a break
+            # from the last step to now, so it only moves the lapse time on, and the wake-up
+            # that six units take at once stays short
+            self.driver.permit_heating(True, now)
+            return
         # commands that came before this status act first, and the plant runs with the old
         # permission up to it: taken at the next tick instead, a command answering the latest
         # sample would integrate again from that sample under the new permission, and stop
@@ -147,7 +138,7 @@ class ActuationUnitNode(LeanNode):
             self.drain(self.duty_sub, with_reception_time=True)
         self.advance_to(now)
         was_allowed = self.driver.heating_allowed(now)
-        self.driver.permit_heating(message.state == SupervisorStatus.ENABLED, now)
+        self.driver.permit_heating(enabled, now)
         if was_allowed and not self.driver.heating_allowed(now):
             self.publish_state()  # the moment heating stopped, for the record
 

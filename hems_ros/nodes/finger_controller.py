@@ -8,7 +8,8 @@ Subscribes
   /hems/<finger>/setpoint    hems_msgs/FingerSetpoint   reliable   (mode position [m] | force [N], tendon side)
   /hems/<finger>/encoder     hems_msgs/EncoderReading   best effort (position-mode feedback)
   /hems/<finger>/wire_force  hems_msgs/WireForce        best effort (force-mode feedback)
-  /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only while ENABLED)
+  /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only while ENABLED;
+                             taken with the status_every-th step, see _poll_other_feedback)
 Publishes
   /hems/<finger>/duty              hems_msgs/DutyCommand      reliable, one per feedback sample
   /hems/<finger>/controller_status hems_msgs/ControllerStatus reliable, with every status_every-th duty and
@@ -104,11 +105,12 @@ class FingerControllerNode(LeanNode):
                                                   self.on_encoder, qos.SENSOR),
             "force": self.subscribe_serialized(WireForce, names.topic(self.finger, "wire_force"), self.on_force,
                                                qos.SENSOR)}
+        self.supervisor_sub = self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
+                                                       self.on_supervisor, qos.STATUS)
         self._poll_other_feedback()
-        self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         # restarted by every control step, so it fires only while no feedback comes: a
         # wake-up of a sleeping process costs more than the status it would send
-        self.idle_timer = self.create_timer(p["idle_status_period_s"], self.publish_status)
+        self.idle_timer = self.create_timer(p["idle_status_period_s"], self.on_idle)
 
     def _declare_gains(self, strategy: str, mode: str):
         """The ``gains.*`` (position) or ``force_gains.*`` parameters, defaults from the core."""
@@ -126,8 +128,12 @@ class FingerControllerNode(LeanNode):
     def _poll_other_feedback(self) -> None:
         """The stream of the other mode only feeds the status: taken when a status goes out
         (every status_every-th control step, or the idle status), instead of waking the node
-        100 times a second on its own."""
-        self.poll(self._other_feedback())
+        100 times a second on its own. The supervisor's status is taken at the same steps:
+        its 10 Hz heartbeat woke the six controllers together with the six units, and that
+        burst was most of the loop's latency tail; the units stop heating on its arrival
+        themselves, so a controller learning a state change up to status_every periods later
+        changes no applied duty."""
+        self.poll(self._other_feedback(), self.supervisor_sub)
 
     # inputs -------------------------------------------------------------------
     def on_setpoint(self, message: FingerSetpoint) -> None:
@@ -178,7 +184,13 @@ class FingerControllerNode(LeanNode):
             return transmission.wire_position(self.setpoint.value, self.ratio)
         return transmission.wire_force(self.setpoint.value, self.ratio)
 
+    def on_idle(self) -> None:
+        self.drain(self.supervisor_sub)
+        self.publish_status()
+
     def control(self, measurement_stamp: tuple[int, int]) -> None:
+        if self._steps_since_status + 1 >= self.status_every:
+            self.drain(self.supervisor_sub)
         if self.enabled:
             self.duty = self.controller.update(self._wire_reference(), self._wire_measurement(self.setpoint.mode))
         else:

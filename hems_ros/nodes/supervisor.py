@@ -28,9 +28,10 @@ from std_srvs.srv import Trigger
 
 from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
 from hems_ros.graph import names, transmission
-from hems_ros.graph.cadence import Cadence
+from hems_ros.graph.cadence import Cadence, supervisor_check_delay
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.nodes import qos
+from hems_ros.nodes.grid_timer import create_grid_timer
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.params import Spec, declare, positive
@@ -90,7 +91,8 @@ class SupervisorNode(LeanNode):
         for command in names.SUPERVISOR_SERVICES:
             self.create_service(Trigger, names.service(command),
                                 lambda request, response, c=command: self.on_command(c, response))
-        self.create_timer(p["check_period_s"], self.check)
+        create_grid_timer(self, p["check_period_s"], lambda now: supervisor_check_delay(p["check_period_s"], now),
+                          self.check)
         self.status_cadence = Cadence(p["status_period_s"], p["check_period_s"])
         self.joints_cadence = Cadence(p["joint_states_period_s"], p["check_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)

@@ -54,3 +54,36 @@ def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context):
     finally:
         helper.destroy_node()
         node.destroy_node()
+
+
+def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_status(context):
+    import rclpy
+
+    from hems_msgs.msg import SupervisorStatus
+    from hems_ros.nodes import qos
+    from hems_ros.nodes.finger_controller import FingerControllerNode
+
+    node = FingerControllerNode(context=context)
+    helper = rclpy.create_node("supervisor_stand_in", context=context)
+    try:
+        assert node.supervisor_sub in node.polled   # never wakes the controller
+        publisher = helper.create_publisher(SupervisorStatus, "/hems/supervisor/status", qos.STATUS)
+        deadline = time.monotonic() + 10.0
+        while publisher.get_subscription_count() < 1:
+            assert time.monotonic() < deadline, "the controller's status subscription was not discovered"
+            time.sleep(0.05)
+        node.wire_position = 0.0
+        node.control((0, 0))   # reports the new key: the next status is due two steps on
+        publisher.publish(SupervisorStatus(state=SupervisorStatus.ENABLED))
+        time.sleep(0.05)
+        node.control((0, 0))
+        assert not node.enabled
+        node.control((0, 0))   # a status step: taken before the duty is computed
+        assert node.enabled and node.status_sequence >= 2
+        publisher.publish(SupervisorStatus(state=SupervisorStatus.ESTOP))
+        time.sleep(0.05)
+        node.on_idle()         # with no feedback the idle status takes it
+        assert not node.enabled and node.duty == 0.0
+    finally:
+        helper.destroy_node()
+        node.destroy_node()

@@ -136,3 +136,29 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
     finally:
         helper.destroy_node()
         node.destroy_node()
+
+
+def test_a_repeated_enabled_status_only_moves_the_permission_on(context):
+    """The supervisor's 10 Hz ENABLED wakes every unit at once: while heating is allowed it
+    neither takes the queued commands nor integrates (the gates read the same for every step
+    up to it), it only moves the lapse time on; a status after a lapse takes the full path."""
+    from hems_msgs.msg import SupervisorStatus
+
+    node = unit(context, require_supervisor=True)
+    try:
+        node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
+        granted_s = node.driver.permission_s
+        time.sleep(0.025)
+        node.on_tick()
+        integrated_s = node.driver.time_s
+        time.sleep(0.012)
+        node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
+        assert node.driver.time_s == integrated_s
+        assert node.driver.permission_s > granted_s + 0.03
+        assert node.driver.permitted_since_s == pytest.approx(granted_s)
+        node.driver.permission_s -= 1.0     # as if the heartbeats had stopped: lapsed
+        node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
+        assert node.driver.time_s > integrated_s
+        assert node.driver.heating_allowed(node.driver.time_s)
+    finally:
+        node.destroy_node()
