@@ -15,3 +15,20 @@ def context(ros_domain_id):
     rclpy.init(context=context)
     yield context
     rclpy.shutdown(context=context)
+
+
+@pytest.fixture
+def matched_publisher():
+    """publisher(node, msg_type, topic, qos): a publisher whose subscriber under test is
+    discovered, so a message published next is not lost to discovery."""
+    import time
+
+    def make(node, msg_type, topic: str, qos_profile):
+        publisher = node.create_publisher(msg_type, topic, qos_profile)
+        deadline = time.monotonic() + 10.0
+        while publisher.get_subscription_count() < 1:
+            assert time.monotonic() < deadline, f"no subscription to {topic} was discovered"
+            time.sleep(0.05)
+        return publisher
+
+    return make

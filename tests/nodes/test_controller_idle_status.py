@@ -27,7 +27,7 @@ def test_control_steps_hold_off_the_idle_status_and_silence_lets_it_fire(context
         node.destroy_node()
 
 
-def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context):
+def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context, matched_publisher):
     import rclpy
 
     from hems_msgs.msg import WireForce
@@ -38,11 +38,7 @@ def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context):
     helper = rclpy.create_node("force_sender", context=context)
     try:
         assert node.setpoint.mode == "position" and node.status_every == 2
-        publisher = helper.create_publisher(WireForce, "/hems/index/wire_force", qos.SENSOR)
-        deadline = time.monotonic() + 10.0
-        while publisher.get_subscription_count() < 1:
-            assert time.monotonic() < deadline, "the controller's force subscription was not discovered"
-            time.sleep(0.05)
+        publisher = matched_publisher(helper, WireForce, "/hems/index/wire_force", qos.SENSOR)
         node.wire_position = 0.0
         node.control((0, 0))   # the first step reports at once (a new status key)
         publisher.publish(WireForce(finger="index", force=7.5))
@@ -56,7 +52,7 @@ def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context):
         node.destroy_node()
 
 
-def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_status(context):
+def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_status(context, matched_publisher):
     import rclpy
 
     from hems_msgs.msg import SupervisorStatus
@@ -67,11 +63,7 @@ def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_statu
     helper = rclpy.create_node("supervisor_stand_in", context=context)
     try:
         assert node.supervisor_sub in node.polled   # never wakes the controller
-        publisher = helper.create_publisher(SupervisorStatus, "/hems/supervisor/status", qos.STATUS)
-        deadline = time.monotonic() + 10.0
-        while publisher.get_subscription_count() < 1:
-            assert time.monotonic() < deadline, "the controller's status subscription was not discovered"
-            time.sleep(0.05)
+        publisher = matched_publisher(helper, SupervisorStatus, "/hems/supervisor/status", qos.STATUS)
         node.wire_position = 0.0
         node.control((0, 0))   # reports the new key: the next status is due two steps on
         publisher.publish(SupervisorStatus(state=SupervisorStatus.ENABLED))

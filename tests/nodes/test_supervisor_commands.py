@@ -6,7 +6,7 @@ from __future__ import annotations
 import time
 
 
-def test_enable_judges_the_reports_received_since_the_last_check(context):
+def test_enable_judges_the_reports_received_since_the_last_check(context, matched_publisher):
     import rclpy
     from rclpy.duration import Duration
     from rclpy.parameter import Parameter
@@ -20,11 +20,7 @@ def test_enable_judges_the_reports_received_since_the_last_check(context):
     supervisor = SupervisorNode(context=context, parameter_overrides=[Parameter("fingers", value=["index"])])
     helper = rclpy.create_node("controller_reports", context=context)
     try:
-        publisher = helper.create_publisher(ControllerStatus, "/hems/index/controller_status", qos.COMMAND)
-        deadline = time.monotonic() + 10.0
-        while publisher.get_subscription_count() < 1:
-            assert time.monotonic() < deadline, "the supervisor's status subscription was not discovered"
-            time.sleep(0.05)
+        publisher = matched_publisher(helper, ControllerStatus, "/hems/index/controller_status", qos.COMMAND)
         # a controller's report with fresh readings, queued while no check runs (the node is
         # not spun, so its 20 ms check never takes it)
         now = to_msg(time.time())

@@ -20,19 +20,6 @@ def unit(context, use_sim_time: bool = False, require_supervisor: bool = False):
         Parameter("require_supervisor", value=require_supervisor), Parameter("use_sim_time", value=use_sim_time)])
 
 
-def duty_publisher(helper):
-    """A publisher of the index unit's duty commands, once the unit's subscription is discovered."""
-    from hems_msgs.msg import DutyCommand
-    from hems_ros.nodes import qos
-
-    publisher = helper.create_publisher(DutyCommand, "/hems/index/duty", qos.COMMAND)
-    deadline = time.monotonic() + 10.0
-    while publisher.get_subscription_count() < 1:
-        assert time.monotonic() < deadline, "the unit's duty subscription was not discovered"
-        time.sleep(0.05)
-    return publisher
-
-
 def test_duty_commands_wake_the_unit_only_on_sim_time(context):
     for use_sim_time in (False, True):
         node = unit(context, use_sim_time)
@@ -42,17 +29,18 @@ def test_duty_commands_wake_the_unit_only_on_sim_time(context):
             node.destroy_node()
 
 
-def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sample(context):
+def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sample(context, matched_publisher):
     import rclpy
 
     from builtin_interfaces.msg import Time
 
     from hems_msgs.msg import DutyCommand
+    from hems_ros.nodes import qos
 
     node = unit(context)
     helper = rclpy.create_node("duty_sender", context=context)
     try:
-        publisher = duty_publisher(helper)
+        publisher = matched_publisher(helper, DutyCommand, "/hems/index/duty", qos.COMMAND)
         # tick as the timer does, just after a sample falls due on the unit's 10 ms grid
         for _ in range(3):
             time.sleep(0.011)
@@ -95,7 +83,7 @@ def test_units_tick_at_their_shoulder_modules_phase_on_wall_clock_time(context):
         node.destroy_node()
 
 
-def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(context):
+def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(context, matched_publisher):
     """An ESTOP stops the heating when it comes: a command that came earlier still heats from
     the sample it answers up to the ESTOP, not only until the unit's previous tick."""
     import rclpy
@@ -105,16 +93,22 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
     from rclpy.duration import Duration
 
     from hems_msgs.msg import DutyCommand, SupervisorStatus
+    from hems_ros.nodes import qos
     from hems_ros.physics import kernel
 
     node = unit(context, require_supervisor=True)
     helper = rclpy.create_node("duty_sender", context=context)
     try:
-        publisher = duty_publisher(helper)
+        publisher = matched_publisher(helper, DutyCommand, "/hems/index/duty", qos.COMMAND)
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         for _ in range(3):
             time.sleep(0.011)
             node.on_tick()
+        # tick just after a sample falls due, so the command answers it well before the next
+        # one (a tick a millisecond before the next sample made the command late)
+        next_sample_s = node.driver._sample_snapshot[0] + node.driver.sample_period_s
+        time.sleep(max(0.0, next_sample_s + 0.0005 - time.time()))
+        node.on_tick()
         sample_s, snapshot = node.driver._sample_snapshot
         energy_at_sample = snapshot[0][kernel.S_EJ]
         sec, nanosec = stamp(sample_s)
