@@ -86,9 +86,12 @@ def heating_gaps(rec, t0: float, until_s: float) -> str:
     this step's peak from 20.06 to as much as 20.5 mm in the lockstep simulation. Names the
     0 % duty commands between the first heating one and ``until_s`` (s after t0, before the
     controller starts braking), and the unit's watchdog trips and 0 % states in that span
-    (the unit publishes its state at once on a trip or a loss of heating permission)."""
-    duties = [(from_msg(m.measurement_stamp) - t0, m.duty_percent)
-              for _, m in rec.since(names.topic(FINGER, "duty"), t0)]
+    (the unit publishes its state at once on a trip or a loss of heating permission), and
+    how many publishers the duty topic has: a second one (a node left over from another
+    test in this domain) answering the same samples would win every other period."""
+    topic = names.topic(FINGER, "duty")
+    publishers = rec.client.node.count_publishers(topic)
+    duties = [(from_msg(m.measurement_stamp) - t0, m.duty_percent) for _, m in rec.since(topic, t0)]
     started = next((t for t, duty in duties if duty > 0.0), None)
     if started is None:
         return "no heating duty command recorded"
@@ -97,7 +100,8 @@ def heating_gaps(rec, t0: float, until_s: float) -> str:
               for _, m in rec.since(names.sim_topic(FINGER, "state"), t0)]
     gaps = [(t, duty, tripped) for t, duty, tripped in states
             if started + 0.02 < t < until_s and (tripped or duty == 0.0)]
-    return (f"heating from {started:.3f} s; 0 % duty commands before {until_s:.2f} s at {zeros}; "
+    return (f"{publishers} publisher(s) of {topic}; heating from {started:.3f} s; "
+            f"0 % duty commands before {until_s:.2f} s at {zeros}; "
             f"unit states (s, duty %, watchdog) with 0 % or a trip: {gaps}")
 
 
@@ -107,6 +111,19 @@ def enable(client) -> None:
         status = client.snapshot(seconds=0.5).supervisor
         message += f" (supervisor faults: {list(status.faults) if status else 'no status'})"
     assert ok, message
+
+
+def wait_until_active(rec, since: float, timeout_s: float = 2.0) -> None:
+    """Until the index controller reports computing duty (it takes the supervisor's status at
+    every second step; the units take it on arrival, earlier). A unit heats only from the
+    status that enabled it, never from before; in the runs where a setpoint sent right after
+    the enable call had its first heating duty answer a sample taken before the setpoint,
+    the wire started later than in the lockstep and peaked at 20.04-20.15 mm instead of
+    20.06 (tests/graph/README.md)."""
+    deadline = time.monotonic() + timeout_s
+    while not any(m.active for _, m in rec.since(names.topic(FINGER, "controller_status"), since)):
+        assert time.monotonic() < deadline, f"the {FINGER} controller did not report active"
+        rec.spin(0.02)
 
 
 def cool_down(client, rec, seconds: float = 8.0) -> None:
@@ -124,7 +141,9 @@ def test_index_position_step_settles_without_overshoot_and_matches_lockstep(grap
     from hems_ros.experiments.lockstep import simulate_loop
 
     _, client = graph
+    enabled_at = time.time()
     enable(client)
+    wait_until_active(rec, enabled_at)
     before = unit_diagnostics(rec)
     t0 = time.time()
     assert client.send_setpoint(FINGER, "position", 0.020)
