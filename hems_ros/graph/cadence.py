@@ -48,17 +48,19 @@ def tick_delay(finger: str, period_s: float, now_s: float) -> float:
     return grid_delay(modules.index(names.MODULE_OF[finger]) * period_s / len(modules), period_s, now_s)
 
 
-def supervisor_check_delay(period_s: float, now_s: float, unit_tick_s: float = 0.01) -> float:
+# Where the supervisor's check sits on the clock's grid (see supervisor_check_delay): 1.2 ms
+# after the thumb pair's tick with the units' default 10 ms tick.
+SUPERVISOR_PHASE_S = 0.0012
+
+
+def supervisor_check_delay(period_s: float, now_s: float) -> float:
     """Seconds from ``now_s`` to the supervisor's next check instant on the clock's grid.
 
     The status sent at a check wakes every unit at once; at a phase left to chance it
     landed on a module pair's tick in some runs and doubled that pair's latency p99. The
-    check therefore runs SUPERVISOR_PHASE_OF_TICK of a unit tick after the first pair's
-    tick, so its status (taking the reports first costs about 0.7 ms) goes out after that
-    pair's chain (encoder, controller, duty: about 1.2 ms at the median) and the units have
-    handled it before the next pair ticks (tests/graph/README.md).
+    check therefore runs SUPERVISOR_PHASE_S after the first pair's tick, so its status
+    (taking the reports first costs about 0.7 ms) goes out after that pair's chain (encoder,
+    controller, duty: about 1.2 ms at the median) and the units have handled it before the
+    next pair ticks, 3.3 ms after the first (tests/graph/README.md).
     """
-    return grid_delay(SUPERVISOR_PHASE_OF_TICK * unit_tick_s, period_s, now_s)
-
-
-SUPERVISOR_PHASE_OF_TICK = 0.12
+    return grid_delay(SUPERVISOR_PHASE_S, period_s, now_s)

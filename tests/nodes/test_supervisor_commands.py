@@ -37,17 +37,17 @@ def test_enable_judges_the_reports_received_since_the_last_check(context, matche
 
 
 def test_the_check_runs_on_the_clock_grid_between_the_module_pairs_ticks(context):
-    """Its status wakes every unit: the check sits SUPERVISOR_PHASE_OF_TICK of a unit tick
-    after the first pair's tick (hems_ros.graph.cadence.supervisor_check_delay)."""
-    from hems_ros.graph.cadence import SUPERVISOR_PHASE_OF_TICK
+    """Its status wakes every unit: the check sits SUPERVISOR_PHASE_S after the first pair's
+    tick (hems_ros.graph.cadence.supervisor_check_delay), between two pairs' ticks."""
+    from hems_ros.graph.cadence import SUPERVISOR_PHASE_S
     from hems_ros.nodes.supervisor import SupervisorNode
 
     supervisor = SupervisorNode(context=context)
     try:
         check = next(t for t in supervisor.timers if t.timer_period_ns == 20_000_000)
         due_s = time.time() + check.time_until_next_call() * 1e-9
-        off = (due_s - SUPERVISOR_PHASE_OF_TICK * 0.01) % 0.02
+        off = (due_s - SUPERVISOR_PHASE_S) % 0.02
         assert min(off, 0.02 - off) <= 0.0005
-        assert 0.001 <= SUPERVISOR_PHASE_OF_TICK * 0.01 <= 0.0033 - 0.001
+        assert 0.001 <= SUPERVISOR_PHASE_S <= 0.0033 - 0.001
     finally:
         supervisor.destroy_node()
