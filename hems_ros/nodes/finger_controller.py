@@ -189,7 +189,9 @@ class FingerControllerNode(LeanNode):
         self.publish_status()
 
     def control(self, measurement_stamp: tuple[int, int]) -> None:
-        if self._steps_since_status + 1 >= self.status_every:
+        self._steps_since_status += 1
+        status_due = self._steps_since_status >= self.status_every
+        if status_due:
             self.drain(self.supervisor_sub)
         if self.enabled:
             self.duty = self.controller.update(self._wire_reference(), self._wire_measurement(self.setpoint.mode))
@@ -202,8 +204,7 @@ class FingerControllerNode(LeanNode):
             duty_percent=self.duty, measurement_stamp_sec=measurement_stamp[0],
             measurement_stamp_nanosec=measurement_stamp[1], sequence=self.sequence)))
         self.idle_timer.reset()
-        self._steps_since_status += 1
-        if self._steps_since_status >= self.status_every or self._status_key() != self._reported:
+        if status_due or self._status_key() != self._reported:
             self.publish_status()
 
     def _status_key(self) -> tuple:
