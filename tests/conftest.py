@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import fcntl
 import os
+import signal
+import time
 from pathlib import Path
 
 import pytest
@@ -59,3 +61,45 @@ def venv() -> Path:
         pytest.fail(f"{VENV} is missing: run `make setup`")
     return VENV
 
+
+
+def _live_descendants(root: int) -> dict[int, str]:
+    """Processes below ``root`` that still run (zombies left out), with their command lines."""
+    children: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            pid, rest = stat.read_text().split(" (", 1)
+            state, ppid = rest.rsplit(") ", 1)[1].split()[:2]
+        except (OSError, ValueError):
+            continue  # gone while we looked
+        if state != "Z":
+            children.setdefault(int(ppid), []).append(int(pid))
+    found: dict[int, str] = {}
+    stack = list(children.get(root, []))
+    while stack:
+        pid = stack.pop()
+        try:
+            found[pid] = (Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+                          .strip())
+        except OSError:
+            continue
+        stack.extend(children.get(pid, []))
+    return found
+
+
+@pytest.fixture(scope="module", autouse=True)
+def no_process_outlives_its_module():
+    """A node a test module left running would join every later test's graph in this
+    domain (a second controller answering the same samples); kill it and say which."""
+    yield
+    left = _live_descendants(os.getpid())
+    if not left:
+        return
+    for pid in left:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    time.sleep(0.2)
+    pytest.fail("processes left running by this module (killed now): "
+                + "; ".join(f"{pid} {command[:160]}" for pid, command in sorted(left.items())))

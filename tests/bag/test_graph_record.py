@@ -14,6 +14,7 @@ busy host is reset and re-enabled each second), so the compared values move.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from pathlib import Path
 
@@ -56,46 +57,42 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
     # all 36 would load this Python process more than the graph's nodes
     witnessed = {stream_topic(FINGER, s): kinds[s] for s in STREAMS}
     output = tmp_path / "graph10s"
-    graph = Graph(GraphOptions(fingers=tuple(fingers), log_level="warn"))
-    graph.start()
-    recorder = None
     received: dict[str, list] = {topic: [] for topic in witnessed}
-    try:
-        with GraphClient("hems_test_record") as client:
-            for topic, msg_type in witnessed.items():
-                client.node.create_subscription(msg_type, topic, received[topic].append,
-                                                qos.COMMAND if msg_type in (DutyCommand, ControllerStatus) else qos.SENSOR)
-            for finger in fingers:
-                assert client.send_setpoint(finger, "position", 0.0, timeout=60)
-            recorder = RecorderProcess(output, flush_period=0.2)
-            recorder.wait_for_topics(graph_topics(tuple(fingers)) + list(sequenced), timeout=30)
-            # The 10 s window opens once the recorder's ~40 new readers have been announced to
-            # every participant: during that discovery burst the full graph lost a few samples
-            # of the last-subscribed topics now and then (see the module documentation).
-            client.spin_for(2.0)
-            window_ns = time.time_ns()
-            ok, message = client.enable_when_ready(60, retry_s=0.5)
-            assert ok, message
-            started = time.monotonic()
-            for finger in fingers:
-                client.send_setpoint(finger, "position", 0.015)   # values that move: heating, travel, duty
-            refaults = 0
-            while time.monotonic() - started < 10.0:
-                client.spin_for(min(1.0, 10.0 - (time.monotonic() - started)))
-                # a supervisor FAULT on this busy host (a stale stream, issue 5) would stop the
-                # heating for the rest of the window: re-enable, the recording goes on regardless
-                if not client.call("enable", timeout=2)[0]:
-                    refaults += 1
-                    client.call("reset", timeout=2)
-                    client.call("enable", timeout=2)
-            info = recorder.stop()
-            recorder = None
-            client.spin_for(0.2)
+    # every process is stopped whatever fails: a graph left running would share the test
+    # domain with every later test's graph
+    with contextlib.ExitStack() as cleanup:
+        graph = cleanup.enter_context(Graph(GraphOptions(fingers=tuple(fingers), log_level="warn")))
+        client = cleanup.enter_context(GraphClient("hems_test_record"))
+        for topic, msg_type in witnessed.items():
+            client.node.create_subscription(msg_type, topic, received[topic].append,
+                                            qos.COMMAND if msg_type in (DutyCommand, ControllerStatus) else qos.SENSOR)
+        for finger in fingers:
+            assert client.send_setpoint(finger, "position", 0.0, timeout=60)
+        recorder = RecorderProcess(output, flush_period=0.2)
+        cleanup.callback(recorder.kill)  # no-op once stopped below
+        recorder.wait_for_topics(graph_topics(tuple(fingers)) + list(sequenced), timeout=30)
+        # The 10 s window opens once the recorder's ~40 new readers have been announced to
+        # every participant: during that discovery burst the full graph lost a few samples
+        # of the last-subscribed topics now and then (see the module documentation).
+        client.spin_for(2.0)
+        window_ns = time.time_ns()
+        ok, message = client.enable_when_ready(60, retry_s=0.5)
+        assert ok, message
+        started = time.monotonic()
+        for finger in fingers:
+            client.send_setpoint(finger, "position", 0.015)   # values that move: heating, travel, duty
+        refaults = 0
+        while time.monotonic() - started < 10.0:
+            client.spin_for(min(1.0, 10.0 - (time.monotonic() - started)))
+            # a supervisor FAULT on this busy host (a stale stream, issue 5) would stop the
+            # heating for the rest of the window: re-enable, the recording goes on regardless
+            if not client.call("enable", timeout=2)[0]:
+                refaults += 1
+                client.call("reset", timeout=2)
+                client.call("enable", timeout=2)
+        info = recorder.stop()
+        client.spin_for(0.2)
         assert not graph.exited(), graph.exited()
-    finally:
-        if recorder is not None:
-            recorder.stop()
-        graph.stop()
 
     assert info.reports[0].complete and (output / "metadata.yaml").is_file()
     bag = load_bag(output)

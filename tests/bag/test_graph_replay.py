@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import subprocess
 import sys
 from pathlib import Path
@@ -71,15 +72,19 @@ def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_do
     inputs = rebased(reference.path, tmp_path / "inputs",
                      [names.topic(finger, "setpoint"), names.SUPERVISOR_STATUS_TOPIC])
     sim_time = ("-p", "use_sim_time:=true")
-    # No supervisor: the replayed status is the original run's; a live one would decide anew.
-    nodes = [start_node("actuation_unit", f"actuation_unit_{finger}", {"finger": finger}, sim_time),
-             start_node("shoulder_module", "shoulder_module_index_middle", {"module": "index_middle"}, sim_time),
-             start_node("finger_controller", f"finger_controller_{finger}", {"finger": finger}, sim_time)]
     output = tmp_path / "replayed"
-    recorder = RecorderProcess(output, topics=[names.topic(finger, s)
-                                               for s in ("encoder", "wire_force", "duty", "controller_status")]
-                               + [names.sim_topic(finger, "state")])
-    try:
+    with contextlib.ExitStack() as cleanup:  # every node stops whatever fails
+        # No supervisor: the replayed status is the original run's; a live one would decide anew.
+        nodes = [start_node(executable, node, params, sim_time) for executable, node, params in (
+            ("actuation_unit", f"actuation_unit_{finger}", {"finger": finger}),
+            ("shoulder_module", "shoulder_module_index_middle", {"module": "index_middle"}),
+            ("finger_controller", f"finger_controller_{finger}", {"finger": finger}))]
+        for node in nodes:
+            cleanup.callback(stop, node)
+        recorder = RecorderProcess(output, topics=[names.topic(finger, s)
+                                                   for s in ("encoder", "wire_force", "duty", "controller_status")]
+                                   + [names.sim_topic(finger, "state")])
+        cleanup.callback(recorder.kill)  # no-op once stopped below
         recorder.wait_for_topics([names.topic(finger, "encoder"), names.topic(finger, "duty")], timeout=60)
         replay = subprocess.run(
             [sys.executable, "-m", "hems_ros.cli.main", "replay", str(inputs),
@@ -87,10 +92,7 @@ def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_do
             env=child_environment(), capture_output=True, text=True, timeout=120)
         assert replay.returncode == 0, replay.stderr
         assert all(node.poll() is None for node in nodes)
-    finally:
         info = recorder.stop()
-        for node in nodes:
-            stop(node)
     assert info.topics[names.topic(finger, "encoder")].count > 1500
     live = grasp_metrics(output, finger, plan, phase_stamps(output, finger))
     print(f"original {original}\nreplayed {live}")

@@ -11,10 +11,7 @@ def graph(venv):
     from hems_ros.graph import names
     from hems_ros.launcher import Graph, GraphOptions
 
-    running = Graph(GraphOptions(log_level="warn"))
-    running.start()
-    client = GraphClient("hems_test")
-    try:
+    with Graph(GraphOptions(log_level="warn")) as running, GraphClient("hems_test") as client:
         # reset first: a start-up hiccup may have latched a fault
         ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
         assert ok, f"graph did not become ready: {message}"
@@ -29,6 +26,3 @@ def graph(venv):
         seen = [f"{ns.rstrip('/')}/{name}" for name, ns in client.node.get_node_names_and_namespaces()]
         assert not {n for n in seen if seen.count(n) > 1}, f"nodes twice in the test domain: {sorted(seen)}"
         yield running, client
-    finally:
-        client.close()
-        running.stop()
