@@ -17,10 +17,10 @@ import argparse
 import os
 import time
 
-from hems_ros.rosenv import apply_network_defaults
+from hems_ros.rosenv import apply_network_defaults, use_private_domain
 
 apply_network_defaults()
-os.environ.setdefault("ROS_DOMAIN_ID", "77")
+DOMAIN_LOCK = use_private_domain()  # no test session or other benchmark shares it
 
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 

@@ -23,10 +23,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from hems_ros.rosenv import apply_network_defaults  # noqa: E402
+from hems_ros.rosenv import apply_network_defaults, use_private_domain  # noqa: E402
 
 apply_network_defaults()
-os.environ.setdefault("ROS_DOMAIN_ID", "76")
+DOMAIN_LOCK = use_private_domain()  # no test session or other benchmark shares it
 
 TOPIC = "/hems_bench/encoder"
 

@@ -7,7 +7,6 @@ in ``os.environ`` before any test starts, so every child process inherits it.
 
 from __future__ import annotations
 
-import fcntl
 import os
 import signal
 import time
@@ -17,30 +16,17 @@ import pytest
 
 REPO = Path(__file__).resolve().parent.parent
 VENV = REPO / ".venv"
-DOMAIN_IDS = range(11, 101)  # clear of 0 (the default) and within the 0-101 port-mapping range
 _domain_lock = None
-
-
-def _reserve_domain_id() -> int:
-    global _domain_lock
-    start = os.getpid() % len(DOMAIN_IDS)
-    for offset in range(len(DOMAIN_IDS)):
-        domain = DOMAIN_IDS[(start + offset) % len(DOMAIN_IDS)]
-        handle = open(f"/tmp/hems-ros-domain-{domain}.lock", "w")
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            handle.close()
-            continue
-        _domain_lock = handle
-        return domain
-    raise RuntimeError("every ROS domain id 11-100 is held by another test session")
 
 
 def pytest_configure(config: pytest.Config) -> None:
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    global _domain_lock
     if "HEMS_TEST_DOMAIN_ID" not in os.environ:
-        os.environ["HEMS_TEST_DOMAIN_ID"] = str(_reserve_domain_id())
+        from hems_ros.rosenv import reserve_domain_id
+
+        domain, _domain_lock = reserve_domain_id()
+        os.environ["HEMS_TEST_DOMAIN_ID"] = str(domain)
     os.environ["ROS_DOMAIN_ID"] = os.environ["HEMS_TEST_DOMAIN_ID"]
 
 

@@ -30,3 +30,20 @@ def test_fast_dds_reads_the_project_profiles_unless_the_user_named_a_file():
     assert path.endswith("config/fastdds_profiles.xml")
     assert "<nack_supression_duration>" in open(path).read()
     assert apply_network_defaults({PROFILES_VARIABLE: "/tmp/mine.xml"})[PROFILES_VARIABLE] == "/tmp/mine.xml"
+
+
+def test_a_reserved_domain_is_not_given_twice_until_released() -> None:
+    from hems_ros.rosenv import PRIVATE_DOMAIN_IDS, reserve_domain_id
+
+    first, first_lock = reserve_domain_id(start=5)
+    second, second_lock = reserve_domain_id(start=5)
+    try:
+        assert first in PRIVATE_DOMAIN_IDS and second in PRIVATE_DOMAIN_IDS
+        assert second != first
+        first_lock.close()
+        again, again_lock = reserve_domain_id(start=5)
+        again_lock.close()
+        assert again == first
+    finally:
+        first_lock.close()
+        second_lock.close()
