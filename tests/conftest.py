@@ -48,7 +48,6 @@ def venv() -> Path:
     return VENV
 
 
-
 def _live_descendants(root: int) -> dict[int, str]:
     """Processes below ``root`` that still run (zombies left out), with their command lines."""
     children: dict[int, list[int]] = {}
@@ -86,6 +85,6 @@ def no_process_outlives_its_module():
             os.kill(pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
-    time.sleep(0.2)
+    time.sleep(0.2)  # gone before the next module starts its graph
     pytest.fail("processes left running by this module (killed now): "
                 + "; ".join(f"{pid} {command[:160]}" for pid, command in sorted(left.items())))
