@@ -103,6 +103,35 @@ def host_speed_s() -> float:
     return time.perf_counter() - start
 
 
+def wake_round_trip_us(rounds: int = 5000) -> float:
+    """Mean microseconds for two processes to wake each other once over a pipe: a second
+    reading of the host beside the Python loop, which kept its speed in a phase where the same
+    graph took 1.02-1.29 cores instead of 0.76-0.86 (2026-11-24). Read in that slow phase only
+    so far (12-19 us); whether it tells the phases apart is still to be seen."""
+    to_child, from_parent = os.pipe()
+    from_child, to_parent = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        for _ in range(rounds):
+            os.read(to_child, 1)
+            os.write(to_parent, b"x")
+        os._exit(0)
+    start = time.perf_counter()
+    for _ in range(rounds):
+        os.write(from_parent, b"x")
+        os.read(from_child, 1)
+    elapsed = time.perf_counter() - start
+    os.waitpid(pid, 0)
+    for fd in (to_child, from_parent, from_child, to_parent):
+        os.close(fd)
+    return elapsed / rounds * 1e6
+
+
+def host_line() -> str:
+    return (f"host speed {host_speed_s():.2f} s (a 3-million-addition Python loop; lower is quicker), "
+            f"wake-up round trip {wake_round_trip_us():.1f} us (two processes over a pipe)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="measured time per mode, s (default 60)")
@@ -110,7 +139,7 @@ def main() -> None:
                         help="comma-separated modes to run: separate, composed (default both)")
     args = parser.parse_args()
     print(f"graph benchmark, {args.seconds:g} s per mode, load average {os.getloadavg()[0]:.1f}, "
-          f"host speed {host_speed_s():.2f} s (a 3-million-addition Python loop; lower is quicker)")
+          + host_line())
     print(f"{'mode':<10} {'p50 ms':>7} {'p99 ms':>7} {'max ms':>7} {'missed %':>9} {'CPU cores':>10}  "
           f"{'p99/floor':>9} {'missed/floor':>12} {'CPU/floor':>9}  supervisor")
     for mode in args.modes.split(","):
@@ -126,7 +155,7 @@ def main() -> None:
             for kind, v in sorted(r["cpu_by_kind"].items(), key=lambda kv: -sum(kv[1]))))
         if r["faults"]:
             print(" " * 10 + " supervisor faults: " + "; ".join(r["faults"]))
-        print(" " * 10 + f" host speed after the run {host_speed_s():.2f} s")
+        print(" " * 10 + f" after the run: {host_line()}")
     print("floors: p99 <= 5 ms, missed < 0.5 %, CPU <= 1 core (a ratio above 1 misses its floor)")
 
 
