@@ -97,7 +97,10 @@ class RecorderProcess:
         return self._finish()
 
     def stop(self, timeout: float = 10.0) -> BagInfo:
-        """SIGTERM the recorder (it finishes the bag), SIGKILL after ``timeout``; the bag's info."""
+        """SIGTERM the recorder (it finishes the bag), SIGKILL after ``timeout``; the bag's info
+        (the same again once stopped)."""
+        if self.result is not None:
+            return self.result
         if self.process.poll() is None:
             self.process.send_signal(signal.SIGTERM)
             try:
@@ -123,8 +126,16 @@ class RecorderProcess:
     def __enter__(self) -> RecorderProcess:
         return self
 
-    def __exit__(self, *exc_info: object) -> None:
-        self.stop()
+    def __exit__(self, exc_type, exc, traceback) -> None:
+        if exc is None:
+            self.stop()
+            return
+        # leaving on an error: still stop the recorder (and finish the bag if it can), but a
+        # failure of its own must not replace the error under way, nor skip later cleanups
+        try:
+            self.stop()
+        except Exception as error:
+            exc.add_note(f"and stopping the recorder failed: {error}")
 
 
 def record_for(output: str | os.PathLike, seconds: float, topics: Iterable[str] | None = None,

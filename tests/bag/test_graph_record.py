@@ -68,8 +68,7 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
                                             qos.COMMAND if msg_type in (DutyCommand, ControllerStatus) else qos.SENSOR)
         for finger in fingers:
             assert client.send_setpoint(finger, "position", 0.0, timeout=60)
-        recorder = RecorderProcess(output, flush_period=0.2)
-        cleanup.callback(recorder.kill)  # no-op once stopped below
+        recorder = cleanup.enter_context(RecorderProcess(output, flush_period=0.2))
         recorder.wait_for_topics(graph_topics(tuple(fingers)) + list(sequenced), timeout=30)
         # The 10 s window opens once the recorder's ~40 new readers have been announced to
         # every participant: during that discovery burst the full graph lost a few samples

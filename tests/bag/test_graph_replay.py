@@ -81,10 +81,9 @@ def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_do
             ("finger_controller", f"finger_controller_{finger}", {"finger": finger}))]
         for node in nodes:
             cleanup.callback(stop, node)
-        recorder = RecorderProcess(output, topics=[names.topic(finger, s)
-                                                   for s in ("encoder", "wire_force", "duty", "controller_status")]
-                                   + [names.sim_topic(finger, "state")])
-        cleanup.callback(recorder.kill)  # no-op once stopped below
+        recorder = cleanup.enter_context(RecorderProcess(
+            output, topics=[names.topic(finger, s) for s in ("encoder", "wire_force", "duty", "controller_status")]
+            + [names.sim_topic(finger, "state")]))
         recorder.wait_for_topics([names.topic(finger, "encoder"), names.topic(finger, "duty")], timeout=60)
         replay = subprocess.run(
             [sys.executable, "-m", "hems_ros.cli.main", "replay", str(inputs),

@@ -110,3 +110,26 @@ def test_recorder_rejects_a_used_folder(tmp_path: Path) -> None:
     recorder = RecorderProcess(tmp_path / "used")
     with pytest.raises(RuntimeError, match="code 2"):
         recorder.wait(timeout=30)
+
+
+def test_stop_twice_gives_the_same_bag_and_an_error_leaving_the_block_stays_the_error(
+        ros_domain_id: int, tmp_path: Path) -> None:
+    publisher = publish(count=1500, rate=500.0)
+    try:
+        with RecorderProcess(tmp_path / "twice", topics=list(STREAMS)) as recorder:
+            recorder.wait_for_topics(STREAMS)
+            info = recorder.stop()
+        assert recorder.stop() is info and info.reports[0].complete
+
+        # a recorder that died under way fails its stop; leaving the block on another error,
+        # the other error is what the caller sees, with the recorder's failure as a note
+        with pytest.raises(KeyError) as raised:
+            with RecorderProcess(tmp_path / "crashed", topics=list(STREAMS)) as recorder:
+                recorder.wait_for_topics(STREAMS)
+                recorder.process.kill()
+                raise KeyError("the scenario's own error")
+    finally:
+        publisher.kill()
+        publisher.wait()
+    assert recorder.process.returncode == -9
+    assert any("stopping the recorder failed" in note and "code -9" in note for note in raised.value.__notes__)
