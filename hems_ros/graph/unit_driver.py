@@ -7,7 +7,8 @@ due on the way (every ``sample_period_s``, stamped with their own time).
 
 A duty command that answers the latest encoder sample (its measurement stamp) and arrives
 before the next sample takes effect from that sample's instant: the driver keeps a snapshot
-of the unit at every sample and re-integrates from it. The HEMS board computes and applies
+of the unit at the latest sample and re-integrates from it (on wall-clock time the node takes
+commands at its ticks, when the unit has not moved past the sample yet). The HEMS board computes and applies
 a duty within microseconds of its sample (the lockstep loop of the control experiments
 does the same); over DDS the command comes 1-3 ms later, and applying it on arrival made
 the loop's overshoot depend on that transport jitter, so a run on /clock could not repeat
@@ -71,7 +72,13 @@ class UnitDriver:
         self.latencies_s: deque[float] = deque(maxlen=max(1, round(latency_window_s / sample_period_s)))
         self.late_commands = 0
         self._samples_taken = 0
-        self._sample_snapshot: tuple | None = None   # (time, unit snapshot) at the latest sample
+        # the latest sample: its clock time, the unit's step count then, and a snapshot of the
+        # unit there, taken only when an advance leaves it and stops short of the next sample
+        # (on wall-clock time the node advances from tick to tick, sample to sample, and takes
+        # commands while the unit is still at the sample: no snapshot and no restore)
+        self._sample_time_s: float | None = None
+        self._sample_steps = 0
+        self._sample_snapshot: tuple | None = None
 
     @property
     def last_result(self) -> StepResult | None:
@@ -95,8 +102,9 @@ class UnitDriver:
             raise ValueError(f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %")
         effective_s = now_s
         if self._answers_latest_sample(measurement_stamp_s):
-            effective_s, snapshot = self._sample_snapshot
-            self.unit.restore(snapshot)
+            effective_s = self._sample_time_s
+            if self.unit.steps != self._sample_steps:   # moved on: the snapshot was taken on leaving
+                self.unit.restore(self._sample_snapshot)
         elif measurement_stamp_s is not None and measurement_stamp_s > 0:
             self.late_commands += 1
         if self.last_command_s is not None:
@@ -125,8 +133,8 @@ class UnitDriver:
         return self.start_time_s + (self._samples_taken + 1) * self.sample_period_s - 1e-9
 
     def _answers_latest_sample(self, measurement_stamp_s: float | None) -> bool:
-        return (measurement_stamp_s is not None and self._sample_snapshot is not None
-                and abs(measurement_stamp_s - self._sample_snapshot[0]) < 0.5 * self.unit.dt)
+        return (measurement_stamp_s is not None and self._sample_time_s is not None
+                and abs(measurement_stamp_s - self._sample_time_s) < 0.5 * self.unit.dt)
 
     def permit_heating(self, allowed: bool, now_s: float) -> None:
         """Supervisor's word: heating allowed (ENABLED) or not; refreshed by every status."""
@@ -163,7 +171,8 @@ class UnitDriver:
         first = unit.steps
         run_duty, run = 0.0, 0
         due = self._next_sample_due_s()
-        for k in range(first + 1, first + 1 + MAX_STEPS_PER_ADVANCE):
+        last = first + MAX_STEPS_PER_ADVANCE
+        for k in range(first + 1, last + 1):
             # the same float arithmetic as time_s before and after step k (epoch times leave
             # a quarter microsecond of resolution, enough to move a gate's boundary)
             step_end = (start + (k - 1) * dt) + dt
@@ -171,21 +180,37 @@ class UnitDriver:
                 break
             duty = self.gate(step_end)
             if run and duty != run_duty:
-                unit.advance(duty=run_duty, steps=run)
+                self._integrate(run_duty, run, now_s, last)
                 run = 0
             run_duty, run = duty, run + 1
             if start + k * dt >= due:
-                unit.advance(duty=run_duty, steps=run)
+                self._integrate(run_duty, run, now_s, last)
                 run = 0
                 self._samples_taken += 1
                 due = self._next_sample_due_s()
                 samples.append(Sample(self.time_s, unit.result()))
-                self._sample_snapshot = (self.time_s, unit.snapshot())
+                self._sample_time_s, self._sample_steps, self._sample_snapshot = self.time_s, unit.steps, None
         if run:
-            unit.advance(duty=run_duty, steps=run)
+            self._integrate(run_duty, run, now_s, last)
         if unit.steps > first:
             self.applied_duty = run_duty
         return samples
+
+    def _integrate(self, duty: float, steps: int, now_s: float, last_step: int) -> None:
+        if (self._sample_snapshot is None and self.unit.steps == self._sample_steps
+                and not self._reaches_next_sample(now_s, last_step)):
+            self._sample_snapshot = self.unit.snapshot()
+        self.unit.advance(duty=duty, steps=steps)
+
+    def _reaches_next_sample(self, now_s: float, last_step: int) -> bool:
+        """Advancing to ``now_s``, at most to step ``last_step``, from the unit's present
+        step takes the next sample (the tests of :meth:`advance`'s loop, without the steps)."""
+        unit, dt, start = self.unit, self.unit.dt, self.start_time_s
+        due = self._next_sample_due_s()
+        k = unit.steps + 1
+        while start + k * dt < due:
+            k += 1
+        return k <= last_step and (start + (k - 1) * dt) + dt <= now_s + 1e-9
 
     def latency_percentiles(self) -> tuple[float, float, float]:
         """(p50, p99, max) of measurement-to-applied latency over the duty commands of the last

@@ -107,15 +107,15 @@ class ActuationUnitNode(LeanNode):
     def on_duty(self, message, received_s: float | None = None) -> None:
         now = seconds(self) if received_s is None else received_s
         measured = seconds_of(message.measurement_stamp_sec, message.measurement_stamp_nanosec)
-        # up to the arrival with the old duty (publishing a sample that fell due), then again
-        # with the new one: from the sample it answers, or from the arrival if it came late
+        # up to the arrival with the old duty (publishing a sample that fell due); the new one
+        # acts from the sample it answers, or from the arrival if it came late, when the
+        # physics next advances (nothing observes the plant in between)
         if not self.driver.will_rewind(message.duty_percent, measured, now):
             self.advance_to(now)
         try:
             self.driver.command(message.duty_percent, now, measured)
         except ValueError as error:
             self.get_logger().error(f"{self.finger}: {error}; applying 0 %")
-        self.advance_to(now)
 
     def on_unreadable_duty(self, received_s: float | None = None) -> None:
         self.advance_to(seconds(self) if received_s is None else received_s)

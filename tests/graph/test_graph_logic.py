@@ -170,6 +170,37 @@ def test_a_duty_answering_the_latest_sample_takes_effect_at_that_sample():
     assert on_time.unit.state["energy_joule_j"] > 1.0
 
 
+def test_a_driver_stepping_from_sample_to_sample_copies_no_state():
+    """On wall-clock time a unit advances tick to tick and takes the commands at the ticks:
+    the unit is still at the sample a command answers, so no snapshot and no restore; the
+    same commands arriving between samples need both and give the same plant."""
+    copies = {}
+
+    def counted(driver: UnitDriver, name: str) -> UnitDriver:
+        unit = driver.unit
+        copy = unit.snapshot
+
+        def snapshot():
+            copies[name] = copies.get(name, 0) + 1
+            return copy()
+        unit.snapshot = snapshot
+        return driver
+
+    at_ticks, between = (counted(UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=5.0,
+                                            require_permission=False), name) for name in ("ticks", "between"))
+    for k in range(1, 31):
+        sample_s = 5.0 + 0.01 * k
+        at_ticks.advance(sample_s)
+        at_ticks.command(60.0, sample_s + 0.004, sample_s)        # taken at the next tick
+        between.advance(sample_s + 0.004)
+        between.command(60.0, sample_s + 0.004, sample_s)
+    for driver in (at_ticks, between):
+        driver.advance(5.35)
+    assert at_ticks.unit.state == between.unit.state and at_ticks.last_result == between.last_result
+    assert at_ticks.unit.state["energy_joule_j"] > 1.0
+    assert copies == {"between": 30}
+
+
 def test_a_late_duty_takes_effect_on_arrival_and_is_counted():
     late = _driven(0.003, stamp_offset_s=-0.01)     # answers the sample before the latest one
     assert late.late_commands == 30
@@ -294,7 +325,7 @@ def test_skipping_the_integration_a_rewinding_command_undoes_changes_no_bit():
     for _ in range(600):
         now += 0.01 + rng.uniform(-0.002, 0.002)
         assert [(s.time_s, s.result) for s in full.advance(now)] == [(s.time_s, s.result) for s in lean.advance(now)]
-        latest = full._sample_snapshot[0] if full._sample_snapshot else None
+        latest = full._sample_time_s
         stamp = rng.choice([latest, latest, latest, now - 0.02, None])
         duty = rng.choice([30.0, 80.0, rng.uniform(0, 100), float("nan"), 150.0])
         received = now + rng.choice([rng.uniform(0, 0.004), rng.uniform(0.008, 0.012)])

@@ -45,10 +45,10 @@ def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sa
         for _ in range(3):
             time.sleep(0.011)
             node.on_tick()
-        next_sample_s = node.driver._sample_snapshot[0] + node.driver.sample_period_s
+        next_sample_s = node.driver._sample_time_s + node.driver.sample_period_s
         time.sleep(max(0.0, next_sample_s + 0.0005 - time.time()))
         node.on_tick()
-        sample_s = node.driver._sample_snapshot[0]
+        sample_s = node.driver._sample_time_s
         assert sample_s == pytest.approx(next_sample_s, abs=1e-6)
         sec, nanosec = stamp(sample_s)
         publisher.publish(DutyCommand(finger="index", duty_percent=35.0,
@@ -94,7 +94,6 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
 
     from hems_msgs.msg import DutyCommand, SupervisorStatus
     from hems_ros.nodes import qos
-    from hems_ros.physics import kernel
 
     node = unit(context, require_supervisor=True)
     helper = rclpy.create_node("duty_sender", context=context)
@@ -106,11 +105,11 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
             node.on_tick()
         # tick just after a sample falls due, so the command answers it well before the next
         # one (a tick a millisecond before the next sample made the command late)
-        next_sample_s = node.driver._sample_snapshot[0] + node.driver.sample_period_s
+        next_sample_s = node.driver._sample_time_s + node.driver.sample_period_s
         time.sleep(max(0.0, next_sample_s + 0.0005 - time.time()))
         node.on_tick()
-        sample_s, snapshot = node.driver._sample_snapshot
-        energy_at_sample = snapshot[0][kernel.S_EJ]
+        sample_s = node.driver._sample_time_s
+        energy_at_sample = node.driver.last_result.energy_joule_j   # the tick stopped at the sample
         sec, nanosec = stamp(sample_s)
         publisher.publish(DutyCommand(finger="index", duty_percent=100.0,
                                       measurement_stamp=Time(sec=sec, nanosec=nanosec)))
