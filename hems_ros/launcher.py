@@ -95,6 +95,7 @@ class Graph:
     def __init__(self, options: GraphOptions) -> None:
         self.options = options
         self.processes: dict[str, subprocess.Popen] = {}
+        self.node_env: dict[str, dict[str, str]] = {}
         self.killed: list[str] = []  # children that needed SIGKILL at the last stop
 
     def commands(self) -> dict[str, list[str]]:
@@ -115,19 +116,27 @@ class Graph:
                 commands[node] = executable_path(executable) + ros_arguments(node, params, self.options)
         return commands
 
-    def start(self) -> None:
-        env = child_environment()
-        warm_physics_cache(env)
+    def start(self, node_env: dict[str, dict[str, str]] | None = None) -> None:
+        """Start every node's process; ``node_env`` adds variables to the environment of the
+        named ones (benchmarks/bench_graph_ab.py runs some nodes on another commit's code)."""
+        self.node_env = dict(node_env or {})
+        warm_physics_cache(child_environment())
         for name, command in self.commands().items():
-            self.processes[name] = subprocess.Popen(command, env=env, preexec_fn=_die_with_parent)
+            self._spawn(name, command)
 
     def restart(self, name: str) -> None:
         """Start the named node's process again (after it died or was killed)."""
         old = self.processes[name]
         if old.poll() is None:
             raise RuntimeError(f"{name} is still running (pid {old.pid})")
-        self.processes[name] = subprocess.Popen(self.commands()[name], env=child_environment(),
-                                                preexec_fn=_die_with_parent)
+        self._spawn(name, self.commands()[name])
+
+    def environment(self, name: str) -> dict[str, str]:
+        """The environment the named node's process starts with."""
+        return {**child_environment(), **self.node_env.get(name, {})}
+
+    def _spawn(self, name: str, command: list[str]) -> None:
+        self.processes[name] = subprocess.Popen(command, env=self.environment(name), preexec_fn=_die_with_parent)
 
     def exited(self) -> dict[str, int]:
         return {name: p.returncode for name, p in self.processes.items() if p.poll() is not None}

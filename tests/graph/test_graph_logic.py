@@ -278,6 +278,14 @@ def test_extra_ros_args_reach_every_node_separate_or_composed():
     assert list(composed) == ["composed"] and composed["composed"][-2:] == list(extra)
 
 
+def test_extra_environment_reaches_only_the_named_nodes():
+    graph = Graph(GraphOptions())
+    graph.node_env = {"supervisor": {"PYTHONPATH": "/elsewhere"}}
+    assert graph.environment("supervisor")["PYTHONPATH"] == "/elsewhere"
+    assert graph.environment("finger_controller_index").get("PYTHONPATH") != "/elsewhere"
+    assert graph.environment("supervisor")["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+
+
 def test_the_log_level_reaches_every_node_separate_or_composed():
     for composed in (False, True):
         commands = Graph(GraphOptions(composed=composed, log_level="error")).commands()
