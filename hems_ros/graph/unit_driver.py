@@ -7,12 +7,13 @@ due on the way (every ``sample_period_s``, stamped with their own time).
 
 A duty command that answers the latest encoder sample (its measurement stamp) and arrives
 before the next sample takes effect from that sample's instant: the driver keeps a snapshot
-of the unit at the latest sample and re-integrates from it (on wall-clock time the node takes
-commands at its ticks, when the unit has not moved past the sample yet). The HEMS board computes and applies
-a duty within microseconds of its sample (the lockstep loop of the control experiments
-does the same); over DDS the command comes 1-3 ms later, and applying it on arrival made
-the loop's overshoot depend on that transport jitter, so a run on /clock could not repeat
-a wall-clock run. A later command (a stalled controller) takes effect on arrival.
+of the unit at the latest sample and re-integrates from it (on wall-clock time the node
+takes commands at its ticks, when the unit has not moved past the sample yet). The HEMS
+board computes and applies a duty within microseconds of its sample (the lockstep loop of
+the control experiments does the same); over DDS the command comes 1-3 ms later, and
+applying it on arrival made the loop's overshoot depend on that transport jitter, so a run
+on /clock could not repeat a wall-clock run. A later command (a stalled controller) takes
+effect on arrival.
 
 Safety gates on the applied duty, checked at every physics step (re-integration included):
 - duty watchdog: no command for ``watchdog_timeout_s`` (three control periods) -> 0 duty,
