@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -41,10 +41,12 @@ def _valid_duty(duty_percent: float) -> bool:
     return math.isfinite(duty_percent) and 0.0 <= duty_percent <= 100.0
 
 
-@dataclass(frozen=True)
-class Sample:
+class Sample(NamedTuple):
+    """An encoder sample and the wire tension at the same instant (ActuationUnit.readings)."""
     time_s: float
-    result: StepResult
+    encoder_counts: int
+    encoder_position_m: float
+    wire_force_n: float
 
 
 class UnitDriver:
@@ -189,7 +191,7 @@ class UnitDriver:
                 run = 0
                 self._samples_taken += 1
                 due = self._next_sample_due_s()
-                samples.append(Sample(self.time_s, unit.result()))
+                samples.append(Sample(self.time_s, *unit.readings()))
                 self._sample_time_s, self._sample_steps, self._sample_snapshot = self.time_s, unit.steps, None
         if run:
             self._integrate(run_duty, run, now_s, last)

@@ -159,14 +159,13 @@ class ActuationUnitNode(LeanNode):
         for sample in samples:
             self.sequence += 1
             sec, nanosec = stamp(sample.time_s)
-            r = sample.result
             self.encoder_pub.publish(ENCODER.encode(ENCODER.fields(
                 header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
-                counts=r.encoder_counts, position=r.encoder_position_m, resolution=self.resolution,
+                counts=sample.encoder_counts, position=sample.encoder_position_m, resolution=self.resolution,
                 sequence=self.sequence)))
             self.tension_pub.publish(TENSION.encode(TENSION.fields(
                 header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
-                force=r.wire_force_n, saturated=False, over_force=False, sequence=self.sequence)))
+                force=sample.wire_force_n, saturated=False, over_force=False, sequence=self.sequence)))
 
     def publish_state(self) -> None:
         r = self.driver.last_result

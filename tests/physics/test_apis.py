@@ -159,6 +159,18 @@ def test_advance_then_result_is_step():
         advanced.advance(duty=101.0)
 
 
+def test_readings_are_the_results_sensor_values():
+    unit = ActuationUnit(load_params("ch6_hems_index"))
+    seen = set()
+    for d in _drive(4000):
+        unit.advance(duty=d)
+        r = unit.result()
+        assert unit.readings() == (r.encoder_counts, r.encoder_position_m, r.wire_force_n)
+        assert type(unit.readings()[0]) is int
+        seen.add(r.encoder_counts)
+    assert len(seen) > 50
+
+
 def test_advance_in_blocks_is_the_same_steps_one_by_one():
     # the node integrates a sample period per call; noise draws and state must not notice
     p = load_params("ch6_hems_index").replace({"force_sensor.noise_std_n": 0.5})
