@@ -46,6 +46,7 @@ def force_reading_array(force_n: np.ndarray, noise_n: np.ndarray, range_max_n: f
 
 
 def noise_generator(seed: int) -> np.random.Generator:
-    """The force sensor's generator; one standard-normal draw per simulation step."""
+    """The force sensor's generator; one standard-normal draw per simulation step (none when
+    the sensor's noise is zero)."""
     return np.random.default_rng(seed)
 

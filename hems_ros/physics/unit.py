@@ -78,6 +78,7 @@ class ActuationUnit:
             raise TypeError("params must be a UnitParams")
         self.dt = float(dt)
         self._p = kernel.pack(self.params)
+        self._noisy = self.params.force_sensor.noise_std_n > 0
         self._out = np.zeros(kernel.N_O)
         self.reset()
 
@@ -143,8 +144,11 @@ class ActuationUnit:
         if done < steps:
             raise FloatingPointError(f"state became non-finite at t = {self.time + self.dt:.6f} s ({self.state})")
         # the result's force noise is the last step's draw; a block of draws continues the
-        # generator's stream exactly as single draws would
-        self._noise = self._rng.standard_normal() if steps == 1 else self._rng.standard_normal(steps)[-1]
+        # generator's stream exactly as single draws would. A noiseless sensor draws nothing
+        # (as the batch API), which spares a unit node, whose force sensor is the shoulder
+        # module's, two generator calls a tick.
+        if self._noisy:
+            self._noise = self._rng.standard_normal() if steps == 1 else self._rng.standard_normal(steps)[-1]
 
     def readings(self) -> tuple[int, float, float]:
         """(encoder counts, encoder position m, wire force N) after the last step: the part of

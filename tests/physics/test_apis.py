@@ -171,6 +171,16 @@ def test_readings_are_the_results_sensor_values():
     assert len(seen) > 50
 
 
+def test_a_noiseless_force_sensor_draws_nothing():
+    unit = ActuationUnit(load_params("ch6_hems_index").replace({"force_sensor.noise_std_n": 0.0}))
+    before = unit._rng.bit_generator.state
+    unit.advance(duty=40.0, steps=50)
+    unit.advance(duty=40.0)
+    assert unit._rng.bit_generator.state == before
+    r = unit.result()
+    assert r.force_reading_n == round(r.wire_force_n / 0.01) * 0.01 or r.force_saturated
+
+
 def test_advance_in_blocks_is_the_same_steps_one_by_one():
     # the node integrates a sample period per call; noise draws and state must not notice
     p = load_params("ch6_hems_index").replace({"force_sensor.noise_std_n": 0.5})
