@@ -66,7 +66,7 @@ def run(composed: bool, seconds: float) -> dict:
                 lambda m: [latest.__setitem__(s.name, {kv.key: kv.value for kv in s.values}) for s in m.status], 10)
             ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
             if not ok:
-                return {"error": f"could not enable: {message}"}
+                return {"error": f"could not enable: {graph.with_exits(message)}"}
             for finger in names.FINGERS:
                 client.send_setpoint(finger, "position", 0.010)
             client.spin_for(5.0)

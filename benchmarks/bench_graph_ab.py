@@ -74,7 +74,7 @@ def run(tree: Path, swapped: bool, seconds: float) -> dict[str, dict[str, list[f
         with GraphClient("hems_bench_ab") as client:
             ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
             if not ok:
-                sys.exit(f"bench_graph_ab: could not enable the graph: {message}")
+                sys.exit(f"bench_graph_ab: could not enable the graph: {graph.with_exits(message)}")
             for finger in names.FINGERS:
                 client.send_setpoint(finger, "position", 0.010)
             client.spin_for(5.0)

@@ -141,6 +141,15 @@ class Graph:
     def exited(self) -> dict[str, int]:
         return {name: p.returncode for name, p in self.processes.items() if p.poll() is not None}
 
+    def with_exits(self, message: str) -> str:
+        """``message`` followed by the nodes that have exited and their exit codes, if any:
+        what to print when the graph does not come up (the supervisor names the missing
+        streams, not a node that died at start-up)."""
+        exited = sorted(self.exited().items())
+        if not exited:
+            return message
+        return f"{message} (exited: " + ", ".join(f"{name} with code {code}" for name, code in exited) + ")"
+
     def stop(self, grace_s: float = 2.5) -> dict[str, int]:
         """SIGINT every child, SIGKILL what is left after ``grace_s``; return exit codes."""
         for process in self.processes.values():

@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
                 return 1
             ok, message = client.enable_when_ready(args.ready_timeout)
             if not ok:
-                print(f"demo: could not enable the graph: {message}", file=sys.stderr)
+                print(f"demo: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)
                 return 1
             print(f"demo: {message}", flush=True)
             traces, phase_starts, statuses = grasp.run_grasp(client, plan, options.fingers)

@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
             recorder.wait_for_topics(graph_topics(options.fingers), timeout=max(1.0, deadline - time.monotonic()))
             ok, message = client.enable_when_ready(args.ready_timeout)
             if not ok:
-                print(f"step: could not enable the graph: {message}", file=sys.stderr)
+                print(f"step: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)
                 return 1
             for value, seconds in ((0.0, args.before_s), (args.step_mm * 1e-3, args.step_s), (0.0, args.after_s)):
                 print(f"step: position {value * 1e3:g} mm for {seconds:g} s", flush=True)

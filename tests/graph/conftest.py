@@ -14,7 +14,7 @@ def graph(venv):
     with Graph(GraphOptions(log_level="warn")) as running, GraphClient("hems_test") as client:
         # reset first: a start-up hiccup may have latched a fault
         ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
-        assert ok, f"graph did not become ready: {message}"
+        assert ok, f"graph did not become ready: {running.with_exits(message)}"
         client.call("disable")
         client.spin_for(10.0)  # let start-up load (imports, numba cache loads or compiles) pass
         client.call("reset")

@@ -286,6 +286,21 @@ def test_extra_environment_reaches_only_the_named_nodes():
     assert graph.environment("supervisor")["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
 
 
+def test_a_graph_that_does_not_come_up_names_the_nodes_that_exited():
+    import subprocess
+    import sys
+
+    graph = Graph(GraphOptions())
+    graph.processes = {"running": subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"]),
+                       "crashed": subprocess.Popen([sys.executable, "-c", "raise SystemExit(3)"])}
+    try:
+        graph.processes["crashed"].wait(10)
+        assert graph.with_exits("little: no encoder yet") == "little: no encoder yet (exited: crashed with code 3)"
+    finally:
+        graph.stop()
+    assert graph.with_exits("x") == "x (exited: crashed with code 3, running with code -2)"
+
+
 def test_the_log_level_reaches_every_node_separate_or_composed():
     for composed in (False, True):
         commands = Graph(GraphOptions(composed=composed, log_level="error")).commands()
