@@ -58,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
             for finger in options.fingers:
                 while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
                     pass
+            listener = grasp.GraspListener(client, options.fingers)   # matched while nothing heats
             try:
                 recorder.wait_for_topics(graph_topics(options.fingers), timeout=max(1.0, deadline - time.monotonic()))
             except (TimeoutError, RuntimeError) as error:
@@ -68,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
                 print(f"demo: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)
                 return 1
             print(f"demo: {message}", flush=True)
-            traces, phase_starts, statuses = grasp.run_grasp(client, plan, options.fingers)
+            traces, phase_starts, statuses = grasp.run_grasp(client, plan, options.fingers, listener)
             client.call("disable")
             client.spin_for(0.3)  # the DISABLED status and the cooling start reach the bag
         grasp.report(traces, plan, phase_starts, args.plot)

@@ -39,54 +39,90 @@ def plan_from(args: argparse.Namespace) -> GraspPlan:
                      hold_s=args.hold_s, release_s=args.release_s)
 
 
-def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS):
-    """Drive the phases on ``fingers``; return (traces, phase starts per finger, supervisor
-    statuses seen)."""
-    from sensor_msgs.msg import JointState
+class GraspListener:
+    """The subscriptions a grasp run reads (joint states, supervisor status, each finger's
+    state and controller status), collecting from :meth:`start` on.
 
-    from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
-    from hems_ros.nodes import qos
-    from hems_ros.nodes.clock_time import from_msg
+    Created before the graph is enabled, so that every process has matched these readers
+    before anything heats: sixteen processes matching fourteen new readers at once stalled a
+    stream for 70-100 ms on two cores, and the supervisor latched FAULT in two of five demos.
+    """
 
-    traces = {f: FingerTrace.empty() for f in fingers}
-    phases = {f: PhaseTracker() for f in fingers}
-    node = client.node
+    def __init__(self, client, fingers=names.FINGERS) -> None:
+        from sensor_msgs.msg import JointState
 
-    def on_joints(message: JointState) -> None:
-        t = from_msg(message.header.stamp)
+        from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
+        from hems_ros.nodes import qos
+        from hems_ros.nodes.clock_time import from_msg
+
+        self.seconds = from_msg
+        self.node = client.node
+        self.collecting = False
+        self.traces = {f: FingerTrace.empty() for f in fingers}
+        self.phases = {f: PhaseTracker() for f in fingers}
+        self.statuses: list = []
+        self.subs = [self.node.create_subscription(JointState, names.JOINT_STATES_TOPIC, self._on_joints, qos.SENSOR),
+                     self.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
+                                                   self._on_supervisor, qos.STATUS)]
+        for finger in fingers:
+            self.subs.append(self.node.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
+                                                           lambda m, f=finger: self._on_state(f, m), qos.SENSOR))
+            self.subs.append(self.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
+                                                           lambda m, f=finger: self._on_status(f, m), qos.COMMAND))
+
+    def start(self) -> None:
+        self.collecting = True
+
+    def close(self) -> None:
+        for sub in self.subs:
+            self.node.destroy_subscription(sub)
+        self.subs = []
+
+    def _on_joints(self, message) -> None:
+        if not self.collecting:
+            return
+        t = self.seconds(message.header.stamp)
         for name, x, f in zip(message.name, message.position, message.effort):
-            if name in traces:
-                traces[name].t.append(t)
-                traces[name].position_m.append(x)
-                traces[name].force_n.append(f)
+            if name in self.traces:
+                self.traces[name].t.append(t)
+                self.traces[name].position_m.append(x)
+                self.traces[name].force_n.append(f)
 
-    def on_state(finger: str, message: ActuatorState) -> None:
-        traces[finger].energy_j.append(message.electrical_energy)
+    def _on_supervisor(self, message) -> None:
+        if self.collecting:
+            self.statuses.append(message)
 
-    def on_status(finger: str, message: ControllerStatus) -> None:
-        traces[finger].duty_t.append(from_msg(message.header.stamp))
-        traces[finger].duty_percent.append(message.duty_percent)
-        phases[finger].feed(message.mode, message.setpoint, message.active, from_msg(message.encoder_stamp),
-                            from_msg(message.force_stamp))
+    def _on_state(self, finger: str, message) -> None:
+        if self.collecting:
+            self.traces[finger].energy_j.append(message.electrical_energy)
 
-    statuses = []
-    subs = [node.create_subscription(JointState, names.JOINT_STATES_TOPIC, on_joints, qos.SENSOR),
-            node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, statuses.append, qos.STATUS)]
-    for finger in fingers:
-        subs.append(node.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
-                                             lambda m, f=finger: on_state(f, m), qos.SENSOR))
-        subs.append(node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
-                                             lambda m, f=finger: on_status(f, m), qos.COMMAND))
-    client.spin_for(0.5)
-    for phase, mode, value, duration in plan.phases():
-        print(f"grasp: {phase}: {mode} {value:g} {'m' if mode == 'position' else 'N'} for {duration:g} s", flush=True)
-        missing = [f for f in fingers if not client.send_setpoint(f, mode, value)]
-        if missing:
-            raise RuntimeError(f"no finger_controller for {', '.join(missing)}")
-        client.spin_for(duration)
-    for sub in subs:
-        node.destroy_subscription(sub)
-    return traces, {f: tracker.starts for f, tracker in phases.items()}, statuses
+    def _on_status(self, finger: str, message) -> None:
+        if not self.collecting:
+            return
+        self.traces[finger].duty_t.append(self.seconds(message.header.stamp))
+        self.traces[finger].duty_percent.append(message.duty_percent)
+        self.phases[finger].feed(message.mode, message.setpoint, message.active,
+                                 self.seconds(message.encoder_stamp), self.seconds(message.force_stamp))
+
+
+def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspListener | None = None):
+    """Drive the phases on ``fingers``; return (traces, phase starts per finger, supervisor
+    statuses seen). Without a ``listener`` made beforehand, one is made here."""
+    if listener is None:
+        listener = GraspListener(client, fingers)
+        client.spin_for(0.5)
+    listener.start()
+    try:
+        for phase, mode, value, duration in plan.phases():
+            print(f"grasp: {phase}: {mode} {value:g} {'m' if mode == 'position' else 'N'} for {duration:g} s",
+                  flush=True)
+            missing = [f for f in fingers if not client.send_setpoint(f, mode, value)]
+            if missing:
+                raise RuntimeError(f"no finger_controller for {', '.join(missing)}")
+            client.spin_for(duration)
+    finally:
+        listener.close()
+    return listener.traces, {f: tracker.starts for f, tracker in listener.phases.items()}, listener.statuses
 
 
 def fault_report(statuses) -> str | None:
