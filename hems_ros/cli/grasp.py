@@ -44,8 +44,10 @@ class GraspListener:
     state and controller status), collecting from :meth:`start` on.
 
     Created before the graph is enabled, so that every process has matched these readers
-    before anything heats: sixteen processes matching fourteen new readers at once stalled a
-    stream for 70-100 ms on two cores, and the supervisor latched FAULT in two of five demos.
+    before anything heats: made right after the enable, while sixteen processes matched
+    fourteen new readers on two cores and every unit began to heat, a stream stalled for
+    50-100 ms about 0.8 s after ENABLED and the supervisor latched FAULT in two of five
+    demos; made first, in none of ten.
     """
 
     def __init__(self, client, fingers=names.FINGERS) -> None:
