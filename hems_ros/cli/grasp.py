@@ -47,7 +47,7 @@ class GraspListener:
     before anything heats: made right after the enable, while sixteen processes matched
     fourteen new readers on two cores and every unit began to heat, a stream stalled for
     50-100 ms about 0.8 s after ENABLED and the supervisor latched FAULT in two of five
-    demos; made first, in none of ten.
+    demos; made first, in none of six.
     """
 
     def __init__(self, client, fingers=names.FINGERS) -> None:
