@@ -163,14 +163,14 @@ class ActuationUnit:
         # one conversion of each array to Python floats: reading twenty numpy scalars one by
         # one cost a node a sixth of its tick's Python time
         s, o, prm = self._s.tolist(), self._out.tolist(), self.params
-        counts = sensors.encoder_counts(s[kernel.S_X], prm.encoder.resolution_m)
+        counts, position, wire_force = self.readings()
         fs = prm.force_sensor
-        reading, saturated = sensors.force_reading(o[kernel.O_FW], float(self._noise) * fs.noise_std_n,
+        reading, saturated = sensors.force_reading(wire_force, float(self._noise) * fs.noise_std_n,
                                                    fs.range_max_n, fs.resolution_n)
         return StepResult(
             time_s=self.time,
             encoder_counts=counts,
-            encoder_position_m=counts * prm.encoder.resolution_m,
+            encoder_position_m=position,
             force_reading_n=reading,
             force_saturated=saturated,
             wire_temperature_c=s[kernel.S_T],
@@ -187,5 +187,5 @@ class ActuationUnit:
             slider_velocity_m_s=s[kernel.S_V],
             tendon_position_m=o[kernel.O_XT],
             tendon_force_n=o[kernel.O_FT],
-            wire_force_n=o[kernel.O_FW],
+            wire_force_n=wire_force,
         )
