@@ -37,6 +37,13 @@ from hems_ros.physics import ActuationUnit, StepResult
 MAX_STEPS_PER_ADVANCE = 500  # a stalled process catches up over several ticks, not at once
 
 
+def _step_end(start_s: float, k: int, dt: float) -> float:
+    """Clock time at the end of step ``k``: the same float arithmetic as ``time_s`` before and
+    after the step (epoch times leave a quarter microsecond of resolution, enough to move a
+    gate's boundary)."""
+    return (start_s + (k - 1) * dt) + dt
+
+
 def _valid_duty(duty_percent: float) -> bool:
     return math.isfinite(duty_percent) and 0.0 <= duty_percent <= 100.0
 
@@ -173,47 +180,47 @@ class UnitDriver:
         unit, dt, start = self.unit, self.unit.dt, self.start_time_s
         first = unit.steps
         run_duty, run = 0.0, 0
-        due = self._next_sample_due_s()
+        limit = now_s + 1e-9
         last = first + MAX_STEPS_PER_ADVANCE
+        sample_k = self._next_sample_step()
         for k in range(first + 1, last + 1):
-            # the same float arithmetic as time_s before and after step k (epoch times leave
-            # a quarter microsecond of resolution, enough to move a gate's boundary)
-            step_end = (start + (k - 1) * dt) + dt
-            if step_end > now_s + 1e-9:
+            step_end = _step_end(start, k, dt)
+            if step_end > limit:
                 break
             duty = self.gate(step_end)
             if run and duty != run_duty:
-                self._integrate(run_duty, run, now_s, last)
+                self._integrate(run_duty, run, sample_k, last, limit)
                 run = 0
             run_duty, run = duty, run + 1
-            if start + k * dt >= due:
-                self._integrate(run_duty, run, now_s, last)
+            if k == sample_k:
+                self._integrate(run_duty, run, sample_k, last, limit)
                 run = 0
                 self._samples_taken += 1
-                due = self._next_sample_due_s()
                 samples.append(Sample(self.time_s, *unit.readings()))
                 self._sample_time_s, self._sample_steps, self._sample_snapshot = self.time_s, unit.steps, None
+                sample_k = self._next_sample_step()
         if run:
-            self._integrate(run_duty, run, now_s, last)
+            self._integrate(run_duty, run, sample_k, last, limit)
         if unit.steps > first:
             self.applied_duty = run_duty
         return samples
 
-    def _integrate(self, duty: float, steps: int, now_s: float, last_step: int) -> None:
-        if (self._sample_snapshot is None and self.unit.steps == self._sample_steps
-                and not self._reaches_next_sample(now_s, last_step)):
-            self._sample_snapshot = self.unit.snapshot()
-        self.unit.advance(duty=duty, steps=steps)
-
-    def _reaches_next_sample(self, now_s: float, last_step: int) -> bool:
-        """Advancing to ``now_s``, at most to step ``last_step``, from the unit's present
-        step takes the next sample (the tests of :meth:`advance`'s loop, without the steps)."""
-        unit, dt, start = self.unit, self.unit.dt, self.start_time_s
-        due = self._next_sample_due_s()
-        k = unit.steps + 1
+    def _next_sample_step(self) -> int:
+        """The step at whose end the next encoder sample falls due."""
+        start, dt, due = self.start_time_s, self.unit.dt, self._next_sample_due_s()
+        k = self.unit.steps + 1
         while start + k * dt < due:
             k += 1
-        return k <= last_step and (start + (k - 1) * dt) + dt <= now_s + 1e-9
+        return k
+
+    def _integrate(self, duty: float, steps: int, sample_k: int, last: int, limit: float) -> None:
+        """``steps`` steps at ``duty`` in an advance that may go to step ``last`` and to the clock
+        time ``limit``; leaving the latest sample without reaching the next one (due at step
+        ``sample_k``), keep a snapshot of it for a rewind."""
+        if (self._sample_snapshot is None and self.unit.steps == self._sample_steps
+                and (sample_k > last or _step_end(self.start_time_s, sample_k, self.unit.dt) > limit)):
+            self._sample_snapshot = self.unit.snapshot()
+        self.unit.advance(duty=duty, steps=steps)
 
     def latency_percentiles(self) -> tuple[float, float, float]:
         """(p50, p99, max) of measurement-to-applied latency over the duty commands of the last
