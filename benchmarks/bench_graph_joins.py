@@ -43,6 +43,11 @@ def hems_executable() -> str:
     return str(beside) if beside.exists() else (shutil.which("hems") or "hems")
 
 
+def fault_kind(fault: str) -> str:
+    """'index: wire_force stale (60 ms ...)' -> 'wire_force stale'."""
+    return fault.split(": ", 1)[-1].split(" (")[0].split(" for ")[0]
+
+
 def hold(client: GraphClient, position_m: float) -> None:
     for finger in HOLDING:
         client.send_setpoint(finger, "position", position_m)
@@ -66,7 +71,7 @@ def run(composed: bool, joins: int) -> dict:
             hold(client, 0.010)
             client.spin_for(4.0)
             faults.clear()
-            faulted, texts = 0, []
+            faulted, kinds = 0, collections.Counter()
             for i in range(joins):
                 started = time.monotonic()
                 print(f"  join {i + 1}/{joins}: hems setpoint index {10 + (i + 1) % 2} mm", flush=True)
@@ -76,7 +81,8 @@ def run(composed: bool, joins: int) -> dict:
                 new = [text for t, text in faults if t >= started]
                 if new:
                     faulted += 1
-                    texts.extend(new)
+                    # the supervisor adds faults to its list as they come: count each once per join
+                    kinds.update({fault_kind(part) for text in new for part in text.split("; ")})
                     ok, message = client.enable_when_ready(30, reset=True, retry_s=0.5)
                     if not ok:
                         return {"error": f"could not enable again: {message}"}
@@ -84,8 +90,6 @@ def run(composed: bool, joins: int) -> dict:
                     client.spin_for(SETTLE_S)
     finally:
         graph.stop()
-    kinds = collections.Counter(part.split(": ", 1)[-1].split(" (")[0].split(" for ")[0]
-                                for text in texts for part in text.split("; "))
     return {"joins": joins, "faulted": faulted, "kinds": dict(kinds)}
 
 
@@ -99,7 +103,7 @@ def main() -> None:
     for mode in args.modes.split(","):
         print(f"{mode}: {args.joins} joins", flush=True)
         results[mode] = run(mode == "composed", args.joins)
-    print("mode        joins  supervisor left ENABLED  stream faults")
+    print("mode        joins  supervisor left ENABLED  faults named (in how many of those joins)")
     for mode, r in results.items():
         if "error" in r:
             print(f"{mode:10s}  {r['error']}")
