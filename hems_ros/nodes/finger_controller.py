@@ -12,8 +12,8 @@ Subscribes
                              taken with the status_every-th step, see _poll_other_feedback)
 Publishes
   /hems/<finger>/duty              hems_msgs/DutyCommand      reliable, one per feedback sample
-  /hems/<finger>/controller_status hems_msgs/ControllerStatus reliable, with every status_every-th duty and
-                                   at once when mode, setpoint, activity or fault change (heartbeat;
+  /hems/<finger>/controller_status hems_msgs/ControllerStatus best effort, with every status_every-th duty
+                                   and at once when mode, setpoint, activity or fault change (heartbeat;
                                    carries the latest encoder and force readings), and every
                                    idle_status_period_s while no feedback arrives
 
@@ -97,8 +97,13 @@ class FingerControllerNode(LeanNode):
         self._steps_since_status = 0
         self._reported: tuple | None = None
         self.duty_pub = self.create_publisher(DutyCommand, names.topic(self.finger, "duty"), qos.COMMAND)
+        # Best effort, as the sensor streams: each status supersedes the last within 20 ms. A
+        # reliable reader holds every later status back behind a lost one until the writer's
+        # next heartbeat repairs it, about 200 ms at this rate, and the supervisor then saw the
+        # controller as dead: such stalls came with processes joining the domain
+        # (benchmarks/bench_graph_joins.py, tests/graph/README.md).
         self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status"),
-                                                qos.COMMAND)
+                                                qos.SENSOR)
         self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint"), self.on_setpoint, qos.COMMAND)
         self.feedback = {
             "position": self.subscribe_serialized(EncoderReading, names.topic(self.finger, "encoder"),

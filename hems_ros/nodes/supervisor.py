@@ -2,7 +2,7 @@
 (hems_ros.graph.supervisor_logic) and the safety monitors of all six fingers.
 
 Services (std_srvs/Trigger)   /hems/supervisor/{enable,disable,estop,reset}
-Subscribes  /hems/<finger>/controller_status (reliable, heartbeat): also the controller's
+Subscribes  /hems/<finger>/controller_status (best effort, heartbeat): also the controller's
             latest encoder and force readings; a stream counts as alive while those readings
             keep changing, so the supervisor need not take 1200 sensor messages a second,
 
@@ -81,7 +81,7 @@ class SupervisorNode(LeanNode):
         self.force_stamps = {f: None for f in self.fingers}
         for finger in self.fingers:
             self.subscribe_serialized(ControllerStatus, names.topic(finger, "controller_status"),
-                                      lambda m, f=finger: self.on_controller(f, m), qos.COMMAND)
+                                      lambda m, f=finger: self.on_controller(f, m), qos.SENSOR)
             self.subscribe_serialized(ActuatorState, names.sim_topic(finger, "state"),
                                       lambda m, f=finger: self.on_state(f, m), qos.SENSOR)
         # 420 messages a second, each of which woke the process; the monitors judge them at
