@@ -291,13 +291,19 @@ def test_a_graph_that_does_not_come_up_names_the_nodes_that_exited():
     import sys
 
     graph = Graph(GraphOptions())
-    graph.processes = {"running": subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"]),
+    # a shell running the tests in the background ignores SIGINT, and children inherit that:
+    # the sleeper takes the default action back and says so before it is stopped
+    sleeper = "import signal, time; signal.signal(signal.SIGINT, signal.SIG_DFL); print('ready', flush=True); " \
+              "time.sleep(30)"
+    graph.processes = {"running": subprocess.Popen([sys.executable, "-c", sleeper], stdout=subprocess.PIPE, text=True),
                        "crashed": subprocess.Popen([sys.executable, "-c", "raise SystemExit(3)"])}
     try:
+        assert graph.processes["running"].stdout.readline() == "ready\n"
         graph.processes["crashed"].wait(10)
         assert graph.with_exits("little: no encoder yet") == "little: no encoder yet (exited: crashed with code 3)"
     finally:
         graph.stop()
+        graph.processes["running"].stdout.close()
     assert graph.with_exits("x") == "x (exited: crashed with code 3, running with code -2)"
 
 
