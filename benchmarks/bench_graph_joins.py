@@ -16,11 +16,9 @@ from __future__ import annotations
 
 import argparse
 import collections
-import shutil
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 from hems_ros.rosenv import apply_network_defaults, use_private_domain
 
@@ -36,11 +34,6 @@ from hems_ros.nodes import qos  # noqa: E402
 
 HOLDING = ("index", "middle", "ring")
 SETTLE_S = 2.0   # after each command, before judging and before the next one
-
-
-def hems_executable() -> str:
-    beside = Path(sys.executable).with_name("hems")
-    return str(beside) if beside.exists() else (shutil.which("hems") or "hems")
 
 
 def fault_kind(fault: str) -> str:
@@ -73,10 +66,14 @@ def run(composed: bool, joins: int) -> dict:
             faults.clear()
             faulted, kinds = 0, collections.Counter()
             for i in range(joins):
-                started = time.monotonic()
-                print(f"  join {i + 1}/{joins}: hems setpoint index {10 + (i + 1) % 2} mm", flush=True)
-                subprocess.run([hems_executable(), "setpoint", "index", str(10 + (i + 1) % 2), "--mode", "position",
-                                "--unit", "mm"], capture_output=True, timeout=60)
+                started, target_mm = time.monotonic(), str(10 + (i + 1) % 2)
+                print(f"  join {i + 1}/{joins}: hems setpoint index {target_mm} mm", flush=True)
+                # the hems command's own code path, in this interpreter (as the installed script)
+                command = subprocess.run([sys.executable, "-m", "hems_ros.cli.main", "setpoint", "index", target_mm,
+                                          "--mode", "position", "--unit", "mm"], capture_output=True, text=True,
+                                         timeout=60)
+                if command.returncode != 0:
+                    return {"error": f"hems setpoint failed ({command.returncode}): {command.stderr.strip()[-300:]}"}
                 client.spin_for(SETTLE_S)
                 new = [text for t, text in faults if t >= started]
                 if new:
