@@ -7,9 +7,12 @@ enabled graph with three fingers holding 10-11 mm, then ``--joins`` times runs
 supervisor left ENABLED (it latches FAULT when a stream stalls for longer than its limit;
 duties are then 0). After a FAULT the benchmark resets and enables through its own client,
 which stays in the domain the whole run so that only the measured commands join. Modes as
-in bench_graph.py: separate processes (16 participants) and composed (one).
+in bench_graph.py: separate processes (16 participants) and composed (one);
+``--no-parameter-services`` starts the separate processes as `hems up
+--no-parameter-services` does (the comparison in tests/graph/README.md).
 
 Usage: .venv/bin/python benchmarks/bench_graph_joins.py [--joins 8] [--modes separate,composed]
+       [--no-parameter-services]
 """
 
 from __future__ import annotations
@@ -46,8 +49,8 @@ def hold(client: GraphClient, position_m: float) -> None:
         client.send_setpoint(finger, "position", position_m)
 
 
-def run(composed: bool, joins: int) -> dict:
-    graph = Graph(GraphOptions(composed=composed, log_level="error"))
+def run(composed: bool, joins: int, parameter_services: bool) -> dict:
+    graph = Graph(GraphOptions(composed=composed, log_level="error", parameter_services=parameter_services))
     graph.start()
     faults: list[tuple[float, str]] = []
 
@@ -95,11 +98,13 @@ def main() -> None:
     parser.add_argument("--joins", type=int, default=8, help="command-line processes to run per mode (default 8)")
     parser.add_argument("--modes", default="separate,composed",
                         help="comma-separated modes to run: separate, composed (default both)")
+    parser.add_argument("--no-parameter-services", dest="parameter_services", action="store_false",
+                        help="separate processes without parameter services (hems up --no-parameter-services)")
     args = parser.parse_args()
     results = {}
     for mode in args.modes.split(","):
         print(f"{mode}: {args.joins} joins", flush=True)
-        results[mode] = run(mode == "composed", args.joins)
+        results[mode] = run(mode == "composed", args.joins, args.parameter_services)
     print("mode        joins  supervisor left ENABLED  faults named (in how many of those joins)")
     for mode, r in results.items():
         if "error" in r:

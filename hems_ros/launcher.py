@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from hems_ros.graph import names
+from hems_ros.nodes.runner import NO_PARAMETER_SERVICES_FLAG
 from hems_ros.paths import config_path
 from hems_ros.rosenv import child_environment
 
@@ -41,6 +42,10 @@ class GraphOptions:
     fingers: tuple[str, ...] = names.FINGERS
     extra_ros_args: tuple[str, ...] = ()
     log_level: str = "info"
+    # False: the separate processes start without parameter services (no `ros2 param`), which
+    # makes a process joining the domain cost them less (hems_ros.nodes.runner); the composed
+    # process, one participant, keeps them
+    parameter_services: bool = True
 
 
 def node_specs(options: GraphOptions) -> list[tuple[str, str, dict[str, str]]]:
@@ -113,7 +118,8 @@ class Graph:
                                     + list(self.options.extra_ros_args))
         else:
             for executable, node, params in specs:
-                commands[node] = executable_path(executable) + ros_arguments(node, params, self.options)
+                flags = [] if self.options.parameter_services else [NO_PARAMETER_SERVICES_FLAG]
+                commands[node] = executable_path(executable) + flags + ros_arguments(node, params, self.options)
         return commands
 
     def start(self, node_env: dict[str, dict[str, str]] | None = None) -> None:

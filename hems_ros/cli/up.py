@@ -26,6 +26,10 @@ def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
                         help="comma-separated fingers to bring up (default all six: " + ",".join(names.FINGERS) + ")")
     parser.add_argument("--log-level", default="info", choices=("debug", "info", "warn", "error"),
                         help="ROS log level of the nodes")
+    parser.add_argument("--no-parameter-services", dest="parameter_services", action="store_false",
+                        help="start the separate processes without their ROS parameter services (ros2 param "
+                             "then does not reach them): a process joining the domain (hems setpoint, ros2 topic "
+                             "pub) then holds the graph up less often; the composed process keeps them")
 
 
 def default_bag(prefix: str) -> Path:
@@ -72,7 +76,8 @@ def graph_options(args: argparse.Namespace) -> GraphOptions:
     if not args.params_file.is_file():
         raise ValueError(f"--params-file {args.params_file}: no such file")
     return GraphOptions(params_file=args.params_file, composed=args.composed, sim_time=args.sim_time,
-                        rate=args.rate, fingers=fingers, log_level=args.log_level)
+                        rate=args.rate, fingers=fingers, log_level=args.log_level,
+                        parameter_services=args.parameter_services)
 
 
 def register(subparsers) -> None:

@@ -10,6 +10,15 @@ from collections.abc import Callable
 from hems_ros.nodes.middleware_threads import defer_middleware_threads
 from hems_ros.rosenv import apply_network_defaults
 
+# Every rclpy node offers six parameter services (twelve DDS endpoints, more than half of a
+# graph node's), and every participant announces all of its endpoints to each process that
+# joins the domain. With sixteen participants on two cores that discovery burst held the
+# graph's streams up past the supervisor's 50 ms limit after about one join in nine (a
+# `hems setpoint` or `ros2 topic pub` latched FAULT); without the services after about one in
+# twenty (tests/graph/README.md), but `ros2 param` no longer reaches the node, so they stay on
+# unless asked (`hems up --no-parameter-services`).
+NO_PARAMETER_SERVICES_FLAG = "--no-parameter-services"
+
 
 def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
              spin: Callable[[object], None] | None = None,
@@ -17,6 +26,8 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     """Initialise rclpy, spin the node until Ctrl-C or SIGTERM, shut down cleanly.
 
     ``-h``/``--help`` before ``--ros-args`` prints the node's documentation and exits.
+    ``--no-parameter-services`` before ``--ros-args`` starts the node without rclpy's six
+    parameter services (NO_PARAMETER_SERVICES_FLAG).
     A ``config_errors`` exception (``ValueError`` by default) raised while constructing the
     node is a configuration error: it is printed with the node's name and the process exits
     with code 2. ``spin(node)`` replaces ``rclpy.spin`` for nodes that drive their own executor.
@@ -26,6 +37,7 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     if "-h" in user_args or "--help" in user_args:
         print(node_help(make_node, args[0]))
         return 0
+    node_kwargs = {"start_parameter_services": False} if NO_PARAMETER_SERVICES_FLAG in user_args else {}
     apply_network_defaults()
     import rclpy
     from rclpy.executors import ExternalShutdownException
@@ -37,7 +49,7 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
         return 2
     node = None
     try:
-        node = make_node()
+        node = make_node(**node_kwargs)
         freeze_long_lived_objects()
         defer_middleware_threads()
         if spin is None:
@@ -79,5 +91,7 @@ def node_help(make_node: Callable[[], object], program: str) -> str:
     parts = [make_node.__doc__, sys.modules[make_node.__module__].__doc__]
     doc = "\n\n".join(inspect.cleandoc(part) for part in parts if part)
     name = os.path.basename(program)
-    return (f"usage: {name} [--ros-args -p <parameter>:=<value> ... | --params-file <file>]\n\n"
-            f"{doc}\n\nStops cleanly on Ctrl-C (SIGINT) or SIGTERM.")
+    return (f"usage: {name} [{NO_PARAMETER_SERVICES_FLAG}] [--ros-args -p <parameter>:=<value> ... | "
+            f"--params-file <file>]\n\n{doc}\n\n{NO_PARAMETER_SERVICES_FLAG}: no parameter services (ros2 param "
+            "does not reach the node; it then costs a process joining the domain less).\n"
+            "Stops cleanly on Ctrl-C (SIGINT) or SIGTERM.")

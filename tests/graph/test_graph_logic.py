@@ -278,6 +278,16 @@ def test_extra_ros_args_reach_every_node_separate_or_composed():
     assert list(composed) == ["composed"] and composed["composed"][-2:] == list(extra)
 
 
+def test_only_the_separate_processes_leave_their_parameter_services_out_and_only_when_asked():
+    def flagged(**options) -> list[bool]:
+        return ["--no-parameter-services" in cmd[:cmd.index("--ros-args")]
+                for cmd in Graph(GraphOptions(**options)).commands().values()]
+
+    assert flagged() == [False] * 16
+    assert flagged(parameter_services=False) == [True] * 16
+    assert flagged(parameter_services=False, composed=True) == [False]
+
+
 def test_extra_environment_reaches_only_the_named_nodes():
     graph = Graph(GraphOptions())
     graph.node_env = {"supervisor": {"PYTHONPATH": "/elsewhere"}}
