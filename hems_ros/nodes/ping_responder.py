@@ -22,8 +22,8 @@ METRES_PER_PERCENT = 1e-3
 
 
 class PingResponder(Node):
-    def __init__(self) -> None:
-        super().__init__("ping_responder", namespace="/hems")
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__("ping_responder", namespace="/hems", **node_kwargs)
         self._reply = self.create_publisher(EncoderReading, REPLY_TOPIC, PING_QOS)
         self.create_subscription(DutyCommand, REQUEST_TOPIC, self._answer, PING_QOS)
 

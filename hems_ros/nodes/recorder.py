@@ -69,8 +69,8 @@ def subscription_qos(publishers: list, depth: int) -> tuple[QoSProfile, list[dic
 
 
 class Recorder(Node):
-    def __init__(self) -> None:
-        super().__init__("recorder", namespace="/hems", enable_rosout=False)
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__("recorder", namespace="/hems", enable_rosout=False, **node_kwargs)
         output = self.declare_parameter("output", "").value or datetime.now().strftime("hems_%Y%m%d_%H%M%S")
         topics = self.declare_parameter("topics", Parameter.Type.STRING_ARRAY).value or []
         regex = self.declare_parameter("regex", "").value
