@@ -116,7 +116,7 @@ class GraphClient:
         for finger in fingers:
             subs.append(self.node.create_subscription(
                 ControllerStatus, names.topic(finger, "controller_status"),
-                lambda m, f=finger: snap.controllers.__setitem__(f, m), qos.SENSOR))
+                lambda m, f=finger: snap.controllers.__setitem__(f, m), qos.CONTROLLER_STATUS))
             subs.append(self.node.create_subscription(
                 ActuatorState, names.sim_topic(finger, "state"), lambda m, f=finger: snap.states.__setitem__(f, m),
                 qos.SENSOR))

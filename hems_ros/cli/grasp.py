@@ -70,7 +70,7 @@ class GraspListener:
             self.subs.append(self.node.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
                                                            lambda m, f=finger: self._on_state(f, m), qos.SENSOR))
             self.subs.append(self.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
-                                                           lambda m, f=finger: self._on_status(f, m), qos.SENSOR))
+                                                           lambda m, f=finger: self._on_status(f, m), qos.CONTROLLER_STATUS))
 
     def start(self) -> None:
         self.collecting = True

@@ -97,13 +97,8 @@ class FingerControllerNode(LeanNode):
         self._steps_since_status = 0
         self._reported: tuple | None = None
         self.duty_pub = self.create_publisher(DutyCommand, names.topic(self.finger, "duty"), qos.COMMAND)
-        # Best effort, as the sensor streams: each status supersedes the last within 20 ms. A
-        # reliable reader holds every later status back behind a lost one until the writer's
-        # next heartbeat repairs it, about 200 ms at this rate, and the supervisor then saw the
-        # controller as dead: such stalls came with processes joining the domain
-        # (benchmarks/bench_graph_joins.py, tests/graph/README.md).
         self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status"),
-                                                qos.SENSOR)
+                                                qos.CONTROLLER_STATUS)
         self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint"), self.on_setpoint, qos.COMMAND)
         self.feedback = {
             "position": self.subscribe_serialized(EncoderReading, names.topic(self.finger, "encoder"),

@@ -12,11 +12,10 @@ from hems_ros.rosenv import apply_network_defaults
 
 # Every rclpy node offers six parameter services (twelve DDS endpoints, more than half of a
 # graph node's), and every participant announces all of its endpoints to each process that
-# joins the domain. With sixteen participants on two cores that discovery burst held the
-# graph's streams up past the supervisor's 50 ms limit now and then (a `hems setpoint` or
-# `ros2 topic pub` latched FAULT): after 13 of 64 joins with the services, 4 of 64 without, in
-# runs of the same hour (tests/graph/README.md). Without them `ros2 param` does not reach the node,
-# so they stay on unless asked (`hems up --no-parameter-services`).
+# joins the domain: with sixteen participants on two cores, fewer endpoints means fewer joins
+# that hold the graph's streams up past the supervisor's limit (figures: tests/graph/README.md).
+# Without them `ros2 param` does not reach the node, so they stay on unless asked
+# (`hems up --no-parameter-services`).
 NO_PARAMETER_SERVICES_FLAG = "--no-parameter-services"
 
 

@@ -81,7 +81,7 @@ class SupervisorNode(LeanNode):
         self.force_stamps = {f: None for f in self.fingers}
         for finger in self.fingers:
             self.subscribe_serialized(ControllerStatus, names.topic(finger, "controller_status"),
-                                      lambda m, f=finger: self.on_controller(f, m), qos.SENSOR)
+                                      lambda m, f=finger: self.on_controller(f, m), qos.CONTROLLER_STATUS)
             self.subscribe_serialized(ActuatorState, names.sim_topic(finger, "state"),
                                       lambda m, f=finger: self.on_state(f, m), qos.SENSOR)
         # 420 messages a second, each of which woke the process; the monitors judge them at

@@ -75,7 +75,7 @@ class ControllerReplay:
         self.statuses: list = []
         self.node.create_subscription(DutyCommand, names.topic(finger, "duty"), self.duties.append, qos.COMMAND)
         self.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
-                                      self.statuses.append, qos.SENSOR)
+                                      self.statuses.append, qos.CONTROLLER_STATUS)
         self.publishers = {
             names.topic(finger, "setpoint"): self.node.create_publisher(
                 FingerSetpoint, names.topic(finger, "setpoint"), qos.COMMAND),

@@ -36,7 +36,7 @@ def rec(graph):
     recorder = Recorder(client)
     recorder.listen(EncoderReading, names.topic(FINGER, "encoder"), qos.SENSOR)
     recorder.listen(WireForce, names.topic(FINGER, "wire_force"), qos.SENSOR)
-    recorder.listen(ControllerStatus, names.topic(FINGER, "controller_status"), qos.SENSOR)
+    recorder.listen(ControllerStatus, names.topic(FINGER, "controller_status"), qos.CONTROLLER_STATUS)
     recorder.listen(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
     recorder.listen(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
     recorder.listen(DutyCommand, names.topic(FINGER, "duty"), qos.COMMAND)

@@ -20,7 +20,7 @@ def test_enable_judges_the_reports_received_since_the_last_check(context, matche
     supervisor = SupervisorNode(context=context, parameter_overrides=[Parameter("fingers", value=["index"])])
     helper = rclpy.create_node("controller_reports", context=context)
     try:
-        publisher = matched_publisher(helper, ControllerStatus, "/hems/index/controller_status", qos.SENSOR)
+        publisher = matched_publisher(helper, ControllerStatus, "/hems/index/controller_status", qos.CONTROLLER_STATUS)
         # a controller's report with fresh readings, queued while no check runs (the node is
         # not spun, so its 20 ms check never takes it)
         now = to_msg(time.time())
