@@ -51,11 +51,22 @@ class GraphClient:
         while time.monotonic() < deadline:
             rclpy.spin_once(self.node, timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())))
 
-    def call(self, command: str, timeout: float = 10.0) -> tuple[bool, str]:
-        """Call a supervisor Trigger service; (success, message)."""
+    def _service_client(self, command: str):
         client = self._service_clients.get(command)
         if client is None:
             client = self._service_clients[command] = self.node.create_client(Trigger, names.service(command))
+        return client
+
+    def call(self, command: str, timeout: float = 10.0) -> tuple[bool, str]:
+        """Call a supervisor Trigger service; (success, message).
+
+        Enabling also makes the estop client, so that it is matched by the time it is needed:
+        the supervisor takes a request only from a client it has discovered, and the first
+        estop from a new client waited for that (about 70 ms) where a matched one stops every
+        unit within a few milliseconds."""
+        client = self._service_client(command)
+        if command == "enable":
+            self._service_client("estop")
         if not client.wait_for_service(timeout_sec=timeout):
             return False, f"no supervisor answers {names.service(command)} (is the graph up?)"
         # The middleware drops a response sent before the service has matched this client's
