@@ -190,14 +190,28 @@ def test_index_force_mode_holds_10_newtons(graph, rec):
 
 def test_estop_zeroes_every_duty_within_30ms_and_latches(graph, rec):
     _, client = graph
+    enable(client)
+    for finger in names.FINGERS:    # every unit heating when the estop comes
+        assert client.send_setpoint(finger, "position", 0.015)
+
+    def latest_duty(finger: str) -> float:
+        states = rec.since(names.sim_topic(finger, "state"), time.time() - 0.2)
+        return states[-1][1].duty_percent if states else 0.0
+
+    deadline = time.monotonic() + 5
+    while not all(latest_duty(f) > 0.0 for f in names.FINGERS):
+        assert time.monotonic() < deadline, f"not every unit heating: {[latest_duty(f) for f in names.FINGERS]}"
+        rec.spin(0.02)
     t_call = time.time()
     ok, message = client.call("estop")
     assert ok, message
     rec.spin(1.0)
     for finger in names.FINGERS:
-        states = rec.since(names.sim_topic(finger, "state"), t_call - 0.2)
-        first_zero = next(from_msg(m.header.stamp) for _, m in states
-                          if m.duty_percent == 0.0 and from_msg(m.header.stamp) >= t_call - 0.2)
+        stamped = [(from_msg(m.header.stamp), m.duty_percent) for _, m in rec.since(names.sim_topic(finger, "state"),
+                                                                                   t_call - 0.2)]
+        before = [duty for stamp, duty in stamped if stamp < t_call]
+        assert before and before[-1] > 0.0, f"{finger}: not heating when the estop was called"
+        first_zero = next(stamp for stamp, duty in stamped if stamp >= t_call and duty == 0.0)
         assert first_zero - t_call <= 0.030, f"{finger}: duty 0 only {1e3 * (first_zero - t_call):.1f} ms after estop"
     assert client.send_setpoint(FINGER, "position", 0.030)
     rec.spin(1.0)
@@ -207,6 +221,8 @@ def test_estop_zeroes_every_duty_within_30ms_and_latches(graph, rec):
     assert not ok and "ESTOP" in message
     ok, message = client.call("reset")
     assert ok, message
+    for finger in names.FINGERS:
+        client.send_setpoint(finger, "position", 0.0)
     cool_down(client, rec)
 
 
