@@ -20,6 +20,21 @@ def unit(context, use_sim_time: bool = False, require_supervisor: bool = False):
         Parameter("require_supervisor", value=require_supervisor), Parameter("use_sim_time", value=use_sim_time)])
 
 
+def tick_just_after_a_sample(node) -> float:
+    """Tick the unit as its timer does, then once just after its next 10 ms sample falls due,
+    so a command answering that sample arrives well before the one after (a tick a
+    millisecond before the next sample made the command late); returns the sample time."""
+    for _ in range(3):
+        time.sleep(0.011)
+        node.on_tick()
+    next_sample_s = node.driver._sample_time_s + node.driver.sample_period_s
+    time.sleep(max(0.0, next_sample_s + 0.0005 - time.time()))
+    node.on_tick()
+    sample_s = node.driver._sample_time_s
+    assert sample_s == pytest.approx(next_sample_s, abs=1e-6)
+    return sample_s
+
+
 def test_duty_commands_wake_the_unit_only_on_sim_time(context):
     for use_sim_time in (False, True):
         node = unit(context, use_sim_time)
@@ -41,15 +56,7 @@ def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sa
     helper = rclpy.create_node("duty_sender", context=context)
     try:
         publisher = matched_publisher(helper, DutyCommand, "/hems/index/duty", qos.COMMAND)
-        # tick as the timer does, just after a sample falls due on the unit's 10 ms grid
-        for _ in range(3):
-            time.sleep(0.011)
-            node.on_tick()
-        next_sample_s = node.driver._sample_time_s + node.driver.sample_period_s
-        time.sleep(max(0.0, next_sample_s + 0.0005 - time.time()))
-        node.on_tick()
-        sample_s = node.driver._sample_time_s
-        assert sample_s == pytest.approx(next_sample_s, abs=1e-6)
+        sample_s = tick_just_after_a_sample(node)
         sec, nanosec = stamp(sample_s)
         publisher.publish(DutyCommand(finger="index", duty_percent=35.0,
                                       measurement_stamp=Time(sec=sec, nanosec=nanosec)))
@@ -100,15 +107,7 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
     try:
         publisher = matched_publisher(helper, DutyCommand, "/hems/index/duty", qos.COMMAND)
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
-        for _ in range(3):
-            time.sleep(0.011)
-            node.on_tick()
-        # tick just after a sample falls due, so the command answers it well before the next
-        # one (a tick a millisecond before the next sample made the command late)
-        next_sample_s = node.driver._sample_time_s + node.driver.sample_period_s
-        time.sleep(max(0.0, next_sample_s + 0.0005 - time.time()))
-        node.on_tick()
-        sample_s = node.driver._sample_time_s
+        sample_s = tick_just_after_a_sample(node)
         energy_at_sample = node.driver.last_result.energy_joule_j   # the tick stopped at the sample
         sec, nanosec = stamp(sample_s)
         publisher.publish(DutyCommand(finger="index", duty_percent=100.0,
