@@ -24,6 +24,9 @@ These measurements carry the evidence:
   approach overshoot from the hold ripple the noise drives.
 * :func:`filter_sweep`: BPID's step and staircase overshoot over derivative filters N the
   dissertation might have used (it does not print N).
+* :func:`hems_ros.physics.validation.onset_bounds`: the energy balance of the measured short
+  pulses, an upper bound on how hot the measured wire was where it had moved, against the
+  model's heating branch: how early a wire with Table 4.1's temperatures can move at all.
 * :func:`perturbation_spread`: how far the step and staircase figures move when the
   ambient temperature moves by 1e-6 degC, the run-to-run spread of a closed-loop cell.
 """
@@ -354,13 +357,20 @@ def ch6_findings(ch6: dict) -> list[Finding]:
     bad = {p: r for p, r in rat.items() if r > 3.0}
     evidence = ""
     if bad:
+        early = min((b for b in validation.onset_bounds(load_params(CH6_PARAMS)) if b.source == "section 5"),
+                    key=lambda b: b.pulse_s)
         evidence = "Plant: " + "; ".join(
             f"{p[13:]}: {100 * s['cooling_share']:.0f} % of the squared error cooling-limited, "
             f"{100 * s['heating_share']:.0f} % heating-limited, RMSE of the rest {s['rmse_unsaturated']:.3f} mm"
             for p, s in ((p, authority_split(ch6[p])) for p in bad)) + (
             ". Heating-limited error is the cold wire's dead time at 100 % duty at the start of "
-            "the ramp and of each step (the model's wire transforms later than the dissertation's, "
-            "docs/validation.md, 1.0 s pulse row). On the sine the wire has not come down when the next ascent starts, so the "
+            "the ramp and of each step: the model's wire transforms later than the dissertation's, and "
+            "no wire with Table 4.1's transformation temperatures could match it (docs/validation.md, "
+            f"transformation onset): the chapter 6 unit moved {early.displacement_mm:g} mm on a "
+            f"{early.energy_j:g} J pulse, which leaves its wire at most {early.lossless_c:.0f} degC even "
+            f"with no heat loss, while the model's wire turns the same {100 * early.fraction:.0f} % to "
+            f"austenite only at {early.branch_c:.0f} degC ({early.branch_unloaded_c:.0f} unloaded) and "
+            f"has moved {early.model_displacement_mm:.2f} mm after the same {early.pulse_s:g} s. On the sine the wire has not come down when the next ascent starts, so the "
             "ascending part begins far above the reference; the sheath and the glove friction "
             "hold it up (the dissertation: descents are slow, cooling + tendon friction). On the "
             "second step the wire reaches the end of its stroke: 27 mm is 3.0 % strain against the "

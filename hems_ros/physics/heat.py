@@ -57,7 +57,24 @@ def appendix_free_convection(diameter_m: float = 0.508e-3) -> tuple[float, float
     return free_convection_h(diameter_m, APPENDIX_GRASHOF, APPENDIX_PRANDTL, APPENDIX_AIR_CONDUCTIVITY)
 
 
+def lossless_temperature_c(energy_j: float, transformed_fraction: float, heat_capacity_j_per_k: float,
+                           latent_heat_j: float, ambient_c: float) -> float:
+    """Wire temperature after ``energy_j`` of heating with no heat loss at all, degC.
+
+    Eq. 4.7 integrated with Q_out = 0 from a cold, fully martensitic wire at ambient:
+    C (T - T_amb) = E - f L, where ``transformed_fraction`` f of the wire has turned to
+    austenite and taken f L of latent heat (``latent_heat_j`` = rho V dH for the whole wire,
+    ``heat_capacity_j_per_k`` = rho V c_p). Every real loss lowers T, so a transformation
+    measured after E joules happened at or below this temperature.
+    """
+    if not 0.0 <= transformed_fraction <= 1.0:
+        raise ValueError(f"transformed_fraction must be in [0, 1], got {transformed_fraction!r}")
+    if not heat_capacity_j_per_k > 0:
+        raise ValueError(f"heat_capacity_j_per_k must be > 0, got {heat_capacity_j_per_k!r}")
+    return ambient_c + (energy_j - transformed_fraction * latent_heat_j) / heat_capacity_j_per_k
+
+
 __all__ = [
-    "convection_coefficient", "convection_loss",
+    "convection_coefficient", "convection_loss", "lossless_temperature_c",
     "churchill_chu_nusselt", "grashof_number", "free_convection_h", "appendix_free_convection",
 ]

@@ -34,6 +34,8 @@ The stack holds MEMORY_DEPTH points; a reversal beyond that forgets the innermos
 
 from __future__ import annotations
 
+import math
+
 from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
@@ -158,6 +160,17 @@ def heating_branch(temperature_c, a_s, inv_width):
     """z+(T) = 1/2 tanh[2((As - T)/(Af - As) + 1/2)] + 1/2 and dz+/dT (eqs. 4.17, 4.20);
     ``inv_width`` = 1/(Af - As)."""
     return _tanh_branch(temperature_c, a_s, inv_width)
+
+
+def heating_branch_temperature(transformed_fraction: float, a_s: float, a_f: float) -> float:
+    """Temperature at which the major heating branch (eq. 4.17) has turned ``transformed_fraction``
+    of the martensite to austenite: z+(T) = 1 - f solved for T, T = As + (Af - As)(1/2 - atanh(1 - 2 f)/2).
+
+    Pass the stress-shifted As, Af (eq. 4.25) for a loaded wire.
+    """
+    if not 0.0 < transformed_fraction < 1.0:
+        raise ValueError(f"transformed_fraction must be in (0, 1), got {transformed_fraction!r}")
+    return a_s + (a_f - a_s) * (0.5 - math.atanh(1.0 - 2.0 * transformed_fraction) / 2.0)
 
 
 @jit_inline

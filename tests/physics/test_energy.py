@@ -5,6 +5,8 @@ recorded trajectories (trapezoidal convective loss from T(t), stored heat from T
 latent heat from xi_end), so a wrong sign or a missing term in the kernel fails here.
 """
 
+import math
+
 import numpy as np
 import pytest
 
@@ -57,3 +59,31 @@ def test_joule_equals_stored_convected_latent(sheathed, helix):
         helix_t = res.sheath_helix_temperature_c[0]
         assert helix_t[-1] > t_amb + 0.5 and helix_t[-1] < res.sheath_temperature_c[0, -1]
         assert e["energy_sheath_convected_j"] > 0.0
+
+
+def test_lossless_temperature_is_where_a_wire_without_losses_ends():
+    # no convection, no sheath: every joule is stored or latent, so the bound is met exactly
+    p = load_params("table41").replace({"sheath.enabled": False, "thermal.h0_w_m2_c": 0.0, "thermal.h2_w_m2_c3": 0.0})
+    res = simulate(p, DT, current=scenarios.pulse_train(1.8, 1.8, DT))
+    xi_end = res.martensite_fraction[0, -1]
+    assert 1.0 - xi_end > 0.3
+    mass = p.thermal.density_kg_m3 * p.wire.volume_m3
+    bound = heat.lossless_temperature_c(res.energy_joule_j[0, -1], 1.0 - xi_end, mass * p.thermal.specific_heat_j_kg_c,
+                                        mass * p.thermal.latent_heat_j_kg, p.ambient_temperature_c)
+    assert res.wire_temperature_c[0, -1] == pytest.approx(bound, abs=0.05)
+    # any loss leaves the wire cooler than the bound of its own energy and transformation
+    lossy = simulate(load_params("table41"), DT, current=scenarios.pulse_train(1.8, 1.8, DT))
+    xi_lossy = lossy.martensite_fraction[0, -1]
+    assert lossy.wire_temperature_c[0, -1] < heat.lossless_temperature_c(
+        lossy.energy_joule_j[0, -1], 1.0 - xi_lossy, mass * p.thermal.specific_heat_j_kg_c,
+        mass * p.thermal.latent_heat_j_kg, p.ambient_temperature_c) - 1.0
+
+
+def test_lossless_temperature_by_hand_and_bad_fraction():
+    # 92.16 J (digest section 5, 1.6 s), 29 of 30 mm moved; Table 4.1 wire: rho V c_p = 0.985 J/K, rho V dH = 28.46 J
+    volume = math.pi / 4 * 0.508e-3**2 * 0.9
+    c, latent = 6450 * volume * 837.4, 6450 * volume * 24183.52
+    assert c == pytest.approx(0.985, abs=1e-3) and latent == pytest.approx(28.46, abs=0.01)
+    assert heat.lossless_temperature_c(92.16, 29 / 30, c, latent, 22.0) == pytest.approx(87.6, abs=0.05)
+    with pytest.raises(ValueError, match="transformed_fraction"):
+        heat.lossless_temperature_c(92.16, 1.2, c, latent, 22.0)

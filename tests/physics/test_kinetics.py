@@ -27,6 +27,17 @@ def test_branches_and_stress_shift():
     assert kinetics.cooling_branch(u_m, 62.0, 0.1)[0] == pytest.approx(kinetics.cooling_branch(103.0, 72.0, 0.1)[0])
 
 
+
+def test_heating_branch_temperature_inverts_the_branch():
+    # half transformed at the middle of the band; 80 % at As + 10 K (1/2 + atanh(0.6)/2) = 96.47 degC
+    assert kinetics.heating_branch_temperature(0.5, 88.0, 98.0) == pytest.approx(93.0)
+    assert kinetics.heating_branch_temperature(0.8, 88.0, 98.0) == pytest.approx(96.466, abs=1e-3)
+    for f in (0.01, 0.3, 0.97):
+        t = kinetics.heating_branch_temperature(f, 95.4, 105.4)
+        assert 1.0 - kinetics.heating_branch(t, 95.4, 0.1)[0] == pytest.approx(f, abs=1e-12)
+    with pytest.raises(ValueError, match="transformed_fraction"):
+        kinetics.heating_branch_temperature(1.0, 88.0, 98.0)
+
 def test_slope_guard_outside_the_loop():
     # far below both branches z+ = z- = 1 exactly: 0/0 must not produce NaN
     s = kinetics.transformation_slope(-200.0, -200.0, 1.0, True, *BAND)

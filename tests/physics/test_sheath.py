@@ -5,7 +5,7 @@ import pytest
 
 from hems_ros.physics import scenarios
 from hems_ros.physics.params import load_params
-from hems_ros.physics.validation import sheath_facts, sweep, voltage_runaway
+from hems_ros.physics.validation import onset_bounds, sheath_facts, sweep, voltage_runaway
 
 
 @pytest.fixture(scope="module")
@@ -53,3 +53,19 @@ def test_table_41_alone_does_not_reach_the_sweep():
     """Why calibration was needed: with C = 6.89 MPa/degC the 1.6-2.2 s pulses fall far short."""
     resp = sweep(load_params("table41").replace({"sheath.enabled": True}), pulses=(1.6, 2.2))
     assert resp[0].max_displacement_m < 0.25 * scenarios.TABLE_32_33[1.6][1] * 1e-3
+
+
+def test_measured_short_pulses_outrun_any_wire_with_table_41_temperatures():
+    rows = {(b.source, b.pulse_s): b for b in onset_bounds()}
+    hems_1s, hems_16 = rows[("section 5", 1.0)], rows[("section 5", 1.6)]
+    # 57.6 J moved the chapter 6 wire 24 of 30 mm: at most 22 + (57.6 - 0.8 x 28.46 J) / 0.985 J/K
+    assert hems_1s.energy_j == pytest.approx(57.6) and hems_1s.fraction == pytest.approx(0.8)
+    assert hems_1s.lossless_c == pytest.approx(57.4, abs=0.1)
+    assert hems_16.lossless_c == pytest.approx(87.6, abs=0.1)
+    # the model's wire gets there only at 96.5 degC unloaded (eq. 4.17), more under 50 N (eq. 4.25)
+    assert hems_1s.branch_unloaded_c == pytest.approx(96.47, abs=0.01)
+    assert hems_1s.branch_c > hems_1s.branch_unloaded_c + 5.0
+    late = [key for key, b in rows.items() if b.lossless_c < b.branch_unloaded_c]
+    assert late == [("Table 3.2", 1.0), ("section 5", 1.0), ("section 5", 1.6)]
+    # and so the model, with more energy at 4 A, has hardly moved after 1 s
+    assert hems_1s.model_displacement_mm < 1.0
