@@ -37,7 +37,7 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "status", help="one row per finger: mode, setpoint, position, force, duty, faults",
         description="Listen to the graph briefly and print one row per finger (tendon side: position in "
-                    "mm, force in N; duty in %%) and the supervisor state.")
+                    "mm, force in N; duty in %) and the supervisor state.")
     parser.add_argument("--listen", type=float, default=1.5, help="seconds to listen (default 1.5)")
     parser.set_defaults(func=run_status)
 

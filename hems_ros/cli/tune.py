@@ -12,9 +12,9 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "tune",
         help="tune BPID gains on the model (scipy Nelder-Mead) and compare with Table 5.1",
-        description="Tune the BPID gains Kp (%%/um), Kd (%% s/um), Kb (1/um) and optionally Ki "
-                    "(%%/(um s)) on the chapter 5 rig (40 N mass, plant 1 kHz, control 100 Hz) for "
-                    "one protocol, minimising RMSE (mm) + weight x MACSI (%% per sample); then report "
+        description="Tune the BPID gains Kp (%/um), Kd (% s/um), Kb (1/um) and optionally Ki "
+                    "(%/(um s)) on the chapter 5 rig (40 N mass, plant 1 kHz, control 100 Hz) for "
+                    "one protocol, minimising RMSE (mm) + weight x MACSI (% per sample); then report "
                     "RMSE, MACSI and APC (W) of Table 5.1 and tuned gains on all five references.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
