@@ -9,7 +9,8 @@ Subscribes
   /hems/<finger>/encoder     hems_msgs/EncoderReading   best effort (position-mode feedback)
   /hems/<finger>/wire_force  hems_msgs/WireForce        best effort (force-mode feedback)
   /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only while ENABLED;
-                             taken with the status_every-th step, see _poll_other_feedback)
+                             read at every status_every-th step; the units stop heating on a
+                             state change themselves)
 Publishes
   /hems/<finger>/duty              hems_msgs/DutyCommand      reliable, one per feedback sample
   /hems/<finger>/controller_status hems_msgs/ControllerStatus best effort, with every status_every-th duty
