@@ -4,8 +4,7 @@
 Services (std_srvs/Trigger)   /hems/supervisor/{enable,disable,estop,reset}
 Subscribes  /hems/<finger>/controller_status (best effort, heartbeat): also the controller's
             latest encoder and force readings; a stream counts as alive while those readings
-            keep changing, so the supervisor need not take 1200 sensor messages a second,
-
+            keep changing, so the supervisor need not take 1200 sensor messages a second;
             /hems/sim/<finger>/state (best effort, duty-watchdog flag)
 Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, transient local; on change and every status_period_s
             /hems/joint_states       sensor_msgs/JointState      tendon position (m) and tendon force (N, as effort)
