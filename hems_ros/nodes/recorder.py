@@ -7,6 +7,13 @@ written as received, never decoded. The subscription QoS follows the publishers:
 only if every publisher is reliable (so best-effort sensor streams are matched), transient
 local if every publisher is (so latched status is received on joining).
 
+A topic in the graph with subscribers but no publisher yet (a controller's setpoint topic) is
+subscribed at once, reliable and volatile as command writers are, so that the single message
+of a short-lived publisher (``hems setpoint``, ``ros2 topic pub --once``) is recorded: such a
+process has sent and gone before a recorder that waited to see its publisher would have
+matched it. Its bag channel, with the publishers' offered QoS, is opened when a publisher or
+the first message appears; a best-effort publisher turns the subscription best effort.
+
 Parameters: ``output`` (bag folder, must not exist or be empty; default
 ``hems_<date>_<time>``), ``topics`` (string array), ``regex`` (string), ``discovery_period``
 (s, 0.2), ``flush_period`` (s, 0.5: the open chunk is closed and handed to the OS this often,
@@ -53,6 +60,12 @@ def message_class(type_name: str) -> type:
     return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
+def waiting_qos(depth: int) -> QoSProfile:
+    """QoS for a topic that has no publisher yet: that of command writers (qos.COMMAND)."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
 def subscription_qos(publishers: list, depth: int) -> tuple[QoSProfile, list[dict]]:
     """A QoS that matches every publisher, and their offered profiles for the bag."""
     reliable = bool(publishers) and all(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE for p in publishers)
@@ -85,7 +98,9 @@ class Recorder(Node):
             raise ValueError("chunk_size and queue_depth must be positive, duration >= 0")
         self._writer = BagWriter(output, compression=compression, chunk_size=chunk_size)
         self._recorded: dict[str, object] = {}
-        self._channels: dict[object, tuple[int, type]] = {}   # subscription -> (channel, class)
+        self._channels: dict[object, tuple[int | None, type]] = {}   # subscription -> (channel, class)
+        self._types: dict[str, str] = {}
+        self._waiting: set[str] = set()    # subscribed before the topic had a publisher
         self._skipped: set[str] = set()
         self._deadline = time.monotonic() + duration if duration > 0 else None
         self.get_logger().info(f"bag {self._writer.folder}: recording {self._selection.describe()}")
@@ -105,33 +120,74 @@ class Recorder(Node):
 
     def _discover(self) -> None:
         for topic, types in self.get_topic_names_and_types():
-            if topic in self._recorded or topic in self._skipped or not self._selection.matches(topic):
+            if topic in self._skipped or not self._selection.matches(topic):
                 continue
-            publishers = self.get_publishers_info_by_topic(topic)
-            if not publishers:
-                continue
-            self._subscribe(topic, types[0], publishers)
+            if topic in self._waiting:
+                publishers = self.get_publishers_info_by_topic(topic)
+                if publishers:
+                    self._adopt(topic, publishers)
+            elif topic not in self._recorded:
+                self._subscribe(topic, types[0], self.get_publishers_info_by_topic(topic))
 
     def _subscribe(self, topic: str, type_name: str, publishers: list) -> None:
         try:
             cls = message_class(type_name)
-            qos, offered = subscription_qos(publishers, self._depth)
-            channel = self._writer.add_topic(topic, type_name, offered)
+            if publishers:
+                qos, offered = subscription_qos(publishers, self._depth)
+                channel = self._writer.add_topic(topic, type_name, offered)
+            else:
+                qos, channel = waiting_qos(self._depth), None
         except (ImportError, AttributeError, ValueError, OSError) as error:
             self._skipped.add(topic)
             self.get_logger().warning(f"not recording {topic} [{type_name}]: {error}")
             return
-        write = self._writer.write
+        self._types[topic] = type_name
+        if channel is None:
+            self._waiting.add(topic)
+        self._listen(topic, cls, channel, qos)
+
+    def _listen(self, topic: str, cls: type, channel: int | None, qos: QoSProfile) -> None:
+        subscription = None
 
         # only for an executor that calls back per message; spin_until_expired drains instead
         def on_message(data: bytes) -> None:
-            write(channel, time.time_ns(), data)
+            self._writer.write(self._channel(subscription), time.time_ns(), data)
 
         subscription = self.create_subscription(cls, topic, on_message, qos, raw=True)
         self._recorded[topic] = subscription
         self._channels[subscription] = (channel, cls)
-        self.get_logger().info(f"{READY_PREFIX}{topic} [{type_name}] "
-                               f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}")
+        self.get_logger().info(f"{READY_PREFIX}{topic} [{self._types[topic]}] "
+                               f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}"
+                               f"{', before any publisher' if channel is None else ''}")
+
+    def _channel(self, subscription) -> int:
+        """The bag channel of ``subscription``, opened now if its topic had no publisher before."""
+        channel, cls = self._channels[subscription]
+        if channel is None:
+            topic = subscription.topic_name
+            publishers = self.get_publishers_info_by_topic(topic)
+            # A message can come before the graph cache lists its writer; it came to a reliable
+            # reader, so from a reliable writer, taken as volatile (what command writers are).
+            offered = subscription_qos(publishers, self._depth)[1] if publishers else [offered_qos(True, False, 0)]
+            channel = self._writer.add_topic(topic, self._types[topic], offered)
+            self._channels[subscription] = (channel, cls)
+        return channel
+
+    def _adopt(self, topic: str, publishers: list) -> None:
+        """A waiting topic got publishers: open its channel; a reliable reader never matches a
+        best-effort writer, so then subscribe again best effort (nothing queued is lost)."""
+        self._waiting.discard(topic)
+        subscription = self._recorded[topic]
+        channel, cls = self._channels[subscription]
+        if channel is None:
+            channel = self._writer.add_topic(topic, self._types[topic], subscription_qos(publishers, self._depth)[1])
+            self._channels[subscription] = (channel, cls)
+        qos = subscription_qos(publishers, self._depth)[0]
+        if qos.reliability != ReliabilityPolicy.RELIABLE:
+            self.drain(subscription)
+            del self._channels[subscription]
+            self.destroy_subscription(subscription)
+            self._listen(topic, cls, channel, qos)
 
     def drain(self, subscription) -> int:
         """Write every message waiting in ``subscription``'s queue; how many there were.
@@ -146,6 +202,8 @@ class Recorder(Node):
             taken = take(cls, True)
             if taken is None:
                 return count
+            if channel is None:
+                channel = self._channel(subscription)
             data, info = taken
             received = info["received_timestamp"] or time.time_ns()   # 0: the middleware gave none
             write(channel, received, data, info["source_timestamp"] or received)

@@ -133,3 +133,75 @@ def test_stop_twice_gives_the_same_bag_and_an_error_leaving_the_block_stays_the_
         publisher.wait()
     assert recorder.process.returncode == -9
     assert any("stopping the recorder failed" in note and "code -9" in note for note in raised.value.__notes__)
+
+
+COMMAND_SCRIPT = Path(__file__).resolve().parent / "command_publisher.py"
+
+
+def command(*args: str) -> None:
+    result = subprocess.run([sys.executable, str(COMMAND_SCRIPT), *args], env=child_environment(),
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+
+
+@pytest.fixture
+def listener(ros_domain_id: int):
+    """A subscription to /hems/index/setpoint, as a controller has: the topic is in the graph
+    before any publisher."""
+    import rclpy
+    from rclpy.context import Context
+
+    from hems_msgs.msg import FingerSetpoint
+    from hems_ros.nodes import qos
+
+    context = Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node("controller_stand_in", context=context)
+    node.create_subscription(FingerSetpoint, "/hems/index/setpoint", lambda m: None, qos.COMMAND)
+    yield node
+    node.destroy_node()
+    rclpy.shutdown(context=context)
+
+
+def offered_reliability(folder: Path, topic: str) -> list[str]:
+    import yaml
+
+    meta = yaml.safe_load((folder / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    entry = next(t["topic_metadata"] for t in meta["topics_with_message_count"] if t["topic_metadata"]["name"] == topic)
+    return [q["reliability"] for q in entry["offered_qos_profiles"]]
+
+
+def test_a_topic_without_publishers_is_subscribed_at_once_so_one_shot_commands_are_recorded(
+        listener, tmp_path: Path) -> None:
+    """`hems setpoint` and `ros2 topic pub --once` send one message and exit: a recorder that
+    subscribed only once it saw their publisher would match them after they had sent."""
+    output = tmp_path / "commands"
+    recorder = RecorderProcess(output, topics=["/hems/index/setpoint"])
+    try:
+        recorder.wait_for_topics(["/hems/index/setpoint"])   # no publisher in the graph yet
+        assert any("before any publisher" in line for line in recorder.log)
+        for value_mm in (5, 12, 18):
+            command("--value", str(value_mm), "--subscribers", "2")   # the listener and the recorder
+    finally:
+        info = recorder.stop()
+    assert info.topics["/hems/index/setpoint"].count == 3
+    bag = load_bag(output)
+    assert list(bag["/hems/index/setpoint"]["value"]) == pytest.approx([0.005, 0.012, 0.018], abs=1e-12)
+    # the bag names the publishers' QoS (rosbag2 metadata), learnt when they appeared
+    assert offered_reliability(output, "/hems/index/setpoint") == ["reliable"]
+
+
+def test_a_waiting_subscription_turns_best_effort_for_a_best_effort_publisher(listener, tmp_path: Path) -> None:
+    output = tmp_path / "late_best_effort"
+    recorder = RecorderProcess(output, topics=["/hems/index/setpoint"], discovery_period=0.05)
+    try:
+        recorder.wait_for_topics(["/hems/index/setpoint"])
+        # a reliable reader never matches a best-effort writer (the listener never does): the
+        # publisher waits for the recorder's new best-effort subscription
+        command("--best-effort", "--subscribers", "1", "--count", "20", "--value", "1")
+    finally:
+        info = recorder.stop()
+    assert info.topics["/hems/index/setpoint"].count == 20
+    assert list(load_bag(output)["/hems/index/setpoint"]["value"]) == pytest.approx(
+        [(1 + k) * 1e-3 for k in range(20)], abs=1e-12)
+    assert offered_reliability(output, "/hems/index/setpoint") == ["best_effort"]
