@@ -25,13 +25,19 @@ def register(subparsers) -> None:
         "setpoint", help="send a finger setpoint (tendon side)",
         description="Publish hems_msgs/FingerSetpoint on /hems/<finger>/setpoint. Values are tendon side: "
                     "position in m (or mm with --unit mm), force in N. Checked here against the same limits "
-                    "the controller applies (tendon stroke 0-54 mm, force 0-25 N).")
+                    "the controller applies (tendon stroke 0-54 mm, force 0-25 N). Then waits until the "
+                    "finger's controller status shows the setpoint, sending it again meanwhile (a controller "
+                    "that had not matched this new publisher yet drops the first one); exit code 1 if no "
+                    "controller took it or its status does not show it within --timeout, 2 for a bad value.")
     parser.add_argument("finger", help="finger name or 'all': " + ", ".join(names.FINGERS))
     parser.add_argument("value", help="setpoint value in --unit")
     parser.add_argument("--mode", choices=MODES, default=None,
                         help="position or force (default: from --unit, position for m/mm, force for N)")
     parser.add_argument("--unit", choices=tuple(UNITS), default=None,
                         help="unit of VALUE: mm, m (position) or N (force); default m or N by mode")
+    parser.add_argument("--timeout", type=float, default=5.0,
+                        help="seconds to wait for the controller to subscribe, and again for its status "
+                             "to show the setpoint (default 5)")
     parser.set_defaults(func=run_setpoint)
 
     parser = subparsers.add_parser(
@@ -83,15 +89,14 @@ def run_setpoint(args: argparse.Namespace) -> int:
         return 2
     from hems_ros.cli.graph_client import GraphClient
 
+    unit = "m" if mode == "position" else "N"
     with GraphClient() as client:
-        missing = [f for f in fingers if not client.send_setpoint(f, mode, value)]
-        client.spin_for(0.2)  # let reliable delivery finish before the node goes away
-    for finger in fingers:
-        if finger not in missing:
-            print(f"{finger}: {mode} setpoint {value:g} {'m' if mode == 'position' else 'N'} sent")
-    for finger in missing:
-        print(f"{finger}: no finger_controller subscribed to {names.topic(finger, 'setpoint')}", file=sys.stderr)
-    return 1 if missing else 0
+        results = {f: client.send_setpoint(f, mode, value, timeout=args.timeout, confirm_s=args.timeout)
+                   for f in fingers}
+    for finger, result in results.items():
+        line = f"{finger}: {mode} setpoint {value:g} {unit}: {result.message}"
+        print(line, file=sys.stdout if result else sys.stderr)
+    return 0 if all(results.values()) else 1
 
 
 def format_status(snap) -> str:

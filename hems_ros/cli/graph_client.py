@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -14,6 +15,21 @@ from hems_ros.graph import names
 from hems_ros.nodes import qos
 
 RETRY_S = 2.0   # a service call unanswered this long is sent again
+MATCH_ALL_S = 1.0   # a subscription that never matches (incompatible QoS) delays a setpoint this long at most
+RESEND_S = 0.3      # a setpoint the controller status does not show yet is sent again after this long
+
+
+@dataclass
+class SetpointResult:
+    """What became of a setpoint: ``sent`` to a subscribed controller, ``confirmed`` by its
+    status (None when not checked), and a line for the user. True when sent and not refuted."""
+
+    sent: bool
+    confirmed: bool | None
+    message: str
+
+    def __bool__(self) -> bool:
+        return self.sent and self.confirmed is not False
 
 
 @dataclass
@@ -35,6 +51,8 @@ class GraphClient:
         # Endpoints are kept for the client's life: every new endpoint is announced to all
         # sixteen nodes, which costs them CPU at the moment they should be controlling.
         self._service_clients: dict[str, object] = {}
+        self._status_subs: dict[str, object] = {}
+        self._statuses: dict[str, ControllerStatus] = {}
 
     def close(self) -> None:
         self.node.destroy_node()
@@ -100,21 +118,70 @@ class GraphClient:
             self.spin_for(retry_s)
         return ok, message
 
-    def send_setpoint(self, finger: str, mode: str, value: float, timeout: float = 5.0) -> bool:
-        """Publish one setpoint once the finger's controller is subscribed; False if none is."""
+    def send_setpoint(self, finger: str, mode: str, value: float, timeout: float = 5.0,
+                      confirm_s: float | None = None) -> SetpointResult:
+        """Publish one setpoint once the finger's controller is subscribed (``timeout`` s).
+
+        It also waits, up to MATCH_ALL_S more, until every other subscription this process
+        already knows on the topic (a recorder, ``ros2 topic echo``) has matched: the setpoint
+        is sent once and not latched.
+
+        ``confirm_s``: then watch the finger's controller status until it shows the setpoint,
+        sending it again every RESEND_S, for up to ``confirm_s`` s. A reader that has not yet
+        matched this new writer drops the sample, and the reliable repair waits for the
+        writer's heartbeat (every 3 s), which a process that exits at once never sends:
+        without the check, one `hems setpoint` of 60 against a one-finger graph here left the
+        controller on its old setpoint."""
+        topic = names.topic(finger, "setpoint")
+        if confirm_s is not None:
+            self._watch_status(finger)   # discovered while the setpoint writer is being matched
         publisher = self._setpoint_pubs.get(finger)
         if publisher is None:
-            publisher = self.node.create_publisher(FingerSetpoint, names.topic(finger, "setpoint"), qos.COMMAND)
+            publisher = self.node.create_publisher(FingerSetpoint, topic, qos.COMMAND)
             self._setpoint_pubs[finger] = publisher
         deadline = time.monotonic() + timeout
         while publisher.get_subscription_count() == 0:
             if time.monotonic() > deadline:
-                return False
+                return SetpointResult(False, None, f"no finger_controller subscribed to {topic}")
             rclpy.spin_once(self.node, timeout_sec=0.02)
+        until = time.monotonic() + MATCH_ALL_S
+        while publisher.get_subscription_count() < self.node.count_subscribers(topic) and time.monotonic() < until:
+            rclpy.spin_once(self.node, timeout_sec=0.02)
+        before = self._statuses.get(finger)
+        self._publish_setpoint(publisher, mode, value)
+        if confirm_s is None:
+            return SetpointResult(True, None, "sent")
+        rejected = None if before is None else before.rejected_setpoints
+        deadline = time.monotonic() + confirm_s
+        resend = time.monotonic() + RESEND_S
+        while time.monotonic() < deadline:
+            rclpy.spin_once(self.node, timeout_sec=0.01)
+            status = self._statuses.get(finger)
+            if status is not None:
+                if status.mode == mode and math.isclose(status.setpoint, value, rel_tol=1e-9, abs_tol=1e-12):
+                    return SetpointResult(True, True, "in force (controller status)")
+                if rejected is None:
+                    rejected = status.rejected_setpoints
+                elif status.rejected_setpoints > rejected:
+                    return SetpointResult(True, False, f"rejected by the controller: {status.last_rejection}")
+            if time.monotonic() >= resend:
+                self._publish_setpoint(publisher, mode, value)
+                resend = time.monotonic() + RESEND_S
+        status = self._statuses.get(finger)
+        seen = ("no controller status received" if status is None else
+                f"the controller status shows {status.mode} {status.setpoint:g}")
+        return SetpointResult(True, False, f"sent, but not in force after {confirm_s:g} s ({seen})")
+
+    def _publish_setpoint(self, publisher, mode: str, value: float) -> None:
         message = FingerSetpoint(mode=mode, value=float(value))
         message.header.stamp = self.node.get_clock().now().to_msg()
         publisher.publish(message)
-        return True
+
+    def _watch_status(self, finger: str) -> None:
+        if finger not in self._status_subs:
+            self._status_subs[finger] = self.node.create_subscription(
+                ControllerStatus, names.topic(finger, "controller_status"),
+                lambda m, f=finger: self._statuses.__setitem__(f, m), qos.CONTROLLER_STATUS)
 
     def snapshot(self, fingers=names.FINGERS, seconds: float = 0.5, supervisor_wait_s: float = 5.0) -> Snapshot:
         """Listen for ``seconds``, and up to ``supervisor_wait_s`` longer while the supervisor,
