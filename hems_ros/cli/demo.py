@@ -72,8 +72,8 @@ def run(args: argparse.Namespace) -> int:
             traces, phase_starts, statuses = grasp.run_grasp(client, plan, options.fingers, listener)
             client.call("disable")
             client.spin_for(0.3)  # the DISABLED status and the cooling start reach the bag
-        grasp.report(traces, plan, phase_starts, args.plot)
-        problem = grasp.fault_report(statuses)
+        rows = grasp.report(traces, plan, phase_starts, args.plot)
+        problem = grasp.fault_report(statuses) or grasp.tracking_report(rows, plan, options.fingers)
         if problem:
             print(f"demo: not a valid run: {problem}", file=sys.stderr)
             return 1

@@ -8,7 +8,9 @@ import time
 from pathlib import Path
 
 from hems_ros.graph import names
-from hems_ros.graph.grasp import FingerTrace, GraspPlan, PhaseTracker, format_summary, plot, summarize
+from hems_ros.graph.grasp import (
+    FingerTrace, GraspPlan, PhaseTracker, format_summary, plot, summarize, tracking_report,
+)
 from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
 
 
@@ -166,8 +168,8 @@ def run(args: argparse.Namespace) -> int:
         except RuntimeError as error:
             print(f"grasp: {error}", file=sys.stderr)
             return 1
-    report(traces, plan, phase_starts, args.plot)
-    problem = fault_report(statuses)
+    rows = report(traces, plan, phase_starts, args.plot)
+    problem = fault_report(statuses) or tracking_report(rows, plan, names.FINGERS)
     if problem:
         print(f"grasp: not a valid run: {problem}", file=sys.stderr)
         return 1

@@ -108,6 +108,27 @@ def summarize(finger: str, trace: FingerTrace, plan: GraspPlan, phase_starts: li
                          _window_rmse(t, f, plan.force_n, h0, h1))
 
 
+FOLLOW_FRACTION = 0.1
+"""A finger whose error over the last settle window of the approach or the hold exceeds this
+fraction of the setpoint did not follow it (normal runs: about 0.6 % and 0.2 %)."""
+
+
+def tracking_report(rows: list[FingerSummary], plan: GraspPlan, fingers) -> str | None:
+    """Which of ``fingers`` did not follow their setpoints (a run with one is not valid), or None.
+
+    The supervisor does not see this: a unit that never heats (no ENABLED status reached it,
+    say) faults nothing, and its finger just stays where it was.
+    """
+    summarized = {r.finger for r in rows}
+    bad = [f"{f} has no summary (its controller did not run every phase)" for f in fingers if f not in summarized]
+    for r in rows:
+        if not r.position_rmse_mm <= FOLLOW_FRACTION * 1e3 * plan.approach_m:   # NaN counts as not followed
+            bad.append(f"{r.finger} approach error {r.position_rmse_mm:.2f} mm")
+        elif not r.force_rmse_n <= FOLLOW_FRACTION * plan.force_n:
+            bad.append(f"{r.finger} hold error {r.force_rmse_n:.2f} N")
+    return f"fingers did not follow their setpoints: {'; '.join(bad)}" if bad else None
+
+
 def format_summary(rows: list[FingerSummary], plan: GraspPlan) -> str:
     lines = [f"grasp: approach {1e3 * plan.approach_m:g} mm, hold {plan.force_n:g} N, release "
              f"(tracking errors are RMS over the whole phase and over its last {plan.settle_window_s:g} s)",

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hems_ros.graph import names
-from hems_ros.graph.grasp import FingerTrace, GraspPlan, PhaseTracker, summarize
+from hems_ros.graph.grasp import FingerSummary, FingerTrace, GraspPlan, PhaseTracker, summarize, tracking_report
 from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.graph.unit_driver import UnitDriver
@@ -253,6 +253,22 @@ def test_grasp_summary_numbers():
     assert summary.force_rmse_n == pytest.approx(0.1)
     assert summary.peak_force_n == pytest.approx(10.1) and summary.energy_j == 42.0
 
+
+
+def test_a_finger_that_did_not_follow_makes_the_grasp_invalid():
+    plan = GraspPlan()
+    good = FingerSummary("index", 0.06, 0.02, 10.1, 299.0, 10.0, 1.3)
+    # the demo once reported this as a valid run: the ring unit never heated, nothing faulted
+    still = FingerSummary("ring", 1e3 * plan.approach_m, plan.force_n - 2.0, 2.04, 0.0, 1e3 * plan.approach_m, 8.0)
+    weak = FingerSummary("middle", 0.06, 0.3 * plan.force_n, 7.0, 250.0, 10.0, 3.5)
+    assert tracking_report([good], plan, ["index"]) is None
+    assert tracking_report([good, still, weak], plan, ["index", "ring", "middle"]) == (
+        f"fingers did not follow their setpoints: ring approach error {1e3 * plan.approach_m:.2f} mm; "
+        f"middle hold error {0.3 * plan.force_n:.2f} N")
+    assert tracking_report([good], plan, ["index", "little"]) == (
+        "fingers did not follow their setpoints: little has no summary (its controller did not run every phase)")
+    nan = FingerSummary("index", math.nan, math.nan, math.nan, 0.0, math.nan, math.nan)
+    assert "index approach error nan mm" in tracking_report([nan], plan, ["index"])
 
 def test_latency_window_holds_the_commands_of_its_last_seconds():
     # 1 s at 10 ms per command: 100 latencies; start-up stalls older than that drop out
