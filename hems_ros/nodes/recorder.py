@@ -12,7 +12,8 @@ subscribed at once, reliable and volatile as command writers are, so that the si
 of a short-lived publisher (``hems setpoint``, ``ros2 topic pub --once``) is recorded: such a
 process has sent and gone before a recorder that waited to see its publisher would have
 matched it. Its bag channel, with the publishers' offered QoS, is opened when a publisher or
-the first message appears; a best-effort publisher turns the subscription best effort.
+the first message appears; a best-effort publisher turns the subscription best effort, a
+latched one transient local unless messages already came.
 
 Parameters: ``output`` (bag folder, must not exist or be empty; default
 ``hems_<date>_<time>``), ``topics`` (string array), ``regex`` (string), ``discovery_period``
@@ -174,17 +175,18 @@ class Recorder(Node):
         return channel
 
     def _adopt(self, topic: str, publishers: list) -> None:
-        """A waiting topic got publishers: open its channel; a reliable reader never matches a
-        best-effort writer, so then subscribe again best effort (nothing queued is lost)."""
+        """A waiting topic got publishers: open its channel with their offered QoS, and
+        subscribe again where the waiting reader falls short (drained first, nothing queued is
+        lost): a reliable reader never matches a best-effort writer, and a latched writer's
+        sample sent before this reader matched it reaches only a transient-local reader. A
+        waiting reader that has already taken messages is matched and stays."""
         self._waiting.discard(topic)
         subscription = self._recorded[topic]
-        channel, cls = self._channels[subscription]
-        if channel is None:
-            channel = self._writer.add_topic(topic, self._types[topic], subscription_qos(publishers, self._depth)[1])
-            self._channels[subscription] = (channel, cls)
+        seen = self.drain(subscription) > 0 or self._channels[subscription][0] is not None
+        channel, cls = self._channel(subscription), self._channels[subscription][1]
         qos = subscription_qos(publishers, self._depth)[0]
-        if qos.reliability != ReliabilityPolicy.RELIABLE:
-            self.drain(subscription)
+        if qos.reliability != ReliabilityPolicy.RELIABLE or (
+                qos.durability == DurabilityPolicy.TRANSIENT_LOCAL and not seen):
             del self._channels[subscription]
             self.destroy_subscription(subscription)
             self._listen(topic, cls, channel, qos)

@@ -2,8 +2,8 @@
 
 Waits until ``--subscribers`` subscriptions have matched its publisher on ``--topic``,
 publishes ``--count`` FingerSetpoint messages (value = ``--value`` + k mm, 100 Hz), and exits
-at once, as `hems setpoint` and `ros2 topic pub --once` do. ``--best-effort`` publishes best
-effort instead of reliable.
+at once (or after ``--linger`` s), as `ros2 topic pub --once` does. ``--best-effort``
+publishes best effort instead of reliable, ``--latched`` transient local.
 """
 
 from __future__ import annotations
@@ -20,17 +20,21 @@ def main() -> int:
     parser.add_argument("--count", type=int, default=1)
     parser.add_argument("--value", type=float, default=0.0, help="mm")
     parser.add_argument("--best-effort", action="store_true")
+    parser.add_argument("--latched", action="store_true", help="transient local")
+    parser.add_argument("--linger", type=float, default=0.0, help="seconds to stay after publishing")
     args = parser.parse_args()
 
     import rclpy
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     from hems_msgs.msg import FingerSetpoint
 
     rclpy.init()
     node = rclpy.create_node("command_publisher")
     reliability = ReliabilityPolicy.BEST_EFFORT if args.best_effort else ReliabilityPolicy.RELIABLE
-    publisher = node.create_publisher(FingerSetpoint, args.topic, QoSProfile(depth=10, reliability=reliability))
+    durability = DurabilityPolicy.TRANSIENT_LOCAL if args.latched else DurabilityPolicy.VOLATILE
+    publisher = node.create_publisher(FingerSetpoint, args.topic,
+                                      QoSProfile(depth=10, reliability=reliability, durability=durability))
     deadline = time.monotonic() + 30.0
     while publisher.get_subscription_count() < args.subscribers:
         if time.monotonic() > deadline:
@@ -41,6 +45,7 @@ def main() -> int:
     for k in range(args.count):
         publisher.publish(FingerSetpoint(mode="position", value=(args.value + k) * 1e-3))
         time.sleep(0.01)
+    time.sleep(args.linger)
     node.destroy_node()
     rclpy.shutdown()
     return 0

@@ -171,37 +171,53 @@ def offered_reliability(folder: Path, topic: str) -> list[str]:
     return [q["reliability"] for q in entry["offered_qos_profiles"]]
 
 
-def test_a_topic_without_publishers_is_subscribed_at_once_so_one_shot_commands_are_recorded(
-        listener, tmp_path: Path) -> None:
-    """`hems setpoint` and `ros2 topic pub --once` send one message and exit: a recorder that
-    subscribed only once it saw their publisher would match them after they had sent."""
-    output = tmp_path / "commands"
-    recorder = RecorderProcess(output, topics=["/hems/index/setpoint"])
+def record_commands(output: Path, *args: str) -> tuple[RecorderProcess, object]:
+    """Record /hems/index/setpoint (a listener keeps it in the graph) while one command_publisher
+    process with ``args`` runs; the recorder and its bag summary."""
+    recorder = RecorderProcess(output, topics=["/hems/index/setpoint"], discovery_period=0.05)
     try:
         recorder.wait_for_topics(["/hems/index/setpoint"])   # no publisher in the graph yet
-        assert any("before any publisher" in line for line in recorder.log)
-        for value_mm in (5, 12, 18):
-            command("--value", str(value_mm), "--subscribers", "2")   # the listener and the recorder
+        command(*args)
     finally:
         info = recorder.stop()
+    return recorder, info
+
+
+def recorded_values(output: Path) -> list[float]:
+    return list(load_bag(output)["/hems/index/setpoint"]["value"])
+
+
+def test_a_topic_without_publishers_is_subscribed_at_once_so_one_shot_commands_are_recorded(
+        listener, tmp_path: Path) -> None:
+    """`hems setpoint` and `ros2 topic pub --once` publish as soon as their writer has matched:
+    a recorder that subscribed only once it saw that writer would have matched it after the
+    sample was sent, and a volatile reader never gets a sample written before it matched.
+    (The writer here stays until its heartbeat, 3 s, could repair a sample the recorder's
+    reader dropped because its own side of the match came later.)"""
+    # the listener and the recorder matched, then three samples at once
+    recorder, info = record_commands(tmp_path / "commands", "--value", "5", "--count", "3", "--subscribers", "2",
+                                     "--linger", "3.5")
+    assert any("before any publisher" in line for line in recorder.log)
     assert info.topics["/hems/index/setpoint"].count == 3
-    bag = load_bag(output)
-    assert list(bag["/hems/index/setpoint"]["value"]) == pytest.approx([0.005, 0.012, 0.018], abs=1e-12)
+    assert recorded_values(tmp_path / "commands") == pytest.approx([0.005, 0.006, 0.007], abs=1e-12)
     # the bag names the publishers' QoS (rosbag2 metadata), learnt when they appeared
-    assert offered_reliability(output, "/hems/index/setpoint") == ["reliable"]
+    assert offered_reliability(tmp_path / "commands", "/hems/index/setpoint") == ["reliable"]
 
 
 def test_a_waiting_subscription_turns_best_effort_for_a_best_effort_publisher(listener, tmp_path: Path) -> None:
-    output = tmp_path / "late_best_effort"
-    recorder = RecorderProcess(output, topics=["/hems/index/setpoint"], discovery_period=0.05)
-    try:
-        recorder.wait_for_topics(["/hems/index/setpoint"])
-        # a reliable reader never matches a best-effort writer (the listener never does): the
-        # publisher waits for the recorder's new best-effort subscription
-        command("--best-effort", "--subscribers", "1", "--count", "20", "--value", "1")
-    finally:
-        info = recorder.stop()
+    # a reliable reader never matches a best-effort writer (the listener never does): the
+    # publisher waits for the recorder's new best-effort subscription
+    _, info = record_commands(tmp_path / "late_best_effort", "--best-effort", "--subscribers", "1", "--count", "20",
+                              "--value", "1")
     assert info.topics["/hems/index/setpoint"].count == 20
-    assert list(load_bag(output)["/hems/index/setpoint"]["value"]) == pytest.approx(
-        [(1 + k) * 1e-3 for k in range(20)], abs=1e-12)
-    assert offered_reliability(output, "/hems/index/setpoint") == ["best_effort"]
+    assert recorded_values(tmp_path / "late_best_effort") == pytest.approx([(1 + k) * 1e-3 for k in range(20)],
+                                                                           abs=1e-12)
+    assert offered_reliability(tmp_path / "late_best_effort", "/hems/index/setpoint") == ["best_effort"]
+
+
+def test_a_waiting_subscription_takes_a_latched_sample_sent_before_it_matched(listener, tmp_path: Path) -> None:
+    # published before anything matched, kept by the writer for late transient-local readers
+    _, info = record_commands(tmp_path / "late_latched", "--latched", "--subscribers", "0", "--value", "7",
+                              "--linger", "3")
+    assert info.topics["/hems/index/setpoint"].count == 1
+    assert recorded_values(tmp_path / "late_latched") == pytest.approx([0.007], abs=1e-12)
