@@ -110,7 +110,7 @@ def summarize(finger: str, trace: FingerTrace, plan: GraspPlan, phase_starts: li
 
 FOLLOW_FRACTION = 0.1
 """A finger whose error over the last settle window of the approach or the hold exceeds this
-fraction of the setpoint did not follow it (normal runs: about 0.6 % and 0.2 %)."""
+fraction of the setpoint did not follow it (normal demo runs: about 0.3 % and 0.2 %)."""
 
 
 def tracking_report(rows: list[FingerSummary], plan: GraspPlan, fingers) -> str | None:
