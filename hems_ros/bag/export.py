@@ -81,10 +81,10 @@ def _jsonable(value):
 def topic_columns(data: TopicData) -> list[tuple[str, list[str]]]:
     """(column name, cells) of every column of ``data``'s CSV, in file order."""
     # divided, not multiplied by 1e-9: the nearest double to each exact time, so it prints short
-    columns = [("time_s", [repr(v) for v in ((data.log_time_ns - data.start_ns) / 1e9).tolist()]),
-               ("log_time_ns", [str(v) for v in data.log_time_ns.tolist()])]
+    columns = [("time_s", _number_cells((data.log_time_ns - data.start_ns) / 1e9)),
+               ("log_time_ns", _number_cells(data.log_time_ns))]
     if "header.stamp.sec" in data.fields and "header.stamp.nanosec" in data.fields:
-        columns.append(("stamp_s", [repr(v) for v in data.stamp.tolist()]))
+        columns.append(("stamp_s", _number_cells(data.stamp)))
     for name, values in data.fields.items():
         if values.dtype == object:
             columns.append((name, _sequence_cells(values)))

@@ -392,8 +392,7 @@ def ch6_findings(ch6: dict) -> list[Finding]:
     bad = {p: r for p, r in rat.items() if r > 3.0}
     evidence = ""
     if bad:
-        early = min((b for b in validation.onset_bounds(load_params(CH6_PARAMS)) if b.source == "section 5"),
-                    key=lambda b: b.pulse_s)
+        early = validation.earliest_onset(validation.onset_bounds(load_params(CH6_PARAMS)), "section 5")
         evidence = "Plant: " + "; ".join(
             f"{p[13:]}: {100 * s['cooling_share']:.0f} % of the squared error cooling-limited, "
             f"{100 * s['heating_share']:.0f} % heating-limited, RMSE of the rest {s['rmse_unsaturated']:.3f} mm"

@@ -108,8 +108,8 @@ def pack(params: UnitParams) -> np.ndarray:
     p[P_L0] = w.length_m
     p[P_S] = w.cross_section_m2
     p[P_AREA] = w.surface_area_m2
-    p[P_CW] = th.density_kg_m3 * w.volume_m3 * th.specific_heat_j_kg_c
-    p[P_LAT] = th.density_kg_m3 * w.volume_m3 * th.latent_heat_j_kg
+    p[P_CW] = params.wire_heat_capacity_j_per_k
+    p[P_LAT] = params.wire_latent_heat_j
     p[P_RHO0M], p[P_T0M] = el.rho0_martensite_ohm_m, el.t0_martensite_c
     p[P_DRDTM], p[P_DRDSM] = el.drho_dt_martensite_ohm_m_per_c, el.drho_dsigma_martensite_ohm_m_per_pa
     p[P_RHO0A], p[P_T0A] = el.rho0_austenite_ohm_m, el.t0_austenite_c

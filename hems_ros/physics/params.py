@@ -379,6 +379,16 @@ class UnitParams:
         if self.sheath.enabled and not self.sheath.ptfe_inner_diameter_m > self.wire.diameter_m:
             raise ParamError("sheath.ptfe_inner_diameter_m: must be > wire.diameter_m (the wire runs inside)")
 
+    @property
+    def wire_heat_capacity_j_per_k(self) -> float:
+        """rho V c_p of the whole wire (eq. 4.7; Table 4.1: 0.985 J/K)."""
+        return self.thermal.density_kg_m3 * self.wire.volume_m3 * self.thermal.specific_heat_j_kg_c
+
+    @property
+    def wire_latent_heat_j(self) -> float:
+        """rho V dH, the latent heat of the whole wire's transformation (eq. 4.7; Table 4.1: 28.45 J)."""
+        return self.thermal.density_kg_m3 * self.wire.volume_m3 * self.thermal.latent_heat_j_kg
+
     # ----------------------------------------------------------------- conversion
     def to_dict(self) -> dict[str, Any]:
         """Nested plain dict (the YAML layout)."""

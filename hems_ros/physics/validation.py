@@ -63,7 +63,7 @@ def _crossing(temp: np.ndarray, xi: np.ndarray, level: float) -> float:
 
 def _cooling_capacity_ratio(p: UnitParams, temp: np.ndarray, xi: np.ndarray) -> float:
     """Peak of (convective loss / |C dT/dt|) while cooling: 1 without latent heat."""
-    c_w = p.thermal.density_kg_m3 * p.wire.volume_m3 * p.thermal.specific_heat_j_kg_c
+    c_w = p.wire_heat_capacity_j_per_k
     q = heat.convection_loss(temp, p.ambient_temperature_c, p.thermal.h0_w_m2_c, p.thermal.h2_w_m2_c3,
                              p.wire.surface_area_m2)
     rate = -np.gradient(temp, DT)
@@ -209,8 +209,6 @@ def onset_bounds(params: UnitParams | None = None) -> list[OnsetBound]:
     """
     p = params or load_params("sheathed_calibrated")
     rig = scenarios.characterization_rig(p, True)
-    capacity = p.thermal.density_kg_m3 * p.wire.volume_m3 * p.thermal.specific_heat_j_kg_c
-    latent = p.thermal.density_kg_m3 * p.wire.volume_m3 * p.thermal.latent_heat_j_kg
     shift = (scenarios.RIG_MASS_KG * 9.81 + scenarios.RIG_SPRING_PRETENSION_N) / p.wire.cross_section_m2 \
         / p.kinetics.ca_pa_per_c
     pulses = sorted({fact[1] for fact in ONSET_FACTS})
@@ -220,11 +218,17 @@ def onset_bounds(params: UnitParams | None = None) -> list[OnsetBound]:
         f = x_mm / stroke_mm
         out.append(OnsetBound(
             source, pulse, energy, x_mm, f,
-            heat.lossless_temperature_c(energy, f, capacity, latent, p.ambient_temperature_c),
+            heat.lossless_temperature_c(energy, f, p.wire_heat_capacity_j_per_k, p.wire_latent_heat_j,
+                                        p.ambient_temperature_c),
             kinetics.heating_branch_temperature(f, p.kinetics.as0_c + shift, p.kinetics.af0_c + shift),
             kinetics.heating_branch_temperature(f, p.kinetics.as0_c, p.kinetics.af0_c),
             model[pulse].max_displacement_m * 1e3))
     return out
+
+
+def earliest_onset(bounds: list[OnsetBound], source: str) -> OnsetBound:
+    """The shortest pulse of ``source`` among ``bounds``: the earliest the measured wire moved."""
+    return min((b for b in bounds if b.source == source), key=lambda b: b.pulse_s)
 
 
 # ------------------------------------------------------------------ report
@@ -379,7 +383,7 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
           f"{b.lossless_c:.1f} | {b.branch_c:.1f} ({b.branch_unloaded_c:.1f}) | {b.model_displacement_mm:.2f} |"
           for b in ob]
     late = [b for b in ob if b.lossless_c < b.branch_unloaded_c]
-    hems = min((b for b in ob if b.source == "section 5"), key=lambda b: b.pulse_s)
+    hems = earliest_onset(ob, "section 5")
     L += ["", f"Where the bound is below the branch even unloaded ({len(late)} of {len(ob)} rows), no wire with Table 4.1's "
           f"transformation temperatures (As0 {cal.kinetics.as0_c:g}, Af0 {cal.kinetics.af0_c:g} degC) and heat "
           "constants can move as early as the measured one did, whatever its sheath and losses: the measured "
