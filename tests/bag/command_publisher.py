@@ -45,9 +45,11 @@ def main() -> int:
     for k in range(args.count):
         publisher.publish(FingerSetpoint(mode="position", value=(args.value + k) * 1e-3))
         time.sleep(0.01)
-    time.sleep(args.linger)
+    until = time.monotonic() + args.linger
+    while rclpy.ok() and time.monotonic() < until:   # SIGTERM shuts the context down (rclpy's handler)
+        time.sleep(0.05)
     node.destroy_node()
-    rclpy.shutdown()
+    rclpy.try_shutdown()
     return 0
 
 

@@ -216,8 +216,25 @@ def test_a_waiting_subscription_turns_best_effort_for_a_best_effort_publisher(li
 
 
 def test_a_waiting_subscription_takes_a_latched_sample_sent_before_it_matched(listener, tmp_path: Path) -> None:
-    # published before anything matched, kept by the writer for late transient-local readers
-    _, info = record_commands(tmp_path / "late_latched", "--latched", "--subscribers", "0", "--value", "7",
-                              "--linger", "3")
+    output = tmp_path / "late_latched"
+    recorder = RecorderProcess(output, topics=["/hems/index/setpoint"], discovery_period=0.05)
+    publisher = None
+    try:
+        recorder.wait_for_topics(["/hems/index/setpoint"])
+        # published at once, before anything can have matched; the writer keeps it for late
+        # transient-local readers and stays until the recorder has one (discovery between
+        # processes now and then takes seconds, so no fixed wait)
+        publisher = subprocess.Popen([sys.executable, str(COMMAND_SCRIPT), "--latched", "--subscribers", "0",
+                                      "--value", "7", "--linger", "60"], env=child_environment())
+        deadline = time.monotonic() + 30.0
+        while not any("/hems/index/setpoint" in line and "transient_local" in line for line in recorder.log):
+            assert time.monotonic() < deadline, "the recorder never subscribed transient local"
+            time.sleep(0.05)
+        time.sleep(2.0)   # the writer's history reaches the new reader once they have matched
+    finally:
+        if publisher is not None:
+            publisher.terminate()
+            publisher.wait(timeout=10)
+        info = recorder.stop()
     assert info.topics["/hems/index/setpoint"].count == 1
-    assert recorded_values(tmp_path / "late_latched") == pytest.approx([0.007], abs=1e-12)
+    assert recorded_values(output) == pytest.approx([0.007], abs=1e-12)
