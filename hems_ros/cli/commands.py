@@ -115,6 +115,11 @@ def format_status(snap) -> str:
         faults = [c.fault] if c.fault else []
         if s is not None and s.watchdog_tripped:
             faults.append("watchdog")
+        if snap.supervisor is not None and snap.supervisor.state_name == "ENABLED":
+            if s is not None and not s.heating_allowed:
+                faults.append("unit has no heating permission")
+            if not c.active:
+                faults.append("controller inactive")
         if c.rejected_setpoints:
             faults.append(f"{c.rejected_setpoints} rejected ({c.last_rejection})")
         rows.append(f"{finger:<16} {c.mode:<9} {setpoint:>7.2f} {unit:<2} {position:>12.2f} {force:>8.2f} "

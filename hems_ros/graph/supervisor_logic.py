@@ -12,6 +12,17 @@ the actuation unit's duty-watchdog flag held for ``stale_s`` fault too. Outside 
 nothing heats, so a silent stream (a node starting or restarting) only blocks ``enable`` and
 ``reset`` until it is back.
 
+``enable`` and ``reset`` also wait for every unit's state report, and for its duty watchdog
+to be clear: its controller's commands (0 % before ENABLED) reach it. Encoder readings and a
+controller heartbeat do not show that path; right after start-up a unit whose duty reader
+had not yet matched its controller's writer was enabled, its watchdog flag stayed up and
+latched FAULT some 100 ms later (about one ``make demo`` in five).
+
+A unit heats, and a controller computes duty, only once it has taken the ENABLED status
+itself. One that has not (its status reader unmatched) leaves its finger cold while the
+rest of the graph looks healthy, so ENABLED also faults a unit reporting no heating
+permission, or a controller reporting itself inactive, for ``enable_grace_s``.
+
 The encoder and force readings reach the supervisor inside the controller's reports
 (:meth:`SupervisorLogic.unchanged`), so a sensor stream is judged when a report comes: a
 report whose reading has not moved for longer than ``stale_s`` faults that stream. While
@@ -28,7 +39,7 @@ from enum import IntEnum
 
 from hems_ros.graph.transmission import tendon_position
 
-STREAMS = ("encoder", "wire_force", "heartbeat")
+STREAMS = ("encoder", "wire_force", "heartbeat", "unit state")
 
 
 class State(IntEnum):
@@ -47,12 +58,17 @@ class MonitorLimits:
     # A lost controller is already caught within 30 ms by each unit's duty watchdog; the
     # heartbeat only has to name it, so it tolerates the scheduling hiccups of a busy host.
     heartbeat_timeout_s: float = 0.2
+    # the units' permission lapses after 0.5 s without a status; as long again to take it
+    enable_grace_s: float = 0.5
 
     def timeout(self, stream: str) -> float:
-        return self.heartbeat_timeout_s if stream == "heartbeat" else self.stale_s
+        """How old a stream's last message may be for ``enable``: the unit state comes at 20 Hz
+        and, like the heartbeat, is not judged to the tens of milliseconds."""
+        return self.stale_s if stream in ("encoder", "wire_force") else self.heartbeat_timeout_s
 
     def __post_init__(self) -> None:
-        for name in ("stale_s", "max_wire_force_n", "max_tendon_position_m", "heartbeat_timeout_s"):
+        for name in ("stale_s", "max_wire_force_n", "max_tendon_position_m", "heartbeat_timeout_s",
+                     "enable_grace_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} = {value!r}: must be a finite value > 0")
@@ -80,6 +96,8 @@ class SupervisorLogic:
         self._enabled_at = float("inf")
         self._last_check: float | None = None
         self._tripped_since: dict[str, float] = {}
+        self._duty_flag: dict[str, bool] = {}
+        self._not_enabled_since: dict[tuple[str, str], float] = {}
 
     # observations -------------------------------------------------------------
     def saw(self, stream: str, finger: str, now: float) -> None:
@@ -112,12 +130,27 @@ class SupervisorLogic:
         FAULT when the flag has stayed up for ``stale_s`` while ENABLED (a lost controller),
         not for a single late command. Flags raised before enabling do not count.
         """
+        self._duty_flag[finger] = tripped
         if not tripped or self.state != State.ENABLED or stamp <= self._enabled_at:
             self._tripped_since.pop(finger, None)
             return
         since = self._tripped_since.setdefault(finger, stamp)
         if stamp - since >= self.limits.stale_s:
             self._fault(finger, "watchdog", f"duty watchdog tripped for {1e3 * (stamp - since):.0f} ms: no duty commands")
+
+    def sees_enabled(self, finger: str, component: str, enabled: bool, now: float) -> None:
+        """A report of ``component`` ("unit" or "controller") of ``finger``, received at ``now``:
+        whether it has taken the ENABLED status (the unit's heating permission, the controller's
+        ``active``). While ENABLED, reports saying no for ``enable_grace_s`` latch FAULT."""
+        key = (finger, component)
+        if enabled or self.state != State.ENABLED:
+            self._not_enabled_since.pop(key, None)
+            return
+        since = self._not_enabled_since.setdefault(key, max(now, self._enabled_at))
+        if now - since >= self.limits.enable_grace_s:
+            consequence = "it does not heat" if component == "unit" else "it sends 0 % duty"
+            self._fault(finger, f"{component} not enabled",
+                        f"{component} has not taken ENABLED for {1e3 * (now - since):.0f} ms: {consequence}")
 
     def check_streams(self, now: float) -> None:
         """While ENABLED, fault every controller heartbeat silent for longer than its timeout
@@ -146,6 +179,8 @@ class SupervisorLogic:
                     missing.append(f"{finger}: no {stream} yet")
                 elif now - seen > self.limits.timeout(stream):
                     missing.append(f"{finger}: {stream} stale")
+            if self._duty_flag.get(finger):
+                missing.append(f"{finger}: no duty commands reach the unit (its watchdog is tripped)")
         return missing
 
     # commands -----------------------------------------------------------------
@@ -162,6 +197,7 @@ class SupervisorLogic:
                 return False, "cannot enable: " + "; ".join(missing)
             self.state = State.ENABLED
             self._enabled_at = now
+            self._not_enabled_since.clear()
             return True, "ENABLED"
         if command == "disable":
             if self.state in (State.FAULT, State.ESTOP):

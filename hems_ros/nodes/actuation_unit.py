@@ -142,8 +142,10 @@ class ActuationUnitNode(LeanNode):
         self.advance_to(now)
         was_allowed = self.driver.heating_allowed(now)
         self.driver.permit_heating(enabled, now)
-        if was_allowed and not self.driver.heating_allowed(now):
-            self.publish_state()  # the moment heating stopped, for the record
+        if was_allowed != self.driver.heating_allowed(now):
+            # the moment heating stopped, for the record; the moment it was allowed, for the
+            # supervisor, which faults a unit that has not taken its ENABLED
+            self.publish_state()
 
     def on_tick(self) -> None:
         now = seconds(self)
@@ -175,11 +177,13 @@ class ActuationUnitNode(LeanNode):
         if r is None:
             return
         self.state_sequence += 1
-        sec, nanosec = stamp(max(self.driver.time_s, seconds(self)))
+        at = max(self.driver.time_s, seconds(self))
+        sec, nanosec = stamp(at)
         self.state_pub.publish(STATE.encode(STATE.fields(
             header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="",
             finger=self.finger, duty_percent=self.driver.applied_duty,
-            watchdog_tripped=self.driver.watchdog_tripped, wire_temperature_c=r.wire_temperature_c,
+            watchdog_tripped=self.driver.watchdog_tripped, heating_allowed=self.driver.heating_allowed(at),
+            wire_temperature_c=r.wire_temperature_c,
             martensite_fraction=r.martensite_fraction, resistance=r.resistance_ohm, current=r.current_a,
             electrical_power=r.electrical_power_w, electrical_energy=r.energy_joule_j, stress=r.stress_pa,
             strain=r.strain, sheath_temperature_c=r.sheath_temperature_c, slider_position=r.slider_position_m,

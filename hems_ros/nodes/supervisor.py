@@ -5,14 +5,16 @@ Services (std_srvs/Trigger)   /hems/supervisor/{enable,disable,estop,reset}
 Subscribes  /hems/<finger>/controller_status (best effort, heartbeat): also the controller's
             latest encoder and force readings; a stream counts as alive while those readings
             keep changing, so the supervisor need not take 1200 sensor messages a second;
-            /hems/sim/<finger>/state (best effort, duty-watchdog flag)
+            /hems/sim/<finger>/state (best effort, duty-watchdog flag, heating permission)
 Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, transient local; on change and every status_period_s
             /hems/joint_states       sensor_msgs/JointState      tendon position (m) and tendon force (N, as effort)
             /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz
 
 Monitors: stale encoder or force streams (> stale_s, default 50 ms), controller heartbeats
 (> heartbeat_timeout_s, default 200 ms), wire
-over-force (default 50 N), tendon over-travel, duty-watchdog flags. Heating is allowed only
+over-force (default 50 N), tendon over-travel, duty-watchdog flags, and while ENABLED a unit
+or controller that has not taken ENABLED within enable_grace_s (0.5 s). ``enable`` also waits
+for every unit's state with its watchdog clear (its controller's commands arrive). Heating is allowed only
 in ENABLED: the units and controllers drop every duty to 0 as soon as they see any other
 state. FAULT and ESTOP latch until reset. The controller status and state topics are taken
 serialized (hems_ros.nodes.wire), at each check rather than on arrival (a wake-up per message
@@ -50,6 +52,8 @@ PARAMETERS = [
     Spec("stale_s", _LIMITS.stale_s, "a stream silent for longer than this is a fault, s", positive, True),
     Spec("heartbeat_timeout_s", _LIMITS.heartbeat_timeout_s, "a controller heartbeat silent for longer is a fault, s",
          positive, True),
+    Spec("enable_grace_s", _LIMITS.enable_grace_s, "while ENABLED, a unit without heating permission or an "
+         "inactive controller for longer than this is a fault, s", positive, True),
     Spec("max_wire_force_n", _LIMITS.max_wire_force_n, "wire over-force limit, N", positive, True),
     Spec("max_tendon_position_m", _LIMITS.max_tendon_position_m, "tendon over-travel limit, m", positive, True),
     Spec("check_period_s", 0.02, "monitor period, s: the controller status and state messages are taken "
@@ -69,7 +73,8 @@ class SupervisorNode(LeanNode):
         p = declare(self, PARAMETERS)
         self.fingers = tuple(p["fingers"])
         self.logic = SupervisorLogic(self.fingers, MonitorLimits(
-            p["stale_s"], p["max_wire_force_n"], p["max_tendon_position_m"], p["heartbeat_timeout_s"]))
+            p["stale_s"], p["max_wire_force_n"], p["max_tendon_position_m"], p["heartbeat_timeout_s"],
+            p["enable_grace_s"]))
         self.position = {f: float("nan") for f in self.fingers}
         self.force = {f: float("nan") for f in self.fingers}
         self.published = None
@@ -100,6 +105,7 @@ class SupervisorNode(LeanNode):
     def on_controller(self, finger: str, message) -> None:
         now = seconds(self)
         self.logic.saw("heartbeat", finger, now)
+        self.logic.sees_enabled(finger, "controller", message.active, now)
         # a reading counts as fresh when its stamp moved since the last status (receive-side
         # judgement: no clock comparison between hosts)
         encoder = (message.encoder_stamp_sec, message.encoder_stamp_nanosec)
@@ -119,8 +125,11 @@ class SupervisorNode(LeanNode):
         self.publish_if_changed()
 
     def on_state(self, finger: str, message) -> None:
+        now = seconds(self)
+        self.logic.saw("unit state", finger, now)
         self.logic.watchdog(finger, message.watchdog_tripped,
                             seconds_of(message.header_stamp_sec, message.header_stamp_nanosec))
+        self.logic.sees_enabled(finger, "unit", message.heating_allowed, now)
         self.publish_if_changed()
 
     def on_command(self, command: str, response: Trigger.Response) -> Trigger.Response:

@@ -33,8 +33,9 @@ def test_valid_setpoints_pass_unchanged():
 
 def _ready(logic, now):
     for finger in logic.fingers:
-        for stream in ("encoder", "wire_force", "heartbeat"):
+        for stream in ("encoder", "wire_force", "heartbeat", "unit state"):
             logic.saw(stream, finger, now)
+        logic.watchdog(finger, False, now)
 
 
 def _report(logic, finger: str, now: float, encoder_moved: bool = True) -> None:
@@ -92,6 +93,60 @@ def test_a_late_check_does_not_blame_the_streams():
     logic.check_streams(0.2)  # the supervisor itself stalled 190 ms
     assert logic.state == State.ENABLED
     logic.check_streams(0.21)  # on time now, streams still silent: a real fault
+    assert logic.state == State.FAULT
+
+
+def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
+    """A unit whose duty reader has not matched its controller's writer yet shows a tripped
+    watchdog; enabling it then latched FAULT some 100 ms later."""
+    logic = SupervisorLogic(("index", "middle"))
+    for stream in ("encoder", "wire_force", "heartbeat"):
+        logic.saw(stream, "index", 1.0)
+        logic.saw(stream, "middle", 1.0)
+    logic.saw("unit state", "index", 1.0)
+    logic.watchdog("index", False, 1.0)
+    ok, message = logic.request("enable", 1.0)
+    assert not ok and message == "cannot enable: middle: no unit state yet"
+    logic.saw("unit state", "middle", 1.01)
+    logic.watchdog("middle", True, 1.01)
+    ok, message = logic.request("enable", 1.01)
+    assert not ok and message == "cannot enable: middle: no duty commands reach the unit (its watchdog is tripped)"
+    logic.watchdog("middle", False, 1.02)
+    assert logic.request("enable", 1.02) == (True, "ENABLED")
+    ok, message = logic.request("enable", 1.3)   # the 20 Hz state reports stopped 280 ms ago
+    assert "index: unit state stale" in message and "middle: unit state stale" in message
+
+
+@pytest.mark.parametrize("component, consequence", [("unit", "it does not heat"),
+                                                    ("controller", "it sends 0 % duty")])
+def test_a_unit_or_controller_that_has_not_taken_enabled_faults_after_the_grace(component, consequence):
+    logic = SupervisorLogic(("index", "ring"), MonitorLimits(enable_grace_s=0.5))
+    _ready(logic, 1.0)
+    logic.sees_enabled("ring", component, False, 0.9)    # before enabling: nothing to take yet
+    logic.request("enable", 1.0)
+    for k in range(1, 27):              # reports every 20 ms; the grace runs from the first after enabling
+        now = 1.0 + 0.02 * k
+        logic.sees_enabled("index", component, k > 2, now)   # took it after 60 ms
+        logic.sees_enabled("ring", component, False, now)
+        assert logic.state == (State.ENABLED if k < 26 else State.FAULT), now
+    assert [(f.finger, f.kind) for f in logic.faults] == [("ring", f"{component} not enabled")]
+    assert str(logic.faults[0]) == f"ring: {component} has not taken ENABLED for 500 ms: {consequence}"
+
+
+def test_a_brief_lapse_of_the_enabled_view_and_a_new_enable_start_the_grace_again():
+    logic = SupervisorLogic(("index",), MonitorLimits(enable_grace_s=0.5))
+    _ready(logic, 0.0)
+    logic.request("enable", 0.0)
+    logic.sees_enabled("index", "unit", False, 0.4)
+    logic.request("disable", 0.45)
+    _ready(logic, 1.0)
+    logic.request("enable", 1.0)
+    logic.sees_enabled("index", "unit", False, 1.4)      # 1.0 s after the first no, 0.4 s into this ENABLED
+    logic.sees_enabled("index", "unit", True, 1.45)
+    logic.sees_enabled("index", "unit", False, 1.6)     # a lapse (a stalled unit lost its permission)
+    logic.sees_enabled("index", "unit", False, 2.0)
+    assert logic.state == State.ENABLED
+    logic.sees_enabled("index", "unit", False, 2.1)
     assert logic.state == State.FAULT
 
 

@@ -23,3 +23,20 @@ def test_snapshot_waits_for_the_supervisor_beyond_its_listen_time(venv, ros_doma
     finally:
         supervisor.terminate()
         supervisor.wait(timeout=10)
+
+
+def test_status_rows_name_a_unit_or_controller_that_has_not_taken_enabled():
+    from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
+    from hems_ros.cli.commands import format_status
+    from hems_ros.cli.graph_client import Snapshot
+
+    snap = Snapshot(controllers={f: ControllerStatus(finger=f, mode="position", active=f != "middle")
+                                 for f in ("index", "middle", "ring")},
+                    states={f: ActuatorState(finger=f, heating_allowed=f != "ring") for f in ("index", "middle", "ring")},
+                    supervisor=SupervisorStatus(state=SupervisorStatus.ENABLED, state_name="ENABLED"))
+    rows = {line.split()[0]: line for line in format_status(snap).splitlines()}
+    assert rows["index"].endswith("  -")
+    assert rows["middle"].endswith("  controller inactive")
+    assert rows["ring"].endswith("  unit has no heating permission")
+    snap.supervisor = SupervisorStatus(state=SupervisorStatus.IDLE, state_name="IDLE")
+    assert all(format_status(snap).splitlines()[i].endswith("  -") for i in (3, 4, 5))

@@ -12,7 +12,7 @@ def test_enable_judges_the_reports_received_since_the_last_check(context, matche
     from rclpy.parameter import Parameter
     from std_srvs.srv import Trigger
 
-    from hems_msgs.msg import ControllerStatus
+    from hems_msgs.msg import ActuatorState, ControllerStatus
     from hems_ros.nodes import qos
     from hems_ros.nodes.clock_time import to_msg
     from hems_ros.nodes.supervisor import SupervisorNode
@@ -21,12 +21,18 @@ def test_enable_judges_the_reports_received_since_the_last_check(context, matche
     helper = rclpy.create_node("controller_reports", context=context)
     try:
         publisher = matched_publisher(helper, ControllerStatus, "/hems/index/controller_status", qos.CONTROLLER_STATUS)
-        # a controller's report with fresh readings, queued while no check runs (the node is
-        # not spun, so its 20 ms check never takes it)
+        unit = matched_publisher(helper, ActuatorState, "/hems/sim/index/state", qos.SENSOR)
+        # a controller's report with fresh readings and the unit's state, queued while no
+        # check runs (the node is not spun, so its 20 ms check never takes them)
         now = to_msg(time.time())
         publisher.publish(ControllerStatus(finger="index", mode="position", wire_position=0.001, wire_force=4.0,
                                            encoder_stamp=now, force_stamp=now))
+        state = ActuatorState(finger="index", watchdog_tripped=False)
+        state.header.stamp = now
         assert publisher.wait_for_all_acked(Duration(seconds=5))
+        for _ in range(3):   # best effort: nothing acknowledges it, so it goes more than once
+            unit.publish(state)
+            time.sleep(0.03)
         response = supervisor.on_command("enable", Trigger.Response())
         assert response.success, response.message
         assert supervisor.logic.state.name == "ENABLED"

@@ -1,0 +1,114 @@
+"""The supervisor enables only units that get their controller's commands, and faults a unit
+that has not taken its ENABLED (one finger's four nodes in this process, real topics)."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+
+
+def _remapped(*rules: str) -> dict:
+    return {"cli_args": ["--ros-args", *(arg for rule in rules for arg in ("-r", rule))]} if rules else {}
+
+
+@pytest.fixture
+def one_finger(context):
+    """make(unit_remaps=(), controller_remaps=()): the index finger's unit, shoulder module,
+    controller and supervisor, spun on a thread until the test ends; returns the supervisor."""
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.parameter import Parameter
+
+    from hems_ros.nodes.actuation_unit import ActuationUnitNode
+    from hems_ros.nodes.finger_controller import FingerControllerNode
+    from hems_ros.nodes.lean_spin import spin_nodes
+    from hems_ros.nodes.shoulder_module import ShoulderModuleNode
+    from hems_ros.nodes.supervisor import SupervisorNode
+
+    nodes, threads = [], []
+
+    def make(unit_remaps=(), controller_remaps=()):
+        supervisor = SupervisorNode(context=context, parameter_overrides=[Parameter("fingers", value=["index"])])
+        nodes.extend([
+            ActuationUnitNode(context=context, **_remapped(*unit_remaps)),
+            ShoulderModuleNode(context=context),
+            FingerControllerNode(context=context, **_remapped(*controller_remaps)),
+            supervisor])
+
+        def spin():
+            try:
+                spin_nodes(nodes)
+            except ExternalShutdownException:
+                pass
+
+        threads.append(threading.Thread(target=spin, daemon=True))
+        threads[0].start()
+        return supervisor
+
+    yield make
+    context.try_shutdown()
+    for thread in threads:
+        thread.join(timeout=5)
+    for node in nodes:
+        node.destroy_node()
+
+
+def _enable_answers(client, seconds: float) -> list[str]:
+    """The supervisor's answers to enable, asked every 0.3 s until it accepts, or refuses for
+    no stream still coming up ("no ... yet", "stale"), or ``seconds`` pass."""
+    answers = []
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        ok, message = client.call("enable", timeout=5.0)
+        answers.append(message)
+        if ok or not ("yet" in message or "stale" in message):
+            break
+        client.spin_for(0.3)
+    return answers
+
+
+def _supervisor_state(client, seconds: float):
+    client.spin_for(seconds)
+    return client.snapshot(("index",), 0.3).supervisor
+
+
+def test_enable_is_refused_while_the_units_watchdog_sees_no_duty_commands(one_finger):
+    """The controller runs and reports fresh readings, but its commands go to another topic:
+    before, this unit was enabled and the watchdog flag latched FAULT about 100 ms later."""
+    from hems_ros.cli.graph_client import GraphClient
+
+    supervisor = one_finger(controller_remaps=["/hems/index/duty:=/hems/index/duty_nowhere"])
+    with GraphClient("enable_gate") as client:
+        answers = _enable_answers(client, 10.0)
+        assert answers[-1] == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)", answers
+        assert supervisor.logic.state.name == "IDLE"
+
+
+def test_a_unit_that_has_not_taken_enabled_faults_within_the_grace(one_finger):
+    """The unit's status reader listens on another topic: it gets its duty commands (watchdog
+    clear, enable accepted) but never the permission to heat."""
+    from hems_ros.cli.graph_client import GraphClient
+
+    supervisor = one_finger(unit_remaps=["/hems/supervisor/status:=/hems/supervisor/status_nowhere"])
+    with GraphClient("enable_gate") as client:
+        answers = _enable_answers(client, 10.0)
+        assert answers[-1] == "ENABLED", answers
+        status = _supervisor_state(client, 1.0)
+        assert status.state_name == "FAULT"
+        assert status.faults[0].startswith("index: unit has not taken ENABLED for "), status.faults
+        assert status.faults[0].endswith(" ms: it does not heat")
+        held_ms = float(status.faults[0].split(" for ")[1].split(" ms")[0])
+        assert 500 <= held_ms <= 700
+    assert supervisor.logic.faults[0].kind == "unit not enabled"
+
+
+def test_a_healthy_finger_is_enabled_and_stays_enabled(one_finger):
+    from hems_ros.cli.graph_client import GraphClient
+
+    one_finger()
+    with GraphClient("enable_gate") as client:
+        answers = _enable_answers(client, 10.0)
+        assert answers[-1] == "ENABLED", answers
+        status = _supervisor_state(client, 1.0)
+        assert status.state_name == "ENABLED", status.faults
