@@ -12,8 +12,9 @@ the actuation unit's duty-watchdog flag held for ``stale_s`` fault too. Outside 
 nothing heats, so a silent stream (a node starting or restarting) only blocks ``enable`` and
 ``reset`` until it is back.
 
-``enable`` and ``reset`` also wait for every unit's state report, and for its duty watchdog
-to be clear: its controller's commands (0 % before ENABLED) reach it. Encoder readings and a
+``enable`` and ``reset`` also wait for every unit's state report, and for its controller's
+commands (0 % before ENABLED) to reach it: a watchdog flag up since the unit started, or
+for ``stale_s``, refuses them (:meth:`SupervisorLogic.watchdog`). Encoder readings and a
 controller heartbeat do not show that path; right after start-up a unit whose duty reader
 had not yet matched its controller's writer was enabled, its watchdog flag stayed up and
 latched FAULT some 100 ms later (about one ``make demo`` in five).
@@ -96,7 +97,10 @@ class SupervisorLogic:
         self._enabled_at = float("inf")
         self._last_check: float | None = None
         self._tripped_since: dict[str, float] = {}
-        self._duty_flag: dict[str, bool] = {}
+        # receive time of the first report of a unit's current watchdog trip (-inf: the unit
+        # has not reported its commands arriving yet), and the units that have
+        self._duty_trip: dict[str, float] = {}
+        self._duty_seen: set[str] = set()
         self._not_enabled_since: dict[tuple[str, str], float] = {}
 
     # observations -------------------------------------------------------------
@@ -123,14 +127,20 @@ class SupervisorLogic:
             self._fault(finger, "over-travel", f"tendon over-travel {1e3 * travel:.1f} mm "
                                 f"(limit {1e3 * self.limits.max_tendon_position_m:g} mm)")
 
-    def watchdog(self, finger: str, tripped: bool, stamp: float) -> None:
-        """A unit's watchdog flag as of ``stamp``.
+    def watchdog(self, finger: str, tripped: bool, stamp: float, now: float) -> None:
+        """A unit's watchdog flag as of ``stamp`` (the unit's clock), received at ``now``.
 
         The unit already forced its duty to 0 when the flag rose; the supervisor latches a
         FAULT when the flag has stayed up for ``stale_s`` while ENABLED (a lost controller),
         not for a single late command. Flags raised before enabling do not count.
+        ``enable`` and ``reset`` are refused while the flag has been up for ``stale_s``, or
+        since the unit started: a single late command does not hold them up either.
         """
-        self._duty_flag[finger] = tripped
+        if not tripped:
+            self._duty_trip.pop(finger, None)
+            self._duty_seen.add(finger)
+        else:
+            self._duty_trip.setdefault(finger, now if finger in self._duty_seen else -math.inf)
         if not tripped or self.state != State.ENABLED or stamp <= self._enabled_at:
             self._tripped_since.pop(finger, None)
             return
@@ -179,7 +189,7 @@ class SupervisorLogic:
                     missing.append(f"{finger}: no {stream} yet")
                 elif now - seen > self.limits.timeout(stream):
                     missing.append(f"{finger}: {stream} stale")
-            if self._duty_flag.get(finger):
+            if now - self._duty_trip.get(finger, math.inf) >= self.limits.stale_s:
                 missing.append(f"{finger}: no duty commands reach the unit (its watchdog is tripped)")
         return missing
 

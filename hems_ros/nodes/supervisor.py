@@ -14,7 +14,7 @@ Monitors: stale encoder or force streams (> stale_s, default 50 ms), controller 
 (> heartbeat_timeout_s, default 200 ms), wire
 over-force (default 50 N), tendon over-travel, duty-watchdog flags, and while ENABLED a unit
 or controller that has not taken ENABLED within enable_grace_s (0.5 s). ``enable`` also waits
-for every unit's state with its watchdog clear (its controller's commands arrive). Heating is allowed only
+for every unit's state and for its controller's commands to reach it (watchdog flag not held). Heating is allowed only
 in ENABLED: the units and controllers drop every duty to 0 as soon as they see any other
 state. FAULT and ESTOP latch until reset. The controller status and state topics are taken
 serialized (hems_ros.nodes.wire), at each check rather than on arrival (a wake-up per message
@@ -128,7 +128,7 @@ class SupervisorNode(LeanNode):
         now = seconds(self)
         self.logic.saw("unit state", finger, now)
         self.logic.watchdog(finger, message.watchdog_tripped,
-                            seconds_of(message.header_stamp_sec, message.header_stamp_nanosec))
+                            seconds_of(message.header_stamp_sec, message.header_stamp_nanosec), now)
         self.logic.sees_enabled(finger, "unit", message.heating_allowed, now)
         self.publish_if_changed()
 

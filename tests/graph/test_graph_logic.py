@@ -35,7 +35,7 @@ def _ready(logic, now):
     for finger in logic.fingers:
         for stream in ("encoder", "wire_force", "heartbeat", "unit state"):
             logic.saw(stream, finger, now)
-        logic.watchdog(finger, False, now)
+        logic.watchdog(finger, False, now, now)
 
 
 def _report(logic, finger: str, now: float, encoder_moved: bool = True) -> None:
@@ -104,16 +104,24 @@ def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
         logic.saw(stream, "index", 1.0)
         logic.saw(stream, "middle", 1.0)
     logic.saw("unit state", "index", 1.0)
-    logic.watchdog("index", False, 1.0)
+    logic.watchdog("index", False, 1.0, 1.0)
     ok, message = logic.request("enable", 1.0)
     assert not ok and message == "cannot enable: middle: no unit state yet"
     logic.saw("unit state", "middle", 1.01)
-    logic.watchdog("middle", True, 1.01)
+    logic.watchdog("middle", True, 1.01, 1.01)       # no command since the unit started
     ok, message = logic.request("enable", 1.01)
     assert not ok and message == "cannot enable: middle: no duty commands reach the unit (its watchdog is tripped)"
-    logic.watchdog("middle", False, 1.02)
-    assert logic.request("enable", 1.02) == (True, "ENABLED")
-    ok, message = logic.request("enable", 1.3)   # the 20 Hz state reports stopped 280 ms ago
+    logic.watchdog("middle", False, 1.02, 1.02)
+    logic.watchdog("index", True, 1.02, 1.02)         # one late command: not held for stale_s yet
+    assert logic.request("enable", 1.04) == (True, "ENABLED")
+    logic.request("disable", 1.05)
+    for finger in ("index", "middle"):
+        for stream in ("encoder", "wire_force", "heartbeat", "unit state"):
+            logic.saw(stream, finger, 1.06)
+    ok, message = logic.request("enable", 1.07)       # held for 50 ms now (a lost controller)
+    assert not ok and message == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)"
+    logic.watchdog("index", False, 1.08, 1.08)
+    ok, message = logic.request("enable", 1.3)   # the 20 Hz state reports stopped 220 ms ago
     assert "index: unit state stale" in message and "middle: unit state stale" in message
 
 
@@ -161,15 +169,15 @@ def test_estop_latches_and_over_force_faults_in_any_state():
 
 def test_watchdog_flag_faults_only_when_held_while_enabled():
     logic = SupervisorLogic(("index",))
-    logic.watchdog("index", True, 0.5)
+    logic.watchdog("index", True, 0.5, 0.5)
     assert logic.state == State.IDLE
     _ready(logic, 1.0)
     logic.request("enable", 1.0)
-    logic.watchdog("index", True, 1.01)
-    logic.watchdog("index", False, 1.03)
-    logic.watchdog("index", True, 1.05)
+    logic.watchdog("index", True, 1.01, 1.01)
+    logic.watchdog("index", False, 1.03, 1.03)
+    logic.watchdog("index", True, 1.05, 1.05)
     assert logic.state == State.ENABLED
-    logic.watchdog("index", True, 1.10)
+    logic.watchdog("index", True, 1.10, 1.10)
     assert logic.state == State.FAULT and logic.faults[0].kind == "watchdog"
 
 
