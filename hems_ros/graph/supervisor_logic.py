@@ -8,13 +8,13 @@ Monitors (per finger, on the receive times of the streams, in the node's clock):
 at or above ``max_wire_force_n`` and tendon travel beyond ``max_tendon_position_m`` fault in
 any state; while ENABLED, an encoder or wire-force stream without a new reading for longer
 than ``stale_s``, a controller heartbeat silent for longer than ``heartbeat_timeout_s``, and
-the actuation unit's duty-watchdog flag held for ``stale_s`` fault too. Outside ENABLED
+the actuation unit's duty-watchdog flag held for ``watchdog_hold_s`` fault too. Outside ENABLED
 nothing heats, so a silent stream (a node starting or restarting) only blocks ``enable`` and
 ``reset`` until it is back.
 
 ``enable`` and ``reset`` also wait for every unit's state report, and for its controller's
 commands (0 % before ENABLED) to reach it: a watchdog flag up since the unit started, or
-for ``stale_s``, refuses them (:meth:`SupervisorLogic.watchdog`). Encoder readings and a
+for ``watchdog_hold_s``, refuses them (:meth:`SupervisorLogic.watchdog`). Encoder readings and a
 controller heartbeat do not show that path; right after start-up a unit whose duty reader
 had not yet matched its controller's writer was enabled, its watchdog flag stayed up and
 latched FAULT some 100 ms later (about one ``make demo`` in five).
@@ -59,6 +59,10 @@ class MonitorLimits:
     # A lost controller is already caught within 30 ms by each unit's duty watchdog; the
     # heartbeat only has to name it, so it tolerates the scheduling hiccups of a busy host.
     heartbeat_timeout_s: float = 0.2
+    # The unit's own watchdog has already set its duty to 0 after 30 ms; the flag held this
+    # long means a lost controller. At 50 ms, one `make demo` in six latched FAULT for a
+    # controller held up 86 ms by the busy host just after ENABLED (54-86 ms in earlier runs).
+    watchdog_hold_s: float = 0.2
     # the units' permission lapses after 0.5 s without a status; as long again to take it
     enable_grace_s: float = 0.5
 
@@ -69,7 +73,7 @@ class MonitorLimits:
 
     def __post_init__(self) -> None:
         for name in ("stale_s", "max_wire_force_n", "max_tendon_position_m", "heartbeat_timeout_s",
-                     "enable_grace_s"):
+                     "watchdog_hold_s", "enable_grace_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} = {value!r}: must be a finite value > 0")
@@ -131,9 +135,9 @@ class SupervisorLogic:
         """A unit's watchdog flag as of ``stamp`` (the unit's clock), received at ``now``.
 
         The unit already forced its duty to 0 when the flag rose; the supervisor latches a
-        FAULT when the flag has stayed up for ``stale_s`` while ENABLED (a lost controller),
+        FAULT when the flag has stayed up for ``watchdog_hold_s`` while ENABLED (a lost controller),
         not for a single late command. Flags raised before enabling do not count.
-        ``enable`` and ``reset`` are refused while the flag has been up for ``stale_s``, or
+        ``enable`` and ``reset`` are refused while the flag has been up for ``watchdog_hold_s``, or
         since the unit started: a single late command does not hold them up either.
         """
         if not tripped:
@@ -145,7 +149,7 @@ class SupervisorLogic:
             self._tripped_since.pop(finger, None)
             return
         since = self._tripped_since.setdefault(finger, stamp)
-        if stamp - since >= self.limits.stale_s:
+        if stamp - since >= self.limits.watchdog_hold_s:
             self._fault(finger, "watchdog", f"duty watchdog tripped for {1e3 * (stamp - since):.0f} ms: no duty commands")
 
     def sees_enabled(self, finger: str, component: str, enabled: bool, now: float) -> None:
@@ -189,7 +193,7 @@ class SupervisorLogic:
                     missing.append(f"{finger}: no {stream} yet")
                 elif now - seen > self.limits.timeout(stream):
                     missing.append(f"{finger}: {stream} stale")
-            if now - self._duty_trip.get(finger, math.inf) >= self.limits.stale_s:
+            if now - self._duty_trip.get(finger, math.inf) >= self.limits.watchdog_hold_s:
                 missing.append(f"{finger}: no duty commands reach the unit (its watchdog is tripped)")
         return missing
 

@@ -12,7 +12,8 @@ Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, trans
 
 Monitors: stale encoder or force streams (> stale_s, default 50 ms), controller heartbeats
 (> heartbeat_timeout_s, default 200 ms), wire
-over-force (default 50 N), tendon over-travel, duty-watchdog flags, and while ENABLED a unit
+over-force (default 50 N), tendon over-travel, duty-watchdog flags held watchdog_hold_s
+(200 ms), and while ENABLED a unit
 or controller that has not taken ENABLED within enable_grace_s (0.5 s). ``enable`` also waits
 for every unit's state and for its controller's commands to reach it (watchdog flag not held). Heating is allowed only
 in ENABLED: the units and controllers drop every duty to 0 as soon as they see any other
@@ -22,6 +23,8 @@ cost more than the message).
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from sensor_msgs.msg import JointState
@@ -40,6 +43,8 @@ from hems_ros.nodes.runner import run_node
 from hems_ros.nodes.wire import seconds_of
 
 _LIMITS = MonitorLimits()
+
+
 def _fingers(value) -> str | None:
     unknown = [f for f in value if f not in names.FINGERS]
     if not value or unknown:
@@ -52,6 +57,8 @@ PARAMETERS = [
     Spec("stale_s", _LIMITS.stale_s, "a stream silent for longer than this is a fault, s", positive, True),
     Spec("heartbeat_timeout_s", _LIMITS.heartbeat_timeout_s, "a controller heartbeat silent for longer is a fault, s",
          positive, True),
+    Spec("watchdog_hold_s", _LIMITS.watchdog_hold_s, "a unit's duty-watchdog flag held this long while ENABLED "
+         "is a fault (a lost controller; the unit itself stops heating after 3 control periods), s", positive, True),
     Spec("enable_grace_s", _LIMITS.enable_grace_s, "while ENABLED, a unit without heating permission or an "
          "inactive controller for longer than this is a fault, s", positive, True),
     Spec("max_wire_force_n", _LIMITS.max_wire_force_n, "wire over-force limit, N", positive, True),
@@ -72,9 +79,8 @@ class SupervisorNode(LeanNode):
         super().__init__("supervisor", namespace=names.NAMESPACE, **node_kwargs)
         p = declare(self, PARAMETERS)
         self.fingers = tuple(p["fingers"])
-        self.logic = SupervisorLogic(self.fingers, MonitorLimits(
-            p["stale_s"], p["max_wire_force_n"], p["max_tendon_position_m"], p["heartbeat_timeout_s"],
-            p["enable_grace_s"]))
+        self.logic = SupervisorLogic(self.fingers, MonitorLimits(**{
+            f.name: p[f.name] for f in dataclasses.fields(MonitorLimits)}))
         self.position = {f: float("nan") for f in self.fingers}
         self.force = {f: float("nan") for f in self.fingers}
         self.published = None

@@ -112,16 +112,16 @@ def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
     ok, message = logic.request("enable", 1.01)
     assert not ok and message == "cannot enable: middle: no duty commands reach the unit (its watchdog is tripped)"
     logic.watchdog("middle", False, 1.02, 1.02)
-    logic.watchdog("index", True, 1.02, 1.02)         # one late command: not held for stale_s yet
-    assert logic.request("enable", 1.04) == (True, "ENABLED")
-    logic.request("disable", 1.05)
+    logic.watchdog("index", True, 1.02, 1.02)         # late commands: not held for watchdog_hold_s yet
     for finger in ("index", "middle"):
         for stream in ("encoder", "wire_force", "heartbeat", "unit state"):
-            logic.saw(stream, finger, 1.06)
-    ok, message = logic.request("enable", 1.07)       # held for 50 ms now (a lost controller)
+            logic.saw(stream, finger, 1.19)
+    assert logic.request("enable", 1.2) == (True, "ENABLED")
+    logic.request("disable", 1.21)
+    ok, message = logic.request("enable", 1.23)       # held past 200 ms now (a lost controller)
     assert not ok and message == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)"
-    logic.watchdog("index", False, 1.08, 1.08)
-    ok, message = logic.request("enable", 1.3)   # the 20 Hz state reports stopped 220 ms ago
+    logic.watchdog("index", False, 1.24, 1.24)
+    ok, message = logic.request("enable", 1.45)   # the 20 Hz state reports stopped 260 ms ago
     assert "index: unit state stale" in message and "middle: unit state stale" in message
 
 
@@ -176,9 +176,14 @@ def test_watchdog_flag_faults_only_when_held_while_enabled():
     logic.watchdog("index", True, 1.01, 1.01)
     logic.watchdog("index", False, 1.03, 1.03)
     logic.watchdog("index", True, 1.05, 1.05)
+    logic.watchdog("index", True, 1.14, 1.14)    # a controller held up 90 ms by a busy host
+    logic.watchdog("index", False, 1.15, 1.15)
+    logic.watchdog("index", True, 1.2, 1.2)
+    logic.watchdog("index", True, 1.39, 1.39)
     assert logic.state == State.ENABLED
-    logic.watchdog("index", True, 1.10, 1.10)
+    logic.watchdog("index", True, 1.41, 1.41)     # held past 200 ms: a lost controller
     assert logic.state == State.FAULT and logic.faults[0].kind == "watchdog"
+    assert str(logic.faults[0]) == "index: duty watchdog tripped for 210 ms: no duty commands"
 
 
 def test_unit_driver_watchdog_permission_and_bad_commands_end_at_zero_duty():
