@@ -13,7 +13,7 @@ UNITS = {"mm": ("position", 1e-3), "m": ("position", 1.0), "N": ("force", 1.0)}
 
 
 def register(subparsers) -> None:
-    for command, text in (("enable", "allow heating: supervisor to ENABLED (needs every stream alive)"),
+    for command, text in (("enable", "allow heating: supervisor to ENABLED (needs every stream alive and every unit getting its controller's commands)"),
                           ("disable", "stop heating: supervisor to DISABLED"),
                           ("estop", "emergency stop: every duty to 0, latched until reset"),
                           ("reset", "clear a latched FAULT or ESTOP (refused while a fault persists)")):
