@@ -99,7 +99,7 @@ def test_a_late_check_does_not_blame_the_streams():
 def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
     """A unit whose duty reader has not matched its controller's writer yet shows a tripped
     watchdog; enabling it then latched FAULT some 100 ms later."""
-    logic = SupervisorLogic(("index", "middle"))
+    logic = SupervisorLogic(("index", "middle"), MonitorLimits(watchdog_hold_s=0.5))
     for stream in ("encoder", "wire_force", "heartbeat"):
         logic.saw(stream, "index", 1.0)
         logic.saw(stream, "middle", 1.0)
@@ -118,10 +118,13 @@ def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
             logic.saw(stream, finger, 1.19)
     assert logic.request("enable", 1.2) == (True, "ENABLED")
     logic.request("disable", 1.21)
-    ok, message = logic.request("enable", 1.23)       # held past 200 ms now (a lost controller)
+    for finger in ("index", "middle"):
+        for stream in ("encoder", "wire_force", "heartbeat", "unit state"):
+            logic.saw(stream, finger, 1.52)
+    ok, message = logic.request("enable", 1.53)       # held past 500 ms now: the commands do not arrive
     assert not ok and message == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)"
-    logic.watchdog("index", False, 1.24, 1.24)
-    ok, message = logic.request("enable", 1.45)   # the 20 Hz state reports stopped 260 ms ago
+    logic.watchdog("index", False, 1.54, 1.54)
+    ok, message = logic.request("enable", 1.8)   # the 20 Hz state reports stopped 280 ms ago
     assert "index: unit state stale" in message and "middle: unit state stale" in message
 
 
@@ -168,7 +171,7 @@ def test_estop_latches_and_over_force_faults_in_any_state():
 
 
 def test_watchdog_flag_faults_only_when_held_while_enabled():
-    logic = SupervisorLogic(("index",))
+    logic = SupervisorLogic(("index",), MonitorLimits(watchdog_hold_s=0.5))
     logic.watchdog("index", True, 0.5, 0.5)
     assert logic.state == State.IDLE
     _ready(logic, 1.0)
@@ -179,11 +182,14 @@ def test_watchdog_flag_faults_only_when_held_while_enabled():
     logic.watchdog("index", True, 1.14, 1.14)    # a controller held up 90 ms by a busy host
     logic.watchdog("index", False, 1.15, 1.15)
     logic.watchdog("index", True, 1.2, 1.2)
-    logic.watchdog("index", True, 1.39, 1.39)
+    logic.watchdog("index", True, 1.41, 1.41)    # a lost duty sample's repair: 210 ms
+    logic.watchdog("index", False, 1.42, 1.42)
+    logic.watchdog("index", True, 1.5, 1.5)
+    logic.watchdog("index", True, 1.99, 1.99)
     assert logic.state == State.ENABLED
-    logic.watchdog("index", True, 1.41, 1.41)     # held past 200 ms: a lost controller
+    logic.watchdog("index", True, 2.01, 2.01)     # held past 500 ms: the commands do not arrive
     assert logic.state == State.FAULT and logic.faults[0].kind == "watchdog"
-    assert str(logic.faults[0]) == "index: duty watchdog tripped for 210 ms: no duty commands"
+    assert str(logic.faults[0]) == "index: duty watchdog tripped for 510 ms: no duty commands"
 
 
 def test_unit_driver_watchdog_permission_and_bad_commands_end_at_zero_duty():
