@@ -16,9 +16,9 @@ duty-watchdog flags held watchdog_hold_s (500 ms), and while ENABLED a unit or c
 that has not taken ENABLED within enable_grace_s (0.5 s). ``enable`` also waits for every
 unit's state and for its controller's commands to reach it (watchdog flag not held).
 Heating is allowed only in ENABLED: the units and controllers drop every duty to 0 as soon
-as they see any other state. FAULT and ESTOP latch until reset. The controller status and state topics are taken
-serialized (hems_ros.nodes.wire), at each check rather than on arrival (a wake-up per message
-cost more than the message).
+as they see any other state. FAULT and ESTOP latch until reset. The controller status and
+state topics are taken serialized (hems_ros.nodes.wire), at each check rather than on
+arrival (a wake-up per message cost more than the message).
 """
 
 from __future__ import annotations
