@@ -105,12 +105,11 @@ class SupervisorLogic:
         self._last_seen: dict[tuple[str, str], float] = {}
         self._enabled_at = float("inf")
         self._last_check: float | None = None
-        self._tripped_since: dict[str, float] = {}
-        # receive time of the first report of a unit's current watchdog trip (-inf: the unit
-        # has not reported its commands arriving yet), and the units that have
-        self._duty_trip: dict[str, float] = {}
+        # (finger, condition) -> receive time of the first report of a condition that has held
+        # since: a unit's watchdog trip (-inf while the unit has not yet reported its commands
+        # arriving), a unit or controller not having taken ENABLED
+        self._since: dict[tuple[str, str], float] = {}
         self._duty_seen: set[str] = set()
-        self._not_enabled_since: dict[tuple[str, str], float] = {}
 
     # observations -------------------------------------------------------------
     def saw(self, stream: str, finger: str, now: float) -> None:
@@ -136,40 +135,42 @@ class SupervisorLogic:
             self._fault(finger, "over-travel", f"tendon over-travel {1e3 * travel:.1f} mm "
                                 f"(limit {1e3 * self.limits.max_tendon_position_m:g} mm)")
 
-    def watchdog(self, finger: str, tripped: bool, stamp: float, now: float) -> None:
-        """A unit's watchdog flag as of ``stamp`` (the unit's clock), received at ``now``.
+    def _held(self, finger: str, condition: str, holding: bool, now: float, start: float | None = None) -> float:
+        """How long ``condition`` has held for ``finger`` by the report received at ``now``
+        (0 when this report ends it); ``start``: when it began, if not at this report."""
+        key = (finger, condition)
+        if not holding:
+            self._since.pop(key, None)
+            return 0.0
+        since = self._since.setdefault(key, now if start is None else start)
+        # while ENABLED only the time since enabling counts (a condition left from an earlier
+        # ENABLED, or from before this one, starts again at the enable)
+        return now - (max(since, self._enabled_at) if self.state == State.ENABLED else since)
+
+    def watchdog(self, finger: str, tripped: bool, now: float) -> None:
+        """A unit's watchdog flag, received at ``now``.
 
         The unit already forced its duty to 0 when the flag rose; the supervisor latches a
         FAULT when the flag has stayed up for ``watchdog_hold_s`` while ENABLED (a lost controller),
-        not for a single late command. Flags raised before enabling do not count.
+        not for a single late command. Time up before enabling does not count.
         ``enable`` and ``reset`` are refused while the flag has been up for ``watchdog_hold_s``, or
         since the unit started: a single late command does not hold them up either.
         """
+        held = self._held(finger, "watchdog", tripped, now, None if finger in self._duty_seen else -math.inf)
         if not tripped:
-            self._duty_trip.pop(finger, None)
             self._duty_seen.add(finger)
-        else:
-            self._duty_trip.setdefault(finger, now if finger in self._duty_seen else -math.inf)
-        if not tripped or self.state != State.ENABLED or stamp <= self._enabled_at:
-            self._tripped_since.pop(finger, None)
-            return
-        since = self._tripped_since.setdefault(finger, stamp)
-        if stamp - since >= self.limits.watchdog_hold_s:
-            self._fault(finger, "watchdog", f"duty watchdog tripped for {1e3 * (stamp - since):.0f} ms: no duty commands")
+        elif self.state == State.ENABLED and held >= self.limits.watchdog_hold_s:
+            self._fault(finger, "watchdog", f"duty watchdog tripped for {1e3 * held:.0f} ms: no duty commands")
 
     def sees_enabled(self, finger: str, component: str, enabled: bool, now: float) -> None:
         """A report of ``component`` ("unit" or "controller") of ``finger``, received at ``now``:
         whether it has taken the ENABLED status (the unit's heating permission, the controller's
         ``active``). While ENABLED, reports saying no for ``enable_grace_s`` latch FAULT."""
-        key = (finger, component)
-        if enabled or self.state != State.ENABLED:
-            self._not_enabled_since.pop(key, None)
-            return
-        since = self._not_enabled_since.setdefault(key, max(now, self._enabled_at))
-        if now - since >= self.limits.enable_grace_s:
+        condition = f"{component} not enabled"
+        held = self._held(finger, condition, not enabled and self.state == State.ENABLED, now)
+        if held >= self.limits.enable_grace_s:
             consequence = "it does not heat" if component == "unit" else "it sends 0 % duty"
-            self._fault(finger, f"{component} not enabled",
-                        f"{component} has not taken ENABLED for {1e3 * (now - since):.0f} ms: {consequence}")
+            self._fault(finger, condition, f"{component} has not taken ENABLED for {1e3 * held:.0f} ms: {consequence}")
 
     def check_streams(self, now: float) -> None:
         """While ENABLED, fault every controller heartbeat silent for longer than its timeout
@@ -198,7 +199,7 @@ class SupervisorLogic:
                     missing.append(f"{finger}: no {stream} yet")
                 elif now - seen > self.limits.timeout(stream):
                     missing.append(f"{finger}: {stream} stale")
-            if now - self._duty_trip.get(finger, math.inf) >= self.limits.watchdog_hold_s:
+            if now - self._since.get((finger, "watchdog"), math.inf) >= self.limits.watchdog_hold_s:
                 missing.append(f"{finger}: no duty commands reach the unit (its watchdog is tripped)")
         return missing
 
@@ -216,7 +217,6 @@ class SupervisorLogic:
                 return False, "cannot enable: " + "; ".join(missing)
             self.state = State.ENABLED
             self._enabled_at = now
-            self._not_enabled_since.clear()
             return True, "ENABLED"
         if command == "disable":
             if self.state in (State.FAULT, State.ESTOP):

@@ -39,7 +39,6 @@ from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.params import Spec, declare, positive
 from hems_ros.nodes.runner import run_node
-from hems_ros.nodes.wire import seconds_of
 
 _LIMITS = MonitorLimits()
 
@@ -132,8 +131,7 @@ class SupervisorNode(LeanNode):
     def on_state(self, finger: str, message) -> None:
         now = seconds(self)
         self.logic.saw("unit state", finger, now)
-        self.logic.watchdog(finger, message.watchdog_tripped,
-                            seconds_of(message.header_stamp_sec, message.header_stamp_nanosec), now)
+        self.logic.watchdog(finger, message.watchdog_tripped, now)
         self.logic.sees_enabled(finger, "unit", message.heating_allowed, now)
         self.publish_if_changed()
 

@@ -8,7 +8,7 @@ import pytest
 from hems_ros.graph import names
 from hems_ros.graph.grasp import FingerSummary, FingerTrace, GraspPlan, PhaseTracker, summarize, tracking_report
 from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
-from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
+from hems_ros.graph.supervisor_logic import STREAMS, MonitorLimits, State, SupervisorLogic
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.physics import ActuationUnit, load_params
 from hems_ros.launcher import Graph, GraphOptions
@@ -31,11 +31,16 @@ def test_valid_setpoints_pass_unchanged():
     assert validate("force", 10.0, SetpointLimits()).mode == "force"
 
 
-def _ready(logic, now):
+def _streams_seen(logic, now, streams=STREAMS):
     for finger in logic.fingers:
-        for stream in ("encoder", "wire_force", "heartbeat", "unit state"):
+        for stream in streams:
             logic.saw(stream, finger, now)
-        logic.watchdog(finger, False, now, now)
+
+
+def _ready(logic, now):
+    _streams_seen(logic, now)
+    for finger in logic.fingers:
+        logic.watchdog(finger, False, now)
 
 
 def _report(logic, finger: str, now: float, encoder_moved: bool = True) -> None:
@@ -100,30 +105,24 @@ def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
     """A unit whose duty reader has not matched its controller's writer yet shows a tripped
     watchdog; enabling it then latched FAULT some 100 ms later."""
     logic = SupervisorLogic(("index", "middle"), MonitorLimits(watchdog_hold_s=0.5))
-    for stream in ("encoder", "wire_force", "heartbeat"):
-        logic.saw(stream, "index", 1.0)
-        logic.saw(stream, "middle", 1.0)
+    _streams_seen(logic, 1.0, ("encoder", "wire_force", "heartbeat"))
     logic.saw("unit state", "index", 1.0)
-    logic.watchdog("index", False, 1.0, 1.0)
+    logic.watchdog("index", False, 1.0)
     ok, message = logic.request("enable", 1.0)
     assert not ok and message == "cannot enable: middle: no unit state yet"
     logic.saw("unit state", "middle", 1.01)
-    logic.watchdog("middle", True, 1.01, 1.01)       # no command since the unit started
+    logic.watchdog("middle", True, 1.01)       # no command since the unit started
     ok, message = logic.request("enable", 1.01)
     assert not ok and message == "cannot enable: middle: no duty commands reach the unit (its watchdog is tripped)"
-    logic.watchdog("middle", False, 1.02, 1.02)
-    logic.watchdog("index", True, 1.02, 1.02)         # late commands: not held for watchdog_hold_s yet
-    for finger in ("index", "middle"):
-        for stream in ("encoder", "wire_force", "heartbeat", "unit state"):
-            logic.saw(stream, finger, 1.19)
+    logic.watchdog("middle", False, 1.02)
+    logic.watchdog("index", True, 1.02)         # late commands: not held for watchdog_hold_s yet
+    _streams_seen(logic, 1.19)
     assert logic.request("enable", 1.2) == (True, "ENABLED")
     logic.request("disable", 1.21)
-    for finger in ("index", "middle"):
-        for stream in ("encoder", "wire_force", "heartbeat", "unit state"):
-            logic.saw(stream, finger, 1.52)
+    _streams_seen(logic, 1.52)
     ok, message = logic.request("enable", 1.53)       # held past 500 ms now: the commands do not arrive
     assert not ok and message == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)"
-    logic.watchdog("index", False, 1.54, 1.54)
+    logic.watchdog("index", False, 1.54)
     ok, message = logic.request("enable", 1.8)   # the 20 Hz state reports stopped 280 ms ago
     assert "index: unit state stale" in message and "middle: unit state stale" in message
 
@@ -172,22 +171,22 @@ def test_estop_latches_and_over_force_faults_in_any_state():
 
 def test_watchdog_flag_faults_only_when_held_while_enabled():
     logic = SupervisorLogic(("index",), MonitorLimits(watchdog_hold_s=0.5))
-    logic.watchdog("index", True, 0.5, 0.5)
+    logic.watchdog("index", True, 0.5)
     assert logic.state == State.IDLE
     _ready(logic, 1.0)
     logic.request("enable", 1.0)
-    logic.watchdog("index", True, 1.01, 1.01)
-    logic.watchdog("index", False, 1.03, 1.03)
-    logic.watchdog("index", True, 1.05, 1.05)
-    logic.watchdog("index", True, 1.14, 1.14)    # a controller held up 90 ms by a busy host
-    logic.watchdog("index", False, 1.15, 1.15)
-    logic.watchdog("index", True, 1.2, 1.2)
-    logic.watchdog("index", True, 1.41, 1.41)    # a lost duty sample's repair: 210 ms
-    logic.watchdog("index", False, 1.42, 1.42)
-    logic.watchdog("index", True, 1.5, 1.5)
-    logic.watchdog("index", True, 1.99, 1.99)
+    logic.watchdog("index", True, 1.01)
+    logic.watchdog("index", False, 1.03)
+    logic.watchdog("index", True, 1.05)
+    logic.watchdog("index", True, 1.14)    # a controller held up 90 ms by a busy host
+    logic.watchdog("index", False, 1.15)
+    logic.watchdog("index", True, 1.2)
+    logic.watchdog("index", True, 1.41)    # a lost duty sample's repair: 210 ms
+    logic.watchdog("index", False, 1.42)
+    logic.watchdog("index", True, 1.5)
+    logic.watchdog("index", True, 1.99)
     assert logic.state == State.ENABLED
-    logic.watchdog("index", True, 2.01, 2.01)     # held past 500 ms: the commands do not arrive
+    logic.watchdog("index", True, 2.01)     # held past 500 ms: the commands do not arrive
     assert logic.state == State.FAULT and logic.faults[0].kind == "watchdog"
     assert str(logic.faults[0]) == "index: duty watchdog tripped for 510 ms: no duty commands"
 
