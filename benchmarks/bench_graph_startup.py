@@ -24,7 +24,7 @@ from bench_graph_joins import fault_kind  # reserves this run's ROS domain
 
 from hems_ros.bag.recording import RecorderProcess
 from hems_ros.cli.graph_client import GraphClient
-from hems_ros.cli.up import graph_topics
+from hems_ros.cli.up import wait_until_recording
 from hems_ros.graph import names
 from hems_ros.launcher import Graph, GraphOptions
 
@@ -39,11 +39,7 @@ def start_once(composed: bool, heat_s: float, bag: Path) -> str | None:
     recorder = RecorderProcess(bag)
     try:
         with GraphClient("hems_bench_startup") as client:
-            deadline = time.monotonic() + READY_TIMEOUT_S
-            for finger in names.FINGERS:
-                while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
-                    pass
-            recorder.wait_for_topics(graph_topics(names.FINGERS), timeout=max(1.0, deadline - time.monotonic()))
+            wait_until_recording(client, recorder, names.FINGERS, time.monotonic() + READY_TIMEOUT_S)
             ok, message = client.enable_when_ready(READY_TIMEOUT_S, retry_s=0.5)
             if not ok:
                 raise RuntimeError(f"could not enable: {graph.with_exits(message)}")

@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from hems_ros.cli import grasp
-from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, graph_topics, stop_recorder
+from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder, wait_until_recording
 from hems_ros.launcher import Graph
 
 
@@ -52,18 +52,12 @@ def run(args: argparse.Namespace) -> int:
           flush=True)
     try:
         with GraphClient("hems_demo") as client:
-            # The controllers start at position 0 already; sending it creates the setpoint
-            # publishers now, so the recorder is subscribed before the first real setpoint.
-            deadline = time.monotonic() + args.ready_timeout
-            for finger in options.fingers:
-                while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
-                    pass
-            listener = grasp.GraspListener(client, options.fingers)   # matched while nothing heats
             try:
-                recorder.wait_for_topics(graph_topics(options.fingers), timeout=max(1.0, deadline - time.monotonic()))
+                wait_until_recording(client, recorder, options.fingers, time.monotonic() + args.ready_timeout)
             except (TimeoutError, RuntimeError) as error:
                 print(f"demo: {error}", file=sys.stderr)
                 return 1
+            listener = grasp.GraspListener(client, options.fingers)   # matched while nothing heats
             ok, message = client.enable_when_ready(args.ready_timeout)
             if not ok:
                 print(f"demo: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, graph_topics, stop_recorder
+from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder, wait_until_recording
 from hems_ros.graph import names, transmission
 
 
@@ -82,11 +82,7 @@ def run(args: argparse.Namespace) -> int:
     finished = None
     try:
         with GraphClient("hems_step") as client:
-            deadline = time.monotonic() + args.ready_timeout
-            for finger in options.fingers:  # creates the setpoint publishers before recording starts
-                while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
-                    pass
-            recorder.wait_for_topics(graph_topics(options.fingers), timeout=max(1.0, deadline - time.monotonic()))
+            wait_until_recording(client, recorder, options.fingers, time.monotonic() + args.ready_timeout)
             ok, message = client.enable_when_ready(args.ready_timeout)
             if not ok:
                 print(f"step: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)

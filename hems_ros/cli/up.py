@@ -45,6 +45,17 @@ def graph_topics(fingers) -> list[str]:
     return topics
 
 
+def wait_until_recording(client, recorder, fingers, deadline: float) -> None:
+    """Send every finger's controller its start setpoint (position 0), which creates the
+    client's setpoint publishers, then wait until ``recorder`` holds :func:`graph_topics`,
+    setpoints included, so that the run's first real setpoint is recorded. ``deadline`` is a
+    time.monotonic() value; the recorder's TimeoutError or RuntimeError passes through."""
+    for finger in fingers:
+        while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
+            pass
+    recorder.wait_for_topics(graph_topics(fingers), timeout=max(1.0, deadline - time.monotonic()))
+
+
 def bag_folder(record, prefix: str) -> Path:
     """The folder ``--record`` asks for; ValueError if it is already used (checked before the graph starts)."""
     folder = default_bag(prefix) if record is True else Path(record)
