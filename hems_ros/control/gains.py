@@ -34,10 +34,20 @@ the gains act on a *scaled* error ``e = scale * (r - y)``, the scale depending o
     band at 400 per N is 0.31 N wide, and the derivative term differentiates that rate
     once more. :data:`FORCE_MODE_BPID` is the force-mode set used for chapter 6: Kd = 0
     (the measured force already contains the rate), an error in units of 10 mN
-    (proportional band 1.25 N, the noise moves the duty by 2.4 % rms) and Ki = 0.5 to hold
-    the force without the error a lower Kp leaves (0.42 N at 100 per N with Ki = 0).
-    Swept in the lockstep (docs/experiments.md): MACSI falls from 11-32 to 2-3 %/sample,
-    the steady-state errors are 0.04 N (step) and 0.03 N (staircase).
+    (proportional band 2.5 N at Kp = 0.4, the noise moves the duty by 1.2 % rms) and
+    Ki = 0.2 to hold the force without the error a lower Kp leaves (0.42 N at 100 per N
+    with Ki = 0). Kp and Ki were chosen on the lockstep sweep of
+    :func:`hems_ros.experiments.findings.force_gain_sweep` (docs/experiments.md): the
+    dissertation reports no overshoot on the force steps, and the earlier Kp 0.8, Ki 0.5
+    saturated the duty for two or three samples on each 4 N staircase jump, so the wire's
+    first burst of speed carried the force 0.23 N past the 16 and 20 N levels (without
+    sensor noise). Kp 0.4, Ki 0.2 passes no level by more than 0.06 N, without the noise
+    and with it (eight noise seeds), and leaves steady-state errors of about 0.05 N (step)
+    and 0.02 N (staircase), the dissertation's 0.05 and 0.04 N. It approaches more slowly:
+    the RMSE grows from 0.26 to 0.42 N on the step (Table 6.2: 0.12 N) and from 0.75 / 2.91
+    to 0.99 / 3.11 N on the 0.125 / 0.25 Hz sines, which the cooling wire limits either way
+    (Table 6.2: 0.10 / 0.18 N). Kp 0.5, Ki 0.3 was faster but passed a level by 0.096 N
+    with one of the seeds. MACSI is about 1.2-1.4 %/sample (11-32 with the Table 5.1 gains).
 
 The scales are fields of every gain set so a tuned force set can change them explicitly.
 Validation rejects negative, NaN and infinite gains at construction, naming the gain.
@@ -124,7 +134,7 @@ TABLE_5_1 = MappingProxyType(
 )
 """Dissertation Table 5.1 gain sets by strategy name, in the units of the module docstring."""
 
-FORCE_MODE_BPID = BPIDGains(kp=0.8, ki=0.5, kd=0.0, kb=1.0, force_scale=100.0)
+FORCE_MODE_BPID = BPIDGains(kp=0.4, ki=0.2, kd=0.0, kb=1.0, force_scale=100.0)
 """BPID gains for force mode on the HEMS unit (module docstring): Kp in %/(10 mN),
 Ki in %/(10 mN s), Kb in 1/(10 mN). Position mode keeps Table 5.1."""
 

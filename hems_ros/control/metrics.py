@@ -11,9 +11,11 @@ scaled by the caller) and u is the duty in %. Errors are r - y.
   R = 4.2 ohm.
 * Step figures on the segments between reference jumps (:func:`step_segments`): rise time
   10-90 % (the dissertation does not state its definition; 10-90 % is the usual one and
-  both fractions are parameters), overshoot past the new level in the unit of y,
-  steady-state error |mean(r - y)| over the last ``window`` seconds of the segment (a
-  bias, separate from the oscillation that chapter 6 reports on its own).
+  both fractions are parameters), overshoot (the first peak past the new level, in the
+  unit of y), hold excursion (the largest excursion past the level anywhere in the segment,
+  which also counts a later ripple about the level: chapter 6 reports that oscillation
+  apart from "no overshoot"), steady-state error |mean(r - y)| over the last ``window``
+  seconds of the segment (a bias, separate from the oscillation).
 * Chapter 6 takes RMSE on ascending parts (sine, ramp) or stationary parts (steps):
   :func:`ascending_mask`, :func:`stationary_mask`, :func:`segment_mask`.
 """
@@ -113,11 +115,33 @@ def rise_time(t, y, seg: StepSegment, lo: float = 0.1, hi: float = 0.9) -> float
     return float(t[seg.start + reached_hi[0]] - t[seg.start + reached_lo[0]])
 
 
-def overshoot(y, seg: StepSegment) -> float:
-    """Largest excursion of y past the new level in the direction of the jump (>= 0)."""
+def _past_level(y, seg: StepSegment):
+    """How far y is past the new level of ``seg`` in the direction of the jump (+ = beyond)."""
     (y,) = _arrays(y)
     sign = 1.0 if seg.after >= seg.before else -1.0
-    return float(max(0.0, np.max(sign * (y[seg.start : seg.stop] - seg.after))))
+    return sign * (y[seg.start : seg.stop] - seg.after)
+
+
+def overshoot(y, seg: StepSegment) -> float:
+    """First peak of y past the new level (>= 0): the largest excursion from the first
+    sample at or beyond the level to the next sample back short of it (or the segment's end).
+
+    A response that stays beyond the level (an SMA wire held there by its hysteresis) counts
+    in full; a later ripple about the level once it came back does not (:func:`hold_excursion`).
+    """
+    past = _past_level(y, seg)
+    reached = np.flatnonzero(past >= 0)
+    if reached.size == 0:
+        return 0.0
+    first = int(reached[0])
+    back = np.flatnonzero(past[first:] < 0)
+    end = past.size if back.size == 0 else first + int(back[0])
+    return float(past[first:end].max())
+
+
+def hold_excursion(y, seg: StepSegment) -> float:
+    """Largest excursion of y past the new level anywhere in ``seg`` (>= 0)."""
+    return float(max(0.0, np.max(_past_level(y, seg))))
 
 
 def steady_state_error(t, r, y, seg: StepSegment, window: float = 1.0) -> float:

@@ -70,3 +70,6 @@ CH6_TABLES = {
 }
 CH6_SS_ERROR = {"ch6_position_step": 0.03, "ch6_position_staircase": 0.01,
                 "ch6_force_step": 0.05, "ch6_force_staircase": 0.04}
+CH6_HOLD = {"force": "about 0.1"}
+"""Oscillation about the level while a force is held (digest section 5, N, text not table);
+the position tests report none (no limit cycles) without a figure."""

@@ -167,9 +167,11 @@ def figures(t, r, y, u, mode: str, segment: str = "all", rest: float | None = No
     or stationary parts by :func:`settled_mask`); ``iae`` is the sample sum of |e| in mm
     or N (Table 5.3 prints it /1e3); ``macsi`` in % per sample; ``apc_w`` by the digest's
     formula. On piecewise-constant references: ``rise_time_s`` (10-90 %, mean over the
-    rising jumps), ``overshoot`` (largest over the jumps, mm or N, on ``y_true`` when given:
-    force-sensor noise is not a motion of the wire) and ``ss_error`` (largest |mean error|
-    over the last second of the jumps that rise); nan otherwise.
+    rising jumps), ``overshoot`` (first peak past the new level, largest over the jumps, mm
+    or N, on ``y_true`` when given: force-sensor noise is not a motion of the wire),
+    ``excursion`` (the same over the whole of each plateau, so the hold ripple counts too)
+    and ``ss_error`` (largest |mean error| over the last second of the jumps that rise);
+    nan otherwise.
     """
     unit = 1e3 if mode == "position" else 1.0
     r_u, y_u = np.asarray(r) * unit, np.asarray(y) * unit
@@ -185,6 +187,7 @@ def figures(t, r, y, u, mode: str, segment: str = "all", rest: float | None = No
     out["rise_time_s"] = float(np.mean([metrics.rise_time(t, y_u, g) for g in rising])) if rising else math.nan
     y_os = y_u if y_true is None else np.asarray(y_true) * unit
     out["overshoot"] = max((metrics.overshoot(y_os, g) for g in segs), default=math.nan)
+    out["excursion"] = max((metrics.hold_excursion(y_os, g) for g in segs), default=math.nan)
     out["ss_error"] = max((metrics.steady_state_error(t, r_u, y_u, g) for g in rising), default=math.nan)
     return out
 

@@ -16,9 +16,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from hems_ros.control import FORCE_MODE_BPID  # noqa: E402
 from hems_ros.experiments.dissertation import (  # noqa: E402
     CH5_PROTOCOLS, CH5_RISE_TIME_S, CH5_SS_ERROR_MM, CH5_STRATEGIES, CH5_TABLES, CH6_FORCE,
-    CH6_POSITION, CH6_SS_ERROR, CH6_TABLES, PROTOCOL_LABELS, STRATEGY_LABELS,
+    CH6_HOLD, CH6_POSITION, CH6_SS_ERROR, CH6_TABLES, PROTOCOL_LABELS, STRATEGY_LABELS,
 )
 from hems_ros.experiments.findings import Finding  # noqa: E402
 
@@ -71,8 +72,9 @@ def ch6_tables(ch6: dict) -> str:
         title, unit, table = CH6_TABLES[kind]
         lines += [f"**{title}** (dissertation / ours / ratio)", "",
                   "| reference | RMSE " + unit + " | mean power W (APC) | rise time s | ss error "
-                  + unit + " | overshoot " + unit + " | model mean electrical power W |",
-                  "|---|---|---|---|---|---|---|"]
+                  + unit + " | overshoot " + unit + " | hold excursion " + unit
+                  + " | model mean electrical power W |",
+                  "|---|---|---|---|---|---|---|---|"]
         for p in names:
             m, d = ch6[p].metrics, table[p]
             ss_d = CH6_SS_ERROR.get(p, math.nan)
@@ -80,8 +82,9 @@ def ch6_tables(ch6: dict) -> str:
                 f"| {PROTOCOL_LABELS[p]} | {_num(d['rmse'], 3)} / {_num(m['rmse'], 3)} / "
                 f"{_ratio(m['rmse'], d['rmse'])} | {_num(d['apc_w'])} / {_num(m['apc_w'])} / "
                 f"{_ratio(m['apc_w'], d['apc_w'])} | {_num(d['rise_time_s'])} / {_num(m['rise_time_s'])} | "
-                f"{_num(ss_d)} / {_num(m['ss_error'], 3)} | 0 / {_num(m['overshoot'])} | "
-                f"{ch6[p].power_w.mean():.1f} |")
+                f"{_num(ss_d)} / {_num(m['ss_error'], 3)} | 0 / {_num(m['overshoot'], 3)} | "
+                f"{CH6_HOLD.get(kind, '-') if math.isfinite(m['excursion']) else '-'} / "
+                f"{_num(m['excursion'], 3)} | {ch6[p].power_w.mean():.1f} |")
         lines.append("")
     return "\n".join(lines)
 
@@ -93,6 +96,10 @@ def findings_md(findings: list[Finding]) -> str:
     if missed:
         lines += ["", "Not reproduced, and why:", ""]
         lines += [f"- **{f.claim}.** {f.evidence}" for f in missed]
+    chosen = [f for f in findings if f.reproduced and f.evidence]
+    if chosen:
+        lines += ["", "Reproduced, and what it rests on:", ""]
+        lines += [f"- **{f.claim}.** {f.evidence}" for f in chosen]
     return "\n".join(lines) + "\n"
 
 
@@ -160,10 +167,13 @@ SETUP_CH5 = ("Straight sheathed actuator with a 40 N hanging mass (`config/physi
              "0.51 against 0.16), so the validated set stays the plant.")
 SETUP_CH6 = ("HEMS index unit (`config/physics/ch6_hems_index.yaml`: x2 pulley, glove as a bias spring "
              "pretensioned 2 N on the tendon, capstan and glove friction), BPID with Table 5.1 gains on "
-             "the encoder (position) and `FORCE_MODE_BPID` (Kp 0.8, Ki 0.5, Kd 0, Kb 1, error in 10 mN; "
-             "why: hems_ros/control/gains.py) on the force sensor (0.03 N rms noise). Position RMSE on "
-             "ascending parts (sine, ramp) or on plateaus once the rise is over (steps); force "
-             "references run from the wire's rest tension (4 N: 2 N behind the x2 pulley) to 20 N.")
+             f"the encoder (position) and `FORCE_MODE_BPID` (Kp {FORCE_MODE_BPID.kp:g}, Ki "
+             f"{FORCE_MODE_BPID.ki:g}, Kd {FORCE_MODE_BPID.kd:g}, Kb {FORCE_MODE_BPID.kb:g}, error in 10 mN; "
+             "why: hems_ros/control/gains.py and the force overshoot finding) on the force sensor "
+             "(0.03 N rms noise). Position RMSE on ascending parts (sine, ramp) or on plateaus once the "
+             "rise is over (steps); force references run from the wire's rest tension (4 N: 2 N behind "
+             "the x2 pulley) to 20 N. Overshoot is the first peak past each new level; hold excursion "
+             "the largest distance past it anywhere on the plateau (the ripple while holding).")
 
 
 def _figure_list(paths: list[Path], rel: str) -> str:

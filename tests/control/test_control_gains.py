@@ -34,7 +34,7 @@ def test_scales_default_to_micrometres_and_force_scale():
 
 def test_force_mode_bpid_set():
     # Kd 0 (the HEMS force already carries the contraction rate), error in 10 mN, Ki holds it.
-    assert FORCE_MODE_BPID == BPIDGains(kp=0.8, ki=0.5, kd=0.0, kb=1.0, force_scale=100.0)
+    assert FORCE_MODE_BPID == BPIDGains(kp=0.4, ki=0.2, kd=0.0, kb=1.0, force_scale=100.0)
     assert FORCE_MODE_BPID.scale_for("force") == 100.0
 
 

@@ -68,6 +68,24 @@ def test_step_figures_down_and_not_reached():
     assert m.overshoot([1, 1, 0.95, 0.9, 0.8, 0.7, 0.6, 0.5], seg) == 0.0
 
 
+def test_overshoot_is_the_first_peak_and_hold_excursion_the_largest():
+    r = [0, 0, 1, 1, 1, 1, 1, 1, 1, 1]
+    # reaches the level at k = 3, peaks 0.04 over it, back short at k = 5; a later ripple of 0.07
+    y = [0, 0, 0.6, 1.0, 1.04, 0.99, 1.0, 1.07, 0.98, 1.0]
+    (seg,) = m.step_segments(r)
+    assert m.overshoot(y, seg) == pytest.approx(0.04)
+    assert m.hold_excursion(y, seg) == pytest.approx(0.07)
+    # never back short of the level (held there): the whole rest of the segment counts
+    held = [0, 0, 0.6, 1.0, 1.04, 1.02, 1.08, 1.05, 1.03, 1.01]
+    assert m.overshoot(held, seg) == pytest.approx(0.08) == m.hold_excursion(held, seg)
+    # downward: the first dip below 0 counts, the later one does not
+    (down,) = m.step_segments([1, 1, 0, 0, 0, 0, 0])
+    y_down = [1, 1, 0.2, -0.03, 0.01, -0.05, 0.0]
+    assert m.overshoot(y_down, down) == pytest.approx(0.03)
+    assert m.hold_excursion(y_down, down) == pytest.approx(0.05)
+    assert m.overshoot([1, 1, 0.5, 0.2, 0.1, 0.1, 0.1], down) == 0.0
+
+
 def test_ascending_mask():
     assert m.ascending_mask([0, 1, 1, 0.5, 2]).tolist() == [False, True, False, False, True]
 

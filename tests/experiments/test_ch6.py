@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import pytest
 
+from hems_ros.control import FORCE_MODE_BPID
+from hems_ros.experiments.chapters import CH6_PARAMS, force_protocol, rest_wire_tension
 from hems_ros.experiments.dissertation import CH6_TABLES
-from hems_ros.experiments.findings import authority_split, force_gain_sweep, force_noise_free
-
-FORCE_STEPS = ("ch6_force_step", "ch6_force_staircase")
+from hems_ros.experiments.findings import FORCE_STEPS, authority_split, force_gain_sweep, force_noise_free
+from hems_ros.experiments.lockstep import run_protocol
+from hems_ros.physics import load_params
 
 
 def test_all_runs_complete(ch6_runs):
@@ -23,25 +25,42 @@ def test_force_steady_state_error_at_most_01_n_with_noise(ch6_runs, protocol):
 
 
 @pytest.mark.parametrize("protocol", FORCE_STEPS)
-def test_force_overshoot_documented(ch6_runs, ch6_found, protocol):
-    # Not reproduced: 0.18-0.24 N past the level, the first samples after the staircase's jumps and
-    # the hold ripple of the sensor noise (docs/experiments.md); 1-2 N with the Table 5.1 gains.
-    assert not ch6_found["force_no_overshoot"].reproduced
-    assert 0.1 < ch6_runs[protocol].metrics["overshoot"] < 0.3
-    evidence = ch6_found["force_no_overshoot"].evidence
-    assert "Without sensor noise" in evidence and "No force gain set of a sweep" in evidence
+def test_force_steps_do_not_overshoot(ch6_runs, ch6_found, protocol):
+    # first peak of the wire force past each new level, with the sensor noise
+    assert ch6_runs[protocol].metrics["overshoot"] <= 0.1
+    assert ch6_found["force_no_overshoot"].reproduced
 
 
-def test_force_step_without_noise_does_not_overshoot():
-    assert force_noise_free()["ch6_force_step"] <= 0.1
+def test_force_steps_without_noise_do_not_overshoot():
+    assert max(force_noise_free().values()) <= 0.1
 
 
-def test_no_force_gain_set_of_the_sweep_keeps_the_noisy_steps_within_01_n():
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_force_steps_do_not_overshoot_with_other_noise_seeds(seed):
+    prm = load_params(CH6_PARAMS).replace({"force_sensor.seed": seed})
+    rest = rest_wire_tension(prm)
+    for name in FORCE_STEPS:
+        assert run_protocol(force_protocol(name, rest), "bpid", prm, FORCE_MODE_BPID).metrics["overshoot"] <= 0.1
+
+
+@pytest.mark.parametrize("protocol", FORCE_STEPS)
+def test_force_hold_ripple_is_reported_apart(ch6_runs, ch6_found, protocol):
+    # The noise-driven ripple over the plateau (the dissertation's "oscillation of about 0.1 N")
+    # is larger than the first peak and shown in its own column and in the finding.
+    m = ch6_runs[protocol].metrics
+    assert 0.05 < m["excursion"] < 0.2
+    assert m["excursion"] > 2 * m["overshoot"]
+    assert "hold ripple" in ch6_found["force_no_overshoot"].evidence
+
+
+def test_force_gain_sweep_shows_what_the_gains_trade():
     sweep = force_gain_sweep()
-    assert min(v["noisy"] for v in sweep.values()) > 0.1
-    # without the noise some sets approach with at most 0.06 N, so what the noise adds is the ripple
-    assert min(v["quiet"] for v in sweep.values()) <= 0.06
-    assert sweep[(0.8, 0.5)]["quiet"] > 0.2     # FORCE_MODE_BPID: the first samples after a 4 N jump
+    ours, fast = sweep[(FORCE_MODE_BPID.kp, FORCE_MODE_BPID.ki)], sweep[(0.8, 0.5)]
+    # the faster set passes a staircase level by more than 0.2 N without noise: the first samples
+    # after a 4 N jump at full duty; it follows the step more closely in exchange
+    assert fast["quiet"] > 0.2 and ours["quiet"] <= 0.06
+    assert fast["rmse_step"] < ours["rmse_step"]
+    assert ours["ss_error"] <= 0.06
 
 
 @pytest.mark.parametrize("protocol", FORCE_STEPS + ("ch6_force_sine_0.125", "ch6_force_sine_0.25"))
