@@ -178,16 +178,20 @@ class _WaitSet:
         wait_set.wait(timeout_ns)
 
     def run_ready(self, on_ready=None) -> None:
-        """Run the callbacks of the ready entities: timers, then subscriptions (one message each,
-        or ``on_ready(subscription)``), then services."""
+        """Run the callbacks of the ready entities: subscriptions (one message each, or
+        ``on_ready(subscription)``), then timers, then services.
+
+        Messages before timers: the nodes' timers judge what has arrived (a controller's idle
+        status reports its last readings, a unit's duty watchdog the last command, the
+        supervisor's monitor the last reports). After the process was not scheduled for a
+        while, both are ready at once; timers first reported the readings from before the
+        pause while newer ones were queued (a controller's idle status with a 106 ms old
+        encoder stamp latched a "stale encoder" FAULT just after enabling, one `make demo`
+        in three), and each message's callback restarts the timer it makes unnecessary.
+        """
         wait_set = self.wait_set
         # a kind the set does not hold is not asked for (a module has neither timers nor
         # services in it)
-        for pointer in wait_set.get_ready_entities("timer") if self.timers else ():
-            timer = self.timers[pointer]
-            if timer.handle.is_timer_ready():
-                timer.handle.call_timer()
-                timer.callback()
         for pointer in wait_set.get_ready_entities("subscription") if self.subscriptions else ():
             subscription = self.subscriptions[pointer]
             if on_ready is not None:
@@ -196,5 +200,10 @@ class _WaitSet:
             taken = subscription.handle.take_message(subscription.msg_type, subscription.raw)
             if taken is not None:
                 subscription.callback(taken[0])
+        for pointer in wait_set.get_ready_entities("timer") if self.timers else ():
+            timer = self.timers[pointer]
+            if timer.handle.is_timer_ready():
+                timer.handle.call_timer()
+                timer.callback()
         for pointer in wait_set.get_ready_entities("service") if self.services else ():
             _serve(self.services[pointer])

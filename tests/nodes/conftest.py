@@ -32,3 +32,17 @@ def matched_publisher():
         return publisher
 
     return make
+
+
+@pytest.fixture
+def one_round(context):
+    """one_round(node): wait once on ``node``'s subscriptions and timers in the nodes' spin
+    loop (hems_ros.nodes.lean_spin) and run what is ready, as a node process does."""
+    from hems_ros.nodes import lean_spin
+
+    def run(node) -> None:
+        rounds = iter([True])
+        lean_spin.loop(context, lambda: (list(node.subscriptions), list(node.timers), []),
+                       keep_going=lambda: next(rounds, False))
+
+    return run

@@ -79,3 +79,45 @@ def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_statu
     finally:
         helper.destroy_node()
         node.destroy_node()
+
+
+def test_after_a_pause_the_controller_reports_the_queued_encoder_reading_not_the_old_one(context, matched_publisher,
+                                                                                        one_round):
+    # A controller process not scheduled for longer than the idle period wakes with its idle
+    # timer ready and encoder readings queued; an idle status sent first repeated the reading
+    # from before the pause, which the supervisor took for a stale encoder (FAULT).
+    import rclpy
+
+    from hems_msgs.msg import EncoderReading
+    from hems_ros.nodes import qos
+    from hems_ros.nodes.finger_controller import FingerControllerNode
+
+    node = FingerControllerNode(context=context)
+    helper = rclpy.create_node("encoder_stand_in", context=context)
+    reported = []
+    publish_status = node.publish_status
+
+    def recording_status() -> None:
+        publish_status()
+        reported.append(node.encoder_stamp)
+
+    node.publish_status = recording_status
+    try:
+        publisher = matched_publisher(helper, EncoderReading, "/hems/index/encoder", qos.SENSOR)
+        reading = EncoderReading(finger="index", counts=10, position=1e-5, resolution=1e-6, sequence=1)
+        reading.header.stamp.sec = 1
+        publisher.publish(reading)
+        time.sleep(0.05)
+        one_round(node)
+        assert node.encoder_stamp == (1, 0)
+        reading.header.stamp.sec, reading.sequence = 2, 2
+        publisher.publish(reading)
+        time.sleep(0.15)   # longer than the 0.1 s idle period
+        assert node.idle_timer.is_ready()
+        reported.clear()
+        one_round(node)
+        assert node.encoder_stamp == (2, 0)
+        assert (1, 0) not in reported
+    finally:
+        helper.destroy_node()
+        node.destroy_node()

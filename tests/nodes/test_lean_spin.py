@@ -142,3 +142,25 @@ def test_lean_spin_serves_the_parameter_services(ros_domain_id: int) -> None:
         done = answer(executor, lambda: client.set_parameters([Parameter("gain", value=0.8)]))
         assert done is not None and done.results[0].successful
         assert node.get_parameter("gain").value == 0.8
+
+
+def test_a_queued_message_runs_before_a_timer_ready_at_the_same_wake_up(context, matched_publisher, one_round) -> None:
+    import rclpy
+    from std_msgs.msg import Int32
+
+    from hems_ros.nodes.lean_node import LeanNode
+
+    order = []
+    node = LeanNode("lean_spin_order", context=context)
+    helper = rclpy.create_node("lean_spin_order_sender", context=context)
+    try:
+        node.create_timer(0.05, lambda: order.append("timer"))
+        node.create_subscription(Int32, "/lean_spin_order/numbers", lambda m: order.append(f"message {m.data}"), 10)
+        publisher = matched_publisher(helper, Int32, "/lean_spin_order/numbers", 10)
+        publisher.publish(Int32(data=1))
+        time.sleep(0.2)    # the node is not spun: the timer expires while the message waits
+        one_round(node)
+        assert order == ["message 1", "timer"]
+    finally:
+        helper.destroy_node()
+        node.destroy_node()
