@@ -42,8 +42,10 @@ def register(subparsers) -> None:
 
 
 def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.0) -> dict[str, float]:
-    """RMSE (whole step), overshoot and steady-state error (mean over its last ``settle_s``), tendon mm."""
+    """RMSE (whole step), overshoot (first peak, :func:`hems_ros.control.metrics.overshoot`) and
+    steady-state error (mean over its last ``settle_s``), tendon mm."""
     from hems_ros.bag import load_bag
+    from hems_ros.control import metrics
 
     bag = load_bag(bag_path, topics=[names.topic(finger, "encoder"), names.topic(finger, "setpoint")])
     encoder, setpoint = bag[names.topic(finger, "encoder")], bag[names.topic(finger, "setpoint")]
@@ -53,7 +55,7 @@ def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.
     during = (t >= start) & (t < end)
     settled = (t >= end - settle_s) & (t < end)
     return {"rmse_mm": float(np.sqrt(np.mean((y[during] - height) ** 2))),
-            "overshoot_mm": float(max(0.0, y[during].max() - height)),
+            "overshoot_mm": metrics.overshoot(y[during], metrics.StepSegment(0, int(during.sum()), 0.0, height)),
             "steady_state_error_mm": float(np.mean(height - y[settled]))}
 
 
