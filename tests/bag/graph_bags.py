@@ -154,10 +154,41 @@ def controller_inputs(bag_path: Path, finger: str):
         else:
             taken = min(m.log_time_ns, stamp_ns_of(msg.header.stamp))
         decoded.append((m.topic, m.data, msg, taken))
+    enabled = next(i for i, (topic, _, msg, _) in enumerate(decoded)
+                   if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED)
+    # The controller takes the supervisor's status only at its status steps (it does not wake
+    # for it, hems_ros/nodes/finger_controller.py), so ENABLED counts from the step whose
+    # status first reports the controller active: just before that step's feedback sample.
+    first_active = _first_active_measurement(bag_path, finger)
+    feedback_taken = [entry[3] for entry in decoded if entry[0] != names.SUPERVISOR_STATUS_TOPIC
+                      and entry[0] != names.topic(finger, "setpoint")
+                      and stamp_ns_of(entry[2].header.stamp) == first_active]
+    if feedback_taken:
+        topic, data, msg, taken = decoded[enabled]
+        decoded[enabled] = (topic, data, msg, max(taken, min(feedback_taken) - 1))
     decoded.sort(key=lambda entry: entry[3])
     enabled = next(i for i, (topic, _, msg, _) in enumerate(decoded)
                    if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED)
     return decoded, enabled
+
+
+def _first_active_measurement(bag_path: Path, finger: str) -> int | None:
+    """Measurement stamp (ns) of the first duty the controller computed while active.
+
+    A control step sends its duty, then its status (within a millisecond); an idle status
+    (no feedback for 0.1 s) comes without a duty, and the next duty is the first active one.
+    """
+    topics = [names.topic(finger, "controller_status"), names.topic(finger, "duty")]
+    bag = load_bag(bag_path, topics=topics)
+    status, duty = bag[topics[0]], bag[topics[1]]
+    active = np.flatnonzero(status["active"])
+    if active.size == 0:
+        return None
+    reported, sent = stamp_ns(status)[active[0]], stamp_ns(duty)
+    same_step = np.flatnonzero((sent <= reported) & (sent > reported - 1_000_000))
+    later = np.flatnonzero(sent > reported)
+    first = same_step[-1] if same_step.size else (later[0] if later.size else None)
+    return None if first is None else int(stamp_ns(duty, "measurement_stamp")[first])
 
 
 def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]], list[tuple[int, float]]]:

@@ -55,7 +55,7 @@ def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000
 # sensor's noise is drawn per sample from the shoulder module's start, which lies at another
 # point of the grasp in each run, so the error over the last second of the hold (mostly that
 # noise) is compared within its sampling spread, not within 2 %: the six fingers of one demo
-# run give 0.014-0.021 N (sd 13 %), so two runs differ by about 19 % (sd); 50 % is 2.6 sd.
+# run give 0.020-0.027 N (sd 10 %), so two runs differ by about 14 % (sd); 50 % is 3.5 sd.
 @pytest.mark.slow
 @pytest.mark.graph_realtime
 def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_domain_id: int, tmp_path: Path) -> None:
