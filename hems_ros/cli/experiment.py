@@ -22,7 +22,8 @@ def register(subparsers) -> None:
                     "index unit (2 N bias pretension): 27 mm position sine/ramp/steps/staircase and "
                     "4-20 N force sine 0.125/0.25 Hz, steps, staircase. Plant at 1 kHz, control at "
                     "100 Hz. Writes <chapter>.md (RMSE mm or N, IAE, MACSI %/sample, APC W, rise "
-                    "time s; dissertation / ours / ratio) and PNG plots.",
+                    "time s, overshoot as the first peak past a new level and hold excursion as the "
+                    "largest over the plateau; dissertation / ours / ratio) and PNG plots.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     parser.add_argument("chapter", choices=("ch5", "ch6", "all"), help="which chapter's tests")
