@@ -57,8 +57,11 @@ class MonitorLimits:
     max_wire_force_n: float = 50.0
     max_tendon_position_m: float = 0.056
     # A lost controller is already caught within 30 ms by each unit's duty watchdog; the
-    # heartbeat only has to name it, so it tolerates the scheduling hiccups of a busy host.
-    heartbeat_timeout_s: float = 0.2
+    # heartbeat only has to name it, so it tolerates the scheduling hiccups of a busy host,
+    # as long as the watchdog flag does (watchdog_hold_s). At 200 ms it latched FAULT in one
+    # `make demo` of fifteen: two controllers silent 200 ms together just after ENABLED on the
+    # two-core host, both running again within 10 ms of the fault.
+    heartbeat_timeout_s: float = 0.5
     # The unit's own watchdog has already set its duty to 0 after 30 ms; the flag held this
     # long means a duty path that does not deliver (a dead controller is named by its
     # heartbeat too). Shorter holds latched FAULT on a live graph just after start-up: at

@@ -11,7 +11,7 @@ Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, trans
             /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz
 
 Monitors: stale encoder or force streams (> stale_s, default 50 ms), controller heartbeats
-(> heartbeat_timeout_s, default 200 ms), wire over-force (default 50 N), tendon over-travel,
+(> heartbeat_timeout_s, default 500 ms), wire over-force (default 50 N), tendon over-travel,
 duty-watchdog flags held watchdog_hold_s (500 ms), and while ENABLED a unit or controller
 that has not taken ENABLED within enable_grace_s (0.5 s). ``enable`` also waits for every
 unit's state and for its controller's commands to reach it (watchdog flag not held).

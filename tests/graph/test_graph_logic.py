@@ -75,7 +75,7 @@ def test_supervisor_enables_only_with_every_stream_alive_and_latches_faults():
 
 
 def test_a_silent_controller_is_its_heartbeat_fault_not_its_sensors():
-    logic = SupervisorLogic(("index",))
+    logic = SupervisorLogic(("index",), MonitorLimits(heartbeat_timeout_s=0.2))
     _ready(logic, 0.0)
     logic.request("enable", 0.0)
     for k in range(1, 20):      # no report for 190 ms: the sensors cannot be judged
@@ -91,7 +91,7 @@ def test_a_silent_controller_is_its_heartbeat_fault_not_its_sensors():
 
 
 def test_a_late_check_does_not_blame_the_streams():
-    logic = SupervisorLogic(("index",))
+    logic = SupervisorLogic(("index",), MonitorLimits(heartbeat_timeout_s=0.2))
     _ready(logic, 0.0)
     logic.request("enable", 0.0)
     logic.check_streams(0.01)
@@ -104,7 +104,7 @@ def test_a_late_check_does_not_blame_the_streams():
 def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
     """A unit whose duty reader has not matched its controller's writer yet shows a tripped
     watchdog; enabling it then latched FAULT some 100 ms later."""
-    logic = SupervisorLogic(("index", "middle"), MonitorLimits(watchdog_hold_s=0.5))
+    logic = SupervisorLogic(("index", "middle"), MonitorLimits(watchdog_hold_s=0.5, heartbeat_timeout_s=0.2))
     _streams_seen(logic, 1.0, ("encoder", "wire_force", "heartbeat"))
     logic.saw("unit state", "index", 1.0)
     logic.watchdog("index", False, 1.0)
