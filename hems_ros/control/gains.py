@@ -40,8 +40,8 @@ the gains act on a *scaled* error ``e = scale * (r - y)``, the scale depending o
     :func:`hems_ros.experiments.findings.force_gain_sweep` (docs/experiments.md): the
     dissertation reports no overshoot on the force steps, and the earlier Kp 0.8, Ki 0.5
     saturated the duty for two or three samples on each 4 N staircase jump, so the wire's
-    first burst of speed carried the force 0.23 N past the 16 and 20 N levels (without
-    sensor noise). Kp 0.4, Ki 0.2 passes no level by more than 0.06 N, without the noise
+    first burst of speed carried the force 0.13 and 0.23 N past the 16 and 20 N levels (without
+    sensor noise). Kp 0.4, Ki 0.2 passes no level by more than 0.062 N, without the noise
     and with it (eight noise seeds), and leaves steady-state errors of about 0.05 N (step)
     and 0.02 N (staircase), the dissertation's 0.05 and 0.04 N. It approaches more slowly:
     the RMSE grows from 0.26 to 0.42 N on the step (Table 6.2: 0.12 N) and from 0.75 / 2.91
