@@ -154,18 +154,18 @@ def controller_inputs(bag_path: Path, finger: str):
         else:
             taken = min(m.log_time_ns, stamp_ns_of(msg.header.stamp))
         decoded.append((m.topic, m.data, msg, taken))
-    enabled = next(i for i, (topic, _, msg, _) in enumerate(decoded)
-                   if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED)
     # The controller takes the supervisor's status only at its status steps (it does not wake
     # for it, hems_ros/nodes/finger_controller.py), so ENABLED counts from the step whose
-    # status first reports the controller active: just before that step's feedback sample.
+    # status first reports the controller active: just before that step's feedback sample
+    # (every ENABLED sent before then, the status being republished, waits until then).
     first_active = _first_active_measurement(bag_path, finger)
-    feedback_taken = [entry[3] for entry in decoded if entry[0] != names.SUPERVISOR_STATUS_TOPIC
-                      and entry[0] != names.topic(finger, "setpoint")
-                      and stamp_ns_of(entry[2].header.stamp) == first_active]
-    if feedback_taken:
-        topic, data, msg, taken = decoded[enabled]
-        decoded[enabled] = (topic, data, msg, max(taken, min(feedback_taken) - 1))
+    feedback = (names.topic(finger, "encoder"), names.topic(finger, "wire_force"))
+    enable_at = min((taken for topic, _, msg, taken in decoded
+                     if topic in feedback and stamp_ns_of(msg.header.stamp) == first_active), default=None)
+    if enable_at is not None:
+        decoded = [(topic, data, msg, max(taken, enable_at - 1))
+                   if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED
+                   else (topic, data, msg, taken) for topic, data, msg, taken in decoded]
     decoded.sort(key=lambda entry: entry[3])
     enabled = next(i for i, (topic, _, msg, _) in enumerate(decoded)
                    if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED)
