@@ -32,6 +32,9 @@ These measurements carry the evidence:
 * :func:`hems_ros.physics.validation.onset_bounds`: the energy balance of the measured short
   pulses, an upper bound on how hot the measured wire was where it had moved, against the
   model's heating branch: how early a wire with Table 4.1's temperatures can move at all.
+* :func:`cold_start_floor`: the least ascending-part RMSE of a chapter 6 position reference
+  for an idealised wire with Table 4.1's band that starts cold (full drive power, no heat
+  loss): how much of a miss no plant with those temperatures could avoid.
 * :func:`perturbation_spread`: how far the step and staircase figures move when the
   ambient temperature moves by 1e-6 degC, the run-to-run spread of a closed-loop cell.
 """
@@ -43,12 +46,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from hems_ros.control import DUTY_MAX, FORCE_MODE_BPID, TABLE_5_1
+from hems_ros.control import DEFAULT_TS, DUTY_MAX, FORCE_MODE_BPID, TABLE_5_1, metrics
 from hems_ros.control.bpid import bilinear_factor
+from hems_ros.control.references import PROTOCOLS
 from hems_ros.experiments.chapters import CH6_PARAMS, force_protocol, rest_wire_tension
 from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH5_RISE_TIME_S, CH5_TABLES, CH6_TABLES
 from hems_ros.experiments.lockstep import LockstepRun, rmse_mask, run_protocol
 from hems_ros.physics import ActuationUnit, load_params, validation
+from hems_ros.physics.kinetics import heating_branch
 from hems_ros.physics.params import Kinetics, UnitParams
 
 RATE_CHECK_PARAMS = "ch5_straight_40n_table32"
@@ -160,6 +165,43 @@ def wire_mass_mode(params: UnitParams) -> dict[str, float]:
     k = params.wire.cross_section_m2 * params.constitutive.e_martensite_pa / params.wire.length_m
     m, b = params.load.mass_kg, params.load.damping_n_s_per_m
     return {"frequency_hz": math.sqrt(k / m) / (2 * math.pi), "damping_ratio": b / (2 * math.sqrt(k * m))}
+
+
+COLD_WIRE_PARAMS = "table41"
+
+
+def cold_start_floor(protocol: str, params: UnitParams | str = COLD_WIRE_PARAMS) -> dict[str, float]:
+    """Least RMSE (mm) any wire with ``params``' transformation band can reach on the ascending
+    parts of ``protocol`` when it is cold as the reference starts to rise.
+
+    Every step below only moves the wire earlier or further than a real one could, so no
+    controller and no plant with that band and heat capacity does better: the wire starts
+    at ambient, takes the drive's ceiling V I (digest section 1: 20 V, 4 A, at most 80 W)
+    from the first sample the reference leaves its base, loses no heat and takes no latent
+    heat (eq. 4.7 without Q_out and the dH term: T = T_amb + P t / (rho V c_p)), turns to
+    austenite along the major heating branch with the stress-free As0, Af0 (eq. 4.17; stress
+    only raises them, eq. 4.25) and gives the full recoverable stroke eps_L L for it.
+    Returns the floor, its ratio to Table 6.1 and how long the bound's wire takes to catch up
+    with the reference (s).
+    """
+    prm = params if isinstance(params, UnitParams) else load_params(params)
+    proto = PROTOCOLS[protocol]
+    if proto.segment != "ascending":
+        raise ValueError(f"{protocol}: the cold-start floor bounds ascending-part RMSE, "
+                         f"not {proto.segment!r} segments")
+    t, r = proto.generate(DEFAULT_TS)
+    start = t[np.flatnonzero(r > r[0])[0] - 1]
+    power = prm.drive.supply_voltage_v * prm.drive.current_limit_a
+    temp = prm.ambient_temperature_c + power * np.clip(t - start, 0.0, None) / prm.wire_heat_capacity_j_per_k
+    k = prm.kinetics
+    inv_width = 1.0 / (k.af0_c - k.as0_c)
+    austenite = 1.0 - np.fromiter((heating_branch(float(x), k.as0_c, inv_width)[0] for x in temp), float, temp.size)
+    y = r[0] + prm.constitutive.max_recoverable_strain * prm.wire.length_m * austenite
+    behind = np.clip(r - y, 0.0, None)
+    floor = metrics.rmse(behind * 1e3, np.zeros_like(behind), metrics.ascending_mask(r))
+    caught = np.flatnonzero((t > start) & (y >= r))
+    return {"rmse_mm": floor, "ratio": floor / CH6_TABLES["position"][2][protocol]["rmse"],
+            "catch_up_s": float(t[caught[0]] - start) if caught.size else math.nan, "power_w": power}
 
 
 def force_noise_free(gains=FORCE_MODE_BPID) -> dict[str, float]:
@@ -407,6 +449,23 @@ def _force_overshoot(ch6: dict) -> Finding:
         evidence)
 
 
+def _cold_start_text(protocols) -> str:
+    if not protocols:
+        return ""
+    floors = {p: cold_start_floor(p) for p in protocols}
+    p0 = load_params(COLD_WIRE_PARAMS)
+    return (
+        f"Nor could any other wire with Table 4.1's band that starts cold: heated at the drive's "
+        f"full {floors[protocols[0]]['power_w']:g} W from the first rising sample, losing no heat, "
+        f"taking no latent heat, turning to austenite at the stress-free As0 {p0.kinetics.as0_c:g}, "
+        f"Af0 {p0.kinetics.af0_c:g} degC and giving the whole {p0.constitutive.max_recoverable_strain * 100:g} % "
+        "stroke for it, it stays behind the reference on the ascending parts by an RMSE of at least "
+        + ", ".join(f"{f['rmse_mm']:.3f} mm on the {p[13:]} ({f['ratio']:.1f}x Table 6.1, caught up after "
+                    f"{f['catch_up_s']:.2f} s)" for p, f in floors.items())
+        + " (`findings.cold_start_floor`). The dissertation's figures therefore need a wire that was "
+        "warm when the reference started to rise, or one that transforms below Table 4.1's band. ")
+
+
 def ch6_findings(ch6: dict) -> list[Finding]:
     """Chapter 6 claims on the runs of :func:`hems_ros.experiments.chapters.run_ch6`."""
     out = []
@@ -432,7 +491,9 @@ def ch6_findings(ch6: dict) -> list[Finding]:
             f"{early.energy_j:g} J pulse, which leaves its wire at most {early.lossless_c:.0f} degC even "
             f"with no heat loss, while the model's wire turns the same {100 * early.fraction:.0f} % to "
             f"austenite only at {early.branch_c:.0f} degC ({early.branch_unloaded_c:.0f} unloaded) and "
-            f"has moved {early.model_displacement_mm:.2f} mm after the same {early.pulse_s:g} s. On the sine the wire has not come down when the next ascent starts, so the "
+            f"has moved {early.model_displacement_mm:.2f} mm after the same {early.pulse_s:g} s. "
+            + _cold_start_text([p for p in bad if PROTOCOLS[p].segment == "ascending"])
+            + "On the sine the wire has not come down when the next ascent starts, so the "
             "ascending part begins far above the reference; the sheath and the glove friction "
             "hold it up (the dissertation: descents are slow, cooling + tendon friction). On the "
             "second step the wire reaches the end of its stroke: 27 mm is 3.0 % strain against the "

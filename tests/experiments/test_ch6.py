@@ -7,7 +7,9 @@ import pytest
 from hems_ros.control import FORCE_MODE_BPID
 from hems_ros.experiments.chapters import CH6_PARAMS, force_protocol, rest_wire_tension
 from hems_ros.experiments.dissertation import CH6_TABLES
-from hems_ros.experiments.findings import FORCE_STEPS, authority_split, force_gain_sweep, force_noise_free
+from hems_ros.experiments.findings import (
+    COLD_WIRE_PARAMS, FORCE_STEPS, authority_split, cold_start_floor, force_gain_sweep, force_noise_free,
+)
 from hems_ros.experiments.lockstep import run_protocol
 from hems_ros.physics import load_params
 
@@ -82,3 +84,27 @@ def test_position_rmse_misses_documented_as_saturated_actuator(ch6_runs, ch6_fou
     assert split["cooling_share"] + split["heating_share"] > 0.85   # step: 0.89
     # the dead time at full duty is the model's late transformation onset, bounded by energy
     assert "even with no heat loss" in ch6_found["position_rmse_3x"].evidence
+
+
+@pytest.mark.parametrize("protocol, floor_mm", [("ch6_position_ramp", 0.0666), ("ch6_position_sine_0.125", 0.2554)])
+def test_cold_wire_cannot_reach_3x_on_the_ascending_parts(ch6_runs, ch6_found, protocol, floor_mm):
+    # An idealised cold wire with Table 4.1's band (80 W, no loss, no latent heat, 3.8 % stroke)
+    # already stays more than 3x Table 6.1 behind; the model, with losses, does worse still.
+    floor = cold_start_floor(protocol)
+    assert floor["rmse_mm"] == pytest.approx(floor_mm, abs=5e-4)
+    assert floor["ratio"] > 3.0
+    assert 0.7 < floor["catch_up_s"] < 0.9
+    assert ch6_runs[protocol].metrics["rmse"] >= floor["rmse_mm"]
+    assert f"{floor['rmse_mm']:.3f} mm on the {protocol[13:]}" in ch6_found["position_rmse_3x"].evidence
+
+
+def test_cold_start_floor_falls_with_a_warm_wire():
+    # The floor is the start temperature's doing: a wire 18 K warmer at the start is not bound above 3x.
+    warm = load_params(COLD_WIRE_PARAMS).replace({"ambient_temperature_c": 40.0})
+    assert cold_start_floor("ch6_position_ramp", warm)["ratio"] < 2.0
+    assert cold_start_floor("ch6_position_sine_0.125", warm)["ratio"] < 1.2
+
+
+def test_cold_start_floor_refuses_plateau_protocols():
+    with pytest.raises(ValueError, match="ch6_position_step: the cold-start floor bounds ascending-part RMSE"):
+        cold_start_floor("ch6_position_step")
