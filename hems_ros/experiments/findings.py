@@ -486,12 +486,14 @@ def ch6_findings(ch6: dict) -> list[Finding]:
             for p, s in ((p, authority_split(ch6[p])) for p in bad)) + (
             ". Heating-limited error is the cold wire's dead time at 100 % duty at the start of "
             "the ramp and of each step: the model's wire transforms later than the dissertation's, and "
-            "no wire with Table 4.1's transformation temperatures could match it (docs/validation.md, "
+            "no wire with Table 4.1's transformation temperatures could match it from a cold start (docs/validation.md, "
             f"transformation onset): the chapter 6 unit moved {early.displacement_mm:g} mm on a "
             f"{early.energy_j:g} J pulse, which leaves its wire at most {early.lossless_c:.0f} degC even "
             f"with no heat loss, while the model's wire turns the same {100 * early.fraction:.0f} % to "
             f"austenite only at {early.branch_c:.0f} degC ({early.branch_unloaded_c:.0f} unloaded) and "
-            f"has moved {early.model_displacement_mm:.2f} mm after the same {early.pulse_s:g} s. "
+            f"has moved {early.model_displacement_mm:.2f} mm after the same {early.pulse_s:g} s; started at "
+            f"{early.start_c:.0f} degC or warmer, which the characterization's \"cooled\" (back at 0.5 % strain) "
+            "allows, a wire with that band could have done it. "
             + _cold_start_text([p for p in bad if PROTOCOLS[p].segment == "ascending"])
             + "On the sine the wire has not come down when the next ascent starts, so the "
             "ascending part begins far above the reference; the sheath and the glove friction "

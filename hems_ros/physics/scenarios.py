@@ -12,6 +12,7 @@ Definitions used throughout (digest section 2):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,6 +81,7 @@ class PulseResponse:
     max_displacement_m: float
     max_force_n: float
     cooling_time_s: float  # NaN when the slider never passed 4.5 mm
+    cooled_temperature_c: float  # wire temperature when it is back at 4.5 mm; NaN as above
     max_temperature_c: float
     min_martensite: float
 
@@ -103,12 +105,15 @@ def pulse_responses(sets: list[UnitParams], pulses: list[float], dt: float = 1e-
     for i, pulse in enumerate(pulses):
         x = res.slider_position_m[i]
         end = int(round(pulse / dt)) - 1
+        cooled = cooling_time(x, end, dt)
         out.append(PulseResponse(
             pulse_s=pulse,
             energy_j=float(res.energy_joule_j[i, -1]),
             max_displacement_m=float(x.max()),
             max_force_n=float(res.wire_force_n[i].max()),
-            cooling_time_s=cooling_time(x, end, dt),
+            cooling_time_s=cooled,
+            cooled_temperature_c=float(res.wire_temperature_c[i, end + int(round(cooled / dt))])
+            if math.isfinite(cooled) else math.nan,
             max_temperature_c=float(res.wire_temperature_c[i].max()),
             min_martensite=float(res.martensite_fraction[i].min()),
         ))

@@ -185,6 +185,7 @@ class OnsetBound:
     branch_c: float               # where the model's heating branch reaches that fraction under 50 N
     branch_unloaded_c: float      # the same with no stress (the lowest it can be)
     model_displacement_mm: float  # the model on the same rig, same pulse length at 4 A
+    start_c: float                # the coldest start from which a lossless wire reaches branch_c
 
 
 ONSET_FACTS = (
@@ -205,7 +206,8 @@ def onset_bounds(params: UnitParams | None = None) -> list[OnsetBound]:
     bound. The model's wire reaches the same fraction on its major heating branch (eq. 4.17)
     at the stress-shifted As, Af of the 50 N preload (eq. 4.25). Where the bound is below the
     branch temperature, no wire with the model's transformation temperatures and heat
-    constants can move as early as the measured one did.
+    constants can move as early as the measured one did from ambient; ``start_c`` is how warm
+    it must have been at the start instead (the same balance from a warmer wire).
     """
     p = params or load_params("sheathed_calibrated")
     rig = scenarios.characterization_rig(p, True)
@@ -216,13 +218,14 @@ def onset_bounds(params: UnitParams | None = None) -> list[OnsetBound]:
     out = []
     for source, pulse, energy, x_mm, stroke_mm in ONSET_FACTS:
         f = x_mm / stroke_mm
+        lossless = heat.lossless_temperature_c(energy, f, p.wire_heat_capacity_j_per_k, p.wire_latent_heat_j,
+                                               p.ambient_temperature_c)
+        branch = kinetics.heating_branch_temperature(f, p.kinetics.as0_c + shift, p.kinetics.af0_c + shift)
         out.append(OnsetBound(
-            source, pulse, energy, x_mm, f,
-            heat.lossless_temperature_c(energy, f, p.wire_heat_capacity_j_per_k, p.wire_latent_heat_j,
-                                        p.ambient_temperature_c),
-            kinetics.heating_branch_temperature(f, p.kinetics.as0_c + shift, p.kinetics.af0_c + shift),
+            source, pulse, energy, x_mm, f, lossless, branch,
             kinetics.heating_branch_temperature(f, p.kinetics.as0_c, p.kinetics.af0_c),
-            model[pulse].max_displacement_m * 1e3))
+            model[pulse].max_displacement_m * 1e3,
+            branch - (lossless - p.ambient_temperature_c)))
     return out
 
 
@@ -378,21 +381,32 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
           "unit (same preload, 3.6 ohm, 57.6 W); its 1.0 s row is 29 mm less the 5 mm the text says "
           "1.0 -> 1.6 s adds, its stroke the 30 mm after 3 s.", "",
           "| source | pulse s | energy J | displ. mm (f) | measured wire at most, degC | "
-          "model branch at f, degC, 50 N (unloaded) | model displ. mm (4 A) |", "|---|---|---|---|---|---|---|"]
+          "model branch at f, degC, 50 N (unloaded) | model displ. mm (4 A) | start at least, degC, 50 N |",
+          "|---|---|---|---|---|---|---|---|"]
     L += [f"| {b.source} | {b.pulse_s:.1f} | {b.energy_j:.2f} | {b.displacement_mm:.2f} ({b.fraction:.2f}) | "
-          f"{b.lossless_c:.1f} | {b.branch_c:.1f} ({b.branch_unloaded_c:.1f}) | {b.model_displacement_mm:.2f} |"
-          for b in ob]
+          f"{b.lossless_c:.1f} | {b.branch_c:.1f} ({b.branch_unloaded_c:.1f}) | {b.model_displacement_mm:.2f} | "
+          f"{b.start_c:.1f} |" for b in ob]
     late = [b for b in ob if b.lossless_c < b.branch_unloaded_c]
     hems = earliest_onset(ob, "section 5")
+    cooled = [r.cooled_temperature_c for r in sw if math.isfinite(r.cooled_temperature_c)]
     L += ["", f"Where the bound is below the branch even unloaded ({len(late)} of {len(ob)} rows), no wire with Table 4.1's "
           f"transformation temperatures (As0 {cal.kinetics.as0_c:g}, Af0 {cal.kinetics.af0_c:g} degC) and heat "
           "constants can move as early as the measured one did, whatever its sheath and losses: the measured "
-          "wires start transforming at lower temperatures, or took more energy than the printed pulse energy. "
+          "wires start transforming at lower temperatures, took more energy than the printed pulse energy, "
+          "or were warmer than ambient when the pulse began. "
           f"The chapter 6 unit is the extreme: it moved {hems.displacement_mm:g} mm on {hems.energy_j:g} J, "
           f"which leaves it at most {hems.lossless_c:.0f} degC, below even Table 4.1's Mf0 = {cal.kinetics.mf0_c:g} degC. The calibration "
           "keeps Table 4.1's temperatures and fits the pulses of 1.6 s and more; the model's wire therefore "
           "starts later than both measured wires, which shows as a dead time at full duty in the "
           "closed-loop runs (docs/experiments.md).", "",
+          "The last column is the third reading: the coldest start from which the same lossless wire "
+          "reaches the model's branch under the 50 N preload, T_branch - (bound - T_amb). Every row needs at "
+          f"most {max(b.start_c for b in ob):.0f} degC. Tables 3.2/3.3 call the wire cooled once it is back at "
+          "0.5 % strain (4.5 mm), and the model's wire, cooling on its branch after the pulses of 1.6 s and more, "
+          f"is back at 4.5 mm at {min(cooled):.0f}-{max(cooled):.0f} degC. If each pulse of a characterization "
+          "began as soon as the wire was cooled in that sense, all four rows are within this bound's reach "
+          "of a wire with Table 4.1's transformation temperatures. The digest does not say when the pulses began; the sweep above, "
+          "the calibration and the closed-loop runs start cold.", "",
           "## Calibrated parameters", "",
           "Fewest parameters, fitted by `hems_ros.physics.calibration` (Nelder-Mead on the chapter 3 facts); "
           "everything else is Table 4.1 / Table 3.1. Objective (sum of squared log ratios, "

@@ -69,3 +69,18 @@ def test_measured_short_pulses_outrun_any_wire_with_table_41_temperatures():
     assert late == [("Table 3.2", 1.0), ("section 5", 1.0), ("section 5", 1.6)]
     # and so the model, with more energy at 4 A, has hardly moved after 1 s
     assert hems_1s.model_displacement_mm < 1.0
+
+
+def test_measured_short_pulses_fit_a_wire_started_where_the_tables_call_it_cooled():
+    # The third reading of the onset table: how warm the wire must have been at the start.
+    rows = {(b.source, b.pulse_s): b for b in onset_bounds()}
+    hems_1s = rows[("section 5", 1.0)]
+    assert hems_1s.start_c == pytest.approx(hems_1s.branch_c - (hems_1s.lossless_c - 22.0))
+    assert hems_1s.start_c == pytest.approx(68.5, abs=0.1)
+    # the model's wire is back at 0.5 % strain (Table 3.2's "cooled") at 71-74 degC ...
+    cooled = [r.cooled_temperature_c for r in sweep(pulses=(1.6, 2.2, 2.8))]
+    assert cooled == pytest.approx([73.8, 71.0, 70.8], abs=0.1)
+    # ... warm enough for every measured short pulse
+    assert max(b.start_c for b in rows.values()) < min(cooled)
+    # the model's 1.0 s pulse never passes 4.5 mm, so it has no cooled temperature
+    assert np.isnan(sweep(pulses=(1.0,))[0].cooled_temperature_c)
