@@ -9,8 +9,8 @@ import pytest
 
 from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH5_RISE_TIME_S
 from hems_ros.experiments.chapters import CH5_PARAMS
-from hems_ros.experiments.findings import (MARGIN, authority_split, bilinear_activity, filter_sweep, perturbation_spread,
-                                         rate_check, ratios, table_4_1_stress_slope)
+from hems_ros.experiments.findings import (MARGIN, authority_split, bilinear_activity, filter_sweep, gain_grid,
+                                         perturbation_spread, rate_check, ratios, table_4_1_stress_slope)
 from hems_ros.physics import load_params
 from hems_ros.physics.scenarios import characterization_rig, pulse_responses
 
@@ -102,6 +102,21 @@ def test_overshoot_is_not_the_derivative_filter(ch5_found):
     least = filter_sweep(load_params(CH5_PARAMS))
     assert least["ch5_step"] > 0.05 and least["ch5_staircase"] > 0.05
     assert f"overshoots at least {least['ch5_step']:.2f} mm" in ch5_found["bpid_overshoot"].evidence
+
+
+def test_overshoot_is_not_table_5_1s_gains(ch5_found):
+    # Over Kp 0.05-0.8 %/um x Kd 0.02-0.5 % s/um the sets that hold the levels within 0.05 mm
+    # (the dissertation's steady-state claim) all overshoot; those that do not overshoot droop.
+    grid = gain_grid(load_params(CH5_PARAMS))
+    step, stair = grid["ch5_step"], grid["ch5_staircase"]
+    assert step["holding"][:2] == pytest.approx((0.107, 0.031), abs=2e-3)
+    assert stair["holding"][:2] == pytest.approx((0.669, 0.024), abs=2e-3)
+    assert step["holding"][0] > 0.05 and stair["holding"][0] > 0.05
+    # the least overshoot of any set: within 0.05 mm on the step, not on the staircase, and
+    # both far off the 0.05 mm steady-state error
+    assert step["least"][0] < 0.05 < stair["least"][0]
+    assert step["least"][1] > 0.15 and stair["least"][1] > 0.15
+    assert f"overshoot at least {step['holding'][0]:.3f} mm on the step" in ch5_found["bpid_overshoot"].evidence
 
 
 def test_overshoot_persists_at_the_dissertations_rise_speed(ch5_runs, ch5_found):
