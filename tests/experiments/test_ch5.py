@@ -10,7 +10,8 @@ import pytest
 from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH5_RISE_TIME_S
 from hems_ros.experiments.chapters import CH5_PARAMS
 from hems_ros.experiments.findings import (MARGIN, authority_split, bilinear_activity, filter_sweep, gain_grid,
-                                         perturbation_spread, rate_check, ratios, table_4_1_stress_slope)
+                                         perturbation_spread, rate_check, ratios, repeated_ratios,
+                                         table_4_1_stress_slope)
 from hems_ros.physics import load_params
 from hems_ros.physics.scenarios import characterization_rig, pulse_responses
 
@@ -94,6 +95,19 @@ def test_iae_misses_are_documented_plant_differences(ch5_runs, ch5_found):
             assert p in STEPS and f"{p[4:]}/{s} ({r:.2f})" in found.evidence
             assert ch5_runs["ch5_step", s].metrics["rise_time_s"] < 0.5 * CH5_RISE_TIME_S[s]
     assert "rises faster" in found.evidence or "cooling-limited" in found.evidence
+
+
+def test_iae_misses_over_three_repetitions(ch5_runs, ch5_found):
+    # The dissertation averaged three repetitions. With the ambient 0.1 degC lower and higher
+    # the sine cell's 2.03 is the worst of three (mean within 2); the staircase cell stays below 0.5.
+    rep = repeated_ratios(ch5_runs, load_params(CH5_PARAMS), "iae",
+                          [("ch5_sine_0.125", "bpid"), ("ch5_staircase", "pid")])
+    sine, stair = rep["ch5_sine_0.125", "bpid"], rep["ch5_staircase", "pid"]
+    assert sine[1] == pytest.approx(ratios(ch5_runs, "iae")["ch5_sine_0.125", "bpid"])
+    assert sine[1] > 2.0 and max(sine[0], sine[2]) < 1.8 and sine[3] < 2.0
+    assert max(stair[:3]) < 0.5 and stair[3] == pytest.approx(0.459, abs=0.005)
+    assert f"sine_0.125/bpid {sine[0]:.2f}, {sine[1]:.2f}, {sine[2]:.2f} (mean {sine[3]:.2f})" in \
+        ch5_found["factor2_iae"].evidence
 
 
 def test_overshoot_is_not_the_derivative_filter(ch5_found):
