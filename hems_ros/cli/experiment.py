@@ -54,11 +54,13 @@ def run(args: argparse.Namespace) -> int:
     if args.chapter in ("ch5", "all"):
         print("chapter 5: 5 references x 3 controllers, 40 N mass (plant 1 kHz, control 100 Hz)", flush=True)
         runs = chapters.run_ch5(progress=lambda m: print(m, flush=True))
+        print("checking the chapter 5 claims (a miss runs its evidence: sweeps, evidence sets) ...", flush=True)
         f5 = findings.ch5_findings(runs, load_params(chapters.CH5_PARAMS))
         results["ch5"] = (runs, f5)
     if args.chapter in ("ch6", "all"):
         print("chapter 6: BPID, index unit, 4 position + 4 force references", flush=True)
         runs = chapters.run_ch6(progress=lambda m: print(m, flush=True))
+        print("checking the chapter 6 claims (a miss runs its evidence) ...", flush=True)
         results["ch6"] = (runs, findings.ch6_findings(runs))
     for chapter, (runs, found) in results.items():
         folder = _folder(args, chapter)
