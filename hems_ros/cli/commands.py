@@ -6,6 +6,7 @@ import argparse
 import math
 import sys
 
+from hems_ros.cli.numbers import positive
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
 
@@ -18,7 +19,7 @@ def register(subparsers) -> None:
                           ("estop", "emergency stop: every duty to 0, latched until reset"),
                           ("reset", "clear a latched FAULT or ESTOP (refused while a fault persists)")):
         parser = subparsers.add_parser(command, help=text, description=text + ".")
-        parser.add_argument("--timeout", type=float, default=10.0, help="seconds to wait for the supervisor")
+        parser.add_argument("--timeout", type=positive, default=10.0, help="seconds to wait for the supervisor")
         parser.set_defaults(func=lambda args, c=command: run_trigger(c, args))
 
     parser = subparsers.add_parser(
@@ -35,7 +36,7 @@ def register(subparsers) -> None:
                         help="position or force (default: from --unit, position for m/mm, force for N)")
     parser.add_argument("--unit", choices=tuple(UNITS), default=None,
                         help="unit of VALUE: mm, m (position) or N (force); default m or N by mode")
-    parser.add_argument("--timeout", type=float, default=5.0,
+    parser.add_argument("--timeout", type=positive, default=5.0,
                         help="seconds to wait for the controller to subscribe, and again for its status "
                              "to show the setpoint (default 5)")
     parser.set_defaults(func=run_setpoint)
@@ -44,7 +45,7 @@ def register(subparsers) -> None:
         "status", help="one row per finger: mode, setpoint, position, force, duty, faults",
         description="Listen to the graph briefly and print one row per finger (tendon side: position in "
                     "mm, force in N; duty in %) and the supervisor state.")
-    parser.add_argument("--listen", type=float, default=1.5, help="seconds to listen (default 1.5)")
+    parser.add_argument("--listen", type=positive, default=1.5, help="seconds to listen (default 1.5)")
     parser.set_defaults(func=run_status)
 
 

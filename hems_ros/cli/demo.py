@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from hems_ros.cli import grasp
+from hems_ros.cli.numbers import positive
 from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder, wait_until_recording
 from hems_ros.launcher import Graph
 
@@ -28,7 +29,7 @@ def register(subparsers) -> None:
     add_graph_arguments(parser)
     grasp.add_grasp_arguments(parser)
     parser.set_defaults(func=run, plot=Path("results/demo_grasp.png"))
-    parser.add_argument("--ready-timeout", type=float, default=60.0,
+    parser.add_argument("--ready-timeout", type=positive, default=60.0,
                         help="seconds to wait for every node to come up (default 60)")
     parser.add_argument("--record", type=Path, default=True, metavar="DIR",
                         help="bag folder the run is recorded into (default bags/demo_<date>_<time>)")

@@ -7,6 +7,7 @@ import sys
 import time
 from pathlib import Path
 
+from hems_ros.cli.numbers import finite, non_negative
 from hems_ros.graph import names
 from hems_ros.graph.grasp import (
     FingerTrace, GraspPlan, PhaseTracker, format_summary, plot, summarize, tracking_report,
@@ -15,11 +16,11 @@ from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
 
 
 def add_grasp_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--force", type=float, default=10.0, help="tendon force to hold, N (default 10)")
-    parser.add_argument("--approach-mm", type=float, default=20.0, help="tendon approach position, mm (default 20)")
-    parser.add_argument("--approach-s", type=float, default=5.0, help="approach duration, s")
-    parser.add_argument("--hold-s", type=float, default=6.0, help="force hold duration, s")
-    parser.add_argument("--release-s", type=float, default=4.0, help="release duration, s")
+    parser.add_argument("--force", type=finite, default=10.0, help="tendon force to hold, N (default 10)")
+    parser.add_argument("--approach-mm", type=finite, default=20.0, help="tendon approach position, mm (default 20)")
+    parser.add_argument("--approach-s", type=non_negative, default=5.0, help="approach duration, s")
+    parser.add_argument("--hold-s", type=non_negative, default=6.0, help="force hold duration, s")
+    parser.add_argument("--release-s", type=non_negative, default=4.0, help="release duration, s")
     parser.add_argument("--plot", type=Path, default=Path("results/grasp.png"), help="PNG plot path")
 
 

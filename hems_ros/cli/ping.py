@@ -8,6 +8,7 @@ import subprocess
 import sys
 import time
 
+from hems_ros.cli.numbers import positive, positive_int
 from hems_ros.rosenv import child_environment
 
 
@@ -27,9 +28,9 @@ def register(subparsers) -> None:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--count", type=int, default=50, help="number of probes (default 50)")
-    parser.add_argument("--rate", type=float, default=50.0, help="probes per second (default 50 Hz)")
-    parser.add_argument("--timeout", type=float, default=15.0,
+    parser.add_argument("--count", type=positive_int, default=50, help="number of probes (default 50)")
+    parser.add_argument("--rate", type=positive, default=50.0, help="probes per second (default 50 Hz)")
+    parser.add_argument("--timeout", type=positive, default=15.0,
                         help="seconds to wait for discovery and for answers (default 15 s)")
     parser.add_argument("--no-spawn", action="store_true",
                         help="do not start a responder; use one already running")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from hems_ros.bag.selection import DEFAULT_RECORD_REGEX
+from hems_ros.cli.numbers import non_negative, positive, positive_int
 
 
 def register(subparsers) -> None:
@@ -22,10 +23,10 @@ def register(subparsers) -> None:
     parser.add_argument("--topic", action="append", default=[], dest="topics",
                         help="record this topic (repeatable)")
     parser.add_argument("--regex", default=None, help="record topics fully matching this regular expression")
-    parser.add_argument("--duration", type=float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
+    parser.add_argument("--duration", type=non_negative, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
     parser.add_argument("--compression", choices=("zstd", "lz4", "none"), default="zstd")
-    parser.add_argument("--chunk-size", type=int, default=262144, help="chunk size in bytes (default 256 KiB)")
-    parser.add_argument("--flush-period", type=float, default=0.5,
+    parser.add_argument("--chunk-size", type=positive_int, default=262144, help="chunk size in bytes (default 256 KiB)")
+    parser.add_argument("--flush-period", type=positive, default=0.5,
                         help="seconds between chunk flushes: at most this much is lost on a crash")
     parser.set_defaults(func=run)
 

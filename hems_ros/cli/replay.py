@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from collections import Counter
@@ -11,6 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
+
+from hems_ros.cli.numbers import non_negative, positive
 
 CLOCK_TOPIC = "/clock"
 
@@ -27,17 +30,17 @@ def register(subparsers) -> None:
             "With --loop the bag restarts (and its clock jumps back) after the last message."),
     )
     parser.add_argument("bag", help="bag folder or .mcap file")
-    parser.add_argument("--rate", type=float, default=1.0, help="speed factor (2 = twice as fast)")
+    parser.add_argument("--rate", type=positive, default=1.0, help="speed factor (2 = twice as fast)")
     parser.add_argument("--loop", action="store_true", help="replay until interrupted")
     parser.add_argument("--topic", action="append", default=[], dest="topics", help="replay this topic (repeatable)")
     parser.add_argument("--regex", default=None, help="replay topics fully matching this regular expression")
     parser.add_argument("--remap", action="append", default=[], metavar="FROM:=TO",
                         help="publish topic FROM on TO (repeatable)")
-    parser.add_argument("--clock", type=float, nargs="?", const=100.0, default=0.0, metavar="HZ",
+    parser.add_argument("--clock", type=positive, nargs="?", const=100.0, default=0.0, metavar="HZ",
                         help="publish /clock from the bag's time at HZ (default 100 Hz when given)")
-    parser.add_argument("--start-delay", type=float, default=1.0,
+    parser.add_argument("--start-delay", type=non_negative, default=1.0,
                         help="seconds between creating the publishers and the first message (discovery)")
-    parser.add_argument("--wait-subscribers", type=float, default=0.0, metavar="SECONDS",
+    parser.add_argument("--wait-subscribers", type=non_negative, default=0.0, metavar="SECONDS",
                         help="before starting, wait up to SECONDS until every replayed topic has a subscriber")
     parser.set_defaults(func=run)
 
@@ -87,8 +90,11 @@ def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Itera
     from hems_ros.bag import iter_messages
     from hems_ros.nodes.recorder import message_class
 
-    if rate <= 0:
-        raise ValueError(f"rate must be positive, not {rate}")
+    if not (math.isfinite(rate) and rate > 0):
+        raise ValueError(f"rate must be a finite number > 0, not {rate}")
+    for name, value in (("clock_hz", clock_hz), ("start_delay", start_delay), ("wait_subscribers", wait_subscribers)):
+        if not (math.isfinite(value) and value >= 0):
+            raise ValueError(f"{name} must be a finite number >= 0, not {value}")
     remap = remap or {}
     messages = sorted((m for m in iter_messages(bag, topics, regex) if not (clock_hz and m.topic == CLOCK_TOPIC)),
                       key=lambda m: m.log_time_ns)
@@ -125,7 +131,7 @@ def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Itera
                         bag_ns = first + int((now - wall_start) * rate * 1e9)
                         clock.publish(Clock(clock=_time_msg(min(bag_ns, message.log_time_ns))))
                         next_tick += 1.0 / clock_hz
-                    if now >= due:
+                    if now >= due or not rclpy.ok():
                         break
                     wake = min(due, next_tick) if clock is not None else due
                     time.sleep(max(0.0, min(wake - now, 0.05)))

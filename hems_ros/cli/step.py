@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hems_ros.cli.numbers import non_negative, positive
 from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder, wait_until_recording
 from hems_ros.graph import names, transmission
 
@@ -29,16 +30,16 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run, fingers="index")
     parser.add_argument("--physics-config", default=None,
                         help="physics parameter set of the actuation units (default: the params file's)")
-    parser.add_argument("--pulley-ratio", type=float, default=transmission.PULLEY_RATIO,
+    parser.add_argument("--pulley-ratio", type=positive, default=transmission.PULLEY_RATIO,
                         help="tendon / wire ratio the controllers convert with; must match the physics set "
                              f"(default {transmission.PULLEY_RATIO:g}; 1 for ch5_straight_40n)")
-    parser.add_argument("--step-mm", type=float, default=20.0, help="step height, tendon mm (default 20)")
-    parser.add_argument("--before-s", type=float, default=2.0, help="seconds at 0 before the step")
-    parser.add_argument("--step-s", type=float, default=5.0, help="seconds at the step height")
-    parser.add_argument("--after-s", type=float, default=8.0, help="seconds at 0 after the step (cooling)")
+    parser.add_argument("--step-mm", type=positive, default=20.0, help="step height, tendon mm (default 20)")
+    parser.add_argument("--before-s", type=non_negative, default=2.0, help="seconds at 0 before the step")
+    parser.add_argument("--step-s", type=positive, default=5.0, help="seconds at the step height")
+    parser.add_argument("--after-s", type=non_negative, default=8.0, help="seconds at 0 after the step (cooling)")
     parser.add_argument("--record", type=Path, default=True, metavar="DIR",
                         help="bag folder (default bags/step_<date>_<time>)")
-    parser.add_argument("--ready-timeout", type=float, default=60.0, help="seconds to wait for the graph")
+    parser.add_argument("--ready-timeout", type=positive, default=60.0, help="seconds to wait for the graph")
 
 
 def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.0) -> dict[str, float]:
@@ -66,8 +67,6 @@ def run(args: argparse.Namespace) -> int:
     try:
         options = graph_options(args)
         record = bag_folder(args.record, "step")
-        if not args.pulley_ratio > 0:
-            raise ValueError(f"--pulley-ratio {args.pulley_ratio}: must be > 0")
     except ValueError as error:
         print(f"step: {error}", file=sys.stderr)
         return 2

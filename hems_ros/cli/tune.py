@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import time
 
+from hems_ros.cli.numbers import non_negative, positive_int
+
 PROTOCOL_CHOICES = ("ch5_sine_0.125", "ch5_sine_0.25", "ch5_sine_0.5", "ch5_step", "ch5_staircase")
 
 
@@ -20,10 +22,10 @@ def register(subparsers) -> None:
     )
     parser.add_argument("--protocol", choices=PROTOCOL_CHOICES, default="ch5_step",
                         help="protocol the cost is measured on")
-    parser.add_argument("--macsi-weight", type=float, default=0.1,
+    parser.add_argument("--macsi-weight", type=non_negative, default=0.1,
                         help="weight of MACSI (%% per sample) against RMSE (mm) in the cost")
     parser.add_argument("--with-ki", action="store_true", help="also tune Ki (Table 5.1 has Ki = 0)")
-    parser.add_argument("--max-evaluations", type=int, default=120,
+    parser.add_argument("--max-evaluations", type=positive_int, default=120,
                         help="closed-loop simulations the optimiser may spend")
     parser.set_defaults(func=run)
 

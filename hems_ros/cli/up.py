@@ -9,6 +9,7 @@ import time
 from datetime import datetime
 from pathlib import Path
 
+from hems_ros.cli.numbers import positive
 from hems_ros.graph import names
 from hems_ros.launcher import Graph, GraphOptions, default_params_file
 
@@ -18,7 +19,7 @@ def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
                         help="run all nodes in one process (one thread, one wait set) instead of one process each")
     parser.add_argument("--sim-time", action="store_true",
                         help="run every node on simulated time from a /clock publisher")
-    parser.add_argument("--rate", type=float, default=1.0,
+    parser.add_argument("--rate", type=positive, default=1.0,
                         help="with --sim-time: simulated seconds per wall second (default 1)")
     parser.add_argument("--params-file", type=Path, default=default_params_file(),
                         help="ROS params file for every node (default config/hems.yaml)")
@@ -82,8 +83,6 @@ def print_bag(prefix: str, info) -> None:
 def graph_options(args: argparse.Namespace) -> GraphOptions:
     fingers = names.FINGERS if args.fingers == "all" else tuple(
         names.check_finger(f.strip()) for f in args.fingers.split(","))
-    if not args.rate > 0:
-        raise ValueError(f"--rate {args.rate}: must be > 0")
     if not args.params_file.is_file():
         raise ValueError(f"--params-file {args.params_file}: no such file")
     return GraphOptions(params_file=args.params_file, composed=args.composed, sim_time=args.sim_time,
@@ -98,7 +97,7 @@ def register(subparsers) -> None:
                     "supervisor, each in its own process (or composed in one). Ctrl-C or SIGTERM stops every "
                     "node within 3 s. Then: hems enable; hems setpoint index 20 --unit mm; hems status.")
     add_graph_arguments(parser)
-    parser.add_argument("--duration", type=float, default=None, help="stop by itself after this many seconds")
+    parser.add_argument("--duration", type=positive, default=None, help="stop by itself after this many seconds")
     parser.add_argument("--record", nargs="?", type=Path, const=True, default=None, metavar="DIR",
                         help="record every /hems topic, /diagnostics and /clock into the bag folder DIR "
                              "(default bags/hems_<date>_<time>)")
