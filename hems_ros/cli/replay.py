@@ -27,7 +27,8 @@ def register(subparsers) -> None:
             "log-time spacing divided by --rate, with the QoS their publishers offered. "
             "--clock publishes rosgraph_msgs/Clock with the bag's time so nodes with "
             "use_sim_time follow the replay (a recorded /clock topic is then not replayed). "
-            "With --loop the bag restarts (and its clock jumps back) after the last message."),
+            "With --loop the bag restarts (and its clock jumps back) after the last message. "
+            "Ctrl-C or SIGTERM stops it and prints what was replayed so far (exit code 0)."),
     )
     parser.add_argument("bag", help="bag folder or .mcap file")
     parser.add_argument("--rate", type=positive, default=1.0, help="speed factor (2 = twice as fast)")
@@ -50,6 +51,7 @@ class ReplayResult:
     published: Counter = field(default_factory=Counter)
     loops: int = 0
     wall_s: float = 0.0
+    interrupted: bool = False   # stopped by SIGINT / SIGTERM before the bag (or --loop) was through
 
 
 def parse_remaps(items: Iterable[str]) -> dict[str, str]:
@@ -118,41 +120,57 @@ def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Itera
             time.sleep(0.02)
         if wait_subscribers:
             time.sleep(0.2)  # matched here; the subscribers' side matches us a moment later
-        first, last = messages[0].log_time_ns, messages[-1].log_time_ns
         started = time.perf_counter()
-        while rclpy.ok():
-            wall_start = time.perf_counter()
-            next_tick = wall_start
-            for message in messages:
-                due = wall_start + (message.log_time_ns - first) * 1e-9 / rate
-                while True:
-                    now = time.perf_counter()
-                    if clock is not None and now >= next_tick:
-                        bag_ns = first + int((now - wall_start) * rate * 1e9)
-                        clock.publish(Clock(clock=_time_msg(min(bag_ns, message.log_time_ns))))
-                        next_tick += 1.0 / clock_hz
-                    if now >= due or not rclpy.ok():
-                        break
-                    wake = min(due, next_tick) if clock is not None else due
-                    time.sleep(max(0.0, min(wake - now, 0.05)))
-                if not rclpy.ok():
+        try:
+            while _play(messages, publishers, clock, clock_hz, rate, result):
+                result.loops += 1
+                if not loop:
                     break
-                publishers[message.topic].publish(message.data)
-                result.published[message.topic] += 1
-            if clock is not None:
-                clock.publish(Clock(clock=_time_msg(last)))
-            result.loops += 1
-            if not loop:
-                break
+            else:
+                result.interrupted = True
+        except KeyboardInterrupt:
+            result.interrupted = True
         result.wall_s = time.perf_counter() - started
-        # Destroying a publisher drops what reliable readers have not acknowledged yet,
-        # so the last messages of a bag would otherwise be lost.
-        for publisher in publishers.values():
-            publisher.wait_for_all_acked(Duration(seconds=2.0))
+        if not result.interrupted:
+            # Destroying a publisher drops what reliable readers have not acknowledged yet,
+            # so the last messages of a bag would otherwise be lost. After SIGTERM the context
+            # is gone and there is nothing left to wait with.
+            for publisher in publishers.values():
+                publisher.wait_for_all_acked(Duration(seconds=2.0))
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
     return result
+
+
+def _play(messages, publishers, clock, clock_hz: float, rate: float, result: ReplayResult) -> bool:
+    """One pass over ``messages`` at their recorded spacing / ``rate`` (and /clock from their
+    time); False when ROS shut down before the pass was through (SIGTERM)."""
+    import rclpy
+    from rosgraph_msgs.msg import Clock
+
+    first = messages[0].log_time_ns
+    wall_start = time.perf_counter()
+    next_tick = wall_start
+    for message in messages:
+        due = wall_start + (message.log_time_ns - first) * 1e-9 / rate
+        while True:
+            now = time.perf_counter()
+            if clock is not None and now >= next_tick:
+                bag_ns = first + int((now - wall_start) * rate * 1e9)
+                clock.publish(Clock(clock=_time_msg(min(bag_ns, message.log_time_ns))))
+                next_tick += 1.0 / clock_hz
+            if now >= due or not rclpy.ok():
+                break
+            wake = min(due, next_tick) if clock is not None else due
+            time.sleep(max(0.0, min(wake - now, 0.05)))
+        if not rclpy.ok():
+            return False
+        publishers[message.topic].publish(message.data)
+        result.published[message.topic] += 1
+    if clock is not None:
+        clock.publish(Clock(clock=_time_msg(messages[-1].log_time_ns)))
+    return True
 
 
 def _time_msg(nanoseconds: int):
@@ -174,5 +192,6 @@ def run(args: argparse.Namespace) -> int:
         return 2
     total = sum(result.published.values())
     print(f"replayed {total} messages on {len(result.published)} topics in {result.wall_s:.3f} s "
-          f"({result.loops} pass{'es' if result.loops != 1 else ''})")
+          f"({result.loops} full pass{'es' if result.loops != 1 else ''}"
+          f"{'; stopped by a signal' if result.interrupted else ''})")
     return 0

@@ -89,3 +89,26 @@ def test_remap_syntax() -> None:
     assert parse_remaps(["/a:=/b"]) == {"/a": "/b"}
     with pytest.raises(ValueError, match="form /from:=/to"):
         parse_remaps(["/a=/b"])
+
+
+@pytest.mark.parametrize("signal_name", ["SIGTERM", "SIGINT"])
+def test_a_signal_stops_replay_cleanly(ros_domain_id: int, tmp_path: Path, signal_name: str) -> None:
+    # SIGTERM used to end in a traceback (waiting for acknowledgements on a context already shut down)
+    import signal
+
+    make_bag(tmp_path / "bag", count=101)   # 10 s at 10 Hz
+    replay = subprocess.Popen(
+        [sys.executable, "-m", "hems_ros.cli.main", "replay", str(tmp_path / "bag"), "--loop", "--start-delay", "0"],
+        env=child_environment(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(3.0)
+        replay.send_signal(getattr(signal, signal_name))
+        out, err = replay.communicate(timeout=20)
+    finally:
+        if replay.poll() is None:
+            replay.kill()
+    assert replay.returncode == 0, err
+    assert "Traceback" not in err
+    assert "(0 full passes; stopped by a signal)" in out
+    published = int(out.split("replayed ")[1].split(" messages")[0])
+    assert 2 <= published <= 40
