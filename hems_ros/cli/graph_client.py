@@ -7,6 +7,7 @@ import time
 from dataclasses import dataclass, field
 
 import rclpy
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 
@@ -17,6 +18,21 @@ from hems_ros.nodes import qos
 RETRY_S = 2.0   # a service call unanswered this long is sent again
 MATCH_ALL_S = 1.0   # a subscription that never matches (incompatible QoS) delays a setpoint this long at most
 RESEND_S = 0.3      # a setpoint the controller status does not show yet is sent again after this long
+
+
+def checked_spin(call, node: Node, *args, **kwargs):
+    """``call(node, ...)`` (rclpy.spin_once, spin_until_future_complete) that raises
+    ExternalShutdownException once SIGINT or SIGTERM has shut rclpy's context down: the spin
+    call itself then fails in whatever rcl object it creates next, with an RCLError that says
+    nothing of the signal."""
+    if not rclpy.ok():
+        raise ExternalShutdownException()
+    try:
+        return call(node, *args, **kwargs)
+    except Exception:
+        if rclpy.ok():
+            raise
+        raise ExternalShutdownException() from None
 
 
 @dataclass
@@ -67,7 +83,7 @@ class GraphClient:
     def spin_for(self, seconds: float) -> None:
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline:
-            rclpy.spin_once(self.node, timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())))
+            checked_spin(rclpy.spin_once, self.node, timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())))
 
     def _service_client(self, command: str):
         client = self._service_clients.get(command)
@@ -93,7 +109,7 @@ class GraphClient:
         deadline = time.monotonic() + timeout
         while True:
             future = client.call_async(Trigger.Request())
-            rclpy.spin_until_future_complete(self.node, future,
+            checked_spin(rclpy.spin_until_future_complete, self.node, future,
                                              timeout_sec=max(0.0, min(RETRY_S, deadline - time.monotonic())))
             if future.result() is not None:
                 return future.result().success, future.result().message
@@ -143,10 +159,10 @@ class GraphClient:
         while publisher.get_subscription_count() == 0:
             if time.monotonic() > deadline:
                 return SetpointResult(False, None, f"no finger_controller subscribed to {topic}")
-            rclpy.spin_once(self.node, timeout_sec=0.02)
+            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)
         until = time.monotonic() + MATCH_ALL_S
         while publisher.get_subscription_count() < self.node.count_subscribers(topic) and time.monotonic() < until:
-            rclpy.spin_once(self.node, timeout_sec=0.02)
+            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)
         before = self._statuses.get(finger)
         self._publish_setpoint(publisher, mode, value)
         if confirm_s is None:
@@ -155,7 +171,7 @@ class GraphClient:
         deadline = time.monotonic() + confirm_s
         resend = time.monotonic() + RESEND_S
         while time.monotonic() < deadline:
-            rclpy.spin_once(self.node, timeout_sec=0.01)
+            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.01)
             status = self._statuses.get(finger)
             if status is not None:
                 if status.mode == mode and math.isclose(status.setpoint, value, rel_tol=1e-9, abs_tol=1e-12):
@@ -204,7 +220,7 @@ class GraphClient:
         self.spin_for(seconds)
         deadline = time.monotonic() + supervisor_wait_s
         while snap.supervisor is None and time.monotonic() < deadline:
-            rclpy.spin_once(self.node, timeout_sec=0.05)
+            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.05)
         for sub in subs:
             self.node.destroy_subscription(sub)
         return snap

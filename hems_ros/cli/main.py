@@ -12,6 +12,8 @@ import importlib
 import pkgutil
 import sys
 
+from rclpy.executors import ExternalShutdownException
+
 import hems_ros
 import hems_ros.cli as cli_pkg
 from hems_ros.rosenv import apply_network_defaults
@@ -44,7 +46,12 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
+        print(f"hems {args.verb}: interrupted", file=sys.stderr)
         return 130
+    except ExternalShutdownException:
+        # rclpy's handler shut the context down on SIGTERM; the verb's own cleanup ran on the way out
+        print(f"hems {args.verb}: stopped by SIGTERM", file=sys.stderr)
+        return 143
 
 
 if __name__ == "__main__":

@@ -1,0 +1,39 @@
+"""A `hems` verb talking to the graph stops cleanly on Ctrl-C and SIGTERM.
+
+rclpy's own handler shuts its context down on SIGTERM, after which the next spin call failed
+in whatever rcl object it created (an RCLError traceback, exit code 1, e.g. from `hems demo`
+in the middle of a grasp). Waiting for a controller that is not there keeps the verb spinning
+without starting a graph.
+"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from hems_ros.rosenv import child_environment
+
+
+@pytest.mark.parametrize("signal_name, code, message", [
+    ("SIGTERM", 143, "hems setpoint: stopped by SIGTERM"),
+    ("SIGINT", 130, "hems setpoint: interrupted"),
+])
+def test_a_waiting_verb_stops_cleanly(ros_domain_id: int, signal_name: str, code: int, message: str) -> None:
+    verb = subprocess.Popen([sys.executable, "-m", "hems_ros.cli.main", "setpoint", "index", "10", "--unit", "mm",
+                             "--timeout", "60"], env=child_environment(), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(3.0)   # imports, rclpy init, then spinning while it waits for a subscriber
+        assert verb.poll() is None
+        verb.send_signal(getattr(signal, signal_name))
+        _, err = verb.communicate(timeout=20)
+    finally:
+        if verb.poll() is None:
+            verb.kill()
+    assert verb.returncode == code, err
+    assert err.strip().splitlines()[-1] == message
+    assert "Traceback" not in err
