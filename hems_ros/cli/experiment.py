@@ -49,6 +49,11 @@ def run(args: argparse.Namespace) -> int:
     if args.docs is not None and args.chapter != "all":
         print("--docs needs chapter 'all' (docs/experiments.md covers both chapters)")
         return 2
+    # made before the runs, so that a folder that cannot be written fails at once, not after them
+    for chapter in ("ch5", "ch6") if args.chapter == "all" else (args.chapter,):
+        _folder(args, chapter).mkdir(parents=True, exist_ok=True)
+    if args.docs is not None:
+        (args.docs / "figures").mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     results = {}
     if args.chapter in ("ch5", "all"):

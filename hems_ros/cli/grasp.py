@@ -35,6 +35,8 @@ def register(subparsers) -> None:
 
 
 def plan_from(args: argparse.Namespace) -> GraspPlan:
+    """The grasp the options ask for, checked before anything runs (the plot's folder too)."""
+    args.plot.parent.mkdir(parents=True, exist_ok=True)
     limits = SetpointLimits()
     validate("force", args.force, limits)
     validate("position", args.approach_mm * 1e-3, limits)
@@ -149,7 +151,6 @@ def report(traces, plan: GraspPlan, phase_starts: dict[str, list[float]], plot_p
     print(format_summary(rows, plan))
     if not complete:
         return rows
-    plot_path.parent.mkdir(parents=True, exist_ok=True)
     plot(traces, plan, min(phase_starts[f][0] for f in complete), plot_path)
     print(f"grasp: plot written to {plot_path}")
     return rows

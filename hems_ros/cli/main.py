@@ -48,6 +48,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"hems {args.verb}: interrupted", file=sys.stderr)
         return 130
+    except OSError as error:
+        # a folder that cannot be made or a file that cannot be written or read
+        print(f"hems {args.verb}: {error}", file=sys.stderr)
+        return 1
     except ExternalShutdownException:
         # rclpy's handler shut the context down on SIGTERM; the verb's own cleanup ran on the way out
         print(f"hems {args.verb}: stopped by SIGTERM", file=sys.stderr)

@@ -191,6 +191,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"hems replay: {error}", file=sys.stderr)
         return 2
     total = sum(result.published.values())
+    if not total and (args.topics or args.regex):
+        from hems_ros.bag import bag_info
+
+        have = ", ".join(sorted(bag_info(args.bag).topics)) or "none"
+        print(f"hems replay: no message of {args.bag} on the selected topics; its topics: {have}", file=sys.stderr)
+        return 2
     print(f"replayed {total} messages on {len(result.published)} topics in {result.wall_s:.3f} s "
           f"({result.loops} full pass{'es' if result.loops != 1 else ''}"
           f"{'; stopped by a signal' if result.interrupted else ''})")

@@ -18,6 +18,7 @@ import numpy as np
 from hems_ros.cli.numbers import non_negative, positive
 from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder, wait_until_recording
 from hems_ros.graph import names, transmission
+from hems_ros.physics.params import load_params
 
 
 def register(subparsers) -> None:
@@ -67,6 +68,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         options = graph_options(args)
         record = bag_folder(args.record, "step")
+        if args.physics_config:
+            load_params(args.physics_config)   # a bad name stops here, not in the unit after start-up
     except ValueError as error:
         print(f"step: {error}", file=sys.stderr)
         return 2

@@ -95,3 +95,25 @@ def test_replay_api_refuses_bad_numbers(keyword, value, message):
 
     with pytest.raises(ValueError, match=message):
         replay(REFERENCE_BAG, **{keyword: value})
+
+
+@pytest.mark.parametrize("argv, code, message", [
+    (["step", "--physics-config", "nonexistent"], 2, "step: no parameter set named 'nonexistent'"),
+    (["demo", "--plot", "{file}/grasp.png"], 1, "hems demo: [Errno 17] File exists"),
+    (["experiment", "ch6", "-o", "{file}/out"], 1, "hems experiment: [Errno 20] Not a directory"),
+    (["replay", str(REFERENCE_BAG), "--topic", "/hems/nope"], 2,
+     "on the selected topics; its topics: /diagnostics, /hems/index/controller_status"),
+])
+def test_bad_inputs_stop_before_anything_starts(tmp_path, argv, code, message):
+    # each used to start the graph or the runs first (or, for the topic, replay nothing and exit 0)
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    argv = [a.format(file=blocker) for a in argv]
+    started = time.monotonic()
+    done = subprocess.run([sys.executable, "-m", "hems_ros.cli.main", *argv], capture_output=True, text=True,
+                          timeout=60, cwd=tmp_path)
+    assert done.returncode == code, done.stderr
+    assert message in done.stderr
+    assert "Traceback" not in done.stderr
+    assert time.monotonic() - started < 20
+    assert not (tmp_path / "bags").exists()
