@@ -67,9 +67,9 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         options = graph_options(args)
-        record = bag_folder(args.record, "step")
         if args.physics_config:
             load_params(args.physics_config)   # a bad name stops here, not in the unit after start-up
+        record = bag_folder(args.record, "step")
     except ValueError as error:
         print(f"step: {error}", file=sys.stderr)
         return 2

@@ -62,14 +62,21 @@ def bag_folder(record, prefix: str) -> Path:
     folder = default_bag(prefix) if record is True else Path(record)
     if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
         raise ValueError(f"--record {folder}: exists and is not an empty folder")
+    try:
+        folder.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise ValueError(f"--record {folder}: cannot make {error.filename}: {error.strerror}") from None
     return folder
 
 
-def stop_recorder(prefix: str, recorder) -> None:
+def stop_recorder(prefix: str, recorder) -> bool:
+    """Stop ``recorder`` and print its bag; False (and why) if the recording failed."""
     try:
         print_bag(prefix, recorder.stop())
     except RuntimeError as error:
         print(f"{prefix}: recording failed: {error}", file=sys.stderr, flush=True)
+        return False
+    return True
 
 
 def print_bag(prefix: str, info) -> None:
@@ -131,6 +138,7 @@ def run(args: argparse.Namespace) -> int:
           f"{f', sim time x{options.rate:g}' if options.sim_time else ''}); Ctrl-C to stop", flush=True)
     started = time.monotonic()
     reported: set[str] = set()
+    recorded = True
     try:
         while not stop["requested"]:
             if args.duration is not None and time.monotonic() - started >= args.duration:
@@ -144,9 +152,9 @@ def run(args: argparse.Namespace) -> int:
             time.sleep(0.05)
     finally:
         if recorder is not None:  # first, so that the bag ends with the graph still running
-            stop_recorder("hems up", recorder)
+            recorded = stop_recorder("hems up", recorder)
         t0 = time.monotonic()
         codes = graph.stop()
         print(f"hems up: stopped {len(codes)} processes in {time.monotonic() - t0:.2f} s"
               + (f" (killed after the grace period: {', '.join(graph.killed)})" if graph.killed else ""), flush=True)
-    return 0
+    return 0 if recorded else 1

@@ -244,7 +244,7 @@ def spin_until_expired(node: Recorder) -> None:
 def main(argv: list[str] | None = None) -> int:
     from hems_ros.nodes.runner import run_node
 
-    return run_node(Recorder, argv, spin=spin_until_expired, config_errors=(ValueError, FileExistsError))
+    return run_node(Recorder, argv, spin=spin_until_expired, config_errors=(ValueError, OSError))
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -112,6 +112,17 @@ def test_recorder_rejects_a_used_folder(tmp_path: Path) -> None:
         recorder.wait(timeout=30)
 
 
+def test_recorder_names_a_folder_it_cannot_make(tmp_path: Path) -> None:
+    # was a traceback (FileNotFoundError / NotADirectoryError escaped the configuration check)
+    (tmp_path / "a_file").write_text("x")
+    recorder = RecorderProcess(tmp_path / "a_file" / "bag")
+    with pytest.raises(RuntimeError, match="code 2") as info:
+        recorder.wait(timeout=30)
+    assert f"Recorder: invalid configuration: [Errno 20] Not a directory: '{tmp_path / 'a_file' / 'bag'}'" \
+        in str(info.value)
+    assert "Traceback" not in "\n".join(recorder.log)
+
+
 def test_stop_twice_gives_the_same_bag_and_an_error_leaving_the_block_stays_the_error(
         ros_domain_id: int, tmp_path: Path) -> None:
     publisher = publish(count=1500, rate=500.0)

@@ -101,6 +101,8 @@ def test_replay_api_refuses_bad_numbers(keyword, value, message):
     (["step", "--physics-config", "nonexistent"], 2, "step: no parameter set named 'nonexistent'"),
     (["demo", "--plot", "{file}/grasp.png"], 1, "hems demo: [Errno 17] File exists"),
     (["experiment", "ch6", "-o", "{file}/out"], 1, "hems experiment: [Errno 20] Not a directory"),
+    (["up", "--record", "{file}/bag", "--duration", "1"], 2, "hems up: --record {file}/bag: cannot make {file}"),
+    (["demo", "--record", "{file}/bag"], 2, "demo: --record {file}/bag: cannot make {file}"),
     (["replay", str(REFERENCE_BAG), "--topic", "/hems/nope"], 2,
      "on the selected topics; its topics: /diagnostics, /hems/index/controller_status"),
 ])
@@ -109,6 +111,7 @@ def test_bad_inputs_stop_before_anything_starts(tmp_path, argv, code, message):
     blocker = tmp_path / "a_file"
     blocker.write_text("not a folder")
     argv = [a.format(file=blocker) for a in argv]
+    message = message.format(file=blocker)
     started = time.monotonic()
     done = subprocess.run([sys.executable, "-m", "hems_ros.cli.main", *argv], capture_output=True, text=True,
                           timeout=60, cwd=tmp_path)
