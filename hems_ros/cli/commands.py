@@ -111,8 +111,8 @@ def format_status(snap) -> str:
             continue
         unit = "mm" if c.mode == "position" else "N"
         setpoint = 1e3 * c.setpoint if c.mode == "position" else c.setpoint
-        position = 1e3 * s.tendon_position if s is not None else math.nan
-        force = transmission.tendon_force(f.force) if f is not None else math.nan
+        position = f"{1e3 * s.tendon_position:>12.2f}" if s is not None else f"{'-':>12}"
+        force = f"{transmission.tendon_force(f.force):>8.2f}" if f is not None else f"{'-':>8}"
         faults = [c.fault] if c.fault else []
         if s is not None and s.watchdog_tripped:
             faults.append("watchdog")
@@ -123,7 +123,7 @@ def format_status(snap) -> str:
                 faults.append("controller inactive")
         if c.rejected_setpoints:
             faults.append(f"{c.rejected_setpoints} rejected ({c.last_rejection})")
-        rows.append(f"{finger:<16} {c.mode:<9} {setpoint:>7.2f} {unit:<2} {position:>12.2f} {force:>8.2f} "
+        rows.append(f"{finger:<16} {c.mode:<9} {setpoint:>7.2f} {unit:<2} {position} {force} "
                     f"{c.duty_percent:>7.1f}  {', '.join(faults) or '-'}")
     sup = snap.supervisor
     rows.append(f"supervisor: {sup.state_name if sup else 'not running'}"

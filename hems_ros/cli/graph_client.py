@@ -57,6 +57,12 @@ class Snapshot:
     forces: dict[str, WireForce] = field(default_factory=dict)
     supervisor: SupervisorStatus | None = None
 
+    def incomplete(self) -> bool:
+        """The supervisor not heard yet, or a finger whose controller reported without its
+        unit's state or its wire force."""
+        return self.supervisor is None or any(
+            f not in self.states or f not in self.forces for f in self.controllers)
+
 
 class GraphClient:
     def __init__(self, name: str = "hems_cli") -> None:
@@ -200,10 +206,10 @@ class GraphClient:
                 lambda m, f=finger: self._statuses.__setitem__(f, m), qos.CONTROLLER_STATUS)
 
     def snapshot(self, fingers=names.FINGERS, seconds: float = 0.5, supervisor_wait_s: float = 5.0) -> Snapshot:
-        """Listen for ``seconds``, and up to ``supervisor_wait_s`` longer while the supervisor,
-        which republishes its status at 10 Hz, has not been heard: DDS discovery between a
-        new process and the graph now and then waits for a periodic announcement, seconds
-        later, and `hems status` reported a running supervisor as not running."""
+        """Listen for ``seconds``, and up to ``supervisor_wait_s`` longer while the snapshot is
+        :meth:`Snapshot.incomplete`: DDS discovery between a new process and the graph now and
+        then waits for a periodic announcement, seconds later, and `hems status` reported a
+        running supervisor as not running, or a finger's position and force as missing."""
         snap = Snapshot()
         subs = [self.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
                                               lambda m: setattr(snap, "supervisor", m), qos.STATUS)]
@@ -219,7 +225,7 @@ class GraphClient:
                 qos.SENSOR))
         self.spin_for(seconds)
         deadline = time.monotonic() + supervisor_wait_s
-        while snap.supervisor is None and time.monotonic() < deadline:
+        while snap.incomplete() and time.monotonic() < deadline:
             checked_spin(rclpy.spin_once, self.node, timeout_sec=0.05)
         for sub in subs:
             self.node.destroy_subscription(sub)

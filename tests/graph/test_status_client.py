@@ -40,3 +40,22 @@ def test_status_rows_name_a_unit_or_controller_that_has_not_taken_enabled():
     assert rows["ring"].endswith("  unit has no heating permission")
     snap.supervisor = SupervisorStatus(state=SupervisorStatus.IDLE, state_name="IDLE")
     assert all(format_status(snap).splitlines()[i].endswith("  -") for i in (3, 4, 5))
+
+
+def test_a_finger_heard_without_its_state_or_force_keeps_the_snapshot_listening_and_shows_dashes():
+    from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus, WireForce
+    from hems_ros.cli.commands import format_status
+    from hems_ros.cli.graph_client import Snapshot
+
+    snap = Snapshot(controllers={"index": ControllerStatus(finger="index", mode="force", setpoint=10.0)},
+                    supervisor=SupervisorStatus(state=SupervisorStatus.ENABLED, state_name="ENABLED"))
+    assert snap.incomplete()
+    row = next(line for line in format_status(snap).splitlines() if line.startswith("index"))
+    # was "nan nan": no state or force message had arrived within the listen
+    assert row.split()[1:6] == ["force", "10.00", "N", "-", "-"] and "nan" not in row
+    snap.states["index"] = ActuatorState(finger="index", tendon_position=0.012)
+    assert snap.incomplete()
+    snap.forces["index"] = WireForce(finger="index", force=8.0)
+    assert not snap.incomplete()
+    row = next(line for line in format_status(snap).splitlines() if line.startswith("index"))
+    assert row.split()[4:6] == ["12.00", "4.00"]
