@@ -73,6 +73,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {folder / (chapter + '.md')} and {len(figs)} figures")
         for f in found:
             print(f"  {'ok  ' if f.reproduced else 'MISS'} {f.claim}: {f.ours}")
+        if not all(f.reproduced for f in found):
+            print(f"  why each MISS, with the runs that show it: {folder / (chapter + '.md')}, "
+                  "'Not reproduced, and why'")
     if args.docs is not None:
         path = report.write_docs(*results["ch5"][:1], *results["ch6"][:1], results["ch5"][1],
                                  results["ch6"][1], args.docs)

@@ -400,7 +400,7 @@ def ch5_findings(ch5: dict, params: UnitParams) -> list[Finding]:
         rc, mode, filters, gain = rate_check(), wire_mass_mode(params), filter_sweep(params), pulse_gain()
         slope, grid = table_4_1_stress_slope(params), gain_grid(params)
         evidence = (
-            f"Plant, shown by two runs. (1) Speed: at full duty the model's wire contracts at "
+            f"Plant. (1) Speed: at full duty the model's wire contracts at "
             f"{coast['speed_mm_s']:.0f} mm/s through mid-stroke (open loop, cold start, "
             f"{coast['time_s']:.2f} s to reach 10 mm) and keeps moving {coast['coast_mm']:.2f} mm "
             f"after the heater is switched off; the step rises (10-90 %) in "

@@ -23,7 +23,9 @@ def test_ch6_writes_tables_figures_and_verdicts(tmp_path):
            "staircase 0.024 N" in lines
     assert any(line.startswith("  MISS Position control: RMSE at most 3x Table 6.1: sine_0.125 4.565 mm (55.0x)")
                for line in lines)
+    assert f"  why each MISS, with the runs that show it: {out / 'ch6.md'}, 'Not reproduced, and why'" in lines
     md = (out / "ch6.md").read_text()
+    assert "Not reproduced, and why:" in md
     assert "| ramp | 0.019 / 0.142 / 7.46 |" in md
     assert "0.067 mm on the ramp (3.5x Table 6.1" in md
     assert sorted(p.name for p in out.glob("*.png"))[:2] == ["ch6_force_sine_0.125.png", "ch6_force_sine_0.25.png"]
