@@ -116,7 +116,7 @@ class GraphClient:
         while True:
             future = client.call_async(Trigger.Request())
             checked_spin(rclpy.spin_until_future_complete, self.node, future,
-                                             timeout_sec=max(0.0, min(RETRY_S, deadline - time.monotonic())))
+                         timeout_sec=max(0.0, min(RETRY_S, deadline - time.monotonic())))
             if future.result() is not None:
                 return future.result().success, future.result().message
             client.remove_pending_request(future)
