@@ -7,7 +7,7 @@ import sys
 import time
 from pathlib import Path
 
-from hems_ros.cli.numbers import finite, non_negative
+from hems_ros.cli.numbers import finite, non_negative, positive
 from hems_ros.graph import names
 from hems_ros.graph.grasp import (
     FingerTrace, GraspPlan, PhaseTracker, format_summary, plot, summarize, tracking_report,
@@ -27,10 +27,17 @@ def add_grasp_arguments(parser: argparse.ArgumentParser) -> None:
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "grasp", help="scripted grasp on all six fingers: position approach, force hold, release",
-        description="On a running, enabled graph (hems up; hems enable): every finger approaches a tendon "
-                    "position, holds a tendon force, then releases; prints a per-finger summary (tracking "
-                    "error, peak force, energy) and writes a PNG plot.")
+        description="On a running graph (hems up), enabled (hems enable) or enabled by this tool after it has "
+                    "joined (--enable): every finger approaches a tendon position, holds a tendon force, then "
+                    "releases; prints a per-finger summary (tracking error, peak force, energy) and writes a PNG "
+                    "plot.")
     add_grasp_arguments(parser)
+    parser.add_argument("--enable", action="store_true",
+                        help="enable the graph once this tool has joined it, and disable it after the grasp: "
+                             "a tool joining an ENABLED separate-process graph can hold its streams up past "
+                             "the supervisor's limits on a small host (README, Safety)")
+    parser.add_argument("--enable-timeout", type=positive, default=30.0,
+                        help="with --enable: seconds to wait for the supervisor to accept enable (default 30)")
     parser.set_defaults(func=run)
 
 
@@ -162,14 +169,32 @@ def run(args: argparse.Namespace) -> int:
     except SetpointError as error:
         print(f"grasp: {error}", file=sys.stderr)
         return 2
+    from rclpy.executors import ExternalShutdownException
+
     from hems_ros.cli.graph_client import GraphClient
 
     with GraphClient("hems_grasp") as client:
         try:
-            traces, phase_starts, statuses = run_grasp(client, plan)
+            listener = None
+            if args.enable:
+                listener = GraspListener(client)   # matched before anything heats
+                ok, message = client.enable_when_ready(args.enable_timeout)
+                if not ok:
+                    print(f"grasp: could not enable the graph: {message}", file=sys.stderr)
+                    return 1
+                print(f"grasp: {message}", flush=True)
+            traces, phase_starts, statuses = run_grasp(client, plan, listener=listener)
+            if args.enable:
+                ok, message = client.call("disable")
+                print(f"grasp: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
         except RuntimeError as error:
             print(f"grasp: {error}", file=sys.stderr)
             return 1
+        except (KeyboardInterrupt, ExternalShutdownException):
+            # the graph is not ours to stop, and a signal has taken this process's ROS context
+            print("grasp: stopped mid-grasp; the fingers keep their last setpoint "
+                  "(hems setpoint all 0 --unit mm releases them, hems disable stops all heating)", file=sys.stderr)
+            raise
     rows = report(traces, plan, phase_starts, args.plot)
     problem = fault_report(statuses) or tracking_report(rows, plan, names.FINGERS)
     if problem:
