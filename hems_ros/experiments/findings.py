@@ -35,6 +35,8 @@ These measurements carry the evidence:
 * :func:`cold_start_floor`: the least ascending-part RMSE of a chapter 6 position reference
   for an idealised wire with Table 4.1's band that starts cold (full drive power, no heat
   loss): how much of a miss no plant with those temperatures could avoid.
+* :func:`warm_start_ratios`: the chapter 6 position runs with wire and sheath started warm,
+  as a rig still warm from earlier work: whether the cold start explains the misses.
 * :func:`gain_grid`: BPID's step and staircase overshoot over a grid of Kp and Kd around
   Table 5.1's: whether any gain set avoids the overshoot on this plant.
 * :func:`perturbation_spread`: how far the step and staircase figures move when the
@@ -204,6 +206,23 @@ def cold_start_floor(protocol: str, params: UnitParams | str = COLD_WIRE_PARAMS)
     caught = np.flatnonzero((t > start) & (y >= r))
     return {"rmse_mm": floor, "ratio": floor / CH6_TABLES["position"][2][protocol]["rmse"],
             "catch_up_s": float(t[caught[0]] - start) if caught.size else math.nan, "power_w": power}
+
+
+WARM_START_C = (40.0, 50.0, 60.0, 70.0)
+"""Start temperatures of wire and sheath for :func:`warm_start_ratios`: up to just below the
+71-74 degC at which the model's wire is back at the characterization's "cooled" 0.5 % strain
+(docs/validation.md), the warmest start that reading allows."""
+
+
+def warm_start_ratios(protocols, temperatures=WARM_START_C,
+                      params: UnitParams | str = CH6_PARAMS) -> dict[float, dict[str, float]]:
+    """RMSE / Table 6.1 of chapter 6 position ``protocols`` (BPID, Table 5.1) with wire and
+    sheath starting at each of ``temperatures`` (degC, fully martensite) instead of cold: what
+    a rig still warm from earlier work would have done with the model's wire."""
+    table = CH6_TABLES["position"][2]
+    return {temp: {p: run_protocol(p, "bpid", params, start_temperature_c=temp).metrics["rmse"] / table[p]["rmse"]
+                   for p in protocols}
+            for temp in temperatures}
 
 
 def _force_steps(gains, noise: bool) -> list[dict[str, float]]:
@@ -541,6 +560,23 @@ def _cold_start_text(protocols) -> str:
         "warm when the reference started to rise, or one that transforms below Table 4.1's band. ")
 
 
+def _warm_start_text(protocols) -> str:
+    warm = warm_start_ratios(protocols)
+    temps = ", ".join(f"{t:g}" for t in warm)
+    best = {p: min(warm, key=lambda t: warm[t][p]) for p in protocols}
+    fits = [t for t, row in warm.items() if max(row.values()) <= 3.0]
+    return (
+        f"Nor does the model's wire started warm: with wire and sheath at {temps} degC (fully "
+        "martensite, as a rig still warm from earlier work would be) the ratios are "
+        + "; ".join(f"{p[13:]} " + ", ".join(f"{warm[t][p]:.1f}x" for t in warm) for p in protocols)
+        + " (best " + ", ".join(f"{p[13:]} {warm[best[p]][p]:.1f}x at {best[p]:g} degC" for p in protocols)
+        + "), so " + ("no start temperature brings them all within 3x" if not fits
+                      else "starts at " + ", ".join(f"{t:g}" for t in fits) + " degC bring them within 3x")
+        + " (`findings.warm_start_ratios`): warmth shortens the ramp's dead time, but the step's error "
+        "is its approach to the level at full duty near the end of the stroke, and on the sine a warm "
+        "sheath slows the descents further. ")
+
+
 def ch6_findings(ch6: dict) -> list[Finding]:
     """Chapter 6 claims on the runs of :func:`hems_ros.experiments.chapters.run_ch6`."""
     out = []
@@ -570,6 +606,7 @@ def ch6_findings(ch6: dict) -> list[Finding]:
             f"{early.start_c:.0f} degC or warmer, which the characterization's \"cooled\" (back at 0.5 % strain) "
             "allows, a wire with that band could have done it. "
             + _cold_start_text([p for p in bad if PROTOCOLS[p].segment == "ascending"])
+            + _warm_start_text(list(bad))
             + "On the sine the wire has not come down when the next ascent starts, so the "
             "ascending part begins far above the reference; the sheath and the glove friction "
             "hold it up (the dissertation: descents are slow, cooling + tendon friction). On the "

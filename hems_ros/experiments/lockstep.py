@@ -79,11 +79,14 @@ def simulate_loop(
     ts: float = DEFAULT_TS,
     dt: float = DEFAULT_DT,
     n_filter: float = DEFAULT_N_FILTER,
+    start_temperature_c: float | None = None,
 ):
     """Closed loop over ``reference`` (one value per control sample, SI unit of ``mode``).
 
-    Returns (measurement, duty, position_m, wire_force_n, power_w, fault); the arrays are
-    cut at the sample where a controller fault or a non-finite plant state stopped the run.
+    The unit starts cold (ambient) unless ``start_temperature_c`` is given
+    (:func:`hems_ros.physics.kernel.initial_state`). Returns (measurement, duty,
+    position_m, wire_force_n, power_w, fault); the arrays are cut at the sample where a
+    controller fault or a non-finite plant state stopped the run.
     """
     prm = _params(params)
     sub = int(round(ts / dt))
@@ -93,7 +96,7 @@ def simulate_loop(
     n = ref.size
     controller = make_controller(strategy, mode, gains, ts=ts, n_filter=n_filter)
     p = kernel.pack(prm)
-    s = kernel.initial_state(prm)
+    s = kernel.initial_state(prm, start_temperature_c)
     out = np.zeros(kernel.N_O)
     res = prm.encoder.resolution_m
     fs = prm.force_sensor
@@ -200,6 +203,7 @@ def run_protocol(
     ts: float = DEFAULT_TS,
     dt: float = DEFAULT_DT,
     n_filter: float = DEFAULT_N_FILTER,
+    start_temperature_c: float | None = None,
 ) -> LockstepRun:
     """Run ``protocol`` (a :data:`PROTOCOLS` name or object) with ``strategy`` on ``params``.
 
@@ -212,7 +216,8 @@ def run_protocol(
     proto = PROTOCOLS[protocol] if isinstance(protocol, str) else protocol
     prm = _params(params)
     t, r = proto.generate(ts)
-    y, u, pos, force, power, fault = simulate_loop(r, strategy, proto.mode, prm, gains, ts, dt, n_filter)
+    y, u, pos, force, power, fault = simulate_loop(r, strategy, proto.mode, prm, gains, ts, dt, n_filter,
+                                                   start_temperature_c)
     t, r = t[: y.size], r[: y.size]
     run = LockstepRun(
         protocol=proto.name, strategy=strategy, mode=proto.mode, params_name=prm.name,

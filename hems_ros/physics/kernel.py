@@ -151,10 +151,19 @@ def pack(params: UnitParams) -> np.ndarray:
     return p
 
 
-def initial_state(params: UnitParams) -> np.ndarray:
-    """Cold, fully martensitic wire at rest in the frictionless static balance with the load."""
+def initial_state(params: UnitParams, temperature_c: float | None = None) -> np.ndarray:
+    """Fully martensitic wire at rest in the frictionless static balance with the load.
+
+    Wire and sheath start at the ambient temperature, or at ``temperature_c`` for a rig still
+    warm from earlier work; a wire warmed from cold stays martensite only below the
+    stress-free As0 (eq. 4.17), so a start at or above it is refused.
+    """
+    start = params.ambient_temperature_c if temperature_c is None else float(temperature_c)
+    if not math.isfinite(start) or start >= params.kinetics.as0_c:
+        raise ValueError(f"start temperature must be finite and below As0 = {params.kinetics.as0_c:g} degC "
+                         f"(a martensite wire), got {temperature_c!r}")
     s = np.zeros(N_STATE)
-    s[S_T] = s[S_TS] = s[S_TH] = params.ambient_temperature_c
+    s[S_T] = s[S_TS] = s[S_TH] = start
     s[S_XI] = 1.0
     s[S_SIG] = params.load.pulley_ratio * params.load.static_force_n() / params.wire.cross_section_m2
     return s
