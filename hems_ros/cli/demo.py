@@ -58,15 +58,15 @@ def run(args: argparse.Namespace) -> int:
             except (TimeoutError, RuntimeError) as error:
                 print(f"demo: {error}", file=sys.stderr)
                 return 1
-            listener = grasp.GraspListener(client, options.fingers)   # matched while nothing heats
-            ok, message = client.enable_when_ready(args.ready_timeout)
-            if not ok:
-                print(f"demo: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)
+            try:
+                traces, phase_starts, statuses = grasp.enabled_grasp(client, plan, options.fingers,
+                                                                     args.ready_timeout, "demo")
+            except grasp.EnableRefused as error:
+                print(f"demo: could not enable the graph: {graph.with_exits(str(error))}", file=sys.stderr)
                 return 1
-            print(f"demo: {message}", flush=True)
-            traces, phase_starts, statuses = grasp.run_grasp(client, plan, options.fingers, listener)
-            client.call("disable")
-            client.spin_for(0.3)  # the DISABLED status and the cooling start reach the bag
+            except RuntimeError as error:
+                print(f"demo: {graph.with_exits(str(error))}", file=sys.stderr)
+                return 1
         rows = grasp.report(traces, plan, phase_starts, args.plot)
         problem = grasp.fault_report(statuses) or grasp.tracking_report(rows, plan, options.fingers)
         if problem:

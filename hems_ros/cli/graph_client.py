@@ -157,10 +157,7 @@ class GraphClient:
         topic = names.topic(finger, "setpoint")
         if confirm_s is not None:
             self._watch_status(finger)   # discovered while the setpoint writer is being matched
-        publisher = self._setpoint_pubs.get(finger)
-        if publisher is None:
-            publisher = self.node.create_publisher(FingerSetpoint, topic, qos.COMMAND)
-            self._setpoint_pubs[finger] = publisher
+        publisher = self._setpoint_publisher(finger)
         deadline = time.monotonic() + timeout
         while publisher.get_subscription_count() == 0:
             if time.monotonic() > deadline:
@@ -193,6 +190,25 @@ class GraphClient:
         seen = ("no controller status received" if status is None else
                 f"the controller status shows {status.mode} {status.setpoint:g}")
         return SetpointResult(True, False, f"sent, but not in force after {confirm_s:g} s ({seen})")
+
+    def _setpoint_publisher(self, finger: str):
+        publisher = self._setpoint_pubs.get(finger)
+        if publisher is None:
+            publisher = self.node.create_publisher(FingerSetpoint, names.topic(finger, "setpoint"), qos.COMMAND)
+            self._setpoint_pubs[finger] = publisher
+        return publisher
+
+    def missing_controllers(self, fingers, timeout: float = 5.0) -> list[str]:
+        """The ``fingers`` whose controller has not subscribed to its setpoint topic within
+        ``timeout`` s, all waited for at once (a run that needs them all can say so before
+        anything heats)."""
+        publishers = {f: self._setpoint_publisher(f) for f in fingers}
+        deadline = time.monotonic() + timeout
+        while True:
+            missing = [f for f, pub in publishers.items() if pub.get_subscription_count() == 0]
+            if not missing or time.monotonic() > deadline:
+                return missing
+            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)
 
     def _publish_setpoint(self, publisher, mode: str, value: float) -> None:
         message = FingerSetpoint(mode=mode, value=float(value))

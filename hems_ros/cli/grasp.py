@@ -38,6 +38,9 @@ def register(subparsers) -> None:
                              "the supervisor's limits on a small host (README, Safety)")
     parser.add_argument("--enable-timeout", type=positive, default=30.0,
                         help="with --enable: seconds to wait for the supervisor to accept enable (default 30)")
+    parser.add_argument("--fingers", default="all",
+                        help="comma-separated fingers to grasp with, as the graph was brought up with "
+                             "(hems up --fingers; default all six)")
     parser.set_defaults(func=run)
 
 
@@ -119,9 +122,20 @@ class GraspListener:
                                  self.seconds(message.encoder_stamp), self.seconds(message.force_stamp))
 
 
+def require_controllers(client, fingers) -> None:
+    """RuntimeError naming the fingers whose controller is not running, before any setpoint
+    is sent: one missing controller used to stop the grasp only when its turn came, 5 s per
+    finger, while the fingers before it were already heating."""
+    missing = client.missing_controllers(fingers)
+    if missing:
+        raise RuntimeError(f"no finger_controller for {', '.join(missing)} (a graph brought up with "
+                           "hems up --fingers needs the same --fingers here)")
+
+
 def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspListener | None = None):
     """Drive the phases on ``fingers``; return (traces, phase starts per finger, supervisor
     statuses seen). Without a ``listener`` made beforehand, one is made here."""
+    require_controllers(client, fingers)
     if listener is None:
         listener = GraspListener(client, fingers)
         client.spin_for(0.5)
@@ -137,6 +151,37 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspLis
     finally:
         listener.close()
     return listener.traces, {f: tracker.starts for f, tracker in listener.phases.items()}, listener.statuses
+
+
+class EnableRefused(RuntimeError):
+    """The supervisor would not enable the graph; the message is its answer."""
+
+
+def enabled_grasp(client, plan: GraspPlan, fingers, enable_timeout: float, who: str):
+    """Make the grasp's readers, enable the graph, run the grasp and disable it again; returns
+    what :func:`run_grasp` returns.
+
+    The readers come first so that every process has matched them before anything heats
+    (:class:`GraspListener`). The disable follows a failed grasp too (a controller missing
+    mid-run), since the heating this call started should end with it; only after SIGINT or
+    SIGTERM, which take this process's ROS context, is there nothing left to call it with.
+    Raises :class:`EnableRefused` when the supervisor does not take the enable.
+    """
+    import rclpy
+
+    listener = GraspListener(client, fingers)
+    require_controllers(client, fingers)
+    ok, message = client.enable_when_ready(enable_timeout)
+    if not ok:
+        raise EnableRefused(message)
+    print(f"{who}: {message}", flush=True)
+    try:
+        return run_grasp(client, plan, fingers, listener)
+    finally:
+        if rclpy.ok():
+            ok, message = client.call("disable")
+            print(f"{who}: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
+            client.spin_for(0.3)  # the DISABLED status and the cooling start reach a recorder
 
 
 def fault_report(statuses) -> str | None:
@@ -166,7 +211,8 @@ def report(traces, plan: GraspPlan, phase_starts: dict[str, list[float]], plot_p
 def run(args: argparse.Namespace) -> int:
     try:
         plan = plan_from(args)
-    except SetpointError as error:
+        fingers = names.parse_fingers(args.fingers)
+    except ValueError as error:
         print(f"grasp: {error}", file=sys.stderr)
         return 2
     from rclpy.executors import ExternalShutdownException
@@ -175,18 +221,13 @@ def run(args: argparse.Namespace) -> int:
 
     with GraphClient("hems_grasp") as client:
         try:
-            listener = None
             if args.enable:
-                listener = GraspListener(client)   # matched before anything heats
-                ok, message = client.enable_when_ready(args.enable_timeout)
-                if not ok:
-                    print(f"grasp: could not enable the graph: {message}", file=sys.stderr)
-                    return 1
-                print(f"grasp: {message}", flush=True)
-            traces, phase_starts, statuses = run_grasp(client, plan, listener=listener)
-            if args.enable:
-                ok, message = client.call("disable")
-                print(f"grasp: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
+                traces, phase_starts, statuses = enabled_grasp(client, plan, fingers, args.enable_timeout, "grasp")
+            else:
+                traces, phase_starts, statuses = run_grasp(client, plan, fingers)
+        except EnableRefused as error:
+            print(f"grasp: could not enable the graph: {error}", file=sys.stderr)
+            return 1
         except RuntimeError as error:
             print(f"grasp: {error}", file=sys.stderr)
             return 1
@@ -196,7 +237,7 @@ def run(args: argparse.Namespace) -> int:
                   "(hems setpoint all 0 --unit mm releases them, hems disable stops all heating)", file=sys.stderr)
             raise
     rows = report(traces, plan, phase_starts, args.plot)
-    problem = fault_report(statuses) or tracking_report(rows, plan, names.FINGERS)
+    problem = fault_report(statuses) or tracking_report(rows, plan, fingers)
     if problem:
         print(f"grasp: not a valid run: {problem}", file=sys.stderr)
         return 1

@@ -88,8 +88,7 @@ def print_bag(prefix: str, info) -> None:
 
 
 def graph_options(args: argparse.Namespace) -> GraphOptions:
-    fingers = names.FINGERS if args.fingers == "all" else tuple(
-        names.check_finger(f.strip()) for f in args.fingers.split(","))
+    fingers = names.parse_fingers(args.fingers)
     if not args.params_file.is_file():
         raise ValueError(f"--params-file {args.params_file}: no such file")
     return GraphOptions(params_file=args.params_file, composed=args.composed, sim_time=args.sim_time,

@@ -21,6 +21,13 @@ def check_finger(finger: str) -> str:
     return finger
 
 
+def parse_fingers(text: str) -> tuple[str, ...]:
+    """A comma-separated finger list of the command line, or "all" (every finger, in FINGERS order)."""
+    if text.strip() == "all":
+        return FINGERS
+    return tuple(check_finger(f.strip()) for f in text.split(","))
+
+
 def check_module(module: str) -> str:
     if module not in MODULES:
         raise ValueError(f"unknown shoulder module {module!r}: expected one of {', '.join(MODULES)}")

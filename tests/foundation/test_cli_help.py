@@ -105,6 +105,7 @@ def test_replay_api_refuses_bad_numbers(keyword, value, message):
     (["demo", "--record", "{file}/bag"], 2, "demo: --record {file}/bag: cannot make {file}"),
     (["replay", str(REFERENCE_BAG), "--topic", "/hems/nope"], 2,
      "on the selected topics; its topics: /diagnostics, /hems/index/controller_status"),
+    (["grasp", "--fingers", "index,pinky"], 2, "grasp: unknown finger 'pinky': expected one of thumb_flexion, thumb_abduction"),
 ])
 def test_bad_inputs_stop_before_anything_starts(tmp_path, argv, code, message):
     # each used to start the graph or the runs first (or, for the topic, replay nothing and exit 0)

@@ -1,0 +1,70 @@
+"""`hems grasp` against a graph brought up with fewer fingers: it names the missing
+controllers before any setpoint (and before enabling), and `--fingers` runs the grasp on the
+fingers the graph has, enabled and disabled by the tool.
+
+One composed finger keeps it in the default run (marked slow).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import time
+
+import pytest
+
+from hems_ros.graph import names
+
+pytestmark = pytest.mark.slow
+
+FINGER = "index"
+
+
+@pytest.fixture(scope="module")
+def one_finger_graph(ros_domain_id):
+    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.launcher import Graph, GraphOptions
+
+    graph = Graph(GraphOptions(fingers=(FINGER,), composed=True, log_level="warn"))
+    graph.start()
+    try:
+        with GraphClient("hems_test_grasp_fingers") as client:
+            assert not client.missing_controllers((FINGER,), timeout=60.0)
+            yield graph, client
+    finally:
+        graph.stop()
+
+
+def _grasp(venv, tmp_path, *extra):
+    return subprocess.run([str(venv / "bin" / "hems"), "grasp", "--enable", "--plot", str(tmp_path / "grasp.png"),
+                           *extra], capture_output=True, text=True, timeout=120)
+
+
+def test_grasp_names_missing_controllers_before_it_enables(one_finger_graph, venv, tmp_path):
+    graph, client = one_finger_graph
+    started = time.monotonic()
+    result = _grasp(venv, tmp_path)
+    assert result.returncode == 1, result.stdout + result.stderr
+    others = [f for f in names.FINGERS if f != FINGER]
+    assert f"grasp: no finger_controller for {', '.join(others)}" in result.stderr
+    assert "hems up --fingers" in result.stderr
+    # one wait for all of them (5 s), not one per finger while the first ones heat
+    assert time.monotonic() - started < 20.0
+    assert "ENABLED" not in result.stdout and "approach" not in result.stdout
+    snap = client.snapshot(fingers=(FINGER,), seconds=0.5)
+    assert snap.supervisor is not None and snap.supervisor.state_name != "ENABLED"
+    assert snap.controllers[FINGER].duty_percent == 0.0
+    assert graph.exited() == {}
+
+
+def test_grasp_on_the_graphs_fingers_enables_runs_and_disables(one_finger_graph, venv, tmp_path):
+    graph, client = one_finger_graph
+    result = _grasp(venv, tmp_path, "--fingers", FINGER)
+    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
+    lines = result.stdout.splitlines()
+    assert "grasp: ENABLED" in lines and "grasp: DISABLED" in lines
+    rows = [line.split() for line in lines if line.split() and line.split()[0] in names.FINGERS]
+    assert [row[0] for row in rows] == [FINGER]
+    assert 9.9 < float(rows[0][5]) < 10.3   # peak tendon force, N (10 N hold)
+    snap = client.snapshot(fingers=(FINGER,), seconds=0.5)
+    assert snap.supervisor.state_name != "ENABLED"
+    assert graph.exited() == {}
