@@ -92,7 +92,11 @@ def run_setpoint(args: argparse.Namespace) -> int:
 
     unit = "m" if mode == "position" else "N"
     with GraphClient() as client:
-        results = {f: client.send_setpoint(f, mode, value, timeout=args.timeout, confirm_s=args.timeout)
+        # one wait for every controller: on a graph brought up with fewer fingers, "all" used
+        # to wait --timeout for each missing one in turn
+        missing = client.missing_controllers(fingers, timeout=args.timeout)
+        results = {f: client.send_setpoint(f, mode, value, timeout=0.0 if f in missing else args.timeout,
+                                           confirm_s=args.timeout)
                    for f in fingers}
     for finger, result in results.items():
         line = f"{finger}: {mode} setpoint {value:g} {unit}: {result.message}"

@@ -1,6 +1,7 @@
-"""`hems grasp` against a graph brought up with fewer fingers: it names the missing
-controllers before any setpoint (and before enabling), and `--fingers` runs the grasp on the
-fingers the graph has, enabled and disabled by the tool.
+"""Verbs against a graph brought up with fewer fingers: `hems grasp` names the missing
+controllers before any setpoint (and before enabling), `--fingers` runs the grasp on the
+fingers the graph has, enabled and disabled by the tool; `hems setpoint all` waits once for
+all the controllers, not once per missing one.
 
 One composed finger keeps it in the default run (marked slow).
 """
@@ -27,7 +28,7 @@ def one_finger_graph(ros_domain_id):
     graph = Graph(GraphOptions(fingers=(FINGER,), composed=True, log_level="warn"))
     graph.start()
     try:
-        with GraphClient("hems_test_grasp_fingers") as client:
+        with GraphClient("hems_test_partial_graph") as client:
             assert not client.missing_controllers((FINGER,), timeout=60.0)
             yield graph, client
     finally:
@@ -67,4 +68,20 @@ def test_grasp_on_the_graphs_fingers_enables_runs_and_disables(one_finger_graph,
     assert 9.9 < float(rows[0][5]) < 10.3   # peak tendon force, N (10 N hold)
     snap = client.snapshot(fingers=(FINGER,), seconds=0.5)
     assert snap.supervisor.state_name != "ENABLED"
+    assert graph.exited() == {}
+
+
+def test_setpoint_all_waits_once_for_the_missing_controllers(one_finger_graph, venv):
+    graph, _ = one_finger_graph
+    started = time.monotonic()
+    result = subprocess.run([str(venv / "bin" / "hems"), "setpoint", "all", "0", "--unit", "mm", "--timeout", "3"],
+                            capture_output=True, text=True, timeout=120)
+    elapsed = time.monotonic() - started
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert f"{FINGER}: position setpoint 0 m: in force (controller status)" in result.stdout
+    for finger in names.FINGERS:
+        if finger != FINGER:
+            assert f"{finger}: position setpoint 0 m: no finger_controller subscribed to /hems/{finger}/setpoint" \
+                in result.stderr
+    assert elapsed < 12.0   # 3 s for all five missing ones, not 15 s
     assert graph.exited() == {}
