@@ -36,6 +36,9 @@ def _die_with_parent() -> None:
 @dataclass
 class GraphOptions:
     params_file: Path = field(default_factory=default_params_file)
+    # applied after params_file, each over the ones before (ROS takes the last value of a
+    # parameter): the gains `hems tune --write-params` writes, a lab's own overrides
+    extra_params_files: tuple[Path, ...] = ()
     composed: bool = False
     sim_time: bool = False
     rate: float = 1.0
@@ -65,7 +68,10 @@ def node_specs(options: GraphOptions) -> list[tuple[str, str, dict[str, str]]]:
 
 def common_ros_arguments(options: GraphOptions) -> list[str]:
     """The ROS arguments every node process gets, separate or composed."""
-    return ["--ros-args", "--params-file", str(options.params_file), "--log-level", options.log_level]
+    args = ["--ros-args", "--params-file", str(options.params_file)]
+    for extra in options.extra_params_files:
+        args += ["--params-file", str(extra)]
+    return args + ["--log-level", options.log_level]
 
 
 def ros_arguments(node: str, params: dict[str, str], options: GraphOptions) -> list[str]:

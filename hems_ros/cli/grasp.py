@@ -26,7 +26,7 @@ def add_grasp_arguments(parser: argparse.ArgumentParser) -> None:
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "grasp", help="scripted grasp on all six fingers: position approach, force hold, release",
+        "grasp", help="scripted grasp (all six fingers, or --fingers): position approach, force hold, release",
         description="On a running graph (hems up), enabled (hems enable) or enabled by this tool after it has "
                     "joined (--enable): every finger approaches a tendon position, holds a tendon force, then "
                     "releases; prints a per-finger summary (tracking error, peak force, energy) and writes a PNG "

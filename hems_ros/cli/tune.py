@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import shlex
+import sys
 import time
+from datetime import datetime
+from pathlib import Path
 
 from hems_ros.cli.numbers import non_negative, positive_int
 
@@ -27,12 +31,17 @@ def register(subparsers) -> None:
     parser.add_argument("--with-ki", action="store_true", help="also tune Ki (Table 5.1 has Ki = 0)")
     parser.add_argument("--max-evaluations", type=positive_int, default=120,
                         help="closed-loop simulations the optimiser may spend")
+    parser.add_argument("--write-params", type=Path, default=None, metavar="FILE",
+                        help="also write the tuned gains as a ROS params file for the finger controllers "
+                             "(run the graph with them: hems up --extra-params FILE)")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from hems_ros.experiments.tuning import compare, tune_bpid
+    from hems_ros.experiments.tuning import compare, params_file_text, tune_bpid
 
+    if args.write_params is not None:
+        args.write_params.parent.mkdir(parents=True, exist_ok=True)   # a bad folder stops before the tuning
     start = time.perf_counter()
     print(f"tuning BPID on {args.protocol} (cost = RMSE mm + {args.macsi_weight} x MACSI) ...", flush=True)
 
@@ -50,5 +59,12 @@ def run(args: argparse.Namespace) -> int:
     for p, a, b in compare(tuned):
         print(f"| {p} | {a['rmse']:.3f} / {b['rmse']:.3f} | {a['macsi']:.2f} / {b['macsi']:.2f} | "
               f"{a['apc_w']:.1f} / {b['apc_w']:.1f} |")
+    if args.write_params is not None:
+        note = (f"BPID position-mode gains from `hems tune {shlex.join(sys.argv[2:])}` "
+                f"({datetime.now():%Y-%m-%d %H:%M}),\n"
+                f"tuned on the chapter 5 rig for {args.protocol}: cost (RMSE mm + {args.macsi_weight:g} x MACSI) "
+                f"{before:.3f} -> {after:.3f}.\nApply over config/hems.yaml: hems up --extra-params {args.write_params}")
+        args.write_params.write_text(params_file_text(tuned, note))
+        print(f"wrote {args.write_params} (hems up --extra-params {args.write_params})")
     print(f"done in {time.perf_counter() - start:.1f} s")
     return 0

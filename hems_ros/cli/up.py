@@ -23,6 +23,9 @@ def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --sim-time: simulated seconds per wall second (default 1)")
     parser.add_argument("--params-file", type=Path, default=default_params_file(),
                         help="ROS params file for every node (default config/hems.yaml)")
+    parser.add_argument("--extra-params", type=Path, action="append", metavar="FILE",
+                        help="ROS params file applied over --params-file (repeatable; later files win), e.g. "
+                             "the gains `hems tune --write-params FILE` writes")
     parser.add_argument("--fingers", default="all",
                         help="comma-separated fingers to bring up (default all six: " + ",".join(names.FINGERS) + ")")
     parser.add_argument("--log-level", default="info", choices=("debug", "info", "warn", "error"),
@@ -89,9 +92,11 @@ def print_bag(prefix: str, info) -> None:
 
 def graph_options(args: argparse.Namespace) -> GraphOptions:
     fingers = names.parse_fingers(args.fingers)
-    if not args.params_file.is_file():
-        raise ValueError(f"--params-file {args.params_file}: no such file")
-    return GraphOptions(params_file=args.params_file, composed=args.composed, sim_time=args.sim_time,
+    for option, path in [("--params-file", args.params_file)] + [("--extra-params", p) for p in args.extra_params or ()]:
+        if not path.is_file():
+            raise ValueError(f"{option} {path}: no such file")
+    return GraphOptions(params_file=args.params_file, extra_params_files=tuple(args.extra_params or ()),
+                        composed=args.composed, sim_time=args.sim_time,
                         rate=args.rate, fingers=fingers, log_level=args.log_level,
                         parameter_services=args.parameter_services)
 

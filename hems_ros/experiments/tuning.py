@@ -9,6 +9,7 @@ and control effort, Tables 5.2 and 5.4).
 from __future__ import annotations
 
 import math
+from dataclasses import fields
 from typing import Callable
 
 import numpy as np
@@ -64,3 +65,14 @@ def compare(tuned: BPIDGains) -> list[tuple[str, dict[str, float], dict[str, flo
     params = load_params(CH5_PARAMS)
     return [(p, run_protocol(p, "bpid", params).metrics, run_protocol(p, "bpid", params, tuned).metrics)
             for p in CH5_PROTOCOLS]
+
+
+def params_file_text(gains: BPIDGains, note: str) -> str:
+    """A ROS params file giving every finger controller ``gains`` in position mode (the
+    ``gains.*`` parameters of hems_ros.nodes.finger_controller), with ``note`` as a comment:
+    applied over config/hems.yaml by ``hems up --extra-params FILE`` or a second
+    ``--params-file`` of ``ros2 run``."""
+    lines = [f"# {line}" for line in note.splitlines()]
+    lines += ["/**:", "  ros__parameters:", "    strategy: bpid"]
+    lines += [f"    gains.{f.name}: {float(getattr(gains, f.name))!r}" for f in fields(gains)]
+    return "\n".join(lines) + "\n"

@@ -105,6 +105,8 @@ def test_replay_api_refuses_bad_numbers(keyword, value, message):
     (["demo", "--record", "{file}/bag"], 2, "demo: --record {file}/bag: cannot make {file}"),
     (["replay", str(REFERENCE_BAG), "--topic", "/hems/nope"], 2,
      "on the selected topics; its topics: /diagnostics, /hems/index/controller_status"),
+    (["up", "--extra-params", "{file}/tuned.yaml"], 2, "hems up: --extra-params {file}/tuned.yaml: no such file"),
+    (["tune", "--write-params", "{file}/tuned.yaml"], 1, "hems tune: [Errno 17] File exists"),
     (["grasp", "--fingers", "index,pinky"], 2, "grasp: unknown finger 'pinky': expected one of thumb_flexion, thumb_abduction"),
 ])
 def test_bad_inputs_stop_before_anything_starts(tmp_path, argv, code, message):
