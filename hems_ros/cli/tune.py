@@ -10,8 +10,7 @@ from datetime import datetime
 from pathlib import Path
 
 from hems_ros.cli.numbers import non_negative, positive_int
-
-PROTOCOL_CHOICES = ("ch5_sine_0.125", "ch5_sine_0.25", "ch5_sine_0.5", "ch5_step", "ch5_staircase")
+from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH6_POSITION
 
 
 def register(subparsers) -> None:
@@ -19,12 +18,15 @@ def register(subparsers) -> None:
         "tune",
         help="tune BPID gains on the model (scipy Nelder-Mead) and compare with Table 5.1",
         description="Tune the BPID gains Kp (%/um), Kd (% s/um), Kb (1/um) and optionally Ki "
-                    "(%/(um s)) on the chapter 5 rig (40 N mass, plant 1 kHz, control 100 Hz) for "
-                    "one protocol, minimising RMSE (mm) + weight x MACSI (% per sample); then report "
-                    "RMSE, MACSI and APC (W) of Table 5.1 and tuned gains on all five references.",
+                    "(%/(um s)) on the model for one protocol (plant 1 kHz, control 100 Hz), minimising "
+                    "RMSE (mm) + weight x MACSI (% per sample); then report RMSE, MACSI and APC (W) of "
+                    "Table 5.1 and tuned gains on every reference of the protocol's rig: a ch5_ protocol "
+                    "runs the chapter 5 rig (40 N mass, five references), a ch6_position_ one the HEMS "
+                    "index unit the node graph simulates (four references; RMSE on their ascending or "
+                    "stationary parts).",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    parser.add_argument("--protocol", choices=PROTOCOL_CHOICES, default="ch5_step",
+    parser.add_argument("--protocol", choices=CH5_PROTOCOLS + CH6_POSITION, default="ch5_step",
                         help="protocol the cost is measured on")
     parser.add_argument("--macsi-weight", type=non_negative, default=0.1,
                         help="weight of MACSI (%% per sample) against RMSE (mm) in the cost")
@@ -38,12 +40,13 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hems_ros.experiments.tuning import compare, params_file_text, tune_bpid
+    from hems_ros.experiments.tuning import compare, params_file_text, rig, tune_bpid
 
     if args.write_params is not None:
         args.write_params.parent.mkdir(parents=True, exist_ok=True)   # a bad folder stops before the tuning
     start = time.perf_counter()
-    print(f"tuning BPID on {args.protocol} (cost = RMSE mm + {args.macsi_weight} x MACSI) ...", flush=True)
+    print(f"tuning BPID on {args.protocol} with physics set {rig(args.protocol)[0]} "
+          f"(cost = RMSE mm + {args.macsi_weight} x MACSI) ...", flush=True)
 
     def progress(n, g, cost):
         if n % 10 == 0:
@@ -56,13 +59,13 @@ def run(args: argparse.Namespace) -> int:
           f"Kb {tuned.kb:.4g} 1/um; cost {before:.3f} -> {after:.3f}")
     print("\n| reference | RMSE mm Table 5.1 / tuned | MACSI % Table 5.1 / tuned | APC W Table 5.1 / tuned |")
     print("|---|---|---|---|")
-    for p, a, b in compare(tuned):
+    for p, a, b in compare(tuned, args.protocol):
         print(f"| {p} | {a['rmse']:.3f} / {b['rmse']:.3f} | {a['macsi']:.2f} / {b['macsi']:.2f} | "
               f"{a['apc_w']:.1f} / {b['apc_w']:.1f} |")
     if args.write_params is not None:
         note = (f"BPID position-mode gains from `hems tune {shlex.join(sys.argv[2:])}` "
                 f"({datetime.now():%Y-%m-%d %H:%M}),\n"
-                f"tuned on the chapter 5 rig for {args.protocol}: cost (RMSE mm + {args.macsi_weight:g} x MACSI) "
+                f"tuned on physics set {rig(args.protocol)[0]} for {args.protocol}: cost (RMSE mm + {args.macsi_weight:g} x MACSI) "
                 f"{before:.3f} -> {after:.3f}.\nApply over config/hems.yaml: hems up --extra-params {args.write_params}")
         args.write_params.write_text(params_file_text(tuned, note))
         print(f"wrote {args.write_params} (hems up --extra-params {args.write_params})")

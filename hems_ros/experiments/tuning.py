@@ -1,4 +1,8 @@
-"""BPID gains tuned on the model (scipy.optimize), compared with Table 5.1 on chapter 5.
+"""BPID gains tuned on the model (scipy.optimize), compared with Table 5.1.
+
+The rig follows the protocol: a chapter 5 protocol tunes on the straight actuator with the
+40 N mass and compares on the five chapter 5 references, a chapter 6 position protocol on
+the HEMS index unit the node graph simulates and its four position references.
 
 Nelder-Mead over log Kp, log Kd, log Kb (and log Ki with ``with_ki``), so the gains stay
 positive and the search is scale-free; the cost is the RMSE (mm) of one chapter 5 protocol
@@ -16,12 +20,22 @@ import numpy as np
 from scipy.optimize import minimize
 
 from hems_ros.control import TABLE_5_1, BPIDGains
-from hems_ros.experiments.chapters import CH5_PARAMS
-from hems_ros.experiments.dissertation import CH5_PROTOCOLS
+from hems_ros.experiments.chapters import CH5_PARAMS, CH6_PARAMS
+from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH6_POSITION
 from hems_ros.experiments.lockstep import run_protocol
 from hems_ros.physics.params import load_params
 
 KI_START = 0.01
+TUNABLE = CH5_PROTOCOLS + CH6_POSITION
+
+
+def rig(protocol: str) -> tuple[str, tuple[str, ...]]:
+    """(physics set, references to compare on) of the chapter ``protocol`` belongs to."""
+    if protocol in CH5_PROTOCOLS:
+        return CH5_PARAMS, CH5_PROTOCOLS
+    if protocol in CH6_POSITION:
+        return CH6_PARAMS, CH6_POSITION
+    raise ValueError(f"cannot tune on {protocol!r}: expected one of {', '.join(TUNABLE)}")
 
 
 def _gains(x: np.ndarray, with_ki: bool) -> BPIDGains:
@@ -32,8 +46,8 @@ def _gains(x: np.ndarray, with_ki: bool) -> BPIDGains:
 
 def tune_bpid(protocol: str = "ch5_step", macsi_weight: float = 0.1, with_ki: bool = False,
               max_evaluations: int = 120, progress: Callable[[int, BPIDGains, float], None] | None = None):
-    """(tuned gains, cost of Table 5.1, tuned cost) on ``protocol`` with the ch5 rig."""
-    params = load_params(CH5_PARAMS)
+    """(tuned gains, cost of Table 5.1, tuned cost) on ``protocol`` with its chapter's rig."""
+    params = load_params(rig(protocol)[0])
     start = TABLE_5_1["bpid"]
     x0 = np.log([start.kp, start.kd, start.kb] + ([KI_START] if with_ki else []))
     count = [0]
@@ -60,11 +74,12 @@ def tune_bpid(protocol: str = "ch5_step", macsi_weight: float = 0.1, with_ki: bo
     return tuned, cost_of(start), cost_of(tuned)
 
 
-def compare(tuned: BPIDGains) -> list[tuple[str, dict[str, float], dict[str, float]]]:
-    """(protocol, Table 5.1 metrics, tuned metrics) on all five chapter 5 references."""
-    params = load_params(CH5_PARAMS)
+def compare(tuned: BPIDGains, protocol: str = "ch5_step") -> list[tuple[str, dict[str, float], dict[str, float]]]:
+    """(reference, Table 5.1 metrics, tuned metrics) on every reference of ``protocol``'s rig."""
+    name, references = rig(protocol)
+    params = load_params(name)
     return [(p, run_protocol(p, "bpid", params).metrics, run_protocol(p, "bpid", params, tuned).metrics)
-            for p in CH5_PROTOCOLS]
+            for p in references]
 
 
 def params_file_text(gains: BPIDGains, note: str) -> str:

@@ -10,7 +10,8 @@ import pytest
 import yaml
 
 from hems_ros.control import TABLE_5_1
-from hems_ros.experiments.tuning import params_file_text, tune_bpid
+from hems_ros.experiments.dissertation import CH6_POSITION
+from hems_ros.experiments.tuning import compare, params_file_text, rig, tune_bpid
 
 
 @pytest.fixture(scope="module")
@@ -23,6 +24,19 @@ def test_tuning_lowers_the_cost_from_table_5_1(tuned):
     assert before == pytest.approx(5.418, abs=0.01)   # RMSE 5.371 mm + 0.1 x MACSI 0.47 % on the step
     assert after < before - 0.05
     assert gains != TABLE_5_1["bpid"] and gains.ki == 0.0
+
+
+def test_a_chapter_6_protocol_tunes_on_the_unit_the_graph_simulates():
+    assert rig("ch6_position_step") == ("ch6_hems_index", CH6_POSITION)
+    assert rig("ch5_staircase")[0] == "ch5_straight_40n"
+    with pytest.raises(ValueError, match="cannot tune on 'ch6_force_step'"):
+        rig("ch6_force_step")
+    gains, before, after = tune_bpid("ch6_position_step", max_evaluations=12)
+    assert before == pytest.approx(0.364 + 0.1 * 0.215, abs=0.005)   # Table 6.1 run: RMSE 0.364 mm, MACSI 0.21 %
+    assert after < before
+    rows = compare(gains, "ch6_position_step")
+    assert [p for p, _, _ in rows] == list(CH6_POSITION)
+    assert rows[2][1]["rmse"] == pytest.approx(0.364, abs=0.001)
 
 
 def test_params_file_gives_the_finger_controllers_the_tuned_gains(tuned, tmp_path, venv, ros_domain_id):
