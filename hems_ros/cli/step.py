@@ -20,6 +20,10 @@ from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop
 from hems_ros.graph import names, transmission
 from hems_ros.physics.params import load_params
 
+# A setpoint the controller status does not show within this long ends the run: the figures
+# would otherwise describe a step the controller never took.
+SETPOINT_CONFIRM_S = 2.0
+
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -43,17 +47,38 @@ def register(subparsers) -> None:
     parser.add_argument("--ready-timeout", type=positive, default=60.0, help="seconds to wait for the graph")
 
 
+def step_span(values: np.ndarray) -> tuple[int, int]:
+    """Indices of the setpoint messages that start and end the last step in ``values``: the
+    first of the last run of equal non-zero values (a setpoint sent again repeats it) and the
+    next message after that run. ValueError when the messages hold no such step."""
+    values = np.asarray(values, dtype=float)
+    raised = np.flatnonzero(values != 0.0)
+    if raised.size == 0 or raised[-1] == values.size - 1:
+        raise ValueError(f"{values.size} setpoint messages ({', '.join(f'{v:g}' for v in values)} m) "
+                         "hold no step up and back to 0")
+    last = raised[-1]
+    first = last
+    while first > 0 and values[first - 1] == values[last]:
+        first -= 1
+    return int(first), int(last + 1)
+
+
 def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.0) -> dict[str, float]:
     """RMSE (whole step), overshoot (first peak, :func:`hems_ros.control.metrics.overshoot`) and
-    steady-state error (mean over its last ``settle_s``), tendon mm."""
+    steady-state error (mean over its last ``settle_s``), tendon mm. ValueError when the bag
+    does not hold the step's setpoints (:func:`step_span`)."""
     from hems_ros.bag import load_bag
     from hems_ros.control import metrics
 
     bag = load_bag(bag_path, topics=[names.topic(finger, "encoder"), names.topic(finger, "setpoint")])
     encoder, setpoint = bag[names.topic(finger, "encoder")], bag[names.topic(finger, "setpoint")]
     t, y = encoder.stamp, 1e3 * transmission.tendon_position(encoder["position"], ratio)
-    start, end = setpoint.stamp[-2], setpoint.stamp[-1]
-    height = 1e3 * setpoint["value"][-2]
+    try:
+        rise, fall = step_span(setpoint["value"])
+    except ValueError as error:
+        raise ValueError(f"{finger}: bag {bag_path}: {error}") from None
+    start, end = setpoint.stamp[rise], setpoint.stamp[fall]
+    height = 1e3 * setpoint["value"][rise]
     during = (t >= start) & (t < end)
     settled = (t >= end - settle_s) & (t < end)
     return {"rmse_mm": float(np.sqrt(np.mean((y[during] - height) ** 2))),
@@ -94,7 +119,10 @@ def run(args: argparse.Namespace) -> int:
             for value, seconds in ((0.0, args.before_s), (args.step_mm * 1e-3, args.step_s), (0.0, args.after_s)):
                 print(f"step: position {value * 1e3:g} mm for {seconds:g} s", flush=True)
                 for finger in options.fingers:
-                    client.send_setpoint(finger, "position", value)
+                    result = client.send_setpoint(finger, "position", value, confirm_s=SETPOINT_CONFIRM_S)
+                    if not result:
+                        print(f"step: {finger}: position setpoint {value:g} m: {result.message}", file=sys.stderr)
+                        return 1
                 client.spin_for(seconds)
             state = client.snapshot(options.fingers, 0.3).supervisor
             client.call("disable")
@@ -109,7 +137,11 @@ def run(args: argparse.Namespace) -> int:
         graph.stop()
     print_bag("step", finished)
     for finger in options.fingers:
-        figures = step_figures(record, finger, args.pulley_ratio)
+        try:
+            figures = step_figures(record, finger, args.pulley_ratio)
+        except ValueError as error:
+            print(f"step: {error}", file=sys.stderr)
+            return 1
         print(f"step: {finger}: " + ", ".join(f"{k} {v:.3f}" for k, v in figures.items()))
     if state is None or state.state_name != "ENABLED":
         print(f"step: not a valid run: supervisor {state.state_name if state else 'silent'}"
