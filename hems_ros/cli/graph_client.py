@@ -198,6 +198,18 @@ class GraphClient:
             self._setpoint_pubs[finger] = publisher
         return publisher
 
+    def wait_for_setpoint_readers(self, finger: str, count: int, timeout: float) -> bool:
+        """Whether ``count`` readers (the controller, a recorder) have matched this client's
+        setpoint writer of ``finger`` within ``timeout`` s: only a matched reader gets the next
+        setpoint, since the writer keeps none for latecomers."""
+        publisher = self._setpoint_publisher(finger)
+        deadline = time.monotonic() + timeout
+        while publisher.get_subscription_count() < count:
+            if time.monotonic() > deadline:
+                return False
+            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)
+        return True
+
     def missing_controllers(self, fingers, timeout: float = 5.0) -> list[str]:
         """The ``fingers`` whose controller has not subscribed to its setpoint topic within
         ``timeout`` s, all waited for at once (a run that needs them all can say so before

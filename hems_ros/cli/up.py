@@ -51,13 +51,19 @@ def graph_topics(fingers) -> list[str]:
 
 def wait_until_recording(client, recorder, fingers, deadline: float) -> None:
     """Send every finger's controller its start setpoint (position 0), which creates the
-    client's setpoint publishers, then wait until ``recorder`` holds :func:`graph_topics`,
-    setpoints included, so that the run's first real setpoint is recorded. ``deadline`` is a
-    time.monotonic() value; the recorder's TimeoutError or RuntimeError passes through."""
+    client's setpoint publishers, wait until ``recorder`` holds :func:`graph_topics`, setpoints
+    included, then until its setpoint readers have matched the client's writers, so that the
+    run's first real setpoint is recorded (a subscribed reader not matched yet loses it: once
+    here a step's bag held one of its four setpoints). ``deadline`` is a time.monotonic()
+    value; TimeoutError when it passes, the recorder's RuntimeError passes through."""
     for finger in fingers:
         while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
             pass
     recorder.wait_for_topics(graph_topics(fingers), timeout=max(1.0, deadline - time.monotonic()))
+    for finger in fingers:   # the controller's reader and the recorder's
+        if not client.wait_for_setpoint_readers(finger, 2, max(1.0, deadline - time.monotonic())):
+            raise TimeoutError(f"the recorder's reader of {names.topic(finger, 'setpoint')} did not match "
+                               "this tool's setpoint writer in time")
 
 
 def bag_folder(record, prefix: str) -> Path:
