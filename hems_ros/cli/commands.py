@@ -94,7 +94,7 @@ def run_setpoint(args: argparse.Namespace) -> int:
     with GraphClient() as client:
         # one wait for every controller: on a graph brought up with fewer fingers, "all" used
         # to wait --timeout for each missing one in turn
-        missing = client.missing_controllers(fingers, timeout=args.timeout)
+        missing = client.fingers_without_readers(fingers, timeout=args.timeout)
         results = {f: client.send_setpoint(f, mode, value, timeout=0.0 if f in missing else args.timeout,
                                            confirm_s=args.timeout)
                    for f in fingers}

@@ -158,11 +158,8 @@ class GraphClient:
         if confirm_s is not None:
             self._watch_status(finger)   # discovered while the setpoint writer is being matched
         publisher = self._setpoint_publisher(finger)
-        deadline = time.monotonic() + timeout
-        while publisher.get_subscription_count() == 0:
-            if time.monotonic() > deadline:
-                return SetpointResult(False, None, f"no finger_controller subscribed to {topic}")
-            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)
+        if self.fingers_without_readers([finger], 1, timeout):
+            return SetpointResult(False, None, f"no finger_controller subscribed to {topic}")
         until = time.monotonic() + MATCH_ALL_S
         while publisher.get_subscription_count() < self.node.count_subscribers(topic) and time.monotonic() < until:
             checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)
@@ -198,26 +195,15 @@ class GraphClient:
             self._setpoint_pubs[finger] = publisher
         return publisher
 
-    def wait_for_setpoint_readers(self, finger: str, count: int, timeout: float) -> bool:
-        """Whether ``count`` readers (the controller, a recorder) have matched this client's
-        setpoint writer of ``finger`` within ``timeout`` s: only a matched reader gets the next
-        setpoint, since the writer keeps none for latecomers."""
-        publisher = self._setpoint_publisher(finger)
-        deadline = time.monotonic() + timeout
-        while publisher.get_subscription_count() < count:
-            if time.monotonic() > deadline:
-                return False
-            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)
-        return True
-
-    def missing_controllers(self, fingers, timeout: float = 5.0) -> list[str]:
-        """The ``fingers`` whose controller has not subscribed to its setpoint topic within
-        ``timeout`` s, all waited for at once (a run that needs them all can say so before
-        anything heats)."""
+    def fingers_without_readers(self, fingers, readers: int = 1, timeout: float = 5.0) -> list[str]:
+        """The ``fingers`` whose setpoint writer in this client has matched fewer than
+        ``readers`` readers (the finger's controller, a recorder) after ``timeout`` s, all
+        waited for at once, so that a run needing them all says so before anything heats. Only
+        a matched reader gets the next setpoint: the writer keeps none for latecomers."""
         publishers = {f: self._setpoint_publisher(f) for f in fingers}
         deadline = time.monotonic() + timeout
         while True:
-            missing = [f for f, pub in publishers.items() if pub.get_subscription_count() == 0]
+            missing = [f for f, pub in publishers.items() if pub.get_subscription_count() < readers]
             if not missing or time.monotonic() > deadline:
                 return missing
             checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)

@@ -12,7 +12,7 @@ from hems_ros.graph import names
 from hems_ros.graph.grasp import (
     FingerTrace, GraspPlan, PhaseTracker, format_summary, plot, summarize, tracking_report,
 )
-from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
+from hems_ros.graph.setpoints import SetpointLimits, validate
 
 
 def add_grasp_arguments(parser: argparse.ArgumentParser) -> None:
@@ -126,7 +126,7 @@ def require_controllers(client, fingers) -> None:
     """RuntimeError naming the fingers whose controller is not running, before any setpoint
     is sent: one missing controller used to stop the grasp only when its turn came, 5 s per
     finger, while the fingers before it were already heating."""
-    missing = client.missing_controllers(fingers)
+    missing = client.fingers_without_readers(fingers)
     if missing:
         raise RuntimeError(f"no finger_controller for {', '.join(missing)} (a graph brought up with "
                            "hems up --fingers needs the same --fingers here)")

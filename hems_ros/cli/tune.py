@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import shlex
-import sys
 import time
 from datetime import datetime
 from pathlib import Path
@@ -63,8 +61,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"| {p} | {a['rmse']:.3f} / {b['rmse']:.3f} | {a['macsi']:.2f} / {b['macsi']:.2f} | "
               f"{a['apc_w']:.1f} / {b['apc_w']:.1f} |")
     if args.write_params is not None:
-        note = (f"BPID position-mode gains from `hems tune {shlex.join(sys.argv[2:])}` "
-                f"({datetime.now():%Y-%m-%d %H:%M}),\n"
+        command = (f"hems tune --protocol {args.protocol} --macsi-weight {args.macsi_weight:g} "
+                   f"--max-evaluations {args.max_evaluations}{' --with-ki' if args.with_ki else ''}")
+        note = (f"BPID position-mode gains from `{command}` ({datetime.now():%Y-%m-%d %H:%M}),\n"
                 f"tuned on physics set {rig(args.protocol)[0]} for {args.protocol}: cost (RMSE mm + {args.macsi_weight:g} x MACSI) "
                 f"{before:.3f} -> {after:.3f}.\nApply over config/hems.yaml: hems up --extra-params {args.write_params}")
         args.write_params.write_text(params_file_text(tuned, note))

@@ -60,10 +60,11 @@ def wait_until_recording(client, recorder, fingers, deadline: float) -> None:
         while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
             pass
     recorder.wait_for_topics(graph_topics(fingers), timeout=max(1.0, deadline - time.monotonic()))
-    for finger in fingers:   # the controller's reader and the recorder's
-        if not client.wait_for_setpoint_readers(finger, 2, max(1.0, deadline - time.monotonic())):
-            raise TimeoutError(f"the recorder's reader of {names.topic(finger, 'setpoint')} did not match "
-                               "this tool's setpoint writer in time")
+    # two readers per setpoint writer: the controller's and the recorder's
+    unmatched = client.fingers_without_readers(fingers, 2, max(1.0, deadline - time.monotonic()))
+    if unmatched:
+        raise TimeoutError("the recorder's setpoint readers did not match this tool's writers in time: "
+                           + ", ".join(names.topic(f, "setpoint") for f in unmatched))
 
 
 def bag_folder(record, prefix: str) -> Path:
@@ -98,10 +99,11 @@ def print_bag(prefix: str, info) -> None:
 
 def graph_options(args: argparse.Namespace) -> GraphOptions:
     fingers = names.parse_fingers(args.fingers)
-    for option, path in [("--params-file", args.params_file)] + [("--extra-params", p) for p in args.extra_params or ()]:
+    extra = tuple(args.extra_params or ())
+    for option, path in [("--params-file", args.params_file)] + [("--extra-params", p) for p in extra]:
         if not path.is_file():
             raise ValueError(f"{option} {path}: no such file")
-    return GraphOptions(params_file=args.params_file, extra_params_files=tuple(args.extra_params or ()),
+    return GraphOptions(params_file=args.params_file, extra_params_files=extra,
                         composed=args.composed, sim_time=args.sim_time,
                         rate=args.rate, fingers=fingers, log_level=args.log_level,
                         parameter_services=args.parameter_services)

@@ -29,7 +29,7 @@ def one_finger_graph(ros_domain_id):
     graph.start()
     try:
         with GraphClient("hems_test_partial_graph") as client:
-            assert not client.missing_controllers((FINGER,), timeout=60.0)
+            assert not client.fingers_without_readers((FINGER,), timeout=60.0)
             yield graph, client
     finally:
         graph.stop()
