@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -162,13 +163,10 @@ def enabled_grasp(client, plan: GraspPlan, fingers, enable_timeout: float, who: 
     what :func:`run_grasp` returns.
 
     The readers come first so that every process has matched them before anything heats
-    (:class:`GraspListener`). The disable follows a failed grasp too (a controller missing
-    mid-run), since the heating this call started should end with it; only after SIGINT or
-    SIGTERM, which take this process's ROS context, is there nothing left to call it with.
-    Raises :class:`EnableRefused` when the supervisor does not take the enable.
+    (:class:`GraspListener`). The disable follows a failed or interrupted grasp too, since the
+    heating this call started should end with it. Raises :class:`EnableRefused` when the
+    supervisor does not take the enable.
     """
-    import rclpy
-
     listener = GraspListener(client, fingers)
     require_controllers(client, fingers)
     ok, message = client.enable_when_ready(enable_timeout)
@@ -178,10 +176,28 @@ def enabled_grasp(client, plan: GraspPlan, fingers, enable_timeout: float, who: 
     try:
         return run_grasp(client, plan, fingers, listener)
     finally:
-        if rclpy.ok():
-            ok, message = client.call("disable")
-            print(f"{who}: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
-            client.spin_for(0.3)  # the DISABLED status and the cooling start reach a recorder
+        ok, message = disable(client)
+        print(f"{who}: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
+
+
+def disable(client) -> tuple[bool, str]:
+    """Call the supervisor's disable through ``client``, or, once SIGINT or SIGTERM has shut
+    this process's ROS context down (rclpy's handler does, and a process's default context
+    cannot be initialised again), through `hems disable` in a process of its own: an
+    interrupted grasp used to leave the graph ENABLED and heating to its last setpoint."""
+    import rclpy
+
+    if rclpy.ok():
+        answer = client.call("disable")
+        client.spin_for(0.3)  # the DISABLED status and the cooling start reach a recorder
+        return answer
+    try:
+        done = subprocess.run([sys.executable, "-m", "hems_ros.cli.main", "disable"], capture_output=True,
+                              text=True, timeout=30)
+    except subprocess.TimeoutExpired:
+        return False, "hems disable did not finish within 30 s: run hems disable"
+    answer = (done.stdout + done.stderr).strip().removeprefix("disable: ")
+    return done.returncode == 0, answer or f"hems disable exited with {done.returncode}"
 
 
 def fault_report(statuses) -> str | None:
@@ -232,9 +248,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"grasp: {error}", file=sys.stderr)
             return 1
         except (KeyboardInterrupt, ExternalShutdownException):
-            # the graph is not ours to stop, and a signal has taken this process's ROS context
-            print("grasp: stopped mid-grasp; the fingers keep their last setpoint "
-                  "(hems setpoint all 0 --unit mm releases them, hems disable stops all heating)", file=sys.stderr)
+            if not args.enable:   # with --enable, enabled_grasp has disabled the graph
+                print("grasp: stopped mid-grasp; the fingers keep their last setpoint "
+                      "(hems setpoint all 0 --unit mm releases them, hems disable stops all heating)",
+                      file=sys.stderr)
             raise
     rows = report(traces, plan, phase_starts, args.plot)
     problem = fault_report(statuses) or tracking_report(rows, plan, fingers)

@@ -1,13 +1,15 @@
 """Verbs against a graph brought up with fewer fingers: `hems grasp` names the missing
 controllers before any setpoint (and before enabling), `--fingers` runs the grasp on the
-fingers the graph has, enabled and disabled by the tool; `hems setpoint all` waits once for
-all the controllers, not once per missing one.
+fingers the graph has, enabled and disabled by the tool, also when a signal stops it;
+`hems setpoint all` waits once for all the controllers, not once per missing one.
 
 One composed finger keeps it in the default run (marked slow).
 """
 
 from __future__ import annotations
 
+import os
+import signal
 import subprocess
 import time
 
@@ -84,4 +86,36 @@ def test_setpoint_all_waits_once_for_the_missing_controllers(one_finger_graph, v
             assert f"{finger}: position setpoint 0 m: no finger_controller subscribed to /hems/{finger}/setpoint" \
                 in result.stderr
     assert elapsed < 12.0   # 3 s for all five missing ones, not 15 s
+    assert graph.exited() == {}
+
+
+@pytest.mark.parametrize("signal_name", ["SIGTERM", "SIGINT"])
+def test_a_grasp_that_enabled_the_graph_disables_it_when_stopped(one_finger_graph, venv, tmp_path, signal_name):
+    # rclpy's handler takes the process's ROS context with the signal; the graph used to stay
+    # ENABLED, the finger heating to its last setpoint
+    graph, client = one_finger_graph
+    grasp = subprocess.Popen([str(venv / "bin" / "hems"), "grasp", "--enable", "--fingers", FINGER,
+                              "--plot", str(tmp_path / "grasp.png")], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        os.set_blocking(grasp.stdout.fileno(), False)
+        seen, deadline = b"", time.monotonic() + 60
+        while b"grasp: approach" not in seen and grasp.poll() is None and time.monotonic() < deadline:
+            try:
+                seen += os.read(grasp.stdout.fileno(), 65536)
+            except BlockingIOError:
+                time.sleep(0.1)
+        assert b"grasp: approach" in seen, seen
+        time.sleep(1.0)   # heating
+        grasp.send_signal(getattr(signal, signal_name))
+        os.set_blocking(grasp.stdout.fileno(), True)
+        rest, err = grasp.communicate(timeout=60)
+        out, err = (seen + rest).decode(), err.decode()
+    finally:
+        if grasp.poll() is None:
+            grasp.kill()
+    assert grasp.returncode in (130, 143), out + err
+    assert "grasp: DISABLED" in out, out + err
+    assert "Traceback" not in err
+    snap = client.snapshot(fingers=(FINGER,), seconds=0.5)
+    assert snap.supervisor.state_name == "DISABLED"
     assert graph.exited() == {}
