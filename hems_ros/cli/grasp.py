@@ -163,10 +163,14 @@ def enabled_grasp(client, plan: GraspPlan, fingers, enable_timeout: float, who: 
     what :func:`run_grasp` returns.
 
     The readers come first so that every process has matched them before anything heats
-    (:class:`GraspListener`). The disable follows a failed or interrupted grasp too, since the
-    heating this call started should end with it. Raises :class:`EnableRefused` when the
-    supervisor does not take the enable.
+    (:class:`GraspListener`). The disable follows a failed grasp too, since the heating this
+    call started should end with it. After SIGINT or SIGTERM, which take this process's ROS
+    context (rclpy's handler shuts it down), there is nothing left to call it with: the
+    caller decides (:func:`disable_from_new_process`, or the demo stops the whole graph).
+    Raises :class:`EnableRefused` when the supervisor does not take the enable.
     """
+    import rclpy
+
     listener = GraspListener(client, fingers)
     require_controllers(client, fingers)
     ok, message = client.enable_when_ready(enable_timeout)
@@ -176,21 +180,16 @@ def enabled_grasp(client, plan: GraspPlan, fingers, enable_timeout: float, who: 
     try:
         return run_grasp(client, plan, fingers, listener)
     finally:
-        ok, message = disable(client)
-        print(f"{who}: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
+        if rclpy.ok():
+            ok, message = client.call("disable")
+            print(f"{who}: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
+            client.spin_for(0.3)  # the DISABLED status and the cooling start reach a recorder
 
 
-def disable(client) -> tuple[bool, str]:
-    """Call the supervisor's disable through ``client``, or, once SIGINT or SIGTERM has shut
-    this process's ROS context down (rclpy's handler does, and a process's default context
-    cannot be initialised again), through `hems disable` in a process of its own: an
-    interrupted grasp used to leave the graph ENABLED and heating to its last setpoint."""
-    import rclpy
-
-    if rclpy.ok():
-        answer = client.call("disable")
-        client.spin_for(0.3)  # the DISABLED status and the cooling start reach a recorder
-        return answer
+def disable_from_new_process() -> tuple[bool, str]:
+    """`hems disable` in a process of its own, for a process whose ROS context a signal has
+    shut down (a default context cannot be initialised again): an interrupted
+    `hems grasp --enable` used to leave the graph ENABLED, heating to its last setpoint."""
     try:
         done = subprocess.run([sys.executable, "-m", "hems_ros.cli.main", "disable"], capture_output=True,
                               text=True, timeout=30)
@@ -248,7 +247,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"grasp: {error}", file=sys.stderr)
             return 1
         except (KeyboardInterrupt, ExternalShutdownException):
-            if not args.enable:   # with --enable, enabled_grasp has disabled the graph
+            if args.enable:
+                ok, message = disable_from_new_process()
+                print(f"grasp: stopped mid-grasp: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
+            else:
                 print("grasp: stopped mid-grasp; the fingers keep their last setpoint "
                       "(hems setpoint all 0 --unit mm releases them, hems disable stops all heating)",
                       file=sys.stderr)

@@ -114,7 +114,7 @@ def test_a_grasp_that_enabled_the_graph_disables_it_when_stopped(one_finger_grap
         if grasp.poll() is None:
             grasp.kill()
     assert grasp.returncode in (130, 143), out + err
-    assert "grasp: DISABLED" in out, out + err
+    assert "grasp: stopped mid-grasp: DISABLED" in out, out + err
     assert "Traceback" not in err
     snap = client.snapshot(fingers=(FINGER,), seconds=0.5)
     assert snap.supervisor.state_name == "DISABLED"
