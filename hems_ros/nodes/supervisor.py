@@ -87,14 +87,18 @@ class SupervisorNode(LeanNode):
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
         self.encoder_stamps = {f: None for f in self.fingers}
         self.force_stamps = {f: None for f in self.fingers}
-        for finger in self.fingers:
-            self.subscribe_serialized(ControllerStatus, names.topic(finger, "controller_status"),
-                                      lambda m, f=finger: self.on_controller(f, m), qos.CONTROLLER_STATUS)
-            self.subscribe_serialized(ActuatorState, names.sim_topic(finger, "state"),
-                                      lambda m, f=finger: self.on_state(f, m), qos.SENSOR)
         # 420 messages a second, each of which woke the process; the monitors judge them at
-        # the check anyway, so the check takes them
-        self.monitored = list(self.subscriptions)
+        # the check anyway, so the check takes them. Only these: on sim time the node also
+        # subscribes to /clock, and taken at the check, which the clock drives, it stopped
+        # the clock and with it every check and periodic status (the units lost their heating
+        # permission 0.5 s after ENABLED).
+        self.monitored = []
+        for finger in self.fingers:
+            self.monitored.append(self.subscribe_serialized(
+                ControllerStatus, names.topic(finger, "controller_status"),
+                lambda m, f=finger: self.on_controller(f, m), qos.CONTROLLER_STATUS))
+            self.monitored.append(self.subscribe_serialized(
+                ActuatorState, names.sim_topic(finger, "state"), lambda m, f=finger: self.on_state(f, m), qos.SENSOR))
         self.poll(*self.monitored)
         for command in names.SUPERVISOR_SERVICES:
             self.create_service(Trigger, names.service(command),

@@ -1,0 +1,43 @@
+"""`hems up --sim-time`: the graph on /clock heats and tracks as on the wall clock.
+
+The supervisor took all its subscriptions out of the wait set to drain them at its check,
+/clock included; on sim time the check waited for the clock and the clock for the check, so
+no periodic status came after ENABLED and every unit lost its heating permission 0.5 s later.
+One composed finger (slow).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+pytestmark = pytest.mark.slow
+
+FINGER = "index"
+
+
+def test_a_sim_time_graph_keeps_heating_and_reaches_its_setpoint(ros_domain_id):
+    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.launcher import Graph, GraphOptions
+
+    graph = Graph(GraphOptions(fingers=(FINGER,), composed=True, sim_time=True, log_level="warn"))
+    graph.start()
+    try:
+        with GraphClient("hems_test_sim_time") as client:
+            ok, message = client.enable_when_ready(60, reset=True, retry_s=0.5)
+            assert ok, message
+            result = client.send_setpoint(FINGER, "position", 0.020, confirm_s=5.0)
+            assert result, result.message
+            client.spin_for(5.0)
+            first = client.snapshot(fingers=(FINGER,), seconds=0.5)
+            client.spin_for(1.0)
+            second = client.snapshot(fingers=(FINGER,), seconds=0.5)
+        assert graph.exited() == {}
+        for snap in (first, second):
+            assert snap.supervisor.state_name == "ENABLED", snap.supervisor.faults
+            assert snap.states[FINGER].heating_allowed
+        # the supervisor's status keeps coming on sim time (10 Hz)
+        stamp = lambda s: s.supervisor.header.stamp.sec + 1e-9 * s.supervisor.header.stamp.nanosec  # noqa: E731
+        assert 0.5 < stamp(second) - stamp(first) < 3.0
+        assert second.states[FINGER].tendon_position == pytest.approx(0.020, abs=5e-4)
+    finally:
+        graph.stop()
