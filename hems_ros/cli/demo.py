@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"demo: started {len(graph.processes)} processes, recording into {record}; waiting for every stream",
           flush=True)
     try:
-        with GraphClient("hems_demo") as client:
+        with GraphClient("hems_demo", sim_time=options.sim_time) as client:
             try:
                 wait_until_recording(client, recorder, options.fingers, time.monotonic() + args.ready_timeout)
             except (TimeoutError, RuntimeError) as error:

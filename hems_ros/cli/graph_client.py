@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 
 from hems_msgs.msg import ActuatorState, ControllerStatus, FingerSetpoint, SupervisorStatus, WireForce
@@ -16,6 +17,7 @@ from hems_ros.graph import names
 from hems_ros.nodes import qos
 
 RETRY_S = 2.0   # a service call unanswered this long is sent again
+CLOCK_STALL_S = 5.0  # /clock standing still this long (wall) means the graph's clock is gone
 MATCH_ALL_S = 1.0   # a subscription that never matches (incompatible QoS) delays a setpoint this long at most
 RESEND_S = 0.3      # a setpoint the controller status does not show yet is sent again after this long
 
@@ -65,10 +67,14 @@ class Snapshot:
 
 
 class GraphClient:
-    def __init__(self, name: str = "hems_cli") -> None:
+    def __init__(self, name: str = "hems_cli", sim_time: bool = False) -> None:
+        """``sim_time``: the graph runs on /clock (``hems up --sim-time``); the client then
+        stamps its setpoints with the graph's time and :meth:`spin_graph_time` counts it."""
         if not rclpy.ok():
             rclpy.init(args=[])
-        self.node = Node(f"{name}_{int(time.time() * 1e3) % 100000}", namespace=names.NAMESPACE)
+        self.sim_time = sim_time
+        self.node = Node(f"{name}_{int(time.time() * 1e3) % 100000}", namespace=names.NAMESPACE,
+                         parameter_overrides=[Parameter("use_sim_time", value=True)] if sim_time else [])
         self._setpoint_pubs: dict[str, object] = {}
         # Endpoints are kept for the client's life: every new endpoint is announced to all
         # sixteen nodes, which costs them CPU at the moment they should be controlling.
@@ -90,6 +96,28 @@ class GraphClient:
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline:
             checked_spin(rclpy.spin_once, self.node, timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())))
+
+    def spin_graph_time(self, seconds: float, stall_s: float = CLOCK_STALL_S) -> None:
+        """Spin for ``seconds`` of the graph's time: wall seconds, or on sim time seconds of
+        /clock (with ``--rate R`` a phase of a run lasts what it says in simulated time).
+        RuntimeError when /clock stands still for ``stall_s`` wall seconds."""
+        if not self.sim_time:
+            self.spin_for(seconds)
+            return
+        clock = self.node.get_clock()
+        start = None
+        last, moved = clock.now().nanoseconds, time.monotonic()
+        while True:
+            now = clock.now().nanoseconds
+            if now != last:
+                last, moved = now, time.monotonic()
+            elif time.monotonic() - moved > stall_s:
+                raise RuntimeError(f"the graph's /clock has not moved for {stall_s:g} s")
+            if now > 0:   # 0 until the first /clock message
+                start = now if start is None else start
+                if now - start >= seconds * 1e9:
+                    return
+            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.01)
 
     def _service_client(self, command: str):
         client = self._service_clients.get(command)

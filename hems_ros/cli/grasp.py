@@ -42,6 +42,9 @@ def register(subparsers) -> None:
     parser.add_argument("--fingers", default="all",
                         help="comma-separated fingers to grasp with, as the graph was brought up with "
                              "(hems up --fingers; default all six)")
+    parser.add_argument("--sim-time", action="store_true",
+                        help="the graph runs on /clock (hems up --sim-time): phase durations in simulated "
+                             "seconds, setpoints stamped with the graph's time")
     parser.set_defaults(func=run)
 
 
@@ -148,7 +151,7 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspLis
             missing = [f for f in fingers if not client.send_setpoint(f, mode, value)]
             if missing:
                 raise RuntimeError(f"no finger_controller for {', '.join(missing)}")
-            client.spin_for(duration)
+            client.spin_graph_time(duration)
     finally:
         listener.close()
     return listener.traces, {f: tracker.starts for f, tracker in listener.phases.items()}, listener.statuses
@@ -234,7 +237,7 @@ def run(args: argparse.Namespace) -> int:
 
     from hems_ros.cli.graph_client import GraphClient
 
-    with GraphClient("hems_grasp") as client:
+    with GraphClient("hems_grasp", sim_time=args.sim_time) as client:
         try:
             if args.enable:
                 traces, phase_starts, statuses = enabled_grasp(client, plan, fingers, args.enable_timeout, "grasp")

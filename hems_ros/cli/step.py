@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     recorder = RecorderProcess(record)
     finished = None
     try:
-        with GraphClient("hems_step") as client:
+        with GraphClient("hems_step", sim_time=options.sim_time) as client:
             wait_until_recording(client, recorder, options.fingers, time.monotonic() + args.ready_timeout)
             ok, message = client.enable_when_ready(args.ready_timeout)
             if not ok:
@@ -123,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
                     if not result:
                         print(f"step: {finger}: position setpoint {value:g} m: {result.message}", file=sys.stderr)
                         return 1
-                client.spin_for(seconds)
+                client.spin_graph_time(seconds)
             state = client.snapshot(options.fingers, 0.3).supervisor
             client.call("disable")
             client.spin_for(0.3)

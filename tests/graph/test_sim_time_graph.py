@@ -41,3 +41,28 @@ def test_a_sim_time_graph_keeps_heating_and_reaches_its_setpoint(ros_domain_id):
         assert second.states[FINGER].tendon_position == pytest.approx(0.020, abs=5e-4)
     finally:
         graph.stop()
+
+
+def test_step_on_sim_time_at_twice_real_time_gives_the_wall_clock_figures(venv, ros_domain_id, tmp_path):
+    # The step tool stamped its setpoints with the wall clock and the units their encoder
+    # samples with /clock: the figures came out nan. It now runs on the graph's clock, and its
+    # phases last what they say in simulated seconds.
+    import re
+    import subprocess
+
+    result = subprocess.run([str(venv / "bin" / "hems"), "step", "--composed", "--sim-time", "--rate", "2",
+                             "--log-level", "warn", "--before-s", "1", "--step-s", "4", "--after-s", "2",
+                             "--record", str(tmp_path / "step")], capture_output=True, text=True, timeout=180)
+    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
+    printed = re.search(r"rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), steady_state_error_mm (-?[\d.]+)", result.stdout)
+    assert printed, result.stdout
+    rmse, overshoot, ss_error = map(float, printed.groups())
+    assert 5.0 < rmse < 15.0   # most of the 4 s step is the rise (wall clock, 1 s before: similar)
+    assert 0.0 <= overshoot < 0.2 and abs(ss_error) < 0.1
+    # the step lasted 4 s of the graph's clock, in whose time its setpoints are stamped
+    from hems_ros.bag import load_bag
+    from hems_ros.cli.step import step_span
+
+    setpoints = load_bag(tmp_path / "step", topics=["/hems/index/setpoint"])["/hems/index/setpoint"]
+    rise, fall = step_span(setpoints["value"])
+    assert setpoints.stamp[fall] - setpoints.stamp[rise] == pytest.approx(4.0, abs=0.05)
