@@ -105,9 +105,16 @@ class Recorder(Node):
         self._skipped: set[str] = set()
         self._deadline = time.monotonic() + duration if duration > 0 else None
         self.get_logger().info(f"bag {self._writer.folder}: recording {self._selection.describe()}")
-        self._discover()
-        self.create_timer(discovery, self._discover)
-        self.create_timer(flush, self._writer.flush)
+        try:
+            self._discover()
+            self.create_timer(discovery, self._discover)
+            self.create_timer(flush, self._writer.flush)
+        except BaseException:
+            # a SIGTERM as soon as the first topics were reported subscribed shuts the context
+            # down under the constructor, whose next rcl call then fails: the node never
+            # exists to be destroyed, and the bag was left without its summary and footer
+            self.finish()
+            raise
 
     def _positive(self, name: str, default: float) -> float:
         value = float(self.declare_parameter(name, default).value)

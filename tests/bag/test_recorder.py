@@ -249,3 +249,19 @@ def test_a_waiting_subscription_takes_a_latched_sample_sent_before_it_matched(li
         info = recorder.stop()
     assert info.topics["/hems/index/setpoint"].count == 1
     assert recorded_values(output) == pytest.approx([0.007], abs=1e-12)
+
+
+def test_a_recorder_stopped_while_it_subscribes_still_finishes_its_bag(ros_domain_id: int, tmp_path: Path) -> None:
+    # SIGTERM right after the first topic was reported subscribed: the recorder was still
+    # subscribing in its constructor, whose next rcl call failed on the shut-down context, and
+    # the bag was left at its 41-byte header (once in a full `make test` on a busy host)
+    publisher = publish(count=3000, rate=500.0)
+    try:
+        for attempt in range(5):
+            recorder = RecorderProcess(tmp_path / f"early_{attempt}", topics=TOPICS)
+            recorder.wait_for_topics(TOPICS[:1])
+            info = recorder.stop()
+            assert info.reports[0].complete, (attempt, info.reports[0].reason, recorder.log[-5:])
+    finally:
+        publisher.kill()
+        publisher.wait()
