@@ -22,15 +22,15 @@ MATCH_ALL_S = 1.0   # a subscription that never matches (incompatible QoS) delay
 RESEND_S = 0.3      # a setpoint the controller status does not show yet is sent again after this long
 
 
-def checked_spin(call, node: Node, *args, **kwargs):
-    """``call(node, ...)`` (rclpy.spin_once, spin_until_future_complete) that raises
-    ExternalShutdownException once SIGINT or SIGTERM has shut rclpy's context down: the spin
-    call itself then fails in whatever rcl object it creates next, with an RCLError that says
-    nothing of the signal."""
+def checked(call, *args, **kwargs):
+    """``call(...)`` (rclpy.spin_once, spin_until_future_complete, a service call) that raises
+    ExternalShutdownException once SIGINT or SIGTERM has shut rclpy's context down: the call
+    itself then fails in whatever rcl object it uses next, with an RCLError or RuntimeError
+    that says nothing of the signal."""
     if not rclpy.ok():
         raise ExternalShutdownException()
     try:
-        return call(node, *args, **kwargs)
+        return call(*args, **kwargs)
     except Exception:
         if rclpy.ok():
             raise
@@ -95,7 +95,7 @@ class GraphClient:
     def spin_for(self, seconds: float) -> None:
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline:
-            checked_spin(rclpy.spin_once, self.node, timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())))
+            checked(rclpy.spin_once, self.node, timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())))
 
     def spin_graph_time(self, seconds: float, stall_s: float = CLOCK_STALL_S) -> None:
         """Spin for ``seconds`` of the graph's time: wall seconds, or on sim time seconds of
@@ -117,7 +117,7 @@ class GraphClient:
                 start = now if start is None else start
                 if now - start >= seconds * 1e9:
                     return
-            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.01)
+            checked(rclpy.spin_once, self.node, timeout_sec=0.01)
 
     def _service_client(self, command: str):
         client = self._service_clients.get(command)
@@ -127,6 +127,12 @@ class GraphClient:
 
     def call(self, command: str, timeout: float = 10.0) -> tuple[bool, str]:
         """Call a supervisor Trigger service; (success, message).
+        ExternalShutdownException once a signal has shut the context down (see :func:`checked`).
+        """
+        return checked(self._call, command, timeout)
+
+    def _call(self, command: str, timeout: float) -> tuple[bool, str]:
+        """:meth:`call` without the signal check.
 
         Enabling also makes the estop client, so that it is matched by the time it is needed:
         the supervisor takes a request only from a client it has discovered, and the first
@@ -143,7 +149,7 @@ class GraphClient:
         deadline = time.monotonic() + timeout
         while True:
             future = client.call_async(Trigger.Request())
-            checked_spin(rclpy.spin_until_future_complete, self.node, future,
+            checked(rclpy.spin_until_future_complete, self.node, future,
                          timeout_sec=max(0.0, min(RETRY_S, deadline - time.monotonic())))
             if future.result() is not None:
                 return future.result().success, future.result().message
@@ -190,7 +196,7 @@ class GraphClient:
             return SetpointResult(False, None, f"no finger_controller subscribed to {topic}")
         until = time.monotonic() + MATCH_ALL_S
         while publisher.get_subscription_count() < self.node.count_subscribers(topic) and time.monotonic() < until:
-            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)
+            checked(rclpy.spin_once, self.node, timeout_sec=0.02)
         before = self._statuses.get(finger)
         self._publish_setpoint(publisher, mode, value)
         if confirm_s is None:
@@ -199,7 +205,7 @@ class GraphClient:
         deadline = time.monotonic() + confirm_s
         resend = time.monotonic() + RESEND_S
         while time.monotonic() < deadline:
-            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.01)
+            checked(rclpy.spin_once, self.node, timeout_sec=0.01)
             status = self._statuses.get(finger)
             if status is not None:
                 if status.mode == mode and math.isclose(status.setpoint, value, rel_tol=1e-9, abs_tol=1e-12):
@@ -234,7 +240,7 @@ class GraphClient:
             missing = [f for f, pub in publishers.items() if pub.get_subscription_count() < readers]
             if not missing or time.monotonic() > deadline:
                 return missing
-            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.02)
+            checked(rclpy.spin_once, self.node, timeout_sec=0.02)
 
     def _publish_setpoint(self, publisher, mode: str, value: float) -> None:
         message = FingerSetpoint(mode=mode, value=float(value))
@@ -268,7 +274,7 @@ class GraphClient:
         self.spin_for(seconds)
         deadline = time.monotonic() + supervisor_wait_s
         while snap.incomplete() and time.monotonic() < deadline:
-            checked_spin(rclpy.spin_once, self.node, timeout_sec=0.05)
+            checked(rclpy.spin_once, self.node, timeout_sec=0.05)
         for sub in subs:
             self.node.destroy_subscription(sub)
         return snap

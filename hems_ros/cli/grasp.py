@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import subprocess
 import sys
 import time
@@ -172,7 +173,7 @@ def enabled_grasp(client, plan: GraspPlan, fingers, enable_timeout: float, who: 
     caller decides (:func:`disable_from_new_process`, or the demo stops the whole graph).
     Raises :class:`EnableRefused` when the supervisor does not take the enable.
     """
-    import rclpy
+    from rclpy.executors import ExternalShutdownException
 
     listener = GraspListener(client, fingers)
     require_controllers(client, fingers)
@@ -181,12 +182,21 @@ def enabled_grasp(client, plan: GraspPlan, fingers, enable_timeout: float, who: 
         raise EnableRefused(message)
     print(f"{who}: {message}", flush=True)
     try:
-        return run_grasp(client, plan, fingers, listener)
-    finally:
-        if rclpy.ok():
-            ok, message = client.call("disable")
-            print(f"{who}: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
-            client.spin_for(0.3)  # the DISABLED status and the cooling start reach a recorder
+        result = run_grasp(client, plan, fingers, listener)
+    except BaseException:
+        # rclpy's handler shuts the context down on its own thread: a Ctrl-C can reach this
+        # before or during the call, which then fails; the signal is what goes on
+        with contextlib.suppress(ExternalShutdownException):
+            _disable(client, who)
+        raise
+    _disable(client, who)
+    return result
+
+
+def _disable(client, who: str) -> None:
+    ok, message = client.call("disable")
+    print(f"{who}: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
+    client.spin_for(0.3)  # the DISABLED status and the cooling start reach a recorder
 
 
 def disable_from_new_process() -> tuple[bool, str]:

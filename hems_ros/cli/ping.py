@@ -59,7 +59,7 @@ def ping(count: int, rate: float, timeout: float) -> dict:
     from rclpy.node import Node
 
     from hems_msgs.msg import DutyCommand, EncoderReading
-    from hems_ros.cli.graph_client import checked_spin
+    from hems_ros.cli.graph_client import checked
     from hems_ros.nodes.ping_responder import (
         COUNTS_PER_PERCENT, METRES_PER_PERCENT, PING_QOS, REPLY_TOPIC, REQUEST_TOPIC,
     )
@@ -88,7 +88,7 @@ def ping(count: int, rate: float, timeout: float) -> dict:
         while publisher.get_subscription_count() == 0 or subscription.get_publisher_count() == 0:
             if time.monotonic() > deadline:
                 raise TimeoutError(f"no ping_responder discovered within {timeout:.0f} s")
-            checked_spin(rclpy.spin_once, node, timeout_sec=0.05)
+            checked(rclpy.spin_once, node, timeout_sec=0.05)
         for sequence in range(count):
             message = DutyCommand(finger="ping", duty_percent=(sequence * 7.3) % 100.0, sequence=sequence)
             message.header.stamp = node.get_clock().now().to_msg()
@@ -96,10 +96,10 @@ def ping(count: int, rate: float, timeout: float) -> dict:
             publisher.publish(message)
             next_send = time.monotonic() + 1.0 / rate
             while time.monotonic() < next_send:
-                checked_spin(rclpy.spin_once, node, timeout_sec=max(0.0, next_send - time.monotonic()))
+                checked(rclpy.spin_once, node, timeout_sec=max(0.0, next_send - time.monotonic()))
         deadline = time.monotonic() + timeout
         while sent and time.monotonic() < deadline:
-            checked_spin(rclpy.spin_once, node, timeout_sec=0.05)
+            checked(rclpy.spin_once, node, timeout_sec=0.05)
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
