@@ -8,7 +8,6 @@ hems_ros/nodes/composed.py). Children die with the launcher even if it is killed
 
 from __future__ import annotations
 
-import ctypes
 import signal
 import subprocess
 import sys
@@ -19,18 +18,11 @@ from pathlib import Path
 from hems_ros.graph import names
 from hems_ros.nodes.runner import NO_PARAMETER_SERVICES_FLAG
 from hems_ros.paths import config_path
-from hems_ros.rosenv import child_environment
-
-PR_SET_PDEATHSIG = 1
-
+from hems_ros.rosenv import child_environment, die_with_parent
 
 def default_params_file() -> Path:
     """config/hems.yaml of the source tree, or of share/hems_ros when installed elsewhere."""
     return config_path("hems.yaml")
-
-
-def _die_with_parent() -> None:
-    ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 @dataclass
@@ -148,7 +140,7 @@ class Graph:
         return {**child_environment(), **self.node_env.get(name, {})}
 
     def _spawn(self, name: str, command: list[str]) -> None:
-        self.processes[name] = subprocess.Popen(command, env=self.environment(name), preexec_fn=_die_with_parent)
+        self.processes[name] = subprocess.Popen(command, env=self.environment(name), preexec_fn=die_with_parent)
 
     def exited(self) -> dict[str, int]:
         return {name: p.returncode for name, p in self.processes.items() if p.poll() is not None}

@@ -10,8 +10,10 @@ anything.
 
 from __future__ import annotations
 
+import ctypes
 import fcntl
 import os
+import signal
 import sys
 from typing import IO
 
@@ -20,6 +22,15 @@ from hems_ros.paths import config_path
 DISCOVERY_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 DEFAULT_DISCOVERY_RANGE = "LOCALHOST"
 PROFILES_VARIABLE = "FASTDDS_DEFAULT_PROFILES_FILE"
+
+
+PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent() -> None:
+    """``preexec_fn`` of a child process: SIGTERM it when its parent dies, even by SIGKILL or
+    a crash, so that no node or recorder of a run outlives it in the DDS domain."""
+    ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 def apply_network_defaults(env: dict[str, str] | os._Environ | None = None):

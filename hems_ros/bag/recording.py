@@ -24,7 +24,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from hems_ros.bag.reader import BagInfo, bag_info
-from hems_ros.rosenv import child_environment
+from hems_ros.rosenv import child_environment, die_with_parent
 
 READY_MARK = "]: recording "
 FINISHED_MARK = "]: bag finished: "
@@ -61,7 +61,8 @@ class RecorderProcess:
         env = child_environment({"RCUTILS_LOGGING_BUFFERED_STREAM": "0", "PYTHONUNBUFFERED": "1"})
         self.process = subprocess.Popen(
             recorder_command(self.output, topics, regex, duration, **options),  # type: ignore[arg-type]
-            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+            preexec_fn=die_with_parent)   # a crashed tool left its recorder recording on
         self._reader = threading.Thread(target=self._read_output, daemon=True)
         self._reader.start()
 

@@ -265,3 +265,41 @@ def test_a_recorder_stopped_while_it_subscribes_still_finishes_its_bag(ros_domai
     finally:
         publisher.kill()
         publisher.wait()
+
+
+def test_a_recorder_ends_with_the_process_that_started_it(ros_domain_id: int, tmp_path: Path) -> None:
+    # `hems step` died once in a Fast DDS fault; its recorder went on recording in the test
+    # domain and the next tests met its readers. It now gets SIGTERM with its parent's death and
+    # finishes the bag.
+    import os
+    import signal
+
+    from hems_ros.bag import bag_info
+
+    output = tmp_path / "orphan"
+    script = ("import sys, time\nfrom pathlib import Path\nfrom hems_ros.bag.recording import RecorderProcess\n"
+              f"r = RecorderProcess(Path({str(output)!r}), topics={TOPICS!r})\n"
+              f"r.wait_for_topics({TOPICS[:1]!r})\nprint(r.process.pid, flush=True)\ntime.sleep(120)\n")
+    publisher = publish(count=3000, rate=500.0)
+    parent = subprocess.Popen([sys.executable, "-c", script], env=child_environment(), stdout=subprocess.PIPE,
+                              text=True)
+    recorder_pid = None
+    try:
+        recorder_pid = int(parent.stdout.readline())
+        parent.send_signal(signal.SIGKILL)
+        parent.wait(timeout=10)
+        deadline = time.monotonic() + 15
+        while os.path.exists(f"/proc/{recorder_pid}") and time.monotonic() < deadline:
+            with open(f"/proc/{recorder_pid}/stat") as stat:
+                if stat.read().rsplit(") ", 1)[1].startswith("Z"):
+                    break   # exited; its parent is gone, so nobody has reaped it yet
+            time.sleep(0.1)
+        assert time.monotonic() < deadline, "the recorder outlived its parent"
+    finally:
+        publisher.kill()
+        publisher.wait()
+        if parent.poll() is None:
+            parent.kill()
+        if recorder_pid is not None and os.path.exists(f"/proc/{recorder_pid}"):
+            os.kill(recorder_pid, signal.SIGKILL)   # outlived its parent: not left in the domain
+    assert bag_info(output).reports[0].complete
