@@ -43,14 +43,15 @@ def test_a_sim_time_graph_keeps_heating_and_reaches_its_setpoint(ros_domain_id):
         graph.stop()
 
 
-def test_step_on_sim_time_at_twice_real_time_gives_the_wall_clock_figures(venv, ros_domain_id, tmp_path):
+def test_step_on_sim_time_at_half_real_time_gives_the_wall_clock_figures(venv, ros_domain_id, tmp_path):
     # The step tool stamped its setpoints with the wall clock and the units their encoder
     # samples with /clock: the figures came out nan. It now runs on the graph's clock, and its
-    # phases last what they say in simulated seconds.
+    # phases last what they say in simulated seconds. Half real time: at twice real time a
+    # busy two-core host could not keep the control loop's timing (0.42 mm overshoot once).
     import re
     import subprocess
 
-    result = subprocess.run([str(venv / "bin" / "hems"), "step", "--composed", "--sim-time", "--rate", "2",
+    result = subprocess.run([str(venv / "bin" / "hems"), "step", "--composed", "--sim-time", "--rate", "0.5",
                              "--log-level", "warn", "--before-s", "1", "--step-s", "4", "--after-s", "2",
                              "--record", str(tmp_path / "step")], capture_output=True, text=True, timeout=180)
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
