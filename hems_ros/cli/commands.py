@@ -30,7 +30,7 @@ def register(subparsers) -> None:
                     "finger's controller status shows the setpoint, sending it again meanwhile (a controller "
                     "that had not matched this new publisher yet drops the first one); exit code 1 if no "
                     "controller took it or its status does not show it within --timeout, 2 for a bad value.")
-    parser.add_argument("finger", help="finger name or 'all': " + ", ".join(names.FINGERS))
+    parser.add_argument("finger", help="finger name, comma-separated names or 'all': " + ", ".join(names.FINGERS))
     parser.add_argument("value", help="setpoint value in --unit")
     parser.add_argument("--mode", choices=MODES, default=None,
                         help="position or force (default: from --unit, position for m/mm, force for N)")
@@ -60,7 +60,7 @@ def run_trigger(command: str, args: argparse.Namespace) -> int:
 
 def parse_setpoint(finger: str, value_text: str, mode: str | None, unit: str | None) -> tuple[list[str], str, float]:
     """(fingers, mode, SI value) from the command line; ValueError with the reason."""
-    fingers = list(names.FINGERS) if finger == "all" else [names.check_finger(finger)]
+    fingers = list(names.parse_fingers(finger))
     if unit is not None:
         unit_mode, factor = UNITS[unit]
         if mode is not None and mode != unit_mode:
