@@ -98,8 +98,7 @@ def simulate_loop(
     p = kernel.pack(prm)
     s = kernel.initial_state(prm, start_temperature_c)
     out = np.zeros(kernel.N_O)
-    res = prm.encoder.resolution_m
-    fs = prm.force_sensor
+    enc, fs = prm.encoder, prm.force_sensor
     # One draw per plant step, in order: the reading at sample k (after step k*sub) uses draw k*sub - 1.
     noise = sensors.noise_generator(fs.seed).standard_normal(n * sub)[sub - 1 :: sub] * fs.noise_std_n
 
@@ -114,9 +113,10 @@ def simulate_loop(
     for k in range(n):
         x = s[kernel.S_X]
         if mode == "position":
-            y = sensors.encoder_counts(x, res) * res
+            y = sensors.encoder_counts(x, enc.resolution_m, enc.gain) * enc.resolution_m
         else:
-            y = sensors.force_reading(force_now, noise_now, fs.range_max_n, fs.resolution_n)[0]
+            y = sensors.force_reading(force_now, noise_now, fs.range_max_n, fs.resolution_n, fs.offset_n,
+                                      fs.drift_n_per_s, k * sub * dt)[0]
         u = controller.update(ref[k], y)
         meas[k], duty[k], pos[k], force[k] = y, u, x, force_now
         if controller.fault is not None:

@@ -1,6 +1,7 @@
 """Batch API: many parameter sets over whole input time series, for analysis and fitting.
 
     res = simulate([p1, p2], dt=1e-3, current=np.array([...]))   # (n_steps,) or (n_sets, n_steps)
+    simulate(p, dt=1e-2, temperature=ramp, start_temperature_c=ramp[0])  # imposed temperature, degC
     res.slider_position_m          # (n_sets, n_records) array; also res["wire_force_n"]
     res.time                       # (n_records,) s, time at the end of each recorded step
 
@@ -51,7 +52,7 @@ class SimResult:
 
     def __getitem__(self, name: str) -> np.ndarray:
         if name in DERIVED and name not in self.data:
-            _add_sensors(self.data, self.params, self.n_steps, self.record_every)
+            _add_sensors(self.data, self.params, self.n_steps, self.record_every, self.time)
         if name not in self.data:
             raise KeyError(f"SimResult has no channel {name!r} (recorded: {', '.join(self.channels())})")
         return self.data[name]
@@ -93,22 +94,36 @@ def _drive_array(kind: str, values, n_sets: int) -> np.ndarray:
     return np.ascontiguousarray(arr)
 
 
+def _start_temperatures(start_temperature_c, n_sets: int) -> list:
+    """One start temperature (degC, or None: the set's own start) per set."""
+    if start_temperature_c is None or np.ndim(start_temperature_c) == 0:
+        return [start_temperature_c] * n_sets
+    starts = list(start_temperature_c)
+    if len(starts) != n_sets:
+        raise ValueError(f"start_temperature_c: expected one value per set ({n_sets}), got {len(starts)}")
+    return starts
+
+
 def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
-             duty=None, current=None, voltage=None, record_every: int = 1,
-             channels: Iterable[str] | None = None) -> SimResult:
+             duty=None, current=None, voltage=None, temperature=None, record_every: int = 1,
+             channels: Iterable[str] | None = None, start_temperature_c=None) -> SimResult:
     """Run one or many parameter sets from the initial state over one drive time series.
 
-    Exactly one of ``duty`` (%), ``current`` (A), ``voltage`` (V); arrays shaped (n_steps,)
-    (same input for every set) or (n_sets, n_steps).
+    Exactly one of ``duty`` (%), ``current`` (A), ``voltage`` (V), ``temperature`` (the wire
+    temperature imposed at the end of each step, degC); arrays shaped (n_steps,) (same input
+    for every set) or (n_sets, n_steps). ``start_temperature_c``: a start temperature for
+    every set, or one per set (None: the set's own start, ambient plus ``params.start``),
+    as kernel.initial_state takes it.
     """
     plist = [params] if isinstance(params, UnitParams) else list(params)
     if not plist or not all(isinstance(p, UnitParams) for p in plist):
         raise TypeError("params must be a UnitParams or a non-empty sequence of UnitParams")
     if not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt = {dt!r}: must be a finite step > 0 s")
-    given = [(k, v) for k, v in (("duty", duty), ("current", current), ("voltage", voltage)) if v is not None]
+    given = [(k, v) for k, v in (("duty", duty), ("current", current), ("voltage", voltage),
+                                 ("temperature", temperature)) if v is not None]
     if len(given) != 1:
-        raise ValueError("give exactly one of duty, current, voltage arrays")
+        raise ValueError("give exactly one of duty, current, voltage, temperature arrays")
     kind, values = given[0]
     drives = _drive_array(kind, values, len(plist))
     if not (isinstance(record_every, (int, np.integer)) and record_every >= 1):
@@ -122,8 +137,10 @@ def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
 
     n_sets, n_steps = len(plist), drives.shape[1]
     n_rec = n_steps // record_every
-    packed = np.ascontiguousarray(np.stack([kernel.pack(p) for p in plist]))
-    states = np.ascontiguousarray(np.stack([kernel.initial_state(p) for p in plist]))
+    imposed = kind == "temperature"
+    packed = np.ascontiguousarray(np.stack([kernel.pack(p, temperature_drive=imposed) for p in plist]))
+    starts = _start_temperatures(start_temperature_c, n_sets)
+    states = np.ascontiguousarray(np.stack([kernel.initial_state(p, t) for p, t in zip(plist, starts)]))
     records = np.zeros((len(index), n_sets, n_rec))
     failed_at = np.zeros(n_sets, dtype=np.int64)
     kernel.run_batch(packed, states, DRIVE_NAMES[kind], drives, float(dt), int(record_every),
@@ -139,8 +156,10 @@ def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
                      n_steps=n_steps)
 
 
-def _add_sensors(data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: int, every: int) -> None:
-    """Sensor channels from the recorded truth, with the same draws as the stepping API."""
+def _add_sensors(data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: int, every: int,
+                 time: np.ndarray) -> None:
+    """Sensor channels from the recorded truth, with the same draws as the stepping API; the
+    force sensor's drift runs on the time of each record."""
     def column(values):
         return np.array(values, dtype=np.float64)[:, None]
 
@@ -148,7 +167,7 @@ def _add_sensors(data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: 
         x = data["slider_position_m"]
         data["strain"] = x / column([p.wire.length_m for p in plist])
         resolution = column([p.encoder.resolution_m for p in plist])
-        counts = sensors.encoder_counts_array(x / resolution, 1.0)
+        counts = sensors.encoder_counts_array(x, resolution, column([p.encoder.gain for p in plist]))
         data["encoder_counts"] = counts
         data["encoder_position_m"] = counts * resolution
     if "wire_force_n" in data:
@@ -158,6 +177,7 @@ def _add_sensors(data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: 
         fs = [p.force_sensor for p in plist]
         reading, saturated = sensors.force_reading_array(
             data["wire_force_n"], noise * column([f.noise_std_n for f in fs]),
-            column([f.range_max_n for f in fs]), column([f.resolution_n for f in fs]))
+            column([f.range_max_n for f in fs]), column([f.resolution_n for f in fs]),
+            column([f.offset_n for f in fs]), column([f.drift_n_per_s for f in fs]), time)
         data["force_reading_n"] = reading
         data["force_saturated"] = saturated

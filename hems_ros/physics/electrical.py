@@ -3,7 +3,11 @@
 Three drives feed the wire: the dissertation's ideal current source (validation runs), the
 HEMS PWM stage (20 V supply, 4 A current limit, duty 0-100 %), and a constant-voltage
 source (shows the thermal runaway: a shorter, austenitic wire has a lower resistance and so
-draws more power). All functions are scalar and numba-compiled; the kernel inlines them.
+draws more power). A fourth drive feeds no power and imposes the wire temperature instead
+(DRIVE_TEMPERATURE, the drive value in degC at the end of the step: the quasi-static
+thermal cycles at constant stress that materials labs publish, which test the kinetics and
+the constitutive law without the heat balance). All functions are scalar and
+numba-compiled; the kernel inlines them.
 """
 
 from __future__ import annotations
@@ -13,7 +17,9 @@ from hems_ros.physics.jit import jit
 DRIVE_DUTY = 0
 DRIVE_CURRENT = 1
 DRIVE_VOLTAGE = 2
-DRIVE_NAMES = {"duty": DRIVE_DUTY, "current": DRIVE_CURRENT, "voltage": DRIVE_VOLTAGE}
+DRIVE_TEMPERATURE = 3
+DRIVE_NAMES = {"duty": DRIVE_DUTY, "current": DRIVE_CURRENT, "voltage": DRIVE_VOLTAGE,
+               "temperature": DRIVE_TEMPERATURE}
 
 
 @jit
@@ -42,13 +48,15 @@ def current_source(current_a, resistance):
 
 
 @jit
-def pwm_stage(duty_percent, resistance, supply_v, current_limit_a):
-    """HEMS PWM MOSFET stage: while on, I = min(V/R, I_limit); returns period means.
+def pwm_stage(duty_percent, resistance, supply_v, current_limit_a, source_resistance=0.0):
+    """HEMS PWM MOSFET stage: while on, I = min(V/(R + R_s), I_limit); returns period means.
 
     Mean current = duty * I_on; mean power = duty * I_on^2 R (the I^2 R of the on-time, not
-    the square of the mean current).
+    the square of the mean current). R_s (``source_resistance``, ohm) is the supply sag: the
+    supply, MOSFET and leads in series drop part of V, and the heat they dissipate is not
+    the wire's.
     """
-    i_on = supply_v / resistance
+    i_on = supply_v / (resistance + source_resistance)
     if i_on > current_limit_a:
         i_on = current_limit_a
     d = duty_percent * 0.01

@@ -16,6 +16,12 @@ linearly implicit Euler step, see :func:`step`).
 
 The state row carries, after the named states, the kinetics' reversal-point memory.
 
+A temperature drive (electrical.DRIVE_TEMPERATURE) imposes the wire temperature at the end
+of the step instead of the heat balance: no electrical power, and the latent heat changes
+nothing, so it runs on a row packed with ``pack(params, temperature_drive=True)``
+(P_LAT = P_TPX = 0). The row, not the drive kind, carries this because the batch's block
+path reads P_TPX from the packed row in several places; step and the batch then agree.
+
 The batch (run_batch) runs blocks of sets with the step's arithmetic vectorised across the
 sets of a block (see "batch" below); step and the batch give bit-identical results while the
 batch keeps the energy accumulators, and agree to rounding when it skips them. Compilation
@@ -66,11 +72,11 @@ _invalidate_stale_cache()
  P_H0, P_H2, P_TAMB,
  P_MF0, P_INV_MW, P_AS0, P_INV_AW,
  P_EM, P_EA, P_ALM, P_ALA, P_EPSL, P_NU,
- P_VSUP, P_ILIM,
- P_MN, P_BN, P_KN, P_FSTAT, P_N,
+ P_VSUP, P_ILIM, P_RSRC,
+ P_MN, P_BN, P_KN, P_K3N, P_FSTAT, P_N,
  P_SHEATH, P_GWS, P_GSA, P_CS, P_GHA, P_CH, P_INV_CH, P_HELIX,
  P_A_IN, P_F_IN, P_A_OUT, P_F_OUT,
- P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, P_TPX, N_P) = range(53)
+ P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, P_TPX, N_P) = range(55)
 
 # ---------------------------------------------------------------- state row
 STATE_NAMES = (
@@ -100,8 +106,12 @@ O_R, O_I, O_P, O_FW, O_FT, O_XT = range(len(OUT_NAMES))
 N_O = len(OUT_NAMES)
 
 
-def pack(params: UnitParams) -> np.ndarray:
-    """Flat float64 row of one parameter set, with the derived quantities precomputed."""
+def pack(params: UnitParams, temperature_drive: bool = False) -> np.ndarray:
+    """Flat float64 row of one parameter set, with the derived quantities precomputed.
+
+    ``temperature_drive``: the row for electrical.DRIVE_TEMPERATURE, whose imposed temperature
+    leaves the latent heat nothing to change (P_LAT = P_TPX = 0; see the module docstring).
+    """
     w, th, el, ki, co = params.wire, params.thermal, params.electrical, params.kinetics, params.constitutive
     ld = params.load
     p = np.zeros(N_P)
@@ -120,8 +130,9 @@ def pack(params: UnitParams) -> np.ndarray:
     p[P_ALM], p[P_ALA] = co.alpha_martensite_per_c, co.alpha_austenite_per_c
     p[P_EPSL], p[P_NU] = co.max_recoverable_strain, co.poisson_ratio
     p[P_VSUP], p[P_ILIM] = params.drive.supply_voltage_v, params.drive.current_limit_a
-    p[P_MN], p[P_BN], p[P_KN] = loads.referred_load(ld.mass_kg, ld.damping_n_s_per_m, ld.stiffness_n_per_m,
-                                                    ld.pulley_ratio)
+    p[P_RSRC] = params.drive.source_resistance_ohm
+    p[P_MN], p[P_BN], p[P_KN], p[P_K3N] = loads.referred_load(
+        ld.mass_kg, ld.damping_n_s_per_m, ld.stiffness_n_per_m, ld.pulley_ratio, ld.cubic_stiffness_n_per_m3)
     p[P_FSTAT], p[P_N] = ld.static_force_n(), ld.pulley_ratio
     if params.sheath.enabled:
         sh = params.sheath
@@ -142,6 +153,8 @@ def pack(params: UnitParams) -> np.ndarray:
             p[P_GSA] = 1.0 / r.sheath_to_air
     # reciprocals the step would otherwise divide by several times per step
     p[P_INV_CW], p[P_INV_L0], p[P_INV_S] = 1.0 / p[P_CW], 1.0 / w.length_m, 1.0 / w.cross_section_m2
+    if temperature_drive:
+        p[P_LAT] = 0.0
     p[P_TPX] = p[P_LAT] * p[P_INV_CW]   # temperature rise per unit of martensite formed (eq. 4.10)
     p[P_INV_CM], p[P_INV_CA] = 1.0 / ki.cm_pa_per_c, 1.0 / ki.ca_pa_per_c
     cap = params.capstan
@@ -154,14 +167,18 @@ def pack(params: UnitParams) -> np.ndarray:
 def initial_state(params: UnitParams, temperature_c: float | None = None) -> np.ndarray:
     """Fully martensitic wire at rest in the frictionless static balance with the load.
 
-    Wire and sheath start at the ambient temperature, or at ``temperature_c`` for a rig still
-    warm from earlier work; a wire warmed from cold stays martensite only below the
-    stress-free As0 (eq. 4.17), so a start at or above it is refused.
+    Wire and sheath start at the ambient temperature plus ``params.start.temperature_offset_c``
+    (a rig still warm from earlier work), or at ``temperature_c`` when given; a wire warmed
+    from cold stays martensite only below the stress-free As0 (eq. 4.17), so a start at or
+    above it is refused.
     """
-    start = params.ambient_temperature_c if temperature_c is None else float(temperature_c)
+    if temperature_c is None:
+        start = params.ambient_temperature_c + params.start.temperature_offset_c
+    else:
+        start = float(temperature_c)
     if not math.isfinite(start) or start >= params.kinetics.as0_c:
         raise ValueError(f"start temperature must be finite and below As0 = {params.kinetics.as0_c:g} degC "
-                         f"(a martensite wire), got {temperature_c!r}")
+                         f"(a martensite wire), got {start!r}")
     s = np.zeros(N_STATE)
     s[S_T] = s[S_TS] = s[S_TH] = start
     s[S_XI] = 1.0
@@ -200,11 +217,14 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     res = electrical.wire_resistance(electrical.mixture_resistivity(xi, rho_m, rho_a), p[pk + P_L0 * n] - x,
                                      p[pk + P_INV_S * n])
     if drive_kind == electrical.DRIVE_DUTY:
-        cur, power = electrical.pwm_stage(drive_value, res, p[pk + P_VSUP * n], p[pk + P_ILIM * n])
+        cur, power = electrical.pwm_stage(drive_value, res, p[pk + P_VSUP * n], p[pk + P_ILIM * n],
+                                          p[pk + P_RSRC * n])
     elif drive_kind == electrical.DRIVE_CURRENT:
         cur, power = electrical.current_source(drive_value, res)
-    else:
+    elif drive_kind == electrical.DRIVE_VOLTAGE:
         cur, power = electrical.voltage_source(drive_value, res)
+    else:
+        cur, power = 0.0, 0.0      # temperature drive: the wire is heated from outside
 
     t_amb = p[pk + P_TAMB * n]
     # q_sa: out of the (first) sheath node to the helix node, which stays at ambient when
@@ -220,9 +240,13 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
         q_ha = 0.0
     net = power - q_air - q_sh
 
-    # eq. 4.10: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT
+    # eq. 4.10: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT.
+    # A temperature drive imposes dT (its row has P_TPX = 0: pack).
     inv_cw = p[pk + P_INV_CW * n]
-    d_temp0 = net * dt * inv_cw
+    if drive_kind == electrical.DRIVE_TEMPERATURE:
+        d_temp0 = drive_value - temp
+    else:
+        d_temp0 = net * dt * inv_cw
     temp_per_xi = p[pk + P_TPX * n]
     modulus = constitutive.reuss_modulus(xi, p[pk + P_EM * n], p[pk + P_EA * n])
     omega = constitutive.transformation_coefficient(modulus, p[pk + P_EPSL * n])
@@ -237,7 +261,7 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     c_in, g_in, c_out, g_out = loads.slider_response(
         area * modulus * inv_l0, x, v, dt, p[pk + P_MN * n], p[pk + P_BN * n], p[pk + P_KN * n],
         p[pk + P_FSTAT * n], p[pk + P_A_IN * n], p[pk + P_F_IN * n],
-        p[pk + P_A_OUT * n], p[pk + P_F_OUT * n])
+        p[pk + P_A_OUT * n], p[pk + P_F_OUT * n], p[pk + P_K3N * n])
 
     inv_cm, inv_ca = p[pk + P_INV_CM * n], p[pk + P_INV_CA * n]
     um_old, ua_old = kinetics.effective_temperatures(temp, sig, inv_cm, inv_ca)
@@ -282,7 +306,7 @@ def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, t_helix,
     out[ok + O_P * n] = power
     out[ok + O_FW * n] = p[pk + P_S * n] * sig_new
     out[ok + O_FT * n] = loads.load_force(v_new, v, x_new, dt, p[pk + P_MN * n], p[pk + P_BN * n],
-                                          p[pk + P_KN * n], p[pk + P_FSTAT * n])
+                                          p[pk + P_KN * n], p[pk + P_FSTAT * n], p[pk + P_K3N * n])
     out[ok + O_XT * n] = p[pk + P_N * n] * x_new
     return math.isfinite(temp_new) and math.isfinite(sig_new) and math.isfinite(x_new)
 

@@ -6,7 +6,9 @@ resistivity) are written in degC, and every such field says so in its name (``*_
 
 Every effect beyond the dissertation's wire model (sheath heat exchange, capstan friction,
 glove friction) is its own group with an ``enabled`` flag, so the dissertation's model is
-``UnitParams()`` and each extension can be switched on or off for comparison.
+``UnitParams()`` and each extension can be switched on or off for comparison. The
+diagnosis extensions (supply sag, stiffening spring, warm start, sensor errors) are off at
+their zero (or unit) defaults instead, which leave every result unchanged bit for bit.
 
 Named sets live in ``config/physics/<name>.yaml`` (``load_params("table41")``); a YAML
 file mirrors :meth:`UnitParams.to_dict`, missing keys take the defaults, unknown keys are
@@ -179,14 +181,22 @@ class Constitutive(_Group):
 
 @dataclass(frozen=True)
 class Drive(_Group):
-    """HEMS PWM stage: one MOSFET per actuator, 20 V supply, 4 A current limit (digest 1)."""
+    """HEMS PWM stage: one MOSFET per actuator, 20 V supply, 4 A current limit (digest 1).
+
+    ``source_resistance_ohm``: supply sag, the resistance in series with the wire while the
+    MOSFET conducts (supply output, MOSFET, leads, contacts). A measured current below
+    V/R at full duty points at it; it is not wire heat (electrical.pwm_stage). 0: the ideal
+    stage. The current and voltage drives do not see it (ideal sources).
+    """
 
     _GROUP = "drive"
     supply_voltage_v: float = 20.0
     current_limit_a: float = 4.0
+    source_resistance_ohm: float = 0.0
 
     def check(self) -> None:
         self._pos("supply_voltage_v", "current_limit_a")
+        self._nonneg("source_resistance_ohm")
 
 
 @dataclass(frozen=True)
@@ -194,12 +204,16 @@ class Load(_Group):
     """What the slider pulls (eqs. 4.32-4.35 and the HEMS finger).
 
     One load law in load coordinates x_L = pulley_ratio * x (x: slider displacement,
-    contraction positive): F_L = m (x_L'' + g) + b x_L' + pretension + k x_L.
+    contraction positive): F_L = m (x_L'' + g) + b x_L' + pretension + k x_L + k3 x_L^3.
     ``kind`` states which of the dissertation's loads this is and fixes which terms must be
     present: ``hanging_mass`` (eq. 4.33, m > 0; an optional series spring for the chapter 3
     rig), ``bias_spring`` (eq. 4.34, massless, k > 0), ``hems_finger`` (massless bias spring
     with pretension standing in for the glove, on the tendon behind the pulley multiplier).
     Defaults: the dissertation's validation rig, bias spring k = 900 N/m preloaded 12 N.
+
+    ``cubic_stiffness_n_per_m3`` (k3): a spring (or glove and finger) that stiffens as it
+    stretches, which a linear k fitted at small strokes underestimates at large ones; 0 is
+    the linear law of eqs. 4.33-4.34.
     """
 
     _GROUP = "load"
@@ -210,11 +224,13 @@ class Load(_Group):
     pretension_n: float = 12.0
     pulley_ratio: float = 1.0
     gravity_m_s2: float = 9.81
+    cubic_stiffness_n_per_m3: float = 0.0
 
     def check(self) -> None:
         if self.kind not in LOAD_KINDS:
             raise ParamError(f"load.kind = {self.kind!r}: must be one of {', '.join(LOAD_KINDS)}")
-        self._nonneg("mass_kg", "damping_n_s_per_m", "stiffness_n_per_m", "pretension_n", "gravity_m_s2")
+        self._nonneg("mass_kg", "damping_n_s_per_m", "stiffness_n_per_m", "pretension_n", "gravity_m_s2",
+                     "cubic_stiffness_n_per_m3")
         if not self.pulley_ratio >= 1:
             raise ParamError(f"load.pulley_ratio = {self.pulley_ratio!r}: must be >= 1")
         if self.kind == "hanging_mass":
@@ -305,30 +321,58 @@ class GloveFriction(_Group):
 
 @dataclass(frozen=True)
 class Encoder(_Group):
-    """Incremental quadrature encoder on the slider (RoLin); integer counts."""
+    """Incremental quadrature encoder on the slider (RoLin); integer counts.
+
+    ``gain``: scale error of the encoder or of its calibration, counts = round(gain x /
+    resolution); 1 is a true scale.
+    """
 
     _GROUP = "encoder"
     resolution_m: float = 1e-6
+    gain: float = 1.0
 
     def check(self) -> None:
-        self._pos("resolution_m")
+        self._pos("resolution_m", "gain")
 
 
 @dataclass(frozen=True)
 class ForceSensor(_Group):
-    """Wire-tension sensor at the fixed end (shoulder module, range up to 50 N)."""
+    """Wire-tension sensor at the fixed end (shoulder module, range up to 50 N).
+
+    ``offset_n`` and ``drift_n_per_s``: a zero error and its drift (load cell creep, an
+    amplifier warming up), the sensor reads F + offset + drift t, t the time since the unit
+    started; both 0 for an ideal zero.
+    """
 
     _GROUP = "force_sensor"
     range_max_n: float = 50.0
     resolution_n: float = 0.01
     noise_std_n: float = 0.03
     seed: int = 0
+    offset_n: float = 0.0
+    drift_n_per_s: float = 0.0
 
     def check(self) -> None:
         self._pos("range_max_n", "resolution_n")
         self._nonneg("noise_std_n")
         if not isinstance(self.seed, int) or self.seed < 0:
             raise ParamError(f"force_sensor.seed = {self.seed!r}: must be a non-negative integer")
+
+
+@dataclass(frozen=True)
+class Start(_Group):
+    """Initial state of a run beyond the cold start (kernel.initial_state).
+
+    ``temperature_offset_c``: wire and sheath start this much above the ambient temperature,
+    a rig still warm from earlier work; its residual heat shortens the next actuation's
+    delay. 0: the cold start.
+    """
+
+    _GROUP = "start"
+    temperature_offset_c: float = 0.0
+
+    def check(self) -> None:
+        self._nonneg("temperature_offset_c")
 
 
 _GROUPS: dict[str, type] = {
@@ -344,6 +388,7 @@ _GROUPS: dict[str, type] = {
     "glove_friction": GloveFriction,
     "encoder": Encoder,
     "force_sensor": ForceSensor,
+    "start": Start,
 }
 
 
@@ -366,6 +411,7 @@ class UnitParams:
     glove_friction: GloveFriction = field(default_factory=GloveFriction)
     encoder: Encoder = field(default_factory=Encoder)
     force_sensor: ForceSensor = field(default_factory=ForceSensor)
+    start: Start = field(default_factory=Start)
 
     def __post_init__(self) -> None:
         t = self.ambient_temperature_c
@@ -494,6 +540,6 @@ def save_params(params: UnitParams, path: str | os.PathLike[str]) -> Path:
 __all__ = [
     "ParamError", "UnitParams", "WireGeometry", "Electrical", "Thermal", "Kinetics",
     "Constitutive", "Drive", "Load", "Sheath", "Capstan", "GloveFriction", "Encoder",
-    "ForceSensor", "LOAD_KINDS", "load_params", "save_params", "config_dir", "available_configs",
+    "ForceSensor", "Start", "LOAD_KINDS", "load_params", "save_params", "config_dir", "available_configs",
 ]
 

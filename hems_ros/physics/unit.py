@@ -1,12 +1,14 @@
 """Stepping API: one actuation unit advanced at a fixed step (1 kHz default) by a node.
 
     unit = ActuationUnit(load_params("sheathed_calibrated"), dt=1e-3)
-    r = unit.step(duty=35.0)          # or current=4.0 (A) or voltage=12.0 (V)
+    r = unit.step(duty=35.0)          # or current=4.0 (A), voltage=12.0 (V), temperature=80.0 (degC)
     r.encoder_counts, r.force_reading, r.wire_temperature_c, r.slider_position_m ...
 
 Exactly one drive per step: ``duty`` in % (0-100) through the HEMS PWM stage (20 V, 4 A
-limit), ``current`` in A (the dissertation's current source) or ``voltage`` in V
-(constant-voltage drive). Out-of-range or non-finite inputs raise ``ValueError``.
+limit), ``current`` in A (the dissertation's current source), ``voltage`` in V
+(constant-voltage drive) or ``temperature``, the wire temperature in degC imposed at the
+end of the step (a thermal cycle without the heat balance, kernel module docstring).
+Out-of-range or non-finite inputs raise ``ValueError``.
 The step is :func:`hems_ros.physics.kernel.step`, the same function the batch API loops,
 so both give the same trajectory for the same input.
 """
@@ -59,11 +61,14 @@ def check_drive(kind: str, value: float) -> None:
         raise ValueError(f"duty = {value!r} %: must be within 0-100 % (the controller clamps, not the plant)")
 
 
-def select_drive(duty: float | None, current: float | None, voltage: float | None):
+def select_drive(duty: float | None, current: float | None, voltage: float | None,
+                 temperature: float | None = None):
     """(kind name, value) of the one drive given; ValueError unless exactly one is given."""
-    given = [(k, v) for k, v in (("duty", duty), ("current", current), ("voltage", voltage)) if v is not None]
+    given = [(k, v) for k, v in (("duty", duty), ("current", current), ("voltage", voltage),
+                                 ("temperature", temperature)) if v is not None]
     if len(given) != 1:
-        raise ValueError(f"give exactly one of duty, current, voltage (got {', '.join(k for k, _ in given) or 'none'})")
+        raise ValueError("give exactly one of duty, current, voltage, temperature "
+                         f"(got {', '.join(k for k, _ in given) or 'none'})")
     return given[0]
 
 
@@ -78,12 +83,14 @@ class ActuationUnit:
             raise TypeError("params must be a UnitParams")
         self.dt = float(dt)
         self._p = kernel.pack(self.params)
+        self._p_imposed = kernel.pack(self.params, temperature_drive=True)   # the temperature drive row
         self._noisy = self.params.force_sensor.noise_std_n > 0
         self._out = np.zeros(kernel.N_O)
         self.reset()
 
     def reset(self) -> None:
-        """Back to t = 0: cold martensitic wire at rest, sensor noise generator re-seeded."""
+        """Back to t = 0: martensitic wire at rest at the start temperature (ambient plus
+        ``params.start``), sensor noise generator re-seeded."""
         self._s = kernel.initial_state(self.params)
         self._out[:] = 0.0
         self._steps = 0
@@ -124,22 +131,23 @@ class ActuationUnit:
         return {k: v for k, v in self.state.items() if k.startswith("energy_")}
 
     def step(self, duty: float | None = None, current: float | None = None,
-             voltage: float | None = None) -> StepResult:
-        """Advance by dt with one drive: duty %, current A or voltage V."""
-        self.advance(duty, current, voltage)
+             voltage: float | None = None, *, temperature: float | None = None) -> StepResult:
+        """Advance by dt with one drive: duty %, current A, voltage V or wire temperature degC."""
+        self.advance(duty, current, voltage, temperature=temperature)
         return self.result()
 
     def advance(self, duty: float | None = None, current: float | None = None,
-                voltage: float | None = None, steps: int = 1) -> None:
+                voltage: float | None = None, steps: int = 1, *, temperature: float | None = None) -> None:
         """:meth:`step` without building its result, ``steps`` times with the same drive in one
         kernel call: a node integrating at 1 kHz reads only the steps that end on a sensor
         sample (:meth:`result`), and the drive changes only with a command."""
-        kind, value = select_drive(duty, current, voltage)
+        kind, value = select_drive(duty, current, voltage, temperature)
         value = float(value)
         check_drive(kind, value)
         if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
             raise ValueError(f"steps = {steps!r}: must be a whole number >= 1")
-        done = kernel.steps(self._p, self._s, DRIVE_NAMES[kind], value, self.dt, self._out, steps)
+        row = self._p_imposed if kind == "temperature" else self._p
+        done = kernel.steps(row, self._s, DRIVE_NAMES[kind], value, self.dt, self._out, steps)
         self._steps += done
         if done < steps:
             raise FloatingPointError(f"state became non-finite at t = {self.time + self.dt:.6f} s ({self.state})")
@@ -154,9 +162,9 @@ class ActuationUnit:
         """(encoder counts, encoder position m, wire force N) after the last step: the part of
         :meth:`result` a node publishes at every encoder sample, without building the rest
         (a fifth of a unit node's Python time per tick went into the whole result)."""
-        resolution = self.params.encoder.resolution_m
-        counts = sensors.encoder_counts(float(self._s[kernel.S_X]), resolution)
-        return counts, counts * resolution, float(self._out[kernel.O_FW])
+        enc = self.params.encoder
+        counts = sensors.encoder_counts(float(self._s[kernel.S_X]), enc.resolution_m, enc.gain)
+        return counts, counts * enc.resolution_m, float(self._out[kernel.O_FW])
 
     def result(self) -> StepResult:
         """Measurements and truth after the last step: what that :meth:`step` returned."""
@@ -165,10 +173,12 @@ class ActuationUnit:
         s, o, prm = self._s.tolist(), self._out.tolist(), self.params
         counts, position, wire_force = self.readings()
         fs = prm.force_sensor
+        time = self.time
         reading, saturated = sensors.force_reading(wire_force, float(self._noise) * fs.noise_std_n,
-                                                   fs.range_max_n, fs.resolution_n)
+                                                   fs.range_max_n, fs.resolution_n, fs.offset_n,
+                                                   fs.drift_n_per_s, time)
         return StepResult(
-            time_s=self.time,
+            time_s=time,
             encoder_counts=counts,
             encoder_position_m=position,
             force_reading_n=reading,
