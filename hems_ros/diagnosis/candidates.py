@@ -1,0 +1,242 @@
+"""What the diagnosis may propose: recalibrations of the printed model and missing effects.
+
+A :class:`Candidate` is a set of bounded physical parameters of :class:`UnitParams` (dotted
+keys) that the fit may move, plus the switches that turn an effect on. Two kinds:
+
+- ``recalibration``: parameters the dissertation's model already has (chapter 4, Table
+  4.1), refitted within ranges published for NiTi actuator wires. A value that ends at a
+  bound is a finding ("the data ask for more than a NiTi wire has"), not a value to use.
+- ``effect``: a mechanism the starting model leaves out, each with the phases it is
+  expected to change. Effects the physics already has (sheath, capstan, glove friction)
+  are candidates only when the starting model has them switched off.
+
+Every parameter is in SI units; ``unit`` and ``scale`` give the unit the report shows.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Mapping
+
+from hems_ros.physics.params import UnitParams
+
+HEATING, TRANSFORMATION, HOLD, COOLING, REST = "heating", "transformation", "hold", "cooling", "rest"
+PHASES = (HEATING, TRANSFORMATION, HOLD, COOLING, REST)
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One fitted parameter: a dotted :class:`UnitParams` key and its physical bounds (SI).
+
+    ``follow``: keys that move by the same amount (a transformation band shifted whole).
+    ``log``: searched on a log scale (a positive range over decades).
+    """
+
+    key: str
+    symbol: str
+    unit: str
+    scale: float
+    lower: float
+    upper: float
+    log: bool = False
+    follow: tuple[str, ...] = ()
+
+    def display(self, value: float) -> float:
+        return value / self.scale
+
+    def describe(self, value: float) -> str:
+        return f"{self.symbol} = {self.display(value):.4g} {self.unit}".rstrip()
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A recalibration or a missing effect: parameters, switches and where it shows."""
+
+    name: str
+    kind: str                                   # "recalibration" or "effect"
+    title: str
+    parameters: tuple[Parameter, ...]
+    phases: tuple[str, ...]
+    source: str                                 # where the bounds come from
+    switches: Mapping[str, object] = field(default_factory=dict)
+    # (starting model, drive kinds of the data, measured channels) -> applicable?
+    applies: Callable[[UnitParams, frozenset, frozenset], bool] = lambda p, d, c: True
+
+    def apply(self, base: UnitParams, values) -> UnitParams:
+        """``base`` with the switches on and the parameters at ``values`` (SI)."""
+        changes: dict[str, object] = dict(self.switches)
+        for par, value in zip(self.parameters, values):
+            changes[par.key] = float(value)
+            for key in par.follow:
+                changes[key] = float(base.get(key)) + float(value) - float(base.get(par.key))
+        return base.replace(changes)
+
+    def bounds(self, base: UnitParams) -> list[tuple[float, float]]:
+        """Bounds of each parameter for this starting model (some depend on it)."""
+        return [_bound(base, par) for par in self.parameters]
+
+    def off_values(self, base: UnitParams) -> list[float]:
+        """The parameters as the starting model has them (the candidate absent)."""
+        return [float(base.get(par.key)) for par in self.parameters]
+
+
+def _bound(base: UnitParams, par: Parameter) -> tuple[float, float]:
+    lower, upper = par.lower, par.upper
+    if par.key == "load.damping_n_s_per_m":
+        lower = float(base.load.damping_n_s_per_m)   # missing damping adds to what the model has
+    if par.key == "load.pretension_n":
+        lower, upper = max(0.0, base.load.pretension_n + lower), base.load.pretension_n + upper
+    if par.key == "start.temperature_offset_c":
+        # a warm wire still has to start as martensite, below As0 (kernel.initial_state)
+        upper = min(upper, base.kinetics.as0_c - base.ambient_temperature_c - 5.0)
+    return lower, upper
+
+
+def _off(key: str) -> Callable[[UnitParams, frozenset, frozenset], bool]:
+    """Applies when the starting model has the effect switched off."""
+    return lambda p, drives, channels: not p.get(key)
+
+
+def _needs_channel(name: str) -> Callable[[UnitParams, frozenset, frozenset], bool]:
+    return lambda p, drives, channels: name in channels
+
+
+def _electric(p: UnitParams, drives: frozenset, channels: frozenset) -> bool:
+    return "temperature" not in drives
+
+
+def _all(*tests):
+    return lambda p, d, c: all(t(p, d, c) for t in tests)
+
+
+# Published ranges (NiTi actuator wires) behind the recalibration bounds.
+_SRC_TEMPERATURES = (
+    "Table 4.1 (As0 88, Af0 98, Ms0 72, Mf0 62 degC, a Flexinol HT wire rated for about "
+    "90 degC); NiTi actuator wires are made with transformation temperatures from about "
+    "60 to 110 degC, so the band may move within 60-110 (heating) and 45-95 degC (cooling)")
+_SRC_SLOPES = (
+    "stress slopes of NiTi are roughly 5-15 MPa/degC: Table 4.1 gives 6.89, Brinson's widely "
+    "used set C_M 8 and C_A 13.8 (J. Intell. Mater. Syst. Struct. 4, 1993), and the "
+    "Clausius-Clapeyron relation with Table 4.1's latent heat and transformation strain "
+    "rho dH / (T eps_L) about 11 MPa/degC at 90 degC")
+_SRC_STRAIN = (
+    "Table 4.1 gives 3.8 %; NiTi recovers up to about 8 % in one cycle, and actuator wires "
+    "are run at 3-5 % for a long life; bounds 2-6 %")
+_SRC_CONVECTION = (
+    "free convection of a thin horizontal cylinder (Churchill-Chu, appendix 4.4: "
+    "h(22 degC) = 42.51 W/m2K for this wire at 90 degC); over wire temperatures of "
+    "40-150 degC and room air the correlation stays within about 30-60 W/m2K")
+_SRC_AMBIENT = "a laboratory at 10-40 degC"
+
+RECALIBRATIONS: tuple[Candidate, ...] = (
+    Candidate(
+        "heating_temperatures", "recalibration", "austenite transformation temperatures As0, Af0",
+        (Parameter("kinetics.as0_c", "As0", "degC", 1.0, 60.0, 110.0, follow=("kinetics.af0_c",)),),
+        (HEATING, TRANSFORMATION), _SRC_TEMPERATURES),
+    Candidate(
+        "cooling_temperatures", "recalibration", "martensite transformation temperatures Ms0, Mf0",
+        (Parameter("kinetics.ms0_c", "Ms0", "degC", 1.0, 45.0, 95.0, follow=("kinetics.mf0_c",)),),
+        (COOLING,), _SRC_TEMPERATURES),
+    Candidate(
+        "stress_slopes", "recalibration", "stress slopes C_A, C_M of the transformation temperatures",
+        (Parameter("kinetics.ca_pa_per_c", "C_A", "MPa/degC", 1e6, 5e6, 15e6),
+         Parameter("kinetics.cm_pa_per_c", "C_M", "MPa/degC", 1e6, 5e6, 15e6)),
+        (TRANSFORMATION, COOLING), _SRC_SLOPES),
+    Candidate(
+        "transformation_strain", "recalibration", "maximum recoverable strain eps_L",
+        (Parameter("constitutive.max_recoverable_strain", "eps_L", "%", 1e-2, 0.02, 0.06),),
+        (TRANSFORMATION, HOLD), _SRC_STRAIN),
+    Candidate(
+        "convection", "recalibration", "free-convection coefficient h0 of the bare wire",
+        (Parameter("thermal.h0_w_m2_c", "h0", "W/m2K", 1.0, 30.0, 60.0),),
+        (HEATING, COOLING), _SRC_CONVECTION, applies=_off("sheath.enabled")),
+    Candidate(
+        "ambient", "recalibration", "ambient temperature",
+        (Parameter("ambient_temperature_c", "T_amb", "degC", 1.0, 10.0, 40.0),),
+        (HEATING, COOLING, REST), _SRC_AMBIENT),
+)
+
+EFFECTS: tuple[Candidate, ...] = (
+    Candidate(
+        "sheath_heat_sink", "effect", "Bowden sheath as a heat sink (heat capacity, wire-sheath contact)",
+        (Parameter("sheath.heat_capacity_j_per_k", "C_s", "J/K", 1.0, 0.2, 30.0, log=True),
+         Parameter("sheath.gap_resistance_k_per_w", "R_gap", "K/W", 1.0, 0.05, 10.0, log=True)),
+        (HEATING, TRANSFORMATION, COOLING),
+        "chapter 3 sheath facts and Table 3.1 (PTFE + steel helix about 17 J/K; wire-to-air "
+        "7.89 K/W sheathed against 14.2 K/W bare)",
+        switches={"sheath.enabled": True, "sheath.helix_heat_capacity_j_per_k": 0.0,
+                  "sheath.liner_helix_resistance_k_per_w": 0.0},
+        applies=_all(_off("sheath.enabled"), _electric)),
+    Candidate(
+        "capstan_friction", "effect", "capstan friction of the wire over the sheath's bends",
+        (Parameter("capstan.bend_angle_rad", "Theta", "deg", math.pi / 180, 0.0, 4 * math.pi),),
+        (TRANSFORMATION, HOLD, COOLING),
+        "eq. 3.1, F_out/F_in = exp(-mu Theta) with mu = 0.04 (PTFE): 0.88 predicted, 0.84 measured "
+        "over pi; bends up to two full turns",
+        switches={"capstan.enabled": True}, applies=_all(_off("capstan.enabled"), _electric)),
+    Candidate(
+        "tendon_friction", "effect", "Coulomb friction of the tendon in the glove",
+        (Parameter("glove_friction.force_n", "F_c", "N", 1.0, 0.0, 10.0),),
+        (TRANSFORMATION, HOLD, COOLING),
+        "chapter 6 force-displacement hysteresis (tendon-glove and bench friction); up to 10 N",
+        switches={"glove_friction.enabled": True}, applies=_all(_off("glove_friction.enabled"), _electric)),
+    Candidate(
+        "load_damping", "effect", "viscous damping of the load beyond the model's",
+        (Parameter("load.damping_n_s_per_m", "b", "N s/m", 1.0, 0.0, 3000.0),),
+        (TRANSFORMATION, COOLING),
+        "eq. 4.33's b (65 N s/m in Table 4.1) identified on the dissertation's rig; a glove or a "
+        "bench adds its own, up to about 3000 N s/m (a 30 mm/s stroke then meets 90 N)",
+        applies=_electric),
+    Candidate(
+        "warm_start", "effect", "wire and sheath warmer than the room at the start",
+        (Parameter("start.temperature_offset_c", "dT_start", "degC", 1.0, 0.0, 80.0),),
+        (HEATING,),
+        "a rig still warm from earlier pulses; the wire must start as martensite, below As0",
+        applies=lambda p, d, c: p.start.temperature_offset_c == 0),
+    Candidate(
+        "preload_error", "effect", "bias-spring pretension other than the model's",
+        (Parameter("load.pretension_n", "F_0", "N", 1.0, -10.0, 10.0),),
+        (REST, HEATING, TRANSFORMATION, HOLD),
+        "the pretension is set by hand on the rig; +-10 N of the model's",
+        applies=_electric),
+    Candidate(
+        "spring_stiffening", "effect", "bias spring that stiffens with stroke (cubic term)",
+        (Parameter("load.cubic_stiffness_n_per_m3", "k3", "N/m3", 1.0, 0.0, 5e6),),
+        (TRANSFORMATION, HOLD),
+        "the chapter 6 glove and spring are nonlinear; up to 40 N extra at 20 mm of load travel",
+        applies=_electric),
+    Candidate(
+        "supply_sag", "effect", "drive supply sagging under load (source resistance)",
+        (Parameter("drive.source_resistance_ohm", "R_s", "ohm", 1.0, 0.0, 5.0),),
+        (HEATING, TRANSFORMATION, HOLD),
+        "the 20 V supply and MOSFET channel; up to 5 ohm (the current then stays below 2.3 A)",
+        applies=lambda p, drives, c: drives == frozenset({"duty"})),
+    Candidate(
+        "encoder_gain", "effect", "displacement sensor scale error",
+        (Parameter("encoder.gain", "g_x", "", 1.0, 0.8, 1.25),),
+        (TRANSFORMATION, HOLD, COOLING),
+        "a miscalibrated encoder scale or pulley lever; +-20 %",
+        applies=_needs_channel("position")),
+    Candidate(
+        "force_sensor_drift", "effect", "force sensor offset and drift",
+        (Parameter("force_sensor.offset_n", "F_off", "N", 1.0, -5.0, 5.0),
+         Parameter("force_sensor.drift_n_per_s", "dF/dt", "mN/s", 1e-3, -0.05, 0.05)),
+        (REST, HEATING, TRANSFORMATION, HOLD, COOLING),
+        "strain-gauge load cells drift with temperature and time; +-5 N, +-50 mN/s",
+        applies=_needs_channel("wire_force")),
+)
+
+ALL: tuple[Candidate, ...] = RECALIBRATIONS + EFFECTS
+BY_NAME: dict[str, Candidate] = {c.name: c for c in ALL}
+
+#: Parameters that only change what a sensor reads, not the physics (a replay shares the
+#: simulation of sets that differ only in these).
+SENSOR_KEYS = ("encoder.gain", "force_sensor.offset_n", "force_sensor.drift_n_per_s")
+
+
+def applicable(base: UnitParams, drives: frozenset, channels: frozenset,
+               names: list[str] | None = None) -> list[Candidate]:
+    """Candidates that make sense for this starting model and data, in library order."""
+    chosen = ALL if names is None else tuple(BY_NAME[n] for n in names)
+    return [c for c in chosen if c.applies(base, drives, channels)]

@@ -1,0 +1,161 @@
+"""Measured time series prepared for fitting: replay plans, phases, the held-out split and
+the noise floor that weighs each channel.
+
+Residuals are weighted by each channel's noise floor, so a model that matches the
+measurement up to its noise has a mean squared weighted residual of 1 on every channel,
+and position (m) and force (N) add up in one cost. The noise floor is read off the
+starting model's residual: its high-frequency part (second differences, robust to the
+few samples where the misfit bends fast) is the measurement's noise and quantisation,
+because a smooth model cannot follow it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hems_ros.diagnosis import phases as phase_mod
+from hems_ros.diagnosis.replay import ReplayPlan, plan, replay
+from hems_ros.diagnosis.runs import OUTPUT_UNITS, DiagnosisInputError, TimeSeriesRun
+from hems_ros.physics.params import UnitParams
+
+#: Least noise floor each channel is credited with (SI): what no replay can promise to match.
+NOISE_FLOOR = {"position": 0.5e-6, "strain": 0.5e-6, "wire_force": 2e-3, "load_force": 2e-3,
+               "temperature": 0.02}
+#: Outputs in the order the gap is reported by (the first one measured is the headline).
+PRIMARY_ORDER = ("position", "strain", "wire_force", "load_force", "temperature")
+
+
+def noise_floor(residual: np.ndarray, resolution: float, channel: str) -> float:
+    """Standard deviation of the white part of ``residual``, from its second differences."""
+    d2 = np.diff(residual, 2)
+    sigma = 0.0
+    if d2.size:
+        centred = d2 - np.median(d2)
+        scale = float(np.median(np.abs(centred))) / 0.6745
+        # the standard deviation of what is not an outlier: the MAD alone is biased for
+        # readings quantised at a step comparable to the noise
+        kept = centred[np.abs(centred) <= 5.0 * scale] if scale > 0 else centred
+        sigma = float(np.sqrt(np.mean(kept**2) / 6.0))
+    return max(sigma, resolution / np.sqrt(12.0), NOISE_FLOOR[channel])
+
+
+@dataclass
+class Split:
+    """Which samples of each run fit the model and which test it."""
+
+    train: list[np.ndarray]
+    heldout: list[np.ndarray]
+    description: str
+
+
+@dataclass
+class Prediction:
+    """One parameter set's outputs on every run, and its weighted residuals."""
+
+    outputs: list[dict[str, np.ndarray]]        # per run: output -> (n_samples,)
+    train: np.ndarray                           # weighted residuals on the training samples
+    heldout: np.ndarray
+
+
+@dataclass
+class TimeSeriesData:
+    """Runs, how to replay them, their phases, split and per-channel noise floor."""
+
+    runs: list[TimeSeriesRun]
+    plans: list[ReplayPlan]
+    segments: list[phase_mod.Segmentation]
+    split: Split
+    sigma: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def channels(self) -> list[str]:
+        return [c for c in PRIMARY_ORDER if any(c in r.outputs for r in self.runs)]
+
+
+    @property
+    def drives(self) -> frozenset:
+        return frozenset(r.drive for r in self.runs)
+
+    @property
+    def n_train(self) -> int:
+        return int(sum(m.sum() * len(r.outputs) for m, r in zip(self.split.train, self.runs)))
+
+    def predict(self, sets: list[UnitParams]) -> list[Prediction]:
+        """Replay every set on every run; weighted residuals split into train and held-out."""
+        per_run = [replay(p, sets) for p in self.plans]
+        out = []
+        for i in range(len(sets)):
+            outputs = [{name: sim[name][i] for name in sim} for sim in per_run]
+            out.append(Prediction(outputs, self._weighted(outputs, self.split.train),
+                                  self._weighted(outputs, self.split.heldout)))
+        return out
+
+    def _weighted(self, outputs: list[dict[str, np.ndarray]], masks: list[np.ndarray]) -> np.ndarray:
+        parts = []
+        for run, sim, mask in zip(self.runs, outputs, masks):
+            for name in self.channels:
+                if name in run.outputs:
+                    parts.append((sim[name][mask] - run.outputs[name][mask]) / self.sigma.get(name, 1.0))
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    def calibrate_noise(self, start: Prediction) -> None:
+        """Noise floor per channel from the starting model's residual (all runs pooled)."""
+        for name in self.channels:
+            floors = []
+            for run, sim in zip(self.runs, start.outputs):
+                if name in run.outputs:
+                    floors.append(noise_floor(run.outputs[name] - sim[name], run.resolution.get(name, 0.0), name))
+            self.sigma[name] = float(np.median(floors))
+
+    def headline(self, start: Prediction) -> str:
+        """The output the starting model misses most on held-out data, in noise-floor units."""
+        def cost(name: str) -> float:
+            r = [(sim[name][m] - run.outputs[name][m]) / self.sigma.get(name, 1.0)
+                 for run, sim, m in zip(self.runs, start.outputs, self.split.heldout) if name in run.outputs]
+            r = np.concatenate(r) if r else np.zeros(0)
+            return float(np.mean(r**2)) if r.size else 0.0
+        return max(self.channels, key=cost)
+
+    def rmse(self, prediction: Prediction, name: str, which: str) -> float:
+        """RMSE of one output over the ``train`` or ``heldout`` samples, SI."""
+        masks = self.split.train if which == "train" else self.split.heldout
+        sq, n = 0.0, 0
+        for run, sim, mask in zip(self.runs, prediction.outputs, masks):
+            if name in run.outputs and mask.any():
+                sq += float(np.sum((sim[name][mask] - run.outputs[name][mask]) ** 2))
+                n += int(mask.sum())
+        return float(np.sqrt(sq / n)) if n else float("nan")
+
+    def display(self, name: str) -> tuple[str, float]:
+        unit = OUTPUT_UNITS[name]
+        return unit[1], unit[2]
+
+
+def prepare(runs: list[TimeSeriesRun], heldout: list[TimeSeriesRun], dt: float | None = None) -> TimeSeriesData:
+    """Plans, phases and the split: the ``heldout`` runs, or every third cycle of each run."""
+    everything = list(runs) + list(heldout)
+    plans = [plan(r, dt) for r in everything]
+    segments = [phase_mod.segment(r) for r in everything]
+    if heldout:
+        train = [np.ones(r.n_samples, bool) for r in runs] + [np.zeros(r.n_samples, bool) for r in heldout]
+        test = [~m for m in train]
+        names = ", ".join(r.name for r in heldout)
+        description = f"held-out runs: {names} (fitted on {', '.join(r.name for r in runs)})"
+    else:
+        train, test, parts = [], [], []
+        for run, seg in zip(runs, segments):
+            chosen = phase_mod.heldout_cycles(seg.n_cycles)
+            mask = np.isin(seg.cycle, chosen)
+            train.append(~mask)
+            test.append(mask)
+            parts.append(f"{run.name}: cycles {', '.join(str(c + 1) for c in chosen) or 'none'} "
+                         f"of {seg.n_cycles}")
+        if not any(m.any() for m in test):
+            counts = ", ".join(f"{r.name} {s.n_cycles}" for r, s in zip(runs, segments))
+            raise DiagnosisInputError(
+                f"too short to hold data out: {counts} cycle(s); a run needs at least {phase_mod.MIN_CYCLES} "
+                "actuation cycles, or give --heldout RUN")
+        description = "held-out cycles (every third, from the second): " + "; ".join(parts)
+    return TimeSeriesData(everything, plans, segments, Split(train, test, description))

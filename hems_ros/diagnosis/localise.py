@@ -1,0 +1,105 @@
+"""Where the model and the measurement disagree: residuals by phase (time series) or by
+figure (tables), and by cycle.
+
+A group (a phase, or one figure of a table) is left unexplained when its residual is
+still well above the noise floor (mean squared weighted residual above ``UNEXPLAINED``)
+and it carries a fair share (``SHARE``) of what remains beyond the noise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hems_ros.diagnosis.candidates import PHASES
+from hems_ros.diagnosis.dataset import Prediction, TimeSeriesData
+from hems_ros.diagnosis.runs import FIGURE_UNITS, OUTPUT_UNITS
+
+UNEXPLAINED = 2.0
+SHARE = 0.2
+
+
+@dataclass(frozen=True)
+class Row:
+    """Residual of one channel in one group (phase or figure)."""
+
+    group: str
+    channel: str
+    samples: int
+    rms: float            # display unit
+    unit: str
+    cost: float           # mean squared weighted residual (1 = noise floor)
+
+
+def display(data, name: str) -> tuple[str, float]:
+    unit = OUTPUT_UNITS.get(name) or FIGURE_UNITS[name]
+    return unit[1], unit[2]
+
+
+def _weights(data, name: str, value: float | None = None) -> float:
+    if isinstance(data, TimeSeriesData):
+        return data.sigma[name]
+    from hems_ros.diagnosis.features import uncertainty
+    return uncertainty(name, value)
+
+
+def table(data, prediction: Prediction) -> list[Row]:
+    """Residual RMS and cost of each channel in each phase (or each figure), all samples."""
+    if not isinstance(data, TimeSeriesData):
+        return _figure_table(data, prediction)
+    rows = []
+    for name in data.channels:
+        unit, scale = display(data, name)
+        for index, phase in enumerate(PHASES):
+            res = [sim[name][seg.phase == index] - run.outputs[name][seg.phase == index]
+                   for run, sim, seg in zip(data.runs, prediction.outputs, data.segments) if name in run.outputs]
+            r = np.concatenate(res) if res else np.zeros(0)
+            if r.size:
+                rows.append(Row(phase, name, int(r.size), float(np.sqrt(np.mean(r**2))) * scale, unit,
+                                float(np.mean((r / data.sigma[name]) ** 2))))
+    return rows
+
+
+def _figure_table(data, prediction: Prediction) -> list[Row]:
+    rows = []
+    for name in data.channels:
+        unit, scale = display(data, name)
+        r = np.array([prediction.outputs[j].get(name, np.nan) - t.figures[name]
+                      for j, (_, t) in enumerate(data.tests) if name in t.figures])
+        w = np.array([_weights(data, name, t.figures[name]) for _, t in data.tests if name in t.figures])
+        r = np.where(np.isfinite(r), r, 1e3 * w)
+        rows.append(Row(name, name, int(r.size), float(np.sqrt(np.mean(r**2))) * scale, unit,
+                        float(np.mean((r / w) ** 2))))
+    return rows
+
+
+def cycles(data: TimeSeriesData, prediction: Prediction, name: str) -> list[tuple[str, int, float, bool]]:
+    """(run, cycle number from 1, residual RMS in display units, held out?) of ``name``."""
+    unit, scale = display(data, name)
+    out = []
+    for run, sim, seg, test in zip(data.runs, prediction.outputs, data.segments, data.split.heldout):
+        if name not in run.outputs:
+            continue
+        for c in range(seg.n_cycles):
+            m = seg.cycle == c
+            r = sim[name][m] - run.outputs[name][m]
+            out.append((run.name, c + 1, float(np.sqrt(np.mean(r**2))) * scale, bool(test[m].any())))
+    return out
+
+
+def unexplained(data, prediction: Prediction, force: bool = False) -> list[str]:
+    """Groups whose residual stays well above the noise and carries a fair share of it.
+
+    ``force``: name at least the worst group (the verdict says something is unexplained).
+    """
+    by_group: dict[str, list[Row]] = {}
+    for row in table(data, prediction):
+        by_group.setdefault(row.group, []).append(row)
+    excess = {g: sum(r.samples * max(r.cost - 1.0, 0.0) for r in rows) for g, rows in by_group.items()}
+    worst_cost = {g: max(r.cost for r in rows) for g, rows in by_group.items()}
+    total = sum(excess.values())
+    named = [g for g in by_group if worst_cost[g] > UNEXPLAINED and total > 0 and excess[g] >= SHARE * total]
+    if not named and force and total > 0:
+        named = [max(excess, key=excess.get)]
+    return named

@@ -1,0 +1,161 @@
+"""Replay measured time series on the model: the measured input drives it open loop.
+
+The recorded duty, current or voltage (held between samples, as the drive board holds it)
+or the measured wire temperature (a thermal cycle, interpolated between samples) drives
+many parameter sets at once through the batch API, and the model's outputs are read at the
+measured sample instants. Sample 0 is the initial state: a wire at rest, martensite, at its
+start temperature.
+
+What a sensor error changes (``SENSOR_KEYS``: encoder gain, force offset and drift) is
+applied to the simulated truth here, so sets that differ only in those share one
+simulation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hems_ros.diagnosis.candidates import SENSOR_KEYS
+from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
+from hems_ros.physics import kernel
+from hems_ros.physics.batch import simulate
+from hems_ros.physics.params import UnitParams
+
+#: Plant step of the replay of an electrically driven run: the graph's (1 kHz).
+DEFAULT_DT = 1e-3
+#: Thermal cycles are quasi-static; a coarser step keeps long paths cheap.
+THERMAL_DT = 1e-2
+_GRAVITY = 9.81
+_KERNEL_CHANNELS = {
+    "position": "slider_position_m",
+    "strain": "slider_position_m",
+    "wire_force": "wire_force_n",
+    "load_force": "tendon_force_n",
+    "temperature": "wire_temperature_c",
+}
+
+
+def thermal_cycle_rig(params: UnitParams, stress_pa: float) -> UnitParams:
+    """A bare wire under a dead weight that holds ``stress_pa`` (the lab's constant stress)."""
+    mass = stress_pa * params.wire.cross_section_m2 / _GRAVITY
+    if not mass > 0:
+        raise DiagnosisInputError(f"thermal cycle: stress {stress_pa:g} Pa must be > 0 (a wire under load)")
+    return params.replace({
+        "load.kind": "hanging_mass", "load.mass_kg": mass, "load.pretension_n": 0.0,
+        "load.stiffness_n_per_m": 0.0, "load.cubic_stiffness_n_per_m3": 0.0, "load.pulley_ratio": 1.0,
+        "load.gravity_m_s2": _GRAVITY, "sheath.enabled": False, "capstan.enabled": False,
+        "glove_friction.enabled": False,
+    })
+
+
+@dataclass(frozen=True)
+class ReplayPlan:
+    """How one run is replayed: the per-step input and where its samples fall."""
+
+    run: TimeSeriesRun
+    dt: float
+    drive: str                  # keyword of batch.simulate
+    values: np.ndarray          # per plant step
+    record_every: int
+    records: np.ndarray         # record index of samples 1..n-1 (sample 0 is the initial state)
+
+    @property
+    def thermal(self) -> bool:
+        return self.drive == "temperature"
+
+
+def plan(run: TimeSeriesRun, dt: float | None = None) -> ReplayPlan:
+    """Steps, input and sample positions of ``run`` (the step shrinks for fast sampling)."""
+    thermal = run.drive == "temperature"
+    step = dt if dt is not None else (THERMAL_DT if thermal else DEFAULT_DT)
+    gaps = np.diff(run.time)
+    if gaps.size == 0:
+        raise DiagnosisInputError(f"{run.name}: a run needs more than one sample")
+    step = min(step, float(gaps.min()))
+    if step < 1e-4:
+        raise DiagnosisInputError(f"{run.name}: samples {gaps.min() * 1e3:.3g} ms apart; "
+                                  "the replay needs them at least 0.1 ms apart")
+    index = np.rint(run.time / step).astype(np.int64)
+    if np.any(np.diff(index) <= 0):
+        raise DiagnosisInputError(f"{run.name}: sample instants do not fall on distinct {step * 1e3:g} ms steps")
+    every = int(np.gcd.reduce(index[1:]))
+    if thermal:
+        ends = (np.arange(index[-1]) + 1) * step
+        values = np.interp(ends, run.time, run.drive_values)
+    else:
+        values = np.repeat(run.drive_values[:-1], np.diff(index))
+    return ReplayPlan(run, step, run.drive, values, every, index[1:] // every - 1)
+
+
+def rig(params: UnitParams, run: TimeSeriesRun) -> UnitParams:
+    """The parameter set the run's conditions call for (a thermal cycle's dead weight)."""
+    return thermal_cycle_rig(params, run.stress_pa) if run.kind == "thermal_cycle" else params
+
+
+def start_temperature(params: UnitParams, run: TimeSeriesRun) -> float | None:
+    """A thermal cycle starts at its first measured temperature; a driven run at the model's."""
+    if run.kind != "thermal_cycle":
+        return None
+    first = float(run.drive_values[0])
+    if first >= params.kinetics.as0_c:
+        raise DiagnosisInputError(
+            f"{run.name}: the thermal cycle starts at {first:g} degC, at or above As0 = "
+            f"{params.kinetics.as0_c:g} degC; it must start cold, with the wire martensite")
+    return first
+
+
+def physics_key(params: UnitParams) -> UnitParams:
+    """``params`` with the sensor errors at their defaults: what the simulation depends on."""
+    return params.replace({key: (1.0 if key == "encoder.gain" else 0.0) for key in SENSOR_KEYS})
+
+
+def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
+    """Each measured output of the run as the model gives it: (n_sets, n_samples) arrays."""
+    run = p.run
+    keys = [physics_key(rig(s, run)) for s in sets]
+    unique: dict[UnitParams, int] = {}
+    for key in keys:
+        unique.setdefault(key, len(unique))
+    physics = list(unique)
+    wanted = sorted({_KERNEL_CHANNELS[name] for name in run.outputs})
+    starts = [start_temperature(s, run) for s in physics]
+    res = simulate(physics, p.dt, record_every=p.record_every, channels=wanted,
+                   start_temperature_c=starts if run.kind == "thermal_cycle" else None,
+                   **{p.drive: p.values})
+    initial = _initial_outputs(physics, starts)
+    rows = np.array([unique[k] for k in keys])
+    time = run.time
+    out = {}
+    for name in run.outputs:
+        channel = _KERNEL_CHANNELS[name]
+        series = np.concatenate([initial[channel][:, None], res[channel][:, p.records]], axis=1)[rows]
+        out[name] = _sensor(name, series, sets, time)
+    return out
+
+
+def _initial_outputs(sets: list[UnitParams], starts: list[float | None]) -> dict[str, np.ndarray]:
+    """The kernel channels at t = 0 (the batch records only after steps)."""
+    rows = [kernel.initial_state(p, t) for p, t in zip(sets, starts)]
+    force = np.array([p.wire.cross_section_m2 * s[kernel.S_SIG] for p, s in zip(sets, rows)])
+    return {
+        "slider_position_m": np.array([s[kernel.S_X] for s in rows]),
+        "wire_force_n": force,
+        "tendon_force_n": np.array([p.load.static_force_n() for p in sets]),
+        "wire_temperature_c": np.array([s[kernel.S_T] for s in rows]),
+    }
+
+
+def _sensor(name: str, truth: np.ndarray, sets: list[UnitParams], time: np.ndarray) -> np.ndarray:
+    """What the measuring chain of each set reads of the simulated ``truth``."""
+    if name == "position":
+        return truth * np.array([s.encoder.gain for s in sets])[:, None]
+    if name == "strain":
+        return -truth / np.array([s.wire.length_m for s in sets])[:, None]
+    if name == "wire_force":
+        offset = np.array([s.force_sensor.offset_n for s in sets])[:, None]
+        drift = np.array([s.force_sensor.drift_n_per_s for s in sets])[:, None]
+        return truth + offset + drift * time[None, :]
+    return truth
+

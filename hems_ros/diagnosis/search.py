@@ -1,0 +1,170 @@
+"""Which explanation the data support: stepwise selection and the verdict.
+
+Costs are mean squared residuals weighted by each channel's noise floor, so 1 is a model
+that matches the measurement to its noise and ``cost - 1`` is what is left to explain.
+
+Forward selection: at each step every candidate not yet in the model is fitted together
+with those already in it (their parameters refitted too) and ranked by its information
+criterion (BIC, training data). The best is accepted when it removes a fair share of what
+is left to explain in the training data (``MIN_SHARE``) and lowers the held-out cost by
+more than the noise can (``MIN_GAIN``): the held-out data decide whether it generalises,
+the training data, which hold most of the samples, how much it explains. A recalibration
+that does as well as the best effect (training cost within ``TIE``) is taken instead: a
+parameter that is simply off comes before new physics. A fit whose parameter ends on a
+bound is a finding, not an explanation. Then backward elimination drops what the later
+terms made unnecessary.
+
+Verdicts: ``none`` (nothing beyond the noise to explain), ``recalibrated`` (parameters
+only), ``named`` (effects, with or without recalibration), ``ambiguous`` (another effect
+fits the held-out data as well as a named one), ``unexplained`` (nothing accepted, or what
+was accepted leaves more than half of the starting gap).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from hems_ros.diagnosis.candidates import Candidate
+from hems_ros.diagnosis.fit import Fit, Space, Structure, fit_structures
+from hems_ros.physics.params import UnitParams
+
+#: Held-out cost left to explain below which there is nothing to explain.
+NOTHING = 0.2
+#: A step must lower the held-out cost by at least this much (noise-floor units) ...
+MIN_GAIN = 0.1
+#: ... and the training cost by this share of what is left to explain there.
+MIN_SHARE = 0.3
+#: Candidates whose training costs are within this ratio explain the data equally well.
+TIE = 0.1
+#: Named effects must at least halve the excess RMS over the noise floor.
+EXPLAINED = 0.5
+MAX_TERMS = 4
+
+
+def excess(cost: float) -> float:
+    """RMS of the residual beyond the noise floor, in noise-floor units."""
+    return math.sqrt(max(cost - 1.0, 0.0))
+
+
+@dataclass
+class Step:
+    """One forward step: every candidate's fit on top of the model so far, best first."""
+
+    ranked: list[Fit]
+    chosen: Fit | None
+    rivals: list[Fit]          # effects as good as the chosen one on held-out data
+
+
+@dataclass
+class Search:
+    start: Fit
+    steps: list[Step]
+    final: Fit
+    dropped: list[str]
+    verdict: str
+    findings: list[str] = field(default_factory=list)
+
+    @property
+    def effects(self) -> list[Candidate]:
+        return [c for c in self.final.structure if c.kind == "effect"]
+
+    @property
+    def recalibrations(self) -> list[Candidate]:
+        return [c for c in self.final.structure if c.kind == "recalibration"]
+
+    @property
+    def ambiguous_with(self) -> list[tuple[str, list[str]]]:
+        named = {c.name for c in self.effects}
+        out = []
+        for step in self.steps:
+            if step.chosen is not None and step.rivals:
+                new = [c.name for c in step.chosen.structure if c.name in named]
+                if new:
+                    out.append((new[-1], [r.structure[-1].name for r in step.rivals]))
+        return out
+
+
+def _better(new: Fit, current: Fit) -> bool:
+    """``new`` explains a fair share of what ``current`` leaves (training data, where most of
+    the data are), and that carries over to the held-out data beyond the noise."""
+    return (current.heldout - new.heldout >= MIN_GAIN
+            and current.train - new.train >= MIN_SHARE * max(current.train - 1.0, 0.0)
+            and new.bic < current.bic and not new.pinned)
+
+
+def _warm(space_fit: Fit, base: UnitParams) -> dict[str, float]:
+    space = Space(base, space_fit.structure)
+    return {c.parameter.key: c.unit(float(v)) for c, v in zip(space.coords, space_fit.values)}
+
+
+def _start_fit(data, base: UnitParams) -> Fit:
+    p = data.predict([base])[0]
+    return Fit((), np.zeros(0), base, float(np.mean(p.train**2)), float(np.mean(p.heldout**2)),
+               p.train.size, [])
+
+
+def run_search(data, base: UnitParams, candidates: list[Candidate],
+               progress: Callable[[str], None] | None = None) -> Search:
+    """Forward selection then backward elimination over ``candidates`` (see module doc)."""
+    say = progress or (lambda message: None)
+    start = _start_fit(data, base)
+    current, steps, findings = start, [], []
+    say(f"starting model: held-out cost {start.heldout:.3g} (1 = the noise floor)")
+    while current.heldout - 1.0 > NOTHING and len(current.structure) < MAX_TERMS:
+        remaining = [c for c in candidates if c not in current.structure]
+        if not remaining:
+            break
+        say(f"step {len(steps) + 1}: {len(remaining)} candidate(s) on top of "
+            f"{', '.join(current.names) or 'the starting model'}")
+        fits = fit_structures(data, base, [current.structure + (c,) for c in remaining], _warm(current, base),
+                              progress=say)
+        ranked = sorted(fits, key=lambda f: f.bic)
+        findings += [p for f in ranked for p in f.pinned if p not in findings]
+        eligible = [f for f in ranked if _better(f, current)]
+        if not eligible:
+            steps.append(Step(ranked, None, []))
+            break
+        best = eligible[0]
+        tied = [f for f in eligible if f.train <= best.train * (1.0 + TIE)]
+        recal = [f for f in tied if f.structure[-1].kind == "recalibration"]
+        chosen = recal[0] if recal else best
+        rivals = [f for f in tied if f is not chosen and f.structure[-1].kind == "effect"
+                  and chosen.structure[-1].kind == "effect"]
+        steps.append(Step(ranked, chosen, rivals))
+        say(f"  accepted {chosen.structure[-1].name}: held-out cost {current.heldout:.3g} -> {chosen.heldout:.3g}")
+        current = chosen
+    current, dropped = _eliminate(data, base, current, say)
+    return Search(start, steps, current, dropped, _verdict(start, current, steps), findings)
+
+
+def _eliminate(data, base: UnitParams, current: Fit, say) -> tuple[Fit, list[str]]:
+    """Drop terms the others made unnecessary (held-out cost no worse without them)."""
+    dropped = []
+    while len(current.structure) > 1:
+        subsets = [tuple(c for c in current.structure if c is not t) for t in current.structure]
+        fits = fit_structures(data, base, subsets, _warm(current, base))
+        best = min(fits, key=lambda f: f.heldout)
+        if _better(current, best):
+            break
+        gone = next(c.name for c in current.structure if c not in best.structure)
+        say(f"  dropped {gone}: held-out cost {current.heldout:.3g} -> {best.heldout:.3g} without it")
+        dropped.append(gone)
+        current = best
+    return current, dropped
+
+
+def _verdict(start: Fit, final: Fit, steps: list[Step]) -> str:
+    if not final.structure:
+        return "none" if start.heldout - 1.0 <= NOTHING else "unexplained"
+    if excess(final.heldout) > EXPLAINED * excess(start.heldout):
+        return "unexplained"
+    if not any(c.kind == "effect" for c in final.structure):
+        return "recalibrated"
+    named = {c.name for c in final.structure}
+    if any(s.rivals and s.chosen is not None and s.chosen.structure[-1].name in named for s in steps):
+        return "ambiguous"
+    return "named"

@@ -1,0 +1,152 @@
+"""The diagnosis from measured runs to a verdict: prepare, replay, search, localise.
+
+:func:`diagnose` is the whole workflow on runs already loaded (csvload, bagload), and
+returns a :class:`Diagnosis` that the report renders; nothing here writes files.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from hems_ros.diagnosis import candidates as library
+from hems_ros.diagnosis import dataset, features, localise
+from hems_ros.diagnosis.runs import DiagnosisInputError, FeatureRun, Run, TimeSeriesRun
+from hems_ros.diagnosis.search import Search, run_search
+from hems_ros.physics.params import UnitParams
+
+
+@dataclass
+class Gap:
+    """Headline disagreement: RMSE of the output the starting model misses most, train and
+    held-out, before and after."""
+
+    metric: str
+    unit: str
+    train_before: float
+    train_after: float
+    heldout_before: float
+    heldout_after: float
+
+    @property
+    def change(self) -> float:
+        return (self.heldout_after / self.heldout_before - 1.0) if self.heldout_before > 0 else math.nan
+
+
+@dataclass
+class Diagnosis:
+    model_name: str
+    start: UnitParams
+    corrected: UnitParams
+    data: object                     # dataset.TimeSeriesData or features.FeatureData
+    search: Search
+    candidates: list[library.Candidate]
+    gap: Gap
+    phases_before: list[localise.Row]
+    phases_after: list[localise.Row]
+    unexplained: list[str]
+    predictions: dict = field(default_factory=dict)   # "start" / "corrected" -> Prediction
+
+    @property
+    def verdict(self) -> str:
+        return self.search.verdict
+
+    def named(self) -> list[dict]:
+        fit = self.search.final
+        return [{"effect": c.name, "title": c.title, "parameters": _parameters(fit, c)}
+                for c in self.search.effects]
+
+    def recalibrated(self) -> dict[str, dict]:
+        fit = self.search.final
+        out = {}
+        for c in self.search.recalibrations:
+            for entry in _parameters(fit, c).items():
+                out[entry[0]] = entry[1]
+        return out
+
+    def summary_line(self) -> str:
+        head = self.verdict
+        if self.verdict in ("named", "ambiguous"):
+            head += ": " + ", ".join(f"{n['effect']} ({'; '.join(_short(p) for p in n['parameters'].values())})"
+                                     for n in self.named())
+        elif self.verdict == "recalibrated":
+            head += ": " + ", ".join(_short(p) for p in self.recalibrated().values())
+        elif self.verdict == "unexplained":
+            head += ": residual in " + (", ".join(self.unexplained) or "every phase") + " not removed by any candidate"
+        g = self.gap
+        return (f"{head}; held-out {g.metric} RMSE {g.heldout_before:.3g} {g.unit} -> {g.heldout_after:.3g} {g.unit} "
+                f"({g.change * 100:+.0f} %)")
+
+
+def _parameters(fit, candidate: library.Candidate) -> dict[str, dict]:
+    out, i = {}, 0
+    for cand in fit.structure:
+        for par in cand.parameters:
+            if cand is candidate:
+                value = float(fit.values[i])
+                out[par.key] = {"symbol": par.symbol, "value": par.display(value), "unit": par.unit,
+                                "si_value": value}
+            i += 1
+    return out
+
+
+def _short(p: dict) -> str:
+    return f"{p['symbol']} = {p['value']:.3g} {p['unit']}".rstrip()
+
+
+def prepare(runs: list[Run], heldout: list[Run], dt: float | None = None):
+    """The dataset of the runs' kind (all runs must be of one kind)."""
+    everything = list(runs) + list(heldout)
+    if not runs:
+        raise DiagnosisInputError("no run given")
+    if all(isinstance(r, TimeSeriesRun) for r in everything):
+        return dataset.prepare(list(runs), list(heldout), dt)
+    if all(isinstance(r, FeatureRun) for r in everything):
+        return features.prepare(list(runs), list(heldout), dt or features.PULSE_DT)
+    raise DiagnosisInputError("all runs must be of one kind: time series (bags, driven runs, thermal cycles) "
+                              "or tables of test figures")
+
+
+def diagnose(runs: list[Run], heldout: list[Run], model: UnitParams, *, candidates: list[str] | None = None,
+             dt: float | None = None, progress: Callable[[str], None] | None = None) -> Diagnosis:
+    """Replay, localise, explain (recalibration, then missing effects) and measure the gap."""
+    say = progress or (lambda message: None)
+    data = prepare(runs, heldout, dt)
+    say(f"{_describe(data)}; {data.split.description}")
+    start_prediction = data.predict([model])[0]
+    if isinstance(data, dataset.TimeSeriesData):
+        data.calibrate_noise(start_prediction)
+        start_prediction = data.predict([model])[0]
+        say("noise floor: " + ", ".join(f"{c} {data.sigma[c] * data.display(c)[1]:.3g} {data.display(c)[0]}"
+                                        for c in data.channels))
+    pool = library.applicable(model, data.drives, frozenset(data.channels), candidates)
+    say(f"candidates: {', '.join(c.name for c in pool)}")
+    search = run_search(data, model, pool, progress=say)
+    corrected = search.final.params
+    final_prediction = data.predict([corrected])[0]
+    headline = data.headline(start_prediction)
+    unit, scale = localise.display(data, headline)
+    gap = Gap(headline, unit,
+              data.rmse(start_prediction, headline, "train") * scale,
+              data.rmse(final_prediction, headline, "train") * scale,
+              data.rmse(start_prediction, headline, "heldout") * scale,
+              data.rmse(final_prediction, headline, "heldout") * scale)
+    before, after = localise.table(data, start_prediction), localise.table(data, final_prediction)
+    unexplained = localise.unexplained(data, final_prediction, force=search.verdict == "unexplained")
+    return Diagnosis(model.name, model, corrected, data, search, pool, gap, before, after, unexplained,
+                     {"start": start_prediction, "corrected": final_prediction})
+
+
+def _describe(data) -> str:
+    if isinstance(data, dataset.TimeSeriesData):
+        n = sum(r.n_samples for r in data.runs)
+        return f"{len(data.runs)} run(s), {n} samples, outputs {', '.join(data.channels)}"
+    return f"{len(data.tests)} test row(s), figures {', '.join(data.channels)}"
+
+
+def total_seconds(runs: list[Run]) -> float:
+    """Measured time covered by the time-series runs (0 for tables)."""
+    return float(np.sum([r.duration_s for r in runs if isinstance(r, TimeSeriesRun)]))
