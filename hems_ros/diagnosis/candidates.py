@@ -240,3 +240,15 @@ def applicable(base: UnitParams, drives: frozenset, channels: frozenset,
     """Candidates that make sense for this starting model and data, in library order."""
     chosen = ALL if names is None else tuple(BY_NAME[n] for n in names)
     return [c for c in chosen if c.applies(base, drives, channels)]
+
+
+def describe_library() -> str:
+    """The library as text: each candidate's parameters, bounds, phases and sources."""
+    base = UnitParams()
+    lines = []
+    for c in ALL:
+        bounds = ", ".join(f"{p.symbol} {p.display(lo):.4g}..{p.display(hi):.4g} {p.unit}".rstrip()
+                           for p, (lo, hi) in zip(c.parameters, c.bounds(base)))
+        lines += [f"{c.name} ({c.kind}): {c.title}", f"    {bounds}; changes {', '.join(c.phases)}",
+                  f"    bounds: {c.source}"]
+    return "\n".join(lines)

@@ -290,7 +290,8 @@ def _ranking(d: Diagnosis, folder: Path) -> str:
     ax.axvline(1.0, color="k", lw=0.8, ls=":", label="noise floor")
     ax.set_yticks(y, [f.structure[-1].name for f in ranked], fontsize=8)
     ax.set_xscale("log")
-    ax.set_xlabel("held-out cost (step 1; green: accepted, purple: recalibration, grey: on a bound)")
+    ax.set_xlabel("held-out cost (step 1, best BIC on top; green: accepted, purple: recalibration, "
+                  "grey: on a bound)")
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(folder / "candidate_ranking.png", dpi=DPI)

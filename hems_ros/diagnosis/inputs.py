@@ -1,0 +1,107 @@
+"""What ``hems diagnose`` is given on its command line, checked and loaded: the starting
+model with the run's conditions, the candidate names, the runs and the report folder.
+
+Every problem is a :class:`DiagnosisInputError` whose message is one line.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import yaml
+
+from hems_ros.diagnosis import bagload, candidates, csvload
+from hems_ros.diagnosis.runs import DiagnosisInputError, Run
+from hems_ros.physics.params import ParamError, UnitParams, load_params
+
+
+def model(name: str, conditions: Path | None = None, overrides: list[str] = ()) -> UnitParams:
+    """The starting model: a named set or YAML file, the run's conditions, ``KEY=VALUE`` overrides."""
+    try:
+        params = load_params(name)
+    except FileNotFoundError:
+        raise DiagnosisInputError(f"--model {name}: no such file") from None
+    except ParamError as error:
+        raise DiagnosisInputError(f"--model {name}: {error}") from None
+    if conditions is not None:
+        params = _with_conditions(params, conditions)
+    changes = {}
+    for item in overrides:
+        key, sep, text = item.partition("=")
+        if not sep or not key:
+            raise DiagnosisInputError(f"--set {item!r}: expected KEY=VALUE, e.g. load.pretension_n=20")
+        changes[key.strip()] = yaml.safe_load(text)
+    try:
+        return params.replace(changes) if changes else params
+    except ParamError as error:
+        raise DiagnosisInputError(f"--set: {error}") from None
+
+
+def _with_conditions(params: UnitParams, path: Path) -> UnitParams:
+    """``params`` with the groups and keys a partial physics YAML gives."""
+    try:
+        data = yaml.safe_load(Path(path).read_text())
+    except OSError as error:
+        raise DiagnosisInputError(f"--conditions {path}: {error.strerror or error}") from None
+    except yaml.YAMLError as error:
+        raise DiagnosisInputError(f"--conditions {path}: not valid YAML ({str(error).splitlines()[0]})") from None
+    if not isinstance(data, dict):
+        raise DiagnosisInputError(f"--conditions {path}: expected a mapping of parameter groups")
+    merged = params.to_dict()
+    for key, value in data.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key].update(value)
+        else:
+            merged[key] = value
+    try:
+        return UnitParams.from_dict(merged, source=str(path))
+    except (ParamError, TypeError) as error:
+        raise DiagnosisInputError(f"--conditions {error}") from None
+
+
+def candidate_names(text: str | None) -> list[str] | None:
+    if text is None:
+        return None
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    unknown = [n for n in names if n not in candidates.BY_NAME]
+    if unknown or not names:
+        raise DiagnosisInputError(f"--candidates: unknown {', '.join(unknown) or '(none given)'} "
+                                  f"(known: {', '.join(candidates.BY_NAME)})")
+    return names
+
+
+def is_bag(path: Path) -> bool:
+    return path.suffix == ".mcap" or (path.is_dir() and (any(path.glob("*.mcap")) or (path / "metadata.yaml").exists()))
+
+
+def load(text: str, columns: str | None, fingers: str | None) -> list[Run]:
+    """The runs in one RUN argument: every finger of a bag, or one table."""
+    path = Path(text)
+    if not path.exists():
+        raise DiagnosisInputError(f"{text}: no such file or folder")
+    if is_bag(path):
+        chosen = [f.strip() for f in fingers.split(",") if f.strip()] if fingers else None
+        return list(bagload.load_bag_runs(path, chosen))
+    if path.is_dir():
+        raise DiagnosisInputError(f"{text}: a folder that is not a bag (no .mcap file in it)")
+    if not columns:
+        raise DiagnosisInputError(f"{text}: a table needs --columns quantity=column[:unit],... "
+                                  "(e.g. time=t:s,current=I:A,displacement=x:mm)")
+    return [csvload.load_table(path, columns)]
+
+
+def stem(text: str) -> str:
+    path = Path(text.rstrip("/"))
+    return path.stem if path.suffix else path.name
+
+
+def check_output(out: Path) -> None:
+    """Refuse a report folder that would overwrite something other than a report."""
+    if out.exists() and (not out.is_dir() or (any(out.iterdir()) and not (out / "summary.json").is_file())):
+        raise DiagnosisInputError(f"--out {out}: exists and is not a diagnosis report folder")
+    parent = out.resolve().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not os.access(parent, os.W_OK):
+        raise DiagnosisInputError(f"--out {out}: cannot write under {parent}")
