@@ -22,6 +22,7 @@ setup(
         (f"share/{PACKAGE}", ["package.xml"]),
         (f"share/{PACKAGE}/config", glob("config/*.yaml") + glob("config/*.xml")),
         (f"share/{PACKAGE}/config/physics", glob("config/physics/*.yaml")),
+        (f"share/{PACKAGE}/config/measurements", glob("config/measurements/*")),
     ],
     install_requires=["setuptools"],
     zip_safe=True,

@@ -5,6 +5,7 @@ corrected model; ``hems diagnose-suite``: the hidden-effect suite that tests the
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -126,7 +127,9 @@ def run_suite(args: argparse.Namespace) -> int:
     result = suite_report.run(args.out, seed=args.seed, quick=args.quick, dissertation=not args.no_dissertation,
                               progress=say)
     if args.docs is not None:
-        args.docs.parent.mkdir(parents=True, exist_ok=True)
+        figures = args.docs.parent / "figures"
+        figures.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(args.out / "confusion.png", figures / "diagnosis_confusion.png")
         args.docs.write_text(result.page)
         say(f"wrote {args.docs}")
     print(result.headline)

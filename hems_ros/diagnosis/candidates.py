@@ -31,6 +31,8 @@ class Parameter:
 
     ``follow``: keys that move by the same amount (a transformation band shifted whole).
     ``log``: searched on a log scale (a positive range over decades).
+    ``neutral``: the value at which a switched-on effect does nothing (a friction force of 0);
+    None: the starting model's value.
     """
 
     key: str
@@ -41,6 +43,7 @@ class Parameter:
     upper: float
     log: bool = False
     follow: tuple[str, ...] = ()
+    neutral: float | None = None
 
     def display(self, value: float) -> float:
         return value / self.scale
@@ -77,8 +80,9 @@ class Candidate:
         return [_bound(base, par) for par in self.parameters]
 
     def off_values(self, base: UnitParams) -> list[float]:
-        """The parameters as the starting model has them (the candidate absent)."""
-        return [float(base.get(par.key)) for par in self.parameters]
+        """Where each parameter leaves the candidate without effect: its neutral value, or the
+        starting model's."""
+        return [float(base.get(par.key)) if par.neutral is None else par.neutral for par in self.parameters]
 
 
 def _bound(base: UnitParams, par: Parameter) -> tuple[float, float]:
@@ -170,14 +174,14 @@ EFFECTS: tuple[Candidate, ...] = (
         applies=_all(_off("sheath.enabled"), _electric)),
     Candidate(
         "capstan_friction", "effect", "capstan friction of the wire over the sheath's bends",
-        (Parameter("capstan.bend_angle_rad", "Theta", "deg", math.pi / 180, 0.0, 4 * math.pi),),
+        (Parameter("capstan.bend_angle_rad", "Theta", "deg", math.pi / 180, 0.0, 4 * math.pi, neutral=0.0),),
         (TRANSFORMATION, HOLD, COOLING),
         "eq. 3.1, F_out/F_in = exp(-mu Theta) with mu = 0.04 (PTFE): 0.88 predicted, 0.84 measured "
         "over pi; bends up to two full turns",
         switches={"capstan.enabled": True}, applies=_all(_off("capstan.enabled"), _electric)),
     Candidate(
         "tendon_friction", "effect", "Coulomb friction of the tendon in the glove",
-        (Parameter("glove_friction.force_n", "F_c", "N", 1.0, 0.0, 10.0),),
+        (Parameter("glove_friction.force_n", "F_c", "N", 1.0, 0.0, 10.0, neutral=0.0),),
         (TRANSFORMATION, HOLD, COOLING),
         "chapter 6 force-displacement hysteresis (tendon-glove and bench friction); up to 10 N",
         switches={"glove_friction.enabled": True}, applies=_all(_off("glove_friction.enabled"), _electric)),

@@ -90,8 +90,13 @@ class _Table:
 
 def _split(line: str, delimiter: str | None) -> list[str]:
     fields = line.split() if delimiter is None else next(csv.reader([line], delimiter=delimiter))
-    fields = [f.strip() for f in fields]
-    while fields and not fields[-1]:    # a trailing delimiter is no column
+    return [f.strip() for f in fields]
+
+
+def _trim(fields: list[str], width: int) -> list[str]:
+    """Drop empty fields past ``width``: a trailing delimiter is no column (an empty field within
+    the header's width is an empty cell)."""
+    while len(fields) > width and not fields[-1]:
         fields.pop()
     return fields
 
@@ -112,10 +117,10 @@ def _read(path: Path) -> _Table:
     header_line = lines[0][1]
     counts = {d: header_line.count(d) for d in (",", ";", "\t")}
     delimiter = max(counts, key=counts.get) if any(counts.values()) else None
-    header = _split(header_line, delimiter)
+    header = _trim(_split(header_line, delimiter), 0)
     rows = []
     for number, line in lines[1:]:
-        fields = _split(line, delimiter)
+        fields = _trim(_split(line, delimiter), len(header))
         if len(fields) != len(header):
             raise DiagnosisInputError(f"{path}: row {number} has {len(fields)} fields, "
                                       f"the header has {len(header)}")
@@ -146,12 +151,16 @@ def _texts(table: _Table, quantity: str, column: str) -> list[str]:
     return [fields[index] for _, fields in table.rows]
 
 
-def _numbers(table: _Table, quantity: str, column: str, unit: str | None) -> np.ndarray:
-    """A numeric column in SI; every value must be a finite number."""
+def _numbers(table: _Table, quantity: str, column: str, unit: str | None, blanks: bool = False) -> np.ndarray:
+    """A numeric column in SI; every value must be a finite number (``blanks``: an empty cell
+    is a figure the table does not give, NaN)."""
     index = _column_index(table, quantity, column)
     values = np.empty(len(table.rows))
     for k, (number, fields) in enumerate(table.rows):
         text = fields[index]
+        if blanks and not text.strip():
+            values[k] = math.nan
+            continue
         if table.decimal_comma and "," in text and "." not in text:
             text = text.replace(",", ".")
         try:
@@ -162,7 +171,7 @@ def _numbers(table: _Table, quantity: str, column: str, unit: str | None) -> np.
             raise DiagnosisInputError(f"{table.where(number, index)}: {fields[index]!r} "
                                       f"is not a finite number")
     values = units.to_si(quantity, unit, values)
-    _check_range(table, quantity, index, values)
+    _check_range(table, quantity, index, values[np.isfinite(values)])
     return values
 
 
@@ -320,13 +329,17 @@ def _features(table: _Table, columns: Columns, name: str) -> FeatureRun:
     if len(table.rows) < MIN_TESTS:
         raise DiagnosisInputError(f"{path}: only {len(table.rows)} test row, too few to compare "
                                   f"(a feature table needs at least {MIN_TESTS})")
-    values = {q: (_texts(table, q, c) if q in units.STRING_QUANTITIES else _numbers(table, q, c, u))
+    values = {q: (_texts(table, q, c) if q in units.STRING_QUANTITIES else
+                  _numbers(table, q, c, u, blanks=q in FIGURE_UNITS))
               for q, (c, u) in columns.items()}
     tests = []
     for k, (number, _) in enumerate(table.rows):
         conditions = {CONDITIONS[q]: _item(values[q][k]) for q in CONDITIONS if q in values}
+        given = {q: float(values[q][k]) for q in figures if math.isfinite(values[q][k])}
+        if not given:
+            raise DiagnosisInputError(f"{path}, row {number}: no figure given (every figure cell is empty)")
         tests.append(FeatureTest(name=(values["name"][k] if "name" in values else "") or f"row {number}",
-                                 conditions=conditions, figures={q: float(values[q][k]) for q in figures}))
+                                 conditions=conditions, figures=given))
     return FeatureRun(name=name, source=str(path), tests=tuple(tests))
 
 

@@ -76,13 +76,16 @@ class Space:
                 model = cand.apply(model, [next(values) for _ in cand.parameters])
         except (ParamError, ValueError):
             return None
+        # a warm start and a lower As0 fitted together may leave no martensite to start from
+        if model.ambient_temperature_c + model.start.temperature_offset_c >= model.kinetics.as0_c:
+            return None
         return model
 
     def off(self) -> np.ndarray:
-        """Each coordinate where the starting model has it (clipped into the bounds)."""
-        return np.array([np.clip(c.unit(float(self.base.get(c.parameter.key))) if
-                                 not (c.parameter.log and self.base.get(c.parameter.key) <= 0) else 0.0, 0, 1)
-                         for c in self.coords])
+        """Each coordinate where it leaves its candidate without effect (clipped into the bounds)."""
+        values = [v for cand in self.structure for v in cand.off_values(self.base)]
+        return np.array([np.clip(c.unit(v) if not (c.parameter.log and v <= 0) else 0.0, 0.0, 1.0)
+                         for c, v in zip(self.coords, values)])
 
 
 @dataclass

@@ -142,7 +142,8 @@ def _candidate_lines(d: Diagnosis) -> list[str]:
     lines = ["## Candidates", "",
              f"Starting model: training cost {_num(s.start.train)}, held-out cost {_num(s.start.heldout)}. "
              "Each step fits every candidate on top of the model so far (bounded least squares, several starts) "
-             "and ranks them by held-out cost; dBIC is against the starting model (training data).", ""]
+             "and ranks them by BIC on the training data (dBIC: against the starting model); the held-out cost "
+             "decides whether the best one generalises.", ""]
     for i, step in enumerate(s.steps, start=1):
         lines += [f"### Step {i}", "", "| candidate | kind | fitted | train cost | held-out cost | dBIC | |",
                   "|---|---|---|---|---|---|---|"]

@@ -1,0 +1,258 @@
+"""``hems diagnose-suite``: run the hidden-effect suite and the dissertation's studies, and
+render suite.md / suite.json / the confusion matrix and the page docs/diagnosis.md.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from hems_ros.diagnosis import candidates as library  # noqa: E402
+from hems_ros.diagnosis import dissertation as studies_module  # noqa: E402
+from hems_ros.diagnosis import suite  # noqa: E402
+from hems_ros.diagnosis.workflow import Diagnosis  # noqa: E402
+from hems_ros.physics.params import load_params  # noqa: E402
+
+DPI = 80
+#: Seeds per case: single effects twice, the null five times (its rate is the one measured).
+SEEDS = {"single": 2, "null": 5}
+QUICK = (("load_damping", "pulses", "mid"), ("supply_sag", "staircase", "high"), ("as_shifted", "pulses", "low"),
+         ("nothing", "pulses", "high"), ("encoder_ripple", "staircase", "mid"),
+         ("friction_and_sag", "pulses", "low"))
+#: What the suite must show (the floors of the workflow's acceptance).
+FLOORS = {"single_low": 0.9, "single_high": 0.8, "null": 0.9, "gap_cut": 0.5, "recovery_low": 0.15}
+
+
+@dataclass
+class SuiteResult:
+    outcomes: list[suite.Outcome]
+    studies: list[tuple[studies_module.Study, Diagnosis]]
+    page: str
+    headline: str
+
+
+def grid(seed: int, quick: bool) -> list[tuple[suite.Case, str, str, int]]:
+    """Every (case, profile, noise level, seed) the suite runs."""
+    by_name = {c.name: c for c in suite.CASES}
+    if quick:
+        return [(by_name[c], p, n, seed) for c, p, n in QUICK]
+    return [(case, prof, noise, seed + k) for case in suite.CASES for prof in suite.PROFILES for noise in suite.NOISE
+            for k in range(SEEDS.get(case.category, 1))]
+
+
+def run(out: Path, seed: int = 0, quick: bool = False, dissertation: bool = True,
+        progress: Callable[[str], None] | None = None) -> SuiteResult:
+    """Run the suite (and the dissertation's studies), write the results into ``out``."""
+    say = progress or (lambda message: None)
+    base = load_params(suite.BASE)
+    duties = {p: suite.profile(p, base) for p in suite.PROFILES}
+    runs = grid(seed, quick)
+    outcomes = []
+    for k, (case, prof, noise, s) in enumerate(runs, start=1):
+        start = time.perf_counter()
+        o = suite.run_case(case, prof, noise, s, base, duties[prof])
+        outcomes.append(o)
+        say(f"[{k}/{len(runs)}] {case.name} {prof} {noise} seed {s}: {o.verdict} "
+            f"{','.join(o.named) or '-'} ({'right' if o.right else 'WRONG'}, {time.perf_counter() - start:.1f} s)")
+    studies = []
+    if dissertation:
+        for study in studies_module.STUDIES:
+            say(f"study {study.key}: {study.command}")
+            studies.append((study, studies_module.run(study, progress=lambda m: say("  " + m))))
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    stats = statistics(outcomes)
+    _confusion_figure(outcomes, out / "confusion.png")
+    (out / "suite.json").write_text(json.dumps({"seed": seed, "quick": quick, "statistics": stats,
+                                                "runs": [_record(o) for o in outcomes]}, indent=1) + "\n")
+    page = render(outcomes, stats, studies, seed, quick, figure="figures/diagnosis_confusion.png")
+    (out / "suite.md").write_text(render(outcomes, stats, studies, seed, quick, figure="confusion.png"))
+    return SuiteResult(outcomes, studies, page, headline(stats, len(outcomes)))
+
+
+def _record(o: suite.Outcome) -> dict:
+    return {"case": o.case.name, "category": o.case.category, "profile": o.profile, "noise": o.noise,
+            "seed": o.seed, "verdict": o.verdict, "named": list(o.named), "first": o.first,
+            "ranking": list(o.ranking), "right": o.right, "errors": o.errors, "gap_before": o.gap_before,
+            "gap_after": o.gap_after, "unexplained": list(o.unexplained)}
+
+
+def _rate(items: list[bool]) -> float:
+    return float(np.mean(items)) if items else math.nan
+
+
+def statistics(outcomes: list[suite.Outcome]) -> dict:
+    """The suite's figures against its floors."""
+    single = [o for o in outcomes if o.case.category == "single"]
+    named = [o for o in outcomes if o.verdict in ("named", "ambiguous") and o.case.expected]
+    cuts = [1.0 - o.gap_after / o.gap_before for o in named if o.gap_before > 0]
+    low_errors = [e for o in outcomes if o.noise == "low" and o.right for e in o.errors.values()]
+    by = {}
+    for level in suite.NOISE:
+        group = [o for o in single if o.noise == level]
+        by[level] = {"ranked_first": _rate([o.ranked_first for o in group]), "right": _rate([o.right for o in group]),
+                     "runs": len(group)}
+    cat = {}
+    for category in ("structural", "pair", "parameter", "outside", "null"):
+        group = [o for o in outcomes if o.case.category == category]
+        cat[category] = {"right": _rate([o.right for o in group]), "runs": len(group)}
+    return {"single": by, "categories": cat,
+            "gap_cut_min": float(min(cuts)) if cuts else math.nan,
+            "recovery_error_max_low": float(max(low_errors)) if low_errors else math.nan}
+
+
+def headline(stats: dict, n: int) -> str:
+    s = stats["single"]
+    c = stats["categories"]
+    parts = [f"{n} runs", f"single effects ranked first: low {_pct(s['low']['ranked_first'])}, "
+             f"mid {_pct(s['mid']['ranked_first'])}, high {_pct(s['high']['ranked_first'])}"]
+    parts += [f"{k} {_pct(v['right'])}" for k, v in c.items() if v["runs"]]
+    parts.append(f"smallest held-out cut {_pct(stats['gap_cut_min'])}")
+    return "; ".join(parts)
+
+
+def _pct(v: float) -> str:
+    return "-" if not math.isfinite(v) else f"{100 * v:.0f} %"
+
+
+# --------------------------------------------------------------------------- page
+def render(outcomes, stats, studies, seed: int, quick: bool, figure: str) -> str:
+    lines = ["# Finding what the model misses (generated by `hems diagnose-suite --docs docs/diagnosis.md`)", "",
+             "`hems diagnose` replays measured runs on the physics model, the measured input driving it open "
+             "loop; localises the residual by phase (heating, transformation, hold, cooling, rest) and cycle; "
+             "then explains it, first by a recalibration of the printed model's parameters within published "
+             "NiTi bounds, then by missing effects from the library below. Each candidate is fitted by bounded "
+             "least squares from several starts on the training data, ranked by BIC and kept only when it "
+             "removes a fair share of what is left there and improves the held-out data beyond the noise "
+             "(`hems_ros/diagnosis/search.py`). The verdict is one of none, recalibrated, named, ambiguous, "
+             "unexplained. The README shows a worked example; `hems diagnose --help` the options.", ""]
+    lines += _library()
+    lines += _suite_section(outcomes, stats, seed, quick, figure)
+    for study, d in studies:
+        lines += _study_section(study, d)
+    return "\n".join(lines) + "\n"
+
+
+def _library() -> list[str]:
+    base = load_params(suite.BASE)
+    lines = ["## The candidates", "",
+             "| candidate | kind | what | parameters (bounds) | phases it changes |", "|---|---|---|---|---|"]
+    for c in library.ALL:
+        bounds = ", ".join(f"{p.symbol} {p.display(lo):.4g}-{p.display(hi):.4g} {p.unit}".rstrip()
+                           for p, (lo, hi) in zip(c.parameters, c.bounds(base)))
+        lines.append(f"| {c.name} | {c.kind} | {c.title} | {bounds} | {', '.join(c.phases)} |")
+    lines += ["", "Where the bounds come from:", ""]
+    lines += [f"- **{c.name}**: {c.source}." for c in library.ALL]
+    return lines + [""]
+
+
+def _suite_section(outcomes, stats, seed, quick, figure) -> list[str]:
+    s, c = stats["single"], stats["categories"]
+    noise = ", ".join(f"{k} {v[0] * 1e3:g} mm / {v[1]:g} N" for k, v in suite.NOISE.items())
+    lines = ["## Hidden-effect suite", "",
+             f"Starting model `{suite.BASE}` (Table 4.1, bare wire, 12 N bias spring, 20 V PWM stage). For each "
+             "case the truth is that model with something changed; it is driven by a duty profile (`pulses`: "
+             "eight pulses of 1.0-2.2 s at 60-100 % duty, one every 8 s; `staircase`: the duty a BPID "
+             "recorded on the starting model holding 5, 10, 15 mm for 3 s each, three times), sampled at "
+             f"100 Hz and read by sensors with Gaussian noise ({noise} standard deviation) quantised to 1 um "
+             f"and 0.01 N. The workflow sees the measured duty, position and wire force only. Seed {seed}"
+             + (" (reduced subset)." if quick else "."), "",
+             "| what the suite must show | floor | measured |", "|---|---|---|",
+             f"| single effect ranked first, low noise | {_pct(FLOORS['single_low'])} | {_pct(s['low']['ranked_first'])} "
+             f"of {s['low']['runs']} |",
+             f"| single effect ranked first, mid noise | - | {_pct(s['mid']['ranked_first'])} of {s['mid']['runs']} |",
+             f"| single effect ranked first, high noise | {_pct(FLOORS['single_high'])} | "
+             f"{_pct(s['high']['ranked_first'])} of {s['high']['runs']} |",
+             f"| structural mismatch: right effect named | - | {_pct(c['structural']['right'])} of "
+             f"{c['structural']['runs']} |",
+             f"| two at once: both named | - | {_pct(c['pair']['right'])} of {c['pair']['runs']} |",
+             f"| parameter only: recalibrated | - | {_pct(c['parameter']['right'])} of {c['parameter']['runs']} |",
+             f"| outside the library: unexplained | - | {_pct(c['outside']['right'])} of {c['outside']['runs']} |",
+             f"| null: no missing effect | {_pct(FLOORS['null'])} | {_pct(c['null']['right'])} of {c['null']['runs']} |",
+             f"| whenever named: held-out RMSE cut | {_pct(FLOORS['gap_cut'])} | at least "
+             f"{_pct(stats['gap_cut_min'])} |",
+             f"| recovered parameters, low noise: largest error | {_pct(FLOORS['recovery_low'])} | "
+             f"{_pct(stats['recovery_error_max_low'])} |", ""]
+    lines += ["Cases:", ""] + [f"- `{case.name}` ({case.category}): {case.description}" for case in suite.CASES]
+    lines += ["", f"![confusion matrix]({figure})", "",
+              "Every run (gap: held-out RMSE of the output the starting model misses most, before -> after; "
+              "error: largest relative error of the recovered values):", "",
+              "| case | profile | noise | seed | verdict | named | first in ranking | gap | error | unexplained |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+    for o in outcomes:
+        err = max(o.errors.values()) if o.errors else math.nan
+        lines.append(f"| {o.case.name} | {o.profile} | {o.noise} | {o.seed} | {o.verdict}{'' if o.right else ' (wrong)'}"
+                     f" | {', '.join(o.named) or '-'} | {o.ranking[0] if o.ranking else '-'} | "
+                     f"{o.gap_before:.3g} -> {o.gap_after:.3g} | {_pct(err)} | {', '.join(o.unexplained) or '-'} |")
+    return lines + [""]
+
+
+def _study_section(study: studies_module.Study, d: Diagnosis) -> list[str]:
+    data = d.data
+    lines = [f"## {study.title}", "", study.question, "", f"`{study.command}`", "", f"**{d.summary_line()}**", ""]
+    channels = data.channels
+    lines += ["| row | " + " | ".join(f"{c} measured / {d.model_name} / corrected" for c in channels) + " |",
+              "|---" * (len(channels) + 1) + "|"]
+    start, corrected = d.predictions["start"], d.predictions["corrected"]
+    held = data.split.heldout[0]
+    for j, (_, test) in enumerate(data.tests):
+        cells = []
+        for name in channels:
+            scale = _scale(name)
+            if name in test.figures:
+                cells.append(f"{test.figures[name] * scale:.3g} / {start.outputs[j].get(name, math.nan) * scale:.3g}"
+                             f" / {corrected.outputs[j].get(name, math.nan) * scale:.3g}")
+            else:
+                cells.append("-")
+        lines.append(f"| {test.name}{' (held out)' if held[j] else ''} | " + " | ".join(cells) + " |")
+    lines.append("")
+    if d.search.findings:
+        lines += ["Fits that would need a value outside the published bounds (findings, not used):", ""]
+        lines += [f"- {f}" for f in d.search.findings] + [""]
+    steps = d.search.steps
+    if steps:
+        ranked = ", ".join(f"{f.structure[-1].name} ({', '.join(f.describe(f.structure[-1]))})"
+                           for f in steps[0].ranked[:4])
+        lines += [f"First step, best four by BIC: {ranked}.", ""]
+    return lines
+
+
+def _scale(name: str) -> float:
+    from hems_ros.diagnosis.runs import FIGURE_UNITS
+    return FIGURE_UNITS[name][2]
+
+
+def _confusion_figure(outcomes: list[suite.Outcome], path: Path) -> None:
+    """Rows: the hidden single effect; columns: what the forward selection took first."""
+    single = [o for o in outcomes if o.case.category == "single"]
+    truths = [c.name for c in suite.SINGLE]
+    columns = [c.name for c in library.ALL] + ["(nothing)"]
+    matrix = np.zeros((len(truths), len(columns)))
+    for o in single:
+        matrix[truths.index(o.case.name), columns.index(o.first or "(nothing)")] += 1
+    keep = matrix.sum(axis=0) > 0
+    keep[[columns.index(t) for t in truths]] = True
+    matrix, columns = matrix[:, keep], [c for c, k in zip(columns, keep) if k]
+    fig, ax = plt.subplots(figsize=(0.5 * len(columns) + 3, 0.45 * len(truths) + 2))
+    ax.imshow(matrix, cmap="Greens")
+    for (i, j), v in np.ndenumerate(matrix):
+        if v:
+            ax.text(j, i, f"{v:.0f}", ha="center", va="center", fontsize=8)
+    ax.set_xticks(range(len(columns)), columns, rotation=60, ha="right", fontsize=8)
+    ax.set_yticks(range(len(truths)), truths, fontsize=8)
+    ax.set_xlabel("first accepted candidate")
+    ax.set_ylabel("hidden effect")
+    ax.set_title("hidden-effect suite, single effects (all noise levels and profiles)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
