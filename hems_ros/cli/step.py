@@ -2,8 +2,9 @@
 
 Starts the graph (one finger by default) with an optional physics set and pulley ratio,
 records it, enables it, holds position 0 for ``--before-s``, steps to ``--step-mm`` for
-``--step-s``, returns to 0 for ``--after-s``, disables, and prints the step's figures from
-the bag (tendon position from the encoder, times from the message stamps).
+``--step-s``, returns to 0 for ``--after-s`` (``--cycles`` times), disables, and prints the
+last step's figures from the bag (tendon position from the encoder, times from the message
+stamps).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hems_ros.cli.numbers import non_negative, positive
+from hems_ros.cli.numbers import non_negative, positive, positive_int
 from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder, wait_until_recording
 from hems_ros.graph import names, transmission
 from hems_ros.physics.params import load_params
@@ -42,6 +43,10 @@ def register(subparsers) -> None:
     parser.add_argument("--before-s", type=non_negative, default=2.0, help="seconds at 0 before the step")
     parser.add_argument("--step-s", type=positive, default=5.0, help="seconds at the step height")
     parser.add_argument("--after-s", type=non_negative, default=8.0, help="seconds at 0 after the step (cooling)")
+    parser.add_argument("--cycles", type=positive_int, default=1,
+                        help="record this many steps, each with its time at 0 before and after (a run for "
+                             "hems diagnose, which needs three); the printed figures are the last step's "
+                             "(default 1)")
     parser.add_argument("--record", type=Path, default=True, metavar="DIR",
                         help="bag folder (default bags/step_<date>_<time>)")
     parser.add_argument("--ready-timeout", type=positive, default=60.0, help="seconds to wait for the graph")
@@ -116,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
             if not ok:
                 print(f"step: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)
                 return 1
-            for value, seconds in ((0.0, args.before_s), (args.step_mm * 1e-3, args.step_s), (0.0, args.after_s)):
+            cycle = ((0.0, args.before_s), (args.step_mm * 1e-3, args.step_s), (0.0, args.after_s))
+            for value, seconds in cycle * args.cycles:
                 print(f"step: position {value * 1e3:g} mm for {seconds:g} s", flush=True)
                 for finger in options.fingers:
                     result = client.send_setpoint(finger, "position", value, confirm_s=SETPOINT_CONFIRM_S)
