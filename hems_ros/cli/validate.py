@@ -7,6 +7,7 @@ and the chapter 5/6 presets) are refitted first (hems_ros.physics.calibration).
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -26,14 +27,28 @@ def register(subparsers) -> None:
     parser.add_argument("--calibrate", action="store_true",
                         help="refit C_M=C_A (Pa/degC), eps_L, sheath gap resistance (K/W) and sheath "
                              "heat capacity (J/K) and rewrite config/physics/*.yaml before validating")
+    parser.add_argument("--physics-config", default=None, metavar="NAME|PATH",
+                        help="validate this parameter set (a config/physics name or a YAML path, e.g. the "
+                             "corrected.yaml of hems diagnose) in place of sheathed_calibrated; write it "
+                             "somewhere else than docs with --output")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from hems_ros.physics import calibration, validation
-    from hems_ros.physics.params import UnitParams, config_dir, save_params
+    from hems_ros.physics.params import ParamError, UnitParams, config_dir, load_params, save_params
 
     start = time.perf_counter()
+    params = None
+    if args.physics_config is not None:
+        try:
+            params = load_params(args.physics_config)
+        except (ParamError, FileNotFoundError) as error:
+            print(f"hems validate: --physics-config {args.physics_config}: {error}", file=sys.stderr)
+            return 2
+        if args.calibrate:
+            print("hems validate: --calibrate and --physics-config exclude each other", file=sys.stderr)
+            return 2
     if args.calibrate:
         print(f"calibrating (Nelder-Mead over {len(calibration.FREE_PARAMETERS)} parameters, about 10 s) ...",
               flush=True)
@@ -47,6 +62,6 @@ def run(args: argparse.Namespace) -> int:
         fitted, metrics = calibration.calibrate(UnitParams(), progress=progress)
         for name, params in calibration.presets(fitted).items():
             print(f"  wrote {save_params(params, config_dir() / f'{name}.yaml')}")
-    validation.run(args.output, progress=lambda msg: print(msg, flush=True))
+    validation.run(args.output, progress=lambda msg: print(msg, flush=True), params=params)
     print(f"done in {time.perf_counter() - start:.1f} s")
     return 0

@@ -235,8 +235,11 @@ def earliest_onset(bounds: list[OnsetBound], source: str) -> OnsetBound:
 
 
 # ------------------------------------------------------------------ report
-def run(out_dir: Path, progress: Callable[[str], None] = print) -> Path:
-    """Run all scenarios, write ``validation.md`` and ``figures/validation_*.png`` under out_dir."""
+def run(out_dir: Path, progress: Callable[[str], None] = print, params: UnitParams | None = None) -> Path:
+    """Run all scenarios, write ``validation.md`` and ``figures/validation_*.png`` under out_dir.
+
+    ``params``: the set validated in the calibrated set's place (default sheathed_calibrated),
+    e.g. a model corrected by ``hems diagnose``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -246,7 +249,7 @@ def run(out_dir: Path, progress: Callable[[str], None] = print) -> Path:
     fig_dir = out_dir / "figures"
     fig_dir.mkdir(parents=True, exist_ok=True)
     t41 = load_params("table41")
-    cal = load_params("sheathed_calibrated")
+    cal = params or load_params("sheathed_calibrated")
 
     progress("[1/6] closed-form checks (h, Churchill-Chu, sheath resistances, capstan)")
     nu, h_cc = heat.appendix_free_convection()
