@@ -87,8 +87,10 @@ def _finger_run(bag: Bag, path: Path, label: str, finger: str, bag_notes: tuple[
     if stamps.size < 2:
         raise DiagnosisInputError(f"{path}: {stamps.size} encoder sample(s) of {finger}: too few to compare")
     period_ns = int(np.median(np.diff(stamps)))
-    drive, duty_notes = _applied_duty(bag[names.topic(finger, "duty")], stamps, period_ns)
-    notes += duty_notes
+    duty = bag[names.topic(finger, "duty")]
+    drive, duty_notes = _applied_duty(duty, stamps, period_ns)
+    steps, step_notes = _duty_steps(duty, encoder.log_time_ns[first] - stamps, stamps, period_ns)
+    notes += duty_notes + step_notes
     position = encoder["position"][first]
     keep = np.ones(stamps.size, dtype=bool)
     outputs_extra, resolution = {}, {"position": float(np.median(encoder["resolution"]))}
@@ -107,7 +109,48 @@ def _finger_run(bag: Bag, path: Path, label: str, finger: str, bag_notes: tuple[
     return TimeSeriesRun(
         name=f"{label}:{finger}", source=source, kind="driven", time=time, drive="duty",
         drive_values=drive[keep], outputs={"position": position - position[0], **outputs_extra},
-        resolution=resolution, setpoints=_setpoints(bag, finger, encoder, stamps[0]), notes=tuple(notes))
+        resolution=resolution, setpoints=_setpoints(bag, finger, encoder, stamps[0]), notes=tuple(notes),
+        drive_steps=None if steps is None else ((steps[0] - stamps[0]) * 1e-9, steps[1]))
+
+
+def _duty_steps(duty: TopicData, encoder_lag_ns: np.ndarray, stamps: np.ndarray,
+                period_ns: int) -> tuple[tuple[np.ndarray, np.ndarray] | None, list[str]]:
+    """The duty as the unit applies it, as a step function (stamp-clock ns, duty %).
+
+    A command that reaches the unit before the sample after the one it answers applies from
+    that sample; a later one from its arrival; no command for three periods is 0 (the
+    watchdog; unit_driver). The bag does not hold the unit's arrival times: the recorder's log
+    time, moved onto the stamp clock by the encoder samples' median log-minus-stamp delay,
+    stands in for them. When log times do not follow the stamps (a graph on /clock at another
+    rate), there is no arrival time to use: None, and the commands apply at their samples.
+    """
+    low, lag, high = np.percentile(encoder_lag_ns, [5, 50, 95])
+    if high - low > 5 * period_ns:
+        return None, ["log times do not follow the stamps (a graph on /clock?): duty commands applied "
+                      "from the samples they answer"]
+    arrival = duty.log_time_ns - int(lag)
+    answered = _stamp_ns(duty, "measurement_stamp")
+    order = np.argsort(arrival, kind="stable")
+    arrival, answered, values = arrival[order], answered[order], duty["duty_percent"][order]
+    index = np.clip(np.searchsorted(stamps, answered - period_ns // 2), 0, stamps.size - 1)
+    matched = np.abs(stamps[index] - answered) <= period_ns // 2
+    following = np.where(index + 1 < stamps.size, stamps[np.minimum(index + 1, stamps.size - 1)], np.iinfo(np.int64).max)
+    on_time = matched & (arrival < following)
+    start = np.where(on_time, stamps[index], arrival)
+    timeout = WATCHDOG_PERIODS * period_ns
+    times, levels = [], []
+    for k in range(start.size):
+        times.append(start[k])
+        levels.append(values[k])
+        if k + 1 < start.size and start[k + 1] > start[k] + timeout:
+            times.append(start[k] + timeout)
+            levels.append(0.0)
+    times, levels = np.array(times, dtype=np.int64), np.array(levels, dtype=float)
+    sort = np.argsort(times, kind="stable")
+    late = int(np.count_nonzero(matched & ~on_time))
+    notes = [f"{late} duty commands reached the unit after the next sample (recorder log times): applied "
+             "from their arrival, as the unit applies them"] if late else []
+    return (times[sort], levels[sort]), notes
 
 
 def _applied_duty(duty: TopicData, stamps: np.ndarray, period_ns: int) -> tuple[np.ndarray, list[str]]:

@@ -93,7 +93,20 @@ def segment(run: TimeSeriesRun) -> Segmentation:
     if len(starts) < MIN_CYCLES:
         # a wire that never gets back to rest (heat building up): cycles by the drive alone
         starts = _cycle_starts(t, on, np.ones_like(near_rest), LONG_OFF_S)
-    return Segmentation(phase, _number(t.size, starts))
+    return Segmentation(phase, _number(t.size, _merge_blips(starts, near_rest)))
+
+
+def _merge_blips(starts: list[int], near_rest: np.ndarray) -> list[int]:
+    """Join a cycle that never leaves the rest band (a controller's short pulse on a wire that
+    cooled a little below its zero) to the cycle after it: alone it would be a held-out
+    cycle with nothing in it."""
+    bounds = starts + [near_rest.size]
+    kept = []
+    for k in range(len(starts)):
+        if kept and near_rest[bounds[k - 1]:bounds[k]].all():
+            continue        # the previous cycle was a blip: it runs on into this one
+        kept.append(starts[k])
+    return kept
 
 
 def _cycle_starts(t: np.ndarray, on: np.ndarray, near_rest: np.ndarray, min_off_s: float) -> list[int]:

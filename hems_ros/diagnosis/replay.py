@@ -84,6 +84,13 @@ def plan(run: TimeSeriesRun, dt: float | None = None) -> ReplayPlan:
     if thermal:
         ends = (np.arange(index[-1]) + 1) * step
         values = np.interp(ends, run.time, run.drive_values)
+    elif run.drive_steps is not None:
+        # a change between steps takes effect at the next step, as a unit applies a command
+        # at the step after it arrives
+        times, levels = run.drive_steps
+        starts = np.arange(index[-1]) * step
+        last = np.searchsorted(times, starts + 1e-9, side="right") - 1
+        values = np.where(last >= 0, levels[np.maximum(last, 0)], 0.0)
     else:
         values = np.repeat(run.drive_values[:-1], np.diff(index))
     return ReplayPlan(run, step, run.drive, values, every, index[1:] // every - 1)
@@ -156,6 +163,8 @@ def _sensor(name: str, truth: np.ndarray, sets: list[UnitParams], time: np.ndarr
     if name == "wire_force":
         offset = np.array([s.force_sensor.offset_n for s in sets])[:, None]
         drift = np.array([s.force_sensor.drift_n_per_s for s in sets])[:, None]
-        return truth + offset + drift * time[None, :]
+        top = np.array([s.force_sensor.range_max_n for s in sets])[:, None]
+        # the sensor reads within 0..range (sensors.force_reading); a slack wire reads 0
+        return np.clip(truth + offset + drift * time[None, :], 0.0, top)
     return truth
 

@@ -107,6 +107,9 @@ def markdown(d: Diagnosis, figures: list[str]) -> str:
     if isinstance(d.data, TimeSeriesData):
         lines += ["Noise floor (high-frequency part of the starting model's residual): "
                   + ", ".join(f"{c} {v['value']:.3g} {v['unit']}" for c, v in _noise(d).items()) + ".", ""]
+    notes = [f"- {r.name}: {n}" for r in d.data.runs for n in r.notes]
+    if notes:
+        lines += ["What the loaders adjusted:", ""] + notes + [""]
     lines += ["## Gap", "", f"| {g.metric} RMSE, {g.unit} | before | after |", "|---|---|---|",
               f"| training data | {_num(g.train_before)} | {_num(g.train_after)} |",
               f"| held-out data | {_num(g.heldout_before)} | {_num(g.heldout_after)} |", ""]

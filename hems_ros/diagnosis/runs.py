@@ -72,6 +72,9 @@ class TimeSeriesRun:
     # a bag's setpoints, for the phase labels only: (time s, mode, value)
     setpoints: tuple[tuple[float, str, float], ...] = ()
     notes: tuple[str, ...] = ()          # what the loader adjusted or dropped, for the report
+    # the input as a step function (times s, values) where it also changes between samples (a
+    # bag's late duty commands, the unit's watchdog); None: it changes only at the samples
+    drive_steps: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def n_samples(self) -> int:

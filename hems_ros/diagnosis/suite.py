@@ -161,7 +161,8 @@ def measure(case: Case, duty: np.ndarray, noise: str, seed: int, base: UnitParam
     sx, sf = NOISE[noise]
     rng = np.random.default_rng(seed)
     x = np.rint((x + rng.normal(0.0, sx, x.size)) / POSITION_STEP) * POSITION_STEP
-    f = np.rint((f + rng.normal(0.0, sf, f.size)) / FORCE_STEP) * FORCE_STEP
+    f = np.clip(np.rint((f + rng.normal(0.0, sf, f.size)) / FORCE_STEP) * FORCE_STEP, 0.0,
+                truth.force_sensor.range_max_n)
     return TimeSeriesRun(name=f"{case.name}-{noise}", source="synthetic", kind="driven", time=t, drive="duty",
                          drive_values=duty, outputs={"position": x - x[0], "wire_force": f},
                          resolution={"position": POSITION_STEP, "wire_force": FORCE_STEP})

@@ -380,9 +380,11 @@ def test_no_simulation_topic_is_requested_or_read(monkeypatch: pytest.MonkeyPatc
                          "/hems/index/setpoint"}
 
 
-def copy_bag(source: Path, target: Path, keep=lambda message, ordinal: True, rewrite=None) -> Path:
+def copy_bag(source: Path, target: Path, keep=lambda message, ordinal: True, rewrite=None,
+             delay=lambda message, ordinal: 0) -> Path:
     """``source`` copied message by message into ``target``: the messages for which
-    ``keep(message, ordinal on its topic)`` holds, ``rewrite = (topic, data -> data)`` applied."""
+    ``keep(message, ordinal on its topic)`` holds, ``rewrite = (topic, data -> data)`` applied,
+    logged ``delay(message, ordinal)`` ns later."""
     ordinals: dict[str, int] = {}
     with BagWriter(target) as writer:
         for m in iter_messages(source):
@@ -392,7 +394,8 @@ def copy_bag(source: Path, target: Path, keep=lambda message, ordinal: True, rew
             if m.topic not in writer.topics:   # parsing the QoS of every message took seconds
                 writer.add_topic(m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or [])
             data = rewrite[1](m.data) if rewrite and m.topic == rewrite[0] else m.data
-            writer.write(writer.topics[m.topic].channel_id, m.log_time_ns, data, m.publish_time_ns)
+            writer.write(writer.topics[m.topic].channel_id, m.log_time_ns + delay(m, ordinal), data,
+                         m.publish_time_ns)
     return target
 
 
@@ -408,6 +411,8 @@ def test_bag_without_simulation_topics_gives_identical_runs(bag_runs, tmp_path: 
         a, b = getattr(original, field.name), getattr(stripped, field.name)
         if isinstance(a, dict):
             assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a), field.name
+        elif field.name == "drive_steps":
+            assert all(np.array_equal(x, y) for x, y in zip(a, b)), field.name
         else:
             assert np.array_equal(a, b) if isinstance(a, np.ndarray) else a == b, field.name
 
@@ -528,3 +533,23 @@ def test_the_loaders_import_no_rclpy() -> None:
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
                             check=True)
     assert result.stdout.strip() == "[]"
+
+
+def test_a_late_duty_command_applies_from_its_arrival(bag_runs, tmp_path: Path) -> None:
+    """The unit applies a command that arrives after the next sample from its arrival (the
+    recorder's log time standing in for it); an on-time one from the sample it answers."""
+    [run] = bag_runs["ch5_step_index"]
+    times, levels = run.drive_steps
+    on_samples = np.searchsorted(times, run.time + 1e-9, side="right") - 1
+    assert np.array_equal(levels[on_samples], run.drive_values)     # the committed bag: all on time
+    k = next(k for k in range(100, run.n_samples) if run.drive_values[k] != run.drive_values[k - 1])
+    raw = raw_streams(BAGS["ch5_step_index"])
+    ordinal = int(np.flatnonzero(raw["duty_at"] == raw["encoder"][k])[0])
+    copy = copy_bag(BAGS["ch5_step_index"], tmp_path / "late",
+                    delay=lambda m, o: 15_000_000 if m.topic == "/hems/index/duty" and o == ordinal else 0)
+    [late] = load_bag_runs(copy)
+    t_late, v_late = late.drive_steps
+    start = t_late[np.flatnonzero(v_late == run.drive_values[k])]
+    assert np.any(np.abs(start - run.time[k] - 0.015) < 0.003)     # from its arrival, ~15 ms on
+    assert not np.any(np.abs(start - run.time[k]) < 1e-9)            # not from its sample
+    assert any(n.startswith("1 duty commands reached the unit after the next sample") for n in late.notes)
