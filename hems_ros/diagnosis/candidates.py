@@ -107,6 +107,7 @@ def _needs_channel(name: str) -> Callable[[UnitParams, frozenset, frozenset], bo
 
 
 def _electric(p: UnitParams, drives: frozenset, channels: frozenset) -> bool:
+    """The data are electrically driven (an imposed temperature leaves no heat balance to fit)."""
     return "temperature" not in drives
 
 
@@ -154,11 +155,11 @@ RECALIBRATIONS: tuple[Candidate, ...] = (
     Candidate(
         "convection", "recalibration", "free-convection coefficient h0 of the bare wire",
         (Parameter("thermal.h0_w_m2_c", "h0", "W/m2K", 1.0, 30.0, 60.0),),
-        (HEATING, COOLING), _SRC_CONVECTION, applies=_off("sheath.enabled")),
+        (HEATING, COOLING), _SRC_CONVECTION, applies=_all(_off("sheath.enabled"), _electric)),
     Candidate(
         "ambient", "recalibration", "ambient temperature",
         (Parameter("ambient_temperature_c", "T_amb", "degC", 1.0, 10.0, 40.0),),
-        (HEATING, COOLING, REST), _SRC_AMBIENT),
+        (HEATING, COOLING, REST), _SRC_AMBIENT, applies=_electric),
 )
 
 EFFECTS: tuple[Candidate, ...] = (
@@ -197,7 +198,7 @@ EFFECTS: tuple[Candidate, ...] = (
         (Parameter("start.temperature_offset_c", "dT_start", "degC", 1.0, 0.0, 80.0),),
         (HEATING,),
         "a rig still warm from earlier pulses; the wire must start as martensite, below As0",
-        applies=lambda p, d, c: p.start.temperature_offset_c == 0),
+        applies=_all(lambda p, d, c: p.start.temperature_offset_c == 0, _electric)),
     Candidate(
         "preload_error", "effect", "bias-spring pretension other than the model's",
         (Parameter("load.pretension_n", "F_0", "N", 1.0, -10.0, 10.0),),
@@ -242,7 +243,10 @@ SENSOR_KEYS = ("encoder.gain", "force_sensor.offset_n", "force_sensor.drift_n_pe
 def applicable(base: UnitParams, drives: frozenset, channels: frozenset,
                names: list[str] | None = None) -> list[Candidate]:
     """Candidates that make sense for this starting model and data, in library order."""
-    chosen = ALL if names is None else tuple(BY_NAME[n] for n in names)
+    unknown = sorted(set(names or ()) - set(BY_NAME))
+    if unknown:
+        raise KeyError(f"unknown candidate {unknown[0]!r}")
+    chosen = ALL if names is None else tuple(c for c in ALL if c.name in names)
     return [c for c in chosen if c.applies(base, drives, channels)]
 
 

@@ -11,8 +11,9 @@ the kind of run:
   a constant load (stress, or load_force/wire_force over the wire's cross-section).
 
 Conventions of the columns: displacement increases when the wire contracts (the encoder's
-sign); strain is the wire's strain, elongation positive. Both become changes from the first
-row. Rows are numbered as in the file (the header's line is row 1 when nothing precedes it),
+sign); strain is the wire's strain, elongation positive. Both become changes from the run's
+lead-in at rest (the mean of the rows before the drive first comes on, at most a second; the
+first row of a thermal cycle). Rows are numbered as in the file (the header's line is row 1 when nothing precedes it),
 so an error's row is the line an editor shows. A table whose delimiter is not the comma may
 use decimal commas (``1,5``).
 """
@@ -37,6 +38,8 @@ MIN_SAMPLES = 20
 MIN_DRIVEN_S = 1.0
 MIN_TESTS = 2
 STRESS_TOLERANCE = 0.02
+#: Drive at or below which a run's lead-in counts as at rest (% duty, A, V).
+LEAD_IN_OFF = {"duty": 0.5, "current": 0.05, "voltage": 0.1}
 
 DRIVE_QUANTITIES = ("duty", "current", "voltage")
 #: time series quantity -> TimeSeriesRun output name
@@ -248,15 +251,24 @@ def load_table(path, columns: str | Mapping[str, tuple[str, str | None]], name: 
                               f"({', '.join(FEATURE_QUANTITIES)})")
 
 
-def _outputs(table: _Table, columns: Columns, quantities: tuple[str, ...]) -> dict[str, np.ndarray]:
+def _outputs(table: _Table, columns: Columns, quantities: tuple[str, ...], rest: int = 1) -> dict[str, np.ndarray]:
+    """The mapped outputs; displacement and strain as changes from their mean over the first
+    ``rest`` rows (the run's lead-in at rest): one noisy first reading would shift the whole run."""
     outputs = {}
     for quantity in quantities:
         if quantity in columns:
             values = _numbers(table, quantity, *columns[quantity])
             if quantity in ("displacement", "strain"):
-                values = values - values[0]     # the runs hold changes from the first sample
+                values = values - float(np.mean(values[:rest]))
             outputs[OUTPUTS[quantity]] = values
     return outputs
+
+
+def _lead_in(time: np.ndarray, drive: np.ndarray, drive_name: str) -> int:
+    """Rows before the drive first comes on, at most the first second (at least one row)."""
+    on = np.flatnonzero(np.abs(drive) > LEAD_IN_OFF[drive_name])
+    first = int(on[0]) if on.size else time.size
+    return max(1, min(first, int(np.searchsorted(time, time[0] + 1.0))))
 
 
 def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSeriesRun:
@@ -264,16 +276,17 @@ def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSerie
     if "time" not in columns:
         raise DiagnosisInputError(f"{table.path}: no time column mapped: "
                                   f"add time=<column>[:unit] to --columns")
-    outputs = _outputs(table, columns, tuple(OUTPUTS))
-    if not outputs:
+    if not any(q in columns for q in OUTPUTS):
         raise DiagnosisInputError(f"{table.path}: no output column mapped: add one of {', '.join(OUTPUTS)} "
                                   f"to --columns")
     time = _numbers(table, "time", *columns["time"])
     _check_time(table, time, "time")
     time = time - time[0]
     require_span(str(table.path), time, "driven")
+    values = _numbers(table, drive, *columns[drive])
+    outputs = _outputs(table, columns, tuple(OUTPUTS), rest=_lead_in(time, values, drive))
     return TimeSeriesRun(name=name, source=str(table.path), kind="driven", time=time, drive=drive,
-                         drive_values=_numbers(table, drive, *columns[drive]), outputs=outputs)
+                         drive_values=values, outputs=outputs)
 
 
 def _thermal_cycle(table: _Table, columns: Columns, name: str, cross_section_m2: float) -> TimeSeriesRun:

@@ -79,6 +79,10 @@ class TimeSeriesData:
         return frozenset(r.drive for r in self.runs)
 
     @property
+    def measured(self) -> frozenset:
+        return frozenset(self.channels)
+
+    @property
     def n_train(self) -> int:
         return int(sum(m.sum() * len(r.outputs) for m, r in zip(self.split.train, self.runs)))
 

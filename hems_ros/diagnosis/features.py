@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hems_ros.diagnosis import closed_loop
 from hems_ros.diagnosis.dataset import Prediction, Split
+from hems_ros.experiments.lockstep import run_protocol
 from hems_ros.diagnosis.runs import FIGURE_UNITS, DiagnosisInputError, FeatureRun, FeatureTest
 from hems_ros.physics.batch import simulate
 from hems_ros.physics.params import UnitParams
@@ -53,7 +53,14 @@ class FeatureData:
 
     @property
     def drives(self) -> frozenset:
-        return frozenset({"current"} if any("pulse_s" in t.conditions for _, t in self.tests) else {"duty"})
+        """Current pulses and closed loops on the PWM stage (duty)."""
+        return frozenset(("current" if "pulse_s" in t.conditions else "duty") for _, t in self.tests)
+
+    @property
+    def measured(self) -> frozenset:
+        """What the figures are read from: the displacement sensor, the force sensor."""
+        return frozenset(("wire_force" if name == "peak_force" else "position")
+                         for name in self.channels if name not in ("cooling_time", "rise_time", "mean_power"))
 
     def predict(self, sets: list[UnitParams]) -> list[Prediction]:
         figures = self._figures(sets)
@@ -89,7 +96,7 @@ class FeatureData:
                 loops.setdefault((str(t.conditions["protocol"]), str(t.conditions.get("controller", "bpid"))),
                                  []).append(j)
         for (protocol, strategy), rows in loops.items():
-            for i, figs in enumerate(closed_loop.run_figures(protocol, strategy, sets)):
+            for i, figs in enumerate(_loop_figures(protocol, strategy, sets)):
                 for j in rows:
                     out[i][j] = {name: figs.get(key, math.nan) * scale for name, (key, scale) in LOOP_FIGURES.items()}
         return out
@@ -110,6 +117,20 @@ class FeatureData:
         errs = [prediction.outputs[j].get(name, math.nan) - t.figures[name]
                 for j, ((_, t), take) in enumerate(zip(self.tests, mask)) if take and name in t.figures]
         return float(np.sqrt(np.mean(np.square(errs)))) if errs else math.nan
+
+
+def _loop_figures(protocol: str, strategy: str, sets: list[UnitParams]) -> list[dict[str, float]]:
+    """The closed-loop figures (lockstep.run_protocol) of every set; a run that a controller
+    fault or a non-finite plant cut short has none. Sets with the same physics and sensors
+    run once."""
+    done: dict[UnitParams, dict[str, float]] = {}
+    out = []
+    for p in sets:
+        if p not in done:
+            run = run_protocol(protocol, strategy, p)
+            done[p] = {} if run.fault else run.metrics
+        out.append(done[p])
+    return out
 
 
 def _pulse_figures(sets: list[UnitParams], tests: list[FeatureTest], dt: float) -> list[dict[str, float]]:

@@ -17,6 +17,7 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import qmc
+from threadpoolctl import threadpool_limits
 
 from hems_ros.diagnosis.batching import Barrier
 from hems_ros.diagnosis.candidates import Candidate, Parameter
@@ -142,7 +143,9 @@ class Evaluator:
                 out.append(None)
             else:
                 p = next(predictions)
-                out.append((p.train, p.heldout))
+                # a set that cannot run the data (a thermal cycle's start above its As0) is no fit
+                out.append((p.train, p.heldout) if np.isfinite(p.train).all() and np.isfinite(p.heldout).all()
+                           else None)
         return out
 
 
@@ -203,7 +206,10 @@ def fit_structures(data, base: UnitParams, structures: Sequence[Structure], warm
     barrier = Barrier(evaluator)
     if progress:
         progress(f"fitting {len(spaces)} structure(s) from {len(jobs)} start(s)")
-    results = barrier.run(jobs)
+    # tens of fits in threads, each with small matrices: a multithreaded BLAS under each of them
+    # spends the cores waiting on itself (benchmarks/bench_diagnose.py: 59 s against 5 s)
+    with threadpool_limits(limits=1, user_api="blas"):
+        results = barrier.run(jobs)
     best: dict[int, tuple] = {}
     for owner, (u, train, held, n_eval) in zip(owners, results):
         if owner not in best or train < best[owner][1]:

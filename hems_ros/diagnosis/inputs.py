@@ -31,11 +31,19 @@ def model(name: str, conditions: Path | None = None, overrides: list[str] = ()) 
         key, sep, text = item.partition("=")
         if not sep or not key:
             raise DiagnosisInputError(f"--set {item!r}: expected KEY=VALUE, e.g. load.pretension_n=20")
-        changes[key.strip()] = yaml.safe_load(text)
+        changes[key.strip()] = _value(text)
     try:
         return params.replace(changes) if changes else params
     except ParamError as error:
         raise DiagnosisInputError(f"--set: {error}") from None
+
+
+def _value(text: str):
+    """A number as Python reads it (YAML 1.1 reads 6.89e6 as a string), else YAML (true, a name)."""
+    try:
+        return float(text) if any(c in text for c in ".eEn") else int(text)
+    except ValueError:
+        return yaml.safe_load(text)
 
 
 def _with_conditions(params: UnitParams, path: Path) -> UnitParams:

@@ -35,6 +35,8 @@ MIN_OFF_S = 0.3
 #: Without returns to rest, a cycle starts after the drive was off this long.
 LONG_OFF_S = 1.0
 MIN_CYCLES = 3
+#: A thermal cycle turns where the temperature reverses by this share of its range.
+TURN_FRACTION = 0.1
 
 
 @dataclass(frozen=True)
@@ -93,13 +95,17 @@ def segment(run: TimeSeriesRun) -> Segmentation:
     if len(starts) < MIN_CYCLES:
         # a wire that never gets back to rest (heat building up): cycles by the drive alone
         starts = _cycle_starts(t, on, np.ones_like(near_rest), LONG_OFF_S)
-    return Segmentation(phase, _number(t.size, _merge_blips(starts, near_rest)))
+    if on.any() and (not starts or starts[0] > int(np.argmax(on))):
+        # the first actuation opens the first cycle whatever came before it
+        starts = [int(np.argmax(on))] + starts
+    merged = _merge_blips(starts, near_rest)
+    return Segmentation(phase, _number(t.size, merged if len(merged) >= MIN_CYCLES else starts))
 
 
 def _merge_blips(starts: list[int], near_rest: np.ndarray) -> list[int]:
     """Join a cycle that never leaves the rest band (a controller's short pulse on a wire that
     cooled a little below its zero) to the cycle after it: alone it would be a held-out
-    cycle with nothing in it."""
+    cycle with nothing in it. Kept apart when joining leaves too few cycles to hold one out."""
     bounds = starts + [near_rest.size]
     kept = []
     for k in range(len(starts)):
@@ -149,8 +155,27 @@ def _segment_thermal(run: TimeSeriesRun) -> Segmentation:
     phase[dtemp > 0] = PHASES.index(HEATING)
     phase[dtemp < 0] = PHASES.index(COOLING)
     phase[fast & (dtemp != 0)] = PHASES.index(TRANSFORMATION)
-    minima = [k for k in range(1, t.size - 1) if temp[k] <= temp[k - 1] and temp[k] < temp[k + 1]]
-    return Segmentation(phase, _number(t.size, [0] + minima))
+    return Segmentation(phase, _number(t.size, [0] + _valleys(temp, TURN_FRACTION * span)))
+
+
+def _valleys(values: np.ndarray, turn: float) -> list[int]:
+    """Indices of the minima after which ``values`` rises by at least ``turn`` again (and
+    before which it fell by as much): the turning points of a path, not its noise."""
+    valleys, falling = [], False
+    low = high = 0
+    for k in range(1, values.size):
+        if falling:
+            if values[k] < values[low]:
+                low = k
+            elif values[k] - values[low] >= turn:
+                valleys.append(low)
+                falling, high = False, k
+        else:
+            if values[k] > values[high]:
+                high = k
+            elif values[high] - values[k] >= turn:
+                falling, low = True, k
+    return valleys
 
 
 def heldout_cycles(n_cycles: int) -> list[int]:

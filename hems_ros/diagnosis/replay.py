@@ -27,6 +27,8 @@ from hems_ros.physics.params import UnitParams
 DEFAULT_DT = 1e-3
 #: Thermal cycles are quasi-static; a coarser step keeps long paths cheap.
 THERMAL_DT = 1e-2
+#: Finest plant step of a replay (10 kHz sampling).
+MIN_STEP = 1e-4
 _GRAVITY = 9.81
 _KERNEL_CHANNELS = {
     "position": "slider_position_m",
@@ -73,8 +75,8 @@ def plan(run: TimeSeriesRun, dt: float | None = None) -> ReplayPlan:
     gaps = np.diff(run.time)
     if gaps.size == 0:
         raise DiagnosisInputError(f"{run.name}: a run needs more than one sample")
-    step = min(step, float(gaps.min()))
-    if step < 1e-4:
+    step = _grid_step(run.time, min(step, float(gaps.min())))
+    if step < MIN_STEP * (1.0 - 1e-6):
         raise DiagnosisInputError(f"{run.name}: samples {gaps.min() * 1e3:.3g} ms apart; "
                                   "the replay needs them at least 0.1 ms apart")
     index = np.rint(run.time / step).astype(np.int64)
@@ -96,21 +98,36 @@ def plan(run: TimeSeriesRun, dt: float | None = None) -> ReplayPlan:
     return ReplayPlan(run, step, run.drive, values, every, index[1:] // every - 1)
 
 
+def _grid_step(time: np.ndarray, step: float) -> float:
+    """The largest step at most ``step`` (a whole fraction of it) whose grid holds every sample
+    instant to 1 % of a step, so the outputs are read at the measured instants; ``step`` when
+    none of the first ten does (the samples are read at the nearest step)."""
+    for divisor in range(1, 11):
+        trial = step / divisor
+        if trial < MIN_STEP * (1.0 - 1e-6):
+            break
+        if np.max(np.abs(time / trial - np.rint(time / trial))) <= 0.01:
+            return trial
+    return step
+
+
 def rig(params: UnitParams, run: TimeSeriesRun) -> UnitParams:
     """The parameter set the run's conditions call for (a thermal cycle's dead weight)."""
     return thermal_cycle_rig(params, run.stress_pa) if run.kind == "thermal_cycle" else params
 
 
-def start_temperature(params: UnitParams, run: TimeSeriesRun) -> float | None:
+def start_temperature(run: TimeSeriesRun) -> float | None:
     """A thermal cycle starts at its first measured temperature; a driven run at the model's."""
-    if run.kind != "thermal_cycle":
-        return None
-    first = float(run.drive_values[0])
-    if first >= params.kinetics.as0_c:
-        raise DiagnosisInputError(
-            f"{run.name}: the thermal cycle starts at {first:g} degC, at or above As0 = "
-            f"{params.kinetics.as0_c:g} degC; it must start cold, with the wire martensite")
-    return first
+    return float(run.drive_values[0]) if run.kind == "thermal_cycle" else None
+
+
+def cannot_start(params: UnitParams, run: TimeSeriesRun) -> str | None:
+    """Why ``params`` cannot replay ``run`` from a martensite wire, or None."""
+    first = start_temperature(run)
+    if first is not None and first >= params.kinetics.as0_c:
+        return (f"{run.name}: the thermal cycle starts at {first:g} degC, at or above As0 = "
+                f"{params.kinetics.as0_c:g} degC of the model; it must start cold, with the wire martensite")
+    return None
 
 
 def physics_key(params: UnitParams) -> UnitParams:
@@ -124,27 +141,30 @@ def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
     keys = [physics_key(rig(s, run)) for s in sets]
     unique: dict[UnitParams, int] = {}
     for key in keys:
-        unique.setdefault(key, len(unique))
+        if cannot_start(key, run) is None:
+            unique.setdefault(key, len(unique))
+    out = {name: np.full((len(sets), run.n_samples), np.nan) for name in run.outputs}
+    if not unique:
+        return out
     physics = list(unique)
     wanted = sorted({_KERNEL_CHANNELS[name] for name in run.outputs})
-    starts = [start_temperature(s, run) for s in physics]
-    res = simulate(physics, p.dt, record_every=p.record_every, channels=wanted,
-                   start_temperature_c=starts if run.kind == "thermal_cycle" else None,
+    start = start_temperature(run)
+    res = simulate(physics, p.dt, record_every=p.record_every, channels=wanted, start_temperature_c=start,
                    **{p.drive: p.values})
-    initial = _initial_outputs(physics, starts)
-    rows = np.array([unique[k] for k in keys])
-    time = run.time
-    out = {}
+    initial = _initial_outputs(physics, start)
+    live = np.array([k in unique for k in keys])
+    rows = np.array([unique[k] for k in keys if k in unique])
+    chosen = [s for s, ok in zip(sets, live) if ok]
     for name in run.outputs:
         channel = _KERNEL_CHANNELS[name]
         series = np.concatenate([initial[channel][:, None], res[channel][:, p.records]], axis=1)[rows]
-        out[name] = _sensor(name, series, sets, time)
+        out[name][live] = _sensor(name, series, chosen, run.time)
     return out
 
 
-def _initial_outputs(sets: list[UnitParams], starts: list[float | None]) -> dict[str, np.ndarray]:
+def _initial_outputs(sets: list[UnitParams], start: float | None) -> dict[str, np.ndarray]:
     """The kernel channels at t = 0 (the batch records only after steps)."""
-    rows = [kernel.initial_state(p, t) for p, t in zip(sets, starts)]
+    rows = [kernel.initial_state(p, start) for p in sets]
     force = np.array([p.wire.cross_section_m2 * s[kernel.S_SIG] for p, s in zip(sets, rows)])
     return {
         "slider_position_m": np.array([s[kernel.S_X] for s in rows]),

@@ -40,7 +40,10 @@ def summary(d: Diagnosis) -> dict:
         "recalibrated": d.recalibrated(),
         "unexplained": d.unexplained,
         "gap": {"metric": f"{g.metric} RMSE", "unit": g.unit, "train_before": g.train_before,
-                "train_after": g.train_after, "heldout_before": g.heldout_before, "heldout_after": g.heldout_after},
+                "train_after": g.train_after, "heldout_before": g.heldout_before, "heldout_after": g.heldout_after,
+                "noise_floor": g.noise if math.isfinite(g.noise) else None,
+                "heldout_beyond_noise_before": g.beyond_noise(g.heldout_before),
+                "heldout_beyond_noise_after": g.beyond_noise(g.heldout_after)},
         "ambiguous_with": [{"effect": e, "rivals": r} for e, r in s.ambiguous_with],
         "findings": s.findings,
         "dropped": s.dropped,
@@ -112,7 +115,11 @@ def markdown(d: Diagnosis, figures: list[str]) -> str:
         lines += ["What the loaders adjusted:", ""] + notes + [""]
     lines += ["## Gap", "", f"| {g.metric} RMSE, {g.unit} | before | after |", "|---|---|---|",
               f"| training data | {_num(g.train_before)} | {_num(g.train_after)} |",
-              f"| held-out data | {_num(g.heldout_before)} | {_num(g.heldout_after)} |", ""]
+              f"| held-out data | {_num(g.heldout_before)} | {_num(g.heldout_after)} |"]
+    if math.isfinite(g.noise):
+        lines += [f"| held-out, beyond the noise floor ({_num(g.noise)} {g.unit}) | "
+                  f"{_num(g.beyond_noise(g.heldout_before))} | {_num(g.beyond_noise(g.heldout_after))} |"]
+    lines += [""]
     lines += ["## Where the model and the measurement disagree", "",
               "Residual RMS by phase (time series) or figure (tables), before / after; cost is the mean squared "
               "residual in noise-floor units (1 = the noise).", "",

@@ -164,7 +164,7 @@ def measure(case: Case, duty: np.ndarray, noise: str, seed: int, base: UnitParam
     f = np.clip(np.rint((f + rng.normal(0.0, sf, f.size)) / FORCE_STEP) * FORCE_STEP, 0.0,
                 truth.force_sensor.range_max_n)
     return TimeSeriesRun(name=f"{case.name}-{noise}", source="synthetic", kind="driven", time=t, drive="duty",
-                         drive_values=duty, outputs={"position": x - x[0], "wire_force": f},
+                         drive_values=duty, outputs={"position": x, "wire_force": f},
                          resolution={"position": POSITION_STEP, "wire_force": FORCE_STEP})
 
 
@@ -183,6 +183,8 @@ class Outcome:
     errors: dict[str, float]        # relative error of each recovered value
     gap_before: float
     gap_after: float
+    beyond_before: float            # the same beyond the noise floor
+    beyond_after: float
     unexplained: tuple[str, ...]
 
     @property
@@ -213,8 +215,10 @@ def outcome(case: Case, prof: str, noise: str, seed: int, d: Diagnosis) -> Outco
     ranking = tuple(f.structure[-1].name for f in steps[0].ranked) if steps else ()
     named = tuple(n["effect"] for n in d.named()) if d.verdict != "recalibrated" else tuple(
         c.name for c in d.search.recalibrations)
-    return Outcome(case, prof, noise, seed, d.verdict, named, first, ranking, errors, d.gap.heldout_before,
-                   d.gap.heldout_after, tuple(d.unexplained))
+    g = d.gap
+    return Outcome(case, prof, noise, seed, d.verdict, named, first, ranking, errors, g.heldout_before,
+                   g.heldout_after, g.beyond_noise(g.heldout_before), g.beyond_noise(g.heldout_after),
+                   tuple(d.unexplained))
 
 
 def run_case(case: Case, prof: str, noise: str, seed: int, base: UnitParams | None = None,

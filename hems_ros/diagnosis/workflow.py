@@ -13,7 +13,7 @@ from typing import Callable
 import numpy as np
 
 from hems_ros.diagnosis import candidates as library
-from hems_ros.diagnosis import dataset, features, localise
+from hems_ros.diagnosis import dataset, features, localise, replay
 from hems_ros.diagnosis.runs import DiagnosisInputError, FeatureRun, Run, TimeSeriesRun
 from hems_ros.diagnosis.search import Search, run_search
 from hems_ros.physics.params import UnitParams
@@ -30,10 +30,15 @@ class Gap:
     train_after: float
     heldout_before: float
     heldout_after: float
+    noise: float = math.nan      # the output's noise floor (time series), same unit
 
     @property
     def change(self) -> float:
         return (self.heldout_after / self.heldout_before - 1.0) if self.heldout_before > 0 else math.nan
+
+    def beyond_noise(self, rmse: float) -> float:
+        """The part of an RMSE the noise floor does not account for: sqrt(RMSE^2 - noise^2)."""
+        return math.sqrt(max(rmse**2 - self.noise**2, 0.0)) if math.isfinite(self.noise) else rmse
 
 
 @dataclass
@@ -75,7 +80,11 @@ class Diagnosis:
         elif self.verdict == "recalibrated":
             head += ": " + ", ".join(_short(p) for p in self.recalibrated().values())
         elif self.verdict == "unexplained":
-            head += ": residual in " + (", ".join(self.unexplained) or "every phase") + " not removed by any candidate"
+            where = ", ".join(self.unexplained) or "every phase"
+            kept = self.search.final.structure
+            head += (f": the residual in {where} stays after " + ", ".join(c.name for c in kept)
+                     + ", which remove(s) part of it" if kept else
+                     f": residual in {where} not removed by any candidate")
         g = self.gap
         return (f"{head}; held-out {g.metric} RMSE {g.heldout_before:.3g} {g.unit} -> {g.heldout_after:.3g} {g.unit} "
                 f"({g.change * 100:+.0f} %)")
@@ -114,6 +123,10 @@ def diagnose(runs: list[Run], heldout: list[Run], model: UnitParams, *, candidat
              dt: float | None = None, progress: Callable[[str], None] | None = None) -> Diagnosis:
     """Replay, localise, explain (recalibration, then missing effects) and measure the gap."""
     say = progress or (lambda message: None)
+    reasons = [r for r in (replay.cannot_start(model, run) for run in list(runs) + list(heldout)
+                           if isinstance(run, TimeSeriesRun)) if r]
+    if reasons:
+        raise DiagnosisInputError(reasons[0])
     data = prepare(runs, heldout, dt)
     say(f"{_describe(data)}; {data.split.description}")
     start_prediction = data.predict([model])[0]
@@ -122,7 +135,7 @@ def diagnose(runs: list[Run], heldout: list[Run], model: UnitParams, *, candidat
         start_prediction = data.predict([model])[0]
         say("noise floor: " + ", ".join(f"{c} {data.sigma[c] * data.display(c)[1]:.3g} {data.display(c)[0]}"
                                         for c in data.channels))
-    pool = library.applicable(model, data.drives, frozenset(data.channels), candidates)
+    pool = library.applicable(model, data.drives, data.measured, candidates)
     say(f"candidates: {', '.join(c.name for c in pool)}")
     search = run_search(data, model, pool, progress=say)
     corrected = search.final.params
@@ -133,7 +146,8 @@ def diagnose(runs: list[Run], heldout: list[Run], model: UnitParams, *, candidat
               data.rmse(start_prediction, headline, "train") * scale,
               data.rmse(final_prediction, headline, "train") * scale,
               data.rmse(start_prediction, headline, "heldout") * scale,
-              data.rmse(final_prediction, headline, "heldout") * scale)
+              data.rmse(final_prediction, headline, "heldout") * scale,
+              data.sigma[headline] * scale if isinstance(data, dataset.TimeSeriesData) else math.nan)
     before, after = localise.table(data, start_prediction), localise.table(data, final_prediction)
     unexplained = localise.unexplained(data, final_prediction, force=search.verdict == "unexplained")
     return Diagnosis(model.name, model, corrected, data, search, pool, gap, before, after, unexplained,

@@ -553,3 +553,16 @@ def test_a_late_duty_command_applies_from_its_arrival(bag_runs, tmp_path: Path) 
     assert np.any(np.abs(start - run.time[k] - 0.015) < 0.003)     # from its arrival, ~15 ms on
     assert not np.any(np.abs(start - run.time[k]) < 1e-9)            # not from its sample
     assert any(n.startswith("1 duty commands reached the unit after the next sample") for n in late.notes)
+
+
+def test_displacement_is_measured_from_the_lead_in_at_rest(tmp_path: Path) -> None:
+    """A noisy displacement sensor: the zero is the mean of the rows before the drive comes on,
+    not the first reading (one noise sample would shift the whole run)."""
+    rows = ["t,d,x"] + [f"{k * 0.01:.2f},0,{0.004 if k == 0 else (-0.001 if k % 2 else 0.001)}" for k in range(50)]
+    rows += [f"{k * 0.01:.2f},100,{1.0 + 0.5 * (k - 50) * 0.01}" for k in range(50, 200)]
+    path = tmp_path / "noisy.csv"
+    path.write_text("\n".join(rows) + "\n")
+    run = load_table(path, "time=t:s,duty=d:%,displacement=x:mm")
+    lead = np.array([0.004] + [(-0.001 if k % 2 else 0.001) for k in range(1, 50)]) * 1e-3
+    assert run.outputs["position"][0] == pytest.approx(0.004e-3 - lead.mean(), abs=1e-12)
+    assert run.outputs["position"][50] == pytest.approx(1.0e-3 - lead.mean(), abs=1e-12)

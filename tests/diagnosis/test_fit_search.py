@@ -1,0 +1,197 @@
+"""Fitting and selection (hems_ros.diagnosis.fit, search) on short synthetic runs with a known
+truth, and the verdict rules on constructed fits."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hems_ros.diagnosis import candidates as lib
+from hems_ros.diagnosis import replay, search, suite
+from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned
+from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
+from hems_ros.diagnosis.search import Step, _verdict
+from hems_ros.diagnosis.workflow import diagnose
+from hems_ros.physics.params import load_params
+
+BASE = load_params("table41")
+# the first 40 s of the suite's pulse train: five pulses, cycle 2 of 4 held out
+DUTY = suite.pulse_profile()[:4000]
+CASES = {c.name: c for c in suite.CASES}
+
+
+@pytest.fixture(scope="module")
+def damping():
+    run = suite.measure(CASES["load_damping"], DUTY, "low", 0, BASE)
+    return diagnose([run], [], BASE)
+
+
+def test_hidden_load_damping_is_named_and_recovered(damping) -> None:
+    d = damping
+    assert d.verdict == "named"
+    assert [c.name for c in d.search.final.structure] == ["load_damping"]
+    (b,) = d.search.final.values
+    assert b == pytest.approx(400.0, rel=0.02)
+    assert d.corrected.load.damping_n_s_per_m == pytest.approx(b, rel=1e-12)
+    # the noise floor is the sensors': 2 um noise on 1 um steps, 0.02 N on 0.01 N steps
+    assert d.data.sigma["position"] == pytest.approx(2.08e-6, rel=0.1)
+    assert d.data.sigma["wire_force"] == pytest.approx(0.0208, rel=0.1)
+    # the corrected model matches to the noise on data it was not fitted on
+    assert d.search.start.heldout > 1e3 and d.search.final.heldout == pytest.approx(1.0, abs=0.15)
+    assert d.gap.metric == "position" and d.gap.heldout_after < 0.01 * d.gap.heldout_before
+    assert d.search.steps[0].ranked[0].names == ("load_damping",)
+    assert not d.search.dropped
+    # a warm start fits to "absent" (0 degC, its lower bound): on a bound, but no finding
+    (warm,) = [f for f in d.search.steps[0].ranked if f.names == ("warm_start",)]
+    assert warm.values[0] < 1e-3 and warm.pinned == []
+    assert not [f for f in d.search.findings if f.startswith("warm_start")]
+
+
+def test_nothing_hidden_gives_none() -> None:
+    run = suite.measure(CASES["nothing"], DUTY, "low", 0, BASE)
+    d = diagnose([run], [], BASE)
+    assert d.verdict == "none"
+    assert d.search.steps == [] and d.search.final.structure == ()
+    assert d.search.start.heldout - 1.0 < search.NOTHING
+    assert d.corrected == BASE
+    assert d.summary_line().startswith("none; held-out position RMSE")
+
+
+def test_a_truth_beyond_a_bound_is_a_finding_not_an_explanation() -> None:
+    # gain 1.4: beyond the +-20 % the encoder_gain candidate allows (upper bound 1.25)
+    run = suite.measure(CASES["nothing"], DUTY, "low", 0, BASE.replace({"encoder.gain": 1.4}))
+    d = diagnose([run], [], BASE, candidates=["encoder_gain"])
+    assert d.search.findings == ["encoder_gain: g_x at its upper bound 1.25"]
+    assert d.search.final.structure == () and d.verdict == "unexplained"
+    (step,) = d.search.steps
+    assert step.chosen is None and step.ranked[0].pinned == d.search.findings
+    assert step.ranked[0].values[0] == pytest.approx(1.25, abs=1e-3)
+    # the pinned fit is far better than the start: rejected for the bound, not for its cost
+    assert step.ranked[0].heldout < 0.2 * d.search.start.heldout
+    assert d.corrected == BASE
+
+
+def test_coordinates_map_bounds_to_the_unit_interval() -> None:
+    lin = Coordinate(lib.BY_NAME["load_damping"], lib.BY_NAME["load_damping"].parameters[0], 65.0, 3000.0)
+    assert (lin.value(0.0), lin.value(1.0), lin.value(0.5)) == (65.0, 3000.0, 1532.5)
+    sheath = lib.BY_NAME["sheath_heat_sink"]
+    log = Coordinate(sheath, sheath.parameters[0], 0.2, 30.0)
+    assert log.value(0.5) == pytest.approx(math.sqrt(0.2 * 30.0), rel=1e-12)
+    for c in (lin, log):
+        for u in (0.0, 0.3, 1.0):
+            assert c.unit(c.value(u)) == pytest.approx(u, abs=1e-12)
+
+
+def test_space_builds_models_and_rejects_impossible_ones() -> None:
+    space = Space(BASE, (lib.BY_NAME["heating_temperatures"], lib.BY_NAME["warm_start"]))
+    assert space.size == 2
+    m = space.params(np.array([0.5, 0.0]))
+    assert (m.kinetics.as0_c, m.kinetics.af0_c, m.start.temperature_offset_c) == (85.0, 95.0, 0.0)
+    # As0 60 with the warmest start (61 degC above 22): no martensite to start from
+    assert space.params(np.array([0.0, 1.0])) is None
+    # outside [0, 1] the values are clipped onto the bounds
+    assert space.values(np.array([-1.0, 2.0])).tolist() == [60.0, 61.0]
+
+
+def test_pinned_means_a_bound_away_from_where_the_candidate_is_absent() -> None:
+    friction = Space(BASE, (lib.BY_NAME["tendon_friction"],))
+    assert _pinned(friction, np.array([0.0])) == []
+    assert _pinned(friction, np.array([0.999])) == ["tendon_friction: F_c at its upper bound 10 N"]
+    assert _pinned(friction, np.array([0.99])) == []
+    gain = Space(BASE, (lib.BY_NAME["encoder_gain"],))
+    assert _pinned(gain, np.array([0.0])) == ["encoder_gain: g_x at its lower bound 0.8"]
+    damping = Space(BASE, (lib.BY_NAME["load_damping"],))        # lower bound: the model's 65 N s/m
+    assert _pinned(damping, np.array([0.0])) == []
+
+
+def _fit(names: tuple[str, ...], train: float, heldout: float, pinned=()) -> Fit:
+    structure = tuple(lib.BY_NAME[n] for n in names)
+    n = sum(len(c.parameters) for c in structure)
+    return Fit(structure, np.zeros(n), BASE, train, heldout, 1000, list(pinned))
+
+
+START = _fit((), 50.0, 40.0)
+
+
+@pytest.mark.parametrize("start_heldout, verdict", [(1.0, "none"), (1.2, "none"), (1.21, "unexplained"),
+                                                    (0.8, "none"), (40.0, "unexplained")])
+def test_verdict_without_terms(start_heldout: float, verdict: str) -> None:
+    start = _fit((), 50.0, start_heldout)
+    assert _verdict(start, start, []) == verdict
+
+
+def test_verdict_with_terms() -> None:
+    # start 40: excess sqrt(39) = 6.24; explained when the final's excess is at most half of it
+    half = 1.0 + (0.5 * math.sqrt(39.0)) ** 2          # 10.75
+    damping = _fit(("load_damping",), 1.0, 1.0)
+    assert _verdict(START, damping, [Step([damping], damping, [])]) == "named"
+    worse = _fit(("load_damping",), 1.0, half + 0.01)
+    assert _verdict(START, worse, [Step([worse], worse, [])]) == "unexplained"
+    edge = _fit(("load_damping",), 1.0, half - 1e-9)
+    assert _verdict(START, edge, [Step([edge], edge, [])]) == "named"
+    recal = _fit(("ambient", "convection"), 1.0, 1.1)
+    assert _verdict(START, recal, []) == "recalibrated"
+    mixed = _fit(("ambient", "load_damping"), 1.0, 1.1)
+    assert _verdict(START, mixed, []) == "named"
+
+
+def test_verdict_ambiguous_only_for_a_named_effect_with_rivals() -> None:
+    damping = _fit(("load_damping",), 1.0, 1.0)
+    friction = _fit(("tendon_friction",), 1.02, 1.0)
+    assert _verdict(START, damping, [Step([damping, friction], damping, [friction])]) == "ambiguous"
+    # the rival's step chose a term the elimination dropped again: the final is not ambiguous
+    both = _fit(("warm_start",), 1.0, 1.0)
+    assert _verdict(START, both, [Step([damping, friction], damping, [friction])]) == "named"
+    # a step that chose nothing has no rivals that count
+    steps = [Step([damping], damping, []), Step([friction], None, [friction])]
+    assert _verdict(START, damping, steps) == "named"
+
+
+def test_better_needs_held_out_gain_training_share_bic_and_no_bound() -> None:
+    current = _fit((), 11.0, 5.0)
+    good = _fit(("load_damping",), 1.0, 1.0)
+    assert search._better(good, current)
+    assert not search._better(_fit(("load_damping",), 1.0, 4.95), current)          # held-out gain 0.05
+    assert not search._better(_fit(("load_damping",), 8.5, 1.0), current)           # 25 % of the 10 left
+    assert search._better(_fit(("load_damping",), 7.9, 1.0), current)               # 31 %
+    assert not search._better(_fit(("load_damping",), 1.0, 1.0, ["pinned"]), current)
+    # BIC: one parameter costs ln(1000) = 6.9 against 1000 ln(train ratio)
+    near = _fit(("load_damping",), 0.999 * 1.0, 0.8)
+    assert not search._better(near, _fit((), 1.0, 1.0)) and search._better(_fit(("load_damping",), 0.99, 0.8),
+                                                                          _fit((), 1.0, 1.0))
+
+
+def _thermal_truth(start_c: float) -> TimeSeriesRun:
+    """Three thermal cycles at 150 MPa of a wire whose As0 is 4 degC above the model's."""
+    one = np.r_[np.arange(start_c, 140.0), np.arange(140.0, start_c, -1.0)]
+    temps = np.r_[np.tile(one, 3), start_c]
+    t = np.arange(temps.size) * 1.0
+    shell = TimeSeriesRun("tc", "synthetic", "thermal_cycle", t, "temperature", temps, {"strain": t * 0},
+                          stress_pa=150e6)
+    truth = BASE.replace({"kinetics.as0_c": 92.0, "kinetics.af0_c": 102.0})
+    strain = replay.replay(replay.plan(shell), [truth])["strain"][0]
+    strain = strain + np.random.default_rng(0).normal(0.0, 2e-5, t.size)
+    return TimeSeriesRun("tc", "synthetic", "thermal_cycle", t, "temperature", temps, {"strain": strain},
+                         stress_pa=150e6)
+
+
+def test_thermal_cycle_recalibrates_as0() -> None:
+    d = diagnose([_thermal_truth(40.0)], [], BASE, candidates=["heating_temperatures"])
+    assert d.verdict == "recalibrated"
+    assert d.search.final.values[0] == pytest.approx(92.0, abs=0.3)
+
+
+def test_thermal_cycle_starting_inside_the_as0_bounds() -> None:
+    d = diagnose([_thermal_truth(65.0)], [], BASE, candidates=["heating_temperatures"])
+    assert d.verdict == "recalibrated"
+
+
+def test_a_partly_explained_run_does_not_say_no_candidate_helped() -> None:
+    # 150 N s/m of damping (the candidate fits it) and a 0.3 mm encoder ripple (nothing fits it)
+    case = suite.Case("damped_ripple", "outside", (), {"load.damping_n_s_per_m": 150.0},
+                      distortion=lambda t, x, f: (x + 0.3e-3 * np.sin(2 * np.pi * x / 2e-3), f))
+    d = diagnose([suite.measure(case, DUTY, "low", 0, BASE)], [], BASE, candidates=["load_damping"])
+    assert d.verdict == "unexplained" and [n["effect"] for n in d.named()] == ["load_damping"]
+    assert "not removed by any candidate" not in d.summary_line()
