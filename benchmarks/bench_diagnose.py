@@ -379,7 +379,7 @@ def main() -> int:
     for label, t in timings.items():
         total = load_s + t.wall
         print(f"{label}: diagnosis wall times {', '.join(f'{w:.1f}' for w in t.walls)} s "
-              f"(median of {args.repeat}), CPU {t.cpu:.1f} s in the median run ({t.cpu / t.wall:.2f} cores "
+              f"(median of {len(t.walls)}), CPU {t.cpu:.1f} s in the median run ({t.cpu / t.wall:.2f} cores "
               f"busy); goal under {GOAL_S:g} s for "
               f"{length_s:g} s: load + diagnosis {total:.1f} s = {total / GOAL_S:.2f} x goal "
               f"({'under' if total < GOAL_S else 'OVER'} the goal)")

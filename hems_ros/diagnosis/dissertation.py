@@ -46,7 +46,7 @@ class Study:
 
 _PULSES = ("name=name,pulse_length=pulse_s:s,current=current_a:A,energy=energy_j:J,"
            "peak_displacement=peak_displacement_mm:mm,peak_force=peak_force_n:N,cooling_time=cooling_time_s:s")
-_LOOPS = "protocol=protocol,controller=controller,{figures}"
+_LOOPS = "name=name,protocol=protocol,controller=controller,{figures}"
 
 STUDIES = (
     Study("tables_3_2_3_3", "Tables 3.2 and 3.3: the single actuator's pulse sweep, from the bare Table 4.1 wire",

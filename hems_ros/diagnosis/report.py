@@ -167,7 +167,7 @@ def _candidate_lines(d: Diagnosis) -> list[str]:
     if s.dropped:
         lines += [f"Dropped again once later terms were in: {', '.join(s.dropped)}.", ""]
     if s.findings:
-        lines += ["Findings (fits that need a value outside the published bounds; not used):", ""]
+        lines += ["Findings (fits that ended on a published bound at some step; such a fit is not accepted):", ""]
         lines += [f"- {p}" for p in s.findings] + [""]
     lines += ["Bounds and where they come from:", ""]
     lines += [f"- **{c.name}** ({c.kind}; {c.title}; changes {', '.join(c.phases)}): "
