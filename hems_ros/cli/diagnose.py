@@ -10,9 +10,25 @@ import sys
 import time
 from pathlib import Path
 
-from hems_ros.cli.numbers import positive
+from hems_ros.cli.numbers import non_negative_int, positive
 
 DEFAULT_MODEL = "table41"
+EPILOG = """\
+RUN: a bag folder recorded from the graph (input /hems/<finger>/duty, measurements
+  /hems/<finger>/encoder and wire_force; /hems/sim/* is never read), or a table with --columns.
+
+--columns quantity=column[:unit],... e.g. time=t:s,duty=d:%,displacement=x:mm,force=F:N
+  driven run:    time and one of duty, current, voltage in; displacement (contraction
+                 positive), strain (elongation positive), wire_force (alias force),
+                 load_force, temperature out
+  thermal cycle: temperature in (rows in path order, time optional), stress or load_force
+                 (constant), strain or displacement out
+  table of tests: name, pulse_length, current, energy, cooled_displacement, protocol,
+                 controller (conditions); peak_displacement, peak_force, cooling_time,
+                 overshoot, rise_time, ss_error, rmse, mean_power (figures; blank = not given)
+  units: s ms min | % 1 | A mA | V mV | degC K | Pa kPa MPa GPa | N kN mN | m mm um |
+         strain 1 or %; a unit left out is SI (temperatures degC, duty %)
+"""
 
 
 def register(subparsers) -> None:
@@ -25,18 +41,7 @@ def register(subparsers) -> None:
                     "improves data it was not fitted on. Writes a report folder (report.md, figures, "
                     "corrected.yaml, summary.json) and prints one summary line. Exit 0 whatever the "
                     "verdict, 1 if the run failed, 2 for bad input.",
-        epilog="RUN is a bag folder recorded from the graph (inputs /hems/<finger>/duty, measurements "
-               "/hems/<finger>/encoder and wire_force; /hems/sim/* is never read) or a table file with "
-               "--columns. Column mapping: quantity=column[:unit], comma separated, e.g. "
-               "'time=t:s,duty=d:%,displacement=x:mm,force=F:N'. Quantities: time, duty, current, voltage "
-               "(inputs of a driven run); temperature (the input of a thermal cycle at constant stress, or "
-               "an output); stress, load_force (the constant load of a thermal cycle); displacement "
-               "(contraction positive), strain (elongation positive), wire_force (alias force), load_force "
-               "(outputs); pulse_length, current, energy, cooled_displacement, protocol, controller, name "
-               "(conditions of a table of tests); peak_displacement, peak_force, cooling_time, overshoot, "
-               "rise_time, ss_error, rmse, mean_power (figures of a table). Units: s ms min, %% 1, A mA, "
-               "V mV, degC K, Pa kPa MPa GPa, N kN mN, m mm um, strain 1 or %%; the default is SI "
-               "(temperatures degC, duty %%).",
+        epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("runs", nargs="*", metavar="RUN", help="measured runs to fit on")
     parser.add_argument("--heldout", nargs="+", default=[], metavar="RUN",
@@ -73,7 +78,7 @@ def register(subparsers) -> None:
                     "measurements. Writes suite.md, suite.json and the confusion matrix into --out, and "
                     "docs/diagnosis.md with --docs. Seeded: the same seed gives the same result.")
     suite.add_argument("--out", type=Path, default=Path("results/diagnosis-suite"), help="output folder")
-    suite.add_argument("--seed", type=int, default=0, help="seed of the sensor noise (default 0)")
+    suite.add_argument("--seed", type=non_negative_int, default=0, help="seed of the sensor noise (default 0)")
     suite.add_argument("--quick", action="store_true", help="the reduced subset that make test runs")
     suite.add_argument("--docs", type=Path, default=None, metavar="PATH",
                        help="also write the generated page (e.g. docs/diagnosis.md)")

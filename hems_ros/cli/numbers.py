@@ -35,3 +35,4 @@ finite = _number(float, "a number", lambda v: None if math.isfinite(v) else "mus
 positive = _number(float, "a number", params.positive)
 non_negative = _number(float, "a number", params.non_negative)
 positive_int = _number(int, "a whole number", lambda v: None if v > 0 else "must be a whole number > 0")
+non_negative_int = _number(int, "a whole number", lambda v: None if v >= 0 else "must be a whole number >= 0")

@@ -14,7 +14,8 @@ import pytest
 from hems_ros.cli import numbers
 from hems_ros.cli.main import build_parser
 
-NUMBER_TYPES = {numbers.finite, numbers.positive, numbers.non_negative, numbers.positive_int}
+NUMBER_TYPES = {numbers.finite, numbers.positive, numbers.non_negative, numbers.positive_int,
+                numbers.non_negative_int}
 REFERENCE_BAG = Path(__file__).resolve().parents[2] / "bags" / "demo_grasp_index"
 
 
@@ -63,6 +64,7 @@ def test_every_numeric_option_checks_its_value():
     (numbers.finite, "ten", "'ten' is not a number"),
     (numbers.positive_int, "1.5", "'1.5' is not a whole number"),
     (numbers.positive_int, "0", "'0': must be a whole number > 0"),
+    (numbers.non_negative_int, "-1", "'-1': must be a whole number >= 0"),
 ])
 def test_bad_numbers_are_named(parse, text, message):
     with pytest.raises(argparse.ArgumentTypeError) as info:
