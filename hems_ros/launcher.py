@@ -88,8 +88,11 @@ def warm_physics_cache(env: dict[str, str]) -> None:
     Without it, after a fresh install or a physics change, every actuation unit compiles the
     kernel at the same time, which starves the whole graph of CPU for tens of seconds.
     """
-    subprocess.run([sys.executable, "-c", "from hems_ros.physics import ActuationUnit; ActuationUnit().step(duty=0.0)"],
-                   env=env, check=True)
+    done = subprocess.run([sys.executable, "-c",
+                           "from hems_ros.physics import ActuationUnit; ActuationUnit().step(duty=0.0)"],
+                          env=env, process_group=0)
+    if done.returncode:
+        raise RuntimeError(f"the physics kernel did not load (exit code {done.returncode})")
 
 
 class Graph:
@@ -140,7 +143,10 @@ class Graph:
         return {**child_environment(), **self.node_env.get(name, {})}
 
     def _spawn(self, name: str, command: list[str]) -> None:
-        self.processes[name] = subprocess.Popen(command, env=self.environment(name), preexec_fn=die_with_parent)
+        # a process group of its own: a Ctrl-C in the terminal reaches the launcher only, which
+        # stops every node itself (stop), whatever each was doing, loading rclpy included
+        self.processes[name] = subprocess.Popen(command, env=self.environment(name), preexec_fn=die_with_parent,
+                                                process_group=0)
 
     def exited(self) -> dict[str, int]:
         return {name: p.returncode for name, p in self.processes.items() if p.poll() is not None}
@@ -155,10 +161,14 @@ class Graph:
         return f"{message} (exited: " + ", ".join(f"{name} with code {code}" for name, code in exited) + ")"
 
     def stop(self, grace_s: float = 2.5) -> dict[str, int]:
-        """SIGINT every child, SIGKILL what is left after ``grace_s``; return exit codes."""
+        """SIGTERM every child, SIGKILL what is left after ``grace_s``; return exit codes.
+
+        SIGTERM, not SIGINT: a running node stops on either (rclpy's handler), but a process
+        still loading Python ends on SIGTERM without an import traceback, and a background
+        job of a non-interactive shell ignores SIGINT until rclpy installs its handler."""
         for process in self.processes.values():
             if process.poll() is None:
-                process.send_signal(signal.SIGINT)
+                process.send_signal(signal.SIGTERM)
         deadline = time.monotonic() + grace_s
         self.killed = []
         for name, process in self.processes.items():

@@ -29,7 +29,9 @@ def register(subparsers) -> None:
                     "the controller applies (tendon stroke 0-54 mm, force 0-25 N). Then waits until the "
                     "finger's controller status shows the setpoint, sending it again meanwhile (a controller "
                     "that had not matched this new publisher yet drops the first one); exit code 1 if no "
-                    "controller took it or its status does not show it within --timeout, 2 for a bad value.")
+                    "controller took it or its status does not show it within --timeout, or if the "
+                    "supervisor is not ENABLED (nothing heats: its state and what to do are printed), 2 for a "
+                    "bad value.")
     parser.add_argument("finger", help="finger name, comma-separated names or 'all': " + ", ".join(names.FINGERS))
     parser.add_argument("value", help="setpoint value in --unit")
     parser.add_argument("--mode", choices=MODES, default=None,
@@ -83,6 +85,8 @@ def parse_setpoint(finger: str, value_text: str, mode: str | None, unit: str | N
 
 
 def run_setpoint(args: argparse.Namespace) -> int:
+    from hems_msgs.msg import SupervisorStatus
+
     try:
         fingers, mode, value = parse_setpoint(args.finger, args.value, args.mode, args.unit)
     except ValueError as error:
@@ -98,10 +102,26 @@ def run_setpoint(args: argparse.Namespace) -> int:
         results = {f: client.send_setpoint(f, mode, value, timeout=0.0 if f in missing else args.timeout,
                                            confirm_s=args.timeout)
                    for f in fingers}
+        supervisor = client.supervisor_status()
     for finger, result in results.items():
         line = f"{finger}: {mode} setpoint {value:g} {unit}: {result.message}"
         print(line, file=sys.stdout if result else sys.stderr)
-    return 0 if all(results.values()) else 1
+    heating = supervisor is not None and supervisor.state == SupervisorStatus.ENABLED
+    if not heating:
+        print(_not_heating(supervisor), file=sys.stderr)
+    return 0 if all(results.values()) and heating else 1
+
+
+def _not_heating(supervisor) -> str:
+    """Why a setpoint in force moves nothing, and what to do."""
+    from hems_msgs.msg import SupervisorStatus
+
+    if supervisor is None:
+        return "no supervisor status: nothing heats without a supervisor in ENABLED (is the graph up?)"
+    faults = f" ({'; '.join(supervisor.faults)})" if supervisor.faults else ""
+    hint = ("hems reset, then hems enable" if supervisor.state in (SupervisorStatus.FAULT, SupervisorStatus.ESTOP)
+            else "hems enable")
+    return f"the supervisor is {supervisor.state_name}{faults}: nothing heats until it is ENABLED ({hint})"
 
 
 def format_status(snap) -> str:

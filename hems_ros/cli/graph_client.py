@@ -222,6 +222,17 @@ class GraphClient:
                 f"the controller status shows {status.mode} {status.setpoint:g}")
         return SetpointResult(True, False, f"sent, but not in force after {confirm_s:g} s ({seen})")
 
+    def supervisor_status(self, timeout: float = 2.0) -> SupervisorStatus | None:
+        """The supervisor's latest status (transient local: the last one comes at once to a
+        new reader), or None when none comes within ``timeout`` s."""
+        got: list = []
+        sub = self.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, got.append, qos.STATUS)
+        deadline = time.monotonic() + timeout
+        while not got and time.monotonic() < deadline:
+            checked(rclpy.spin_once, self.node, timeout_sec=0.02)
+        self.node.destroy_subscription(sub)
+        return got[-1] if got else None
+
     def _setpoint_publisher(self, finger: str):
         publisher = self._setpoint_pubs.get(finger)
         if publisher is None:

@@ -13,8 +13,6 @@ import os
 import pkgutil
 import sys
 
-from rclpy.executors import ExternalShutdownException
-
 import hems_ros
 import hems_ros.cli as cli_pkg
 from hems_ros.rosenv import apply_network_defaults
@@ -39,7 +37,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     apply_network_defaults()
-    parser = build_parser()
+    try:
+        parser = build_parser()
+        from rclpy.executors import ExternalShutdownException
+    except KeyboardInterrupt:
+        return 130      # Ctrl-C while the verbs and rclpy load: nothing started yet, nothing to say
     args = parser.parse_args(argv)
     if args.verb is None:
         parser.print_help()

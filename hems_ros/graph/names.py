@@ -35,7 +35,7 @@ def check_module(module: str) -> str:
 
 
 def topic(finger: str, stream: str) -> str:
-    """Per-finger topic: duty, encoder, wire_force, setpoint, controller_status."""
+    """Per-finger topic: duty, encoder, wire_force, setpoint, controller_status, commands."""
     return f"{NAMESPACE}/{finger}/{stream}"
 
 
@@ -45,6 +45,7 @@ def sim_topic(finger: str, stream: str) -> str:
 
 
 SUPERVISOR_STATUS_TOPIC = f"{NAMESPACE}/supervisor/status"
+SUPERVISOR_COMMANDS_TOPIC = f"{NAMESPACE}/supervisor/commands"
 JOINT_STATES_TOPIC = f"{NAMESPACE}/joint_states"
 DIAGNOSTICS_TOPIC = "/diagnostics"
 

@@ -7,10 +7,19 @@ Heating is allowed only in ENABLED, so every other state means zero duty.
 Monitors (per finger, on the receive times of the streams, in the node's clock): wire force
 at or above ``max_wire_force_n`` and tendon travel beyond ``max_tendon_position_m`` fault in
 any state; while ENABLED, an encoder or wire-force stream without a new reading for longer
-than ``stale_s``, a controller heartbeat silent for longer than ``heartbeat_timeout_s``, and
-the actuation unit's duty-watchdog flag held for ``watchdog_hold_s`` fault too. Outside ENABLED
-nothing heats, so a silent stream (a node starting or restarting) only blocks ``enable`` and
-``reset`` until it is back.
+than ``lost_s`` (a lost stream), a controller heartbeat silent for longer than
+``heartbeat_timeout_s``, and the actuation unit's duty-watchdog flag held for
+``watchdog_hold_s`` fault too. Outside ENABLED nothing heats, so a silent stream (a node
+starting or restarting) only blocks ``enable`` and ``reset`` until it is back.
+
+A sensor gap longer than ``stale_s`` but shorter than ``lost_s`` is counted, not latched
+(:meth:`SupervisorLogic.gaps`): a host that is busy for a moment (a command-line tool
+joining the domain, a garbage collection) delays streams by tens of milliseconds, and
+heating is already safe through it without the supervisor. A controller computes a duty
+only for a new reading, so no reading means no command, and the unit's duty watchdog is
+at 0 % three control periods after the last one; a controller in position mode whose force
+readings fall behind its encoder (or in force mode, the reverse) sends 0 % itself
+(finger_controller). What the supervisor adds is the latch for a loss that persists.
 
 ``enable`` and ``reset`` also wait for every unit's state report, and for its controller's
 commands (0 % before ENABLED) to reach it: a watchdog flag up since the unit started, or
@@ -53,7 +62,13 @@ class State(IntEnum):
 
 @dataclass(frozen=True)
 class MonitorLimits:
+    # a sensor stream older than this is not ready for ``enable``, and a gap longer than this
+    # is counted as a transient gap
     stale_s: float = 0.05
+    # a sensor stream without a new reading for this long while ENABLED is lost: FAULT. The
+    # units are at 0 % duty 30 ms into any gap (module docstring); as long as the heartbeat's
+    # limit, below which a busy host has held streams up (tests/graph/README.md)
+    lost_s: float = 0.5
     max_wire_force_n: float = 50.0
     max_tendon_position_m: float = 0.056
     # A lost controller is already caught within 30 ms by each unit's duty watchdog; the
@@ -80,7 +95,7 @@ class MonitorLimits:
         return self.stale_s if stream in ("encoder", "wire_force") else self.heartbeat_timeout_s
 
     def __post_init__(self) -> None:
-        for name in ("stale_s", "max_wire_force_n", "max_tendon_position_m", "heartbeat_timeout_s",
+        for name in ("stale_s", "lost_s", "max_wire_force_n", "max_tendon_position_m", "heartbeat_timeout_s",
                      "watchdog_hold_s", "enable_grace_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
@@ -113,18 +128,31 @@ class SupervisorLogic:
         # arriving), a unit or controller not having taken ENABLED
         self._since: dict[tuple[str, str], float] = {}
         self._duty_seen: set[str] = set()
+        # (finger, stream) -> [number of gaps longer than stale_s while ENABLED, longest s]
+        self._gaps: dict[tuple[str, str], list] = {}
 
     # observations -------------------------------------------------------------
     def saw(self, stream: str, finger: str, now: float) -> None:
+        seen = self._last_seen.get((stream, finger))
+        if (stream in ("encoder", "wire_force") and self.state == State.ENABLED and seen is not None
+                and now - seen > self.limits.stale_s):
+            gap = self._gaps.setdefault((finger, stream), [0, 0.0])
+            gap[0] += 1
+            gap[1] = max(gap[1], now - max(seen, self._enabled_at))
         self._last_seen[(stream, finger)] = now
 
     def unchanged(self, stream: str, finger: str, now: float) -> None:
         """A controller reported the same ``stream`` reading ("encoder" or "wire_force") as
         before (a new one goes to :meth:`encoder` or :meth:`wire_force`): while ENABLED, a
-        reading unchanged for longer than ``stale_s`` faults the stream."""
+        reading unchanged for longer than ``lost_s`` faults the stream."""
         seen = self._last_seen.get((stream, finger))
-        if self.state == State.ENABLED and seen is not None and now - seen > self.limits.stale_s:
-            self._fault(finger, stream, f"{stream} stale ({1e3 * (now - seen):.0f} ms without a new reading)")
+        if self.state == State.ENABLED and seen is not None and now - max(seen, self._enabled_at) > self.limits.lost_s:
+            self._fault(finger, stream, f"{stream} lost ({1e3 * (now - seen):.0f} ms without a new reading)")
+
+    def gaps(self) -> dict[tuple[str, str], tuple[int, float]]:
+        """Sensor gaps longer than ``stale_s`` (and shorter than ``lost_s``) while ENABLED, by
+        (finger, stream): (count, longest s). Transient: counted for the diagnostics."""
+        return {key: (count, longest) for key, (count, longest) in self._gaps.items()}
 
     def wire_force(self, finger: str, force_n: float, now: float) -> None:
         self.saw("wire_force", finger, now)

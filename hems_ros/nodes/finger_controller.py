@@ -13,6 +13,7 @@ Subscribes
                              state change themselves)
 Publishes
   /hems/<finger>/duty              hems_msgs/DutyCommand      reliable, one per feedback sample
+  /hems/<finger>/commands          hems_msgs/CommandRecord    reliable, transient local: every setpoint received
   /hems/<finger>/controller_status hems_msgs/ControllerStatus best effort, with every status_every-th duty
                                    and at once when mode, setpoint, activity or fault change (heartbeat;
                                    carries the latest encoder and force readings), and every
@@ -25,7 +26,9 @@ in duty.
 
 An invalid setpoint (non-finite, outside the tendon stroke or force range, unknown mode) is
 rejected with a logged error and counted in the status; the last valid setpoint stays.
-Outside ENABLED, or after a controller fault (non-finite input), the duty sent is 0.
+Outside ENABLED, after a controller fault (non-finite input), or while the other mode's
+readings lag the feedback by more than ``feedback_lag_s`` (on the unit's stamps), the duty
+sent is 0.
 The encoder, force, duty and status topics carry serialized messages (hems_ros.nodes.wire).
 """
 
@@ -33,13 +36,14 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from hems_msgs.msg import ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
+from hems_msgs.msg import (CommandRecord, ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint,
+                           SupervisorStatus, WireForce)
 from hems_ros.control import STRATEGIES, make_controller, mode_gains
 from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, Setpoint, SetpointError, SetpointLimits, validate
 from hems_ros.nodes import qos
-from hems_ros.nodes.clock_time import now_ns
+from hems_ros.nodes.clock_time import now_ns, stamp_now
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
@@ -64,6 +68,9 @@ PARAMETERS = [
          positive, True),
     Spec("status_every", 2, "publish the status with every n-th duty (and whenever mode, setpoint, activity or "
          "fault change): 50 Hz keeps the supervisor's 50 ms stream checks fed at half the messages", positive, True),
+    Spec("feedback_lag_s", 0.1, "0 % duty while the other mode's readings (force in position mode, encoder in "
+         "force mode) are older than this against the feedback's, on the unit's stamps, s: without them "
+         "over-force and over-travel cannot be seen", positive, True),
 ]
 
 
@@ -95,11 +102,14 @@ class FingerControllerNode(LeanNode):
         self.sequence = 0
         self.status_sequence = 0
         self.status_every = p["status_every"]
+        self.feedback_lag_ns = int(round(p["feedback_lag_s"] * 1e9))
         self._steps_since_status = 0
         self._reported: tuple | None = None
         self.duty_pub = self.create_publisher(DutyCommand, names.topic(self.finger, "duty"), qos.COMMAND)
         self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status"),
                                                 qos.CONTROLLER_STATUS)
+        self.commands_pub = self.create_publisher(CommandRecord, names.topic(self.finger, "commands"), qos.COMMAND_LOG)
+        self.commands = 0
         self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint"), self.on_setpoint, qos.COMMAND)
         self.feedback = {
             "position": self.subscribe_serialized(EncoderReading, names.topic(self.finger, "encoder"),
@@ -145,8 +155,10 @@ class FingerControllerNode(LeanNode):
             self.last_rejection = str(error)
             self.get_logger().error(f"{self.finger}: setpoint rejected: {error}; keeping "
                                     f"{self.setpoint.mode} {self.setpoint.value:g}")
+            self.record(message, False, str(error))
             self.publish_status()
             return
+        self.record(message, True, "")
         if setpoint.mode != self.controller.mode:
             self.drain(self._other_feedback())
             measurement = self._wire_measurement(setpoint.mode)
@@ -157,6 +169,14 @@ class FingerControllerNode(LeanNode):
         self.setpoint = setpoint
         self._poll_other_feedback()
         self.get_logger().info(f"{self.finger}: setpoint {setpoint.mode} {setpoint.value:g}")
+
+    def record(self, message: FingerSetpoint, accepted: bool, detail: str) -> None:
+        """The setpoint as received, on /hems/<finger>/commands (hems_msgs/CommandRecord)."""
+        self.commands += 1
+        record = CommandRecord(node=self.get_name(), command=str(message.mode), value=float(message.value),
+                               accepted=accepted, detail=detail, sequence=self.commands)
+        record.header.stamp = stamp_now(self)
+        self.commands_pub.publish(record)
 
     def on_supervisor(self, message: SupervisorStatus) -> None:
         enabled = message.state == SupervisorStatus.ENABLED
@@ -194,7 +214,7 @@ class FingerControllerNode(LeanNode):
         status_due = self._steps_since_status >= self.status_every
         if status_due:
             self.drain(self.supervisor_sub)
-        if self.enabled:
+        if self.enabled and self._other_fresh(measurement_stamp):
             self.duty = self.controller.update(self._wire_reference(), self._wire_measurement(self.setpoint.mode))
         else:
             self.duty = 0.0
@@ -207,6 +227,20 @@ class FingerControllerNode(LeanNode):
         self.idle_timer.reset()
         if status_due or self._status_key() != self._reported:
             self.publish_status()
+
+    def _other_fresh(self, measurement_stamp: tuple[int, int]) -> bool:
+        """The other mode's latest reading is at most feedback_lag_s older than the feedback
+        sample, both on the unit's stamps, so the host's timing does not enter: a force sensor
+        (or encoder) that stopped must not leave the wire heating blind to over-force."""
+        other = self.force_stamp if self.setpoint.mode == "position" else self.encoder_stamp
+        if other == NO_STAMP:
+            return False
+        lag = (measurement_stamp[0] - other[0]) * 1_000_000_000 + measurement_stamp[1] - other[1]
+        if lag > self.feedback_lag_ns:
+            self.drain(self._other_feedback())   # polled at the statuses: take what came meanwhile
+            other = self.force_stamp if self.setpoint.mode == "position" else self.encoder_stamp
+            lag = (measurement_stamp[0] - other[0]) * 1_000_000_000 + measurement_stamp[1] - other[1]
+        return lag <= self.feedback_lag_ns
 
     def _status_key(self) -> tuple:
         return self.setpoint.mode, self.setpoint.value, self.enabled, self.controller.fault

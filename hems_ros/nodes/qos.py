@@ -13,3 +13,7 @@ STATUS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=Reliab
 # heartbeat repaired it, about 200 ms at 50 Hz; the supervisor then saw the controller as dead
 # (processes joining the domain, benchmarks/bench_graph_joins.py, tests/graph/README.md).
 CONTROLLER_STATUS = SENSOR
+# What a node was commanded (hems_msgs/CommandRecord): every record reaches a recorder that has
+# matched the node, and one that joins later still gets the last hundred.
+COMMAND_LOG = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)

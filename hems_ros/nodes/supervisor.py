@@ -7,10 +7,12 @@ Subscribes  /hems/<finger>/controller_status (best effort, heartbeat): also the 
             keep changing, so the supervisor need not take 1200 sensor messages a second;
             /hems/sim/<finger>/state (best effort, duty-watchdog flag, heating permission)
 Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, transient local; on change and every status_period_s
+            /hems/supervisor/commands hems_msgs/CommandRecord   reliable, transient local: every service call
             /hems/joint_states       sensor_msgs/JointState      tendon position (m) and tendon force (N, as effort)
             /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz
 
-Monitors: stale encoder or force streams (> stale_s, default 50 ms), controller heartbeats
+Monitors: lost encoder or force streams (no new reading for lost_s, default 500 ms; shorter
+gaps over stale_s, 50 ms, are counted in /diagnostics), controller heartbeats
 (> heartbeat_timeout_s, default 500 ms), wire over-force (default 50 N), tendon over-travel,
 duty-watchdog flags held watchdog_hold_s (500 ms), and while ENABLED a unit or controller
 that has not taken ENABLED within enable_grace_s (0.5 s). ``enable`` also waits for every
@@ -29,7 +31,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
-from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
+from hems_msgs.msg import ActuatorState, CommandRecord, ControllerStatus, SupervisorStatus
 from hems_ros.graph import names, transmission
 from hems_ros.graph.cadence import Cadence, supervisor_check_delay
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
@@ -52,7 +54,11 @@ def _fingers(value) -> str | None:
 
 PARAMETERS = [
     Spec("fingers", list(names.FINGERS), "fingers to supervise (all six by default)", _fingers, True),
-    Spec("stale_s", _LIMITS.stale_s, "a stream silent for longer than this is a fault, s", positive, True),
+    Spec("stale_s", _LIMITS.stale_s, "an encoder or wire-force stream older than this is not ready for enable, "
+         "and a gap longer than this while ENABLED is counted in /diagnostics, s", positive, True),
+    Spec("lost_s", _LIMITS.lost_s, "an encoder or wire-force stream without a new reading for longer than this "
+         "while ENABLED is lost: a fault (the units stop heating 3 control periods into any gap), s",
+         positive, True),
     Spec("heartbeat_timeout_s", _LIMITS.heartbeat_timeout_s, "a controller heartbeat silent for longer is a fault, s",
          positive, True),
     Spec("watchdog_hold_s", _LIMITS.watchdog_hold_s, "a unit's duty-watchdog flag held this long while ENABLED "
@@ -85,6 +91,8 @@ class SupervisorNode(LeanNode):
         self.status_pub = self.create_publisher(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
         self.joints_pub = self.create_publisher(JointState, names.JOINT_STATES_TOPIC, qos.SENSOR)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
+        self.commands_pub = self.create_publisher(CommandRecord, names.SUPERVISOR_COMMANDS_TOPIC, qos.COMMAND_LOG)
+        self.commands = 0
         self.encoder_stamps = {f: None for f in self.fingers}
         self.force_stamps = {f: None for f in self.fingers}
         # 420 messages a second, each of which woke the process; the monitors judge them at
@@ -145,6 +153,11 @@ class SupervisorNode(LeanNode):
         # that came right after a successful reset
         self.take_reports()
         response.success, response.message = self.logic.request(command, seconds(self))
+        self.commands += 1
+        record = CommandRecord(node="supervisor", command=command, value=float("nan"), accepted=response.success,
+                               detail=response.message, sequence=self.commands)
+        record.header.stamp = stamp_now(self)
+        self.commands_pub.publish(record)
         # rclpy ties a severity to each logging call site, so the two levels need two calls
         if command == "estop" or not response.success:
             self.get_logger().warning(f"{command}: {response.message}")
@@ -206,7 +219,9 @@ class SupervisorNode(LeanNode):
         status = DiagnosticStatus(
             level=level, name="hems/supervisor", hardware_id="supervisor", message=state.name,
             values=[KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
-            + [KeyValue(key="not ready", value=m) for m in missing])
+            + [KeyValue(key="not ready", value=m) for m in missing]
+            + [KeyValue(key=f"gaps {finger} {stream}", value=f"{count}, longest {1e3 * longest:.0f} ms")
+               for (finger, stream), (count, longest) in sorted(self.logic.gaps().items())])
         array = DiagnosticArray(status=[status])
         array.header.stamp = stamp_now(self)
         self.diagnostics_pub.publish(array)

@@ -1,8 +1,9 @@
 """A short-lived setpoint publisher for the recorder tests (runs as its own process).
 
 Waits until ``--subscribers`` subscriptions have matched its publisher on ``--topic``,
-publishes ``--count`` FingerSetpoint messages (value = ``--value`` + k mm, 100 Hz), and exits
-at once (or after ``--linger`` s), as `ros2 topic pub --once` does. ``--best-effort``
+publishes ``--count`` FingerSetpoint messages (value = ``--value`` + k mm, 100 Hz; with
+``--until-taken`` each again until the controller status shows it), and exits at once (or
+after ``--linger`` s), as `ros2 topic pub --once` does. ``--best-effort``
 publishes best effort instead of reliable, ``--latched`` transient local.
 """
 
@@ -22,6 +23,9 @@ def main() -> int:
     parser.add_argument("--best-effort", action="store_true")
     parser.add_argument("--latched", action="store_true", help="transient local")
     parser.add_argument("--linger", type=float, default=0.0, help="seconds to stay after publishing")
+    parser.add_argument("--until-taken", action="store_true",
+                        help="publish each value at 100 Hz until the controller status shows it (as a user "
+                             "running `ros2 topic pub -r 100` until the finger moves), 10 s at most")
     args = parser.parse_args()
 
     import rclpy
@@ -42,9 +46,21 @@ def main() -> int:
                   file=sys.stderr)
             return 1
         time.sleep(0.02)
+    shown = []
+    if args.until_taken:
+        from hems_msgs.msg import ControllerStatus
+        from hems_ros.nodes import qos
+
+        node.create_subscription(ControllerStatus, args.topic.rsplit("/", 1)[0] + "/controller_status",
+                                 lambda m: shown.append(m.setpoint), qos.CONTROLLER_STATUS)
     for k in range(args.count):
-        publisher.publish(FingerSetpoint(mode="position", value=(args.value + k) * 1e-3))
-        time.sleep(0.01)
+        value = (args.value + k) * 1e-3
+        until = time.monotonic() + 10.0
+        while True:
+            publisher.publish(FingerSetpoint(mode="position", value=value))
+            rclpy.spin_once(node, timeout_sec=0.01)
+            if not args.until_taken or value in shown[-5:] or time.monotonic() > until:
+                break
     until = time.monotonic() + args.linger
     while rclpy.ok() and time.monotonic() < until:   # SIGTERM shuts the context down (rclpy's handler)
         time.sleep(0.05)

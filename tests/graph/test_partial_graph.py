@@ -119,3 +119,14 @@ def test_a_grasp_that_enabled_the_graph_disables_it_when_stopped(one_finger_grap
     snap = client.snapshot(fingers=(FINGER,), seconds=0.5)
     assert snap.supervisor.state_name == "DISABLED"
     assert graph.exited() == {}
+
+
+def test_a_setpoint_on_a_graph_not_enabled_says_nothing_heats(one_finger_graph, venv):
+    graph, client = one_finger_graph
+    client.call("disable")
+    result = subprocess.run([str(venv / "bin" / "hems"), "setpoint", FINGER, "5", "--unit", "mm", "--timeout", "5"],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert f"{FINGER}: position setpoint 0.005 m: in force (controller status)" in result.stdout
+    assert "the supervisor is DISABLED: nothing heats until it is ENABLED (hems enable)" in result.stderr
+    assert graph.exited() == {}
