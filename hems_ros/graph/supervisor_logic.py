@@ -5,8 +5,8 @@ ESTOP; both stay until ``reset``, which is refused while a fault condition persi
 Heating is allowed only in ENABLED, so every other state means zero duty.
 
 Monitors (per finger, on the receive times of the streams, in the node's clock): wire force
-at or above ``max_wire_force_n`` and tendon travel beyond ``max_tendon_position_m`` fault in
-any state; while ENABLED, an encoder or wire-force stream without a new reading for longer
+at or above ``max_wire_force_n``, tendon travel beyond ``max_tendon_position_m`` and a wire
+temperature estimated at or above ``max_wire_temperature_c`` fault in any state; while ENABLED, an encoder or wire-force stream without a new reading for longer
 than ``lost_s`` (a lost stream), a controller heartbeat silent for longer than
 ``heartbeat_timeout_s``, and the actuation unit's duty-watchdog flag held for
 ``watchdog_hold_s`` fault too. Outside ENABLED nothing heats, so a silent stream (a node
@@ -71,6 +71,9 @@ class MonitorLimits:
     lost_s: float = 0.5
     max_wire_force_n: float = 50.0
     max_tendon_position_m: float = 0.056
+    # a controller's wire-temperature estimate (from the drive board's readings) this high: the
+    # controller's own cut-off (150 degC by default) did not hold the wire
+    max_wire_temperature_c: float = 170.0
     # A lost controller is already caught within 30 ms by each unit's duty watchdog; the
     # heartbeat only has to name it, so it tolerates the scheduling hiccups of a busy host,
     # as long as the watchdog flag does (watchdog_hold_s). At 200 ms it latched FAULT in one
@@ -95,8 +98,8 @@ class MonitorLimits:
         return self.stale_s if stream in ("encoder", "wire_force") else self.heartbeat_timeout_s
 
     def __post_init__(self) -> None:
-        for name in ("stale_s", "lost_s", "max_wire_force_n", "max_tendon_position_m", "heartbeat_timeout_s",
-                     "watchdog_hold_s", "enable_grace_s"):
+        for name in ("stale_s", "lost_s", "max_wire_force_n", "max_tendon_position_m", "max_wire_temperature_c",
+                     "heartbeat_timeout_s", "watchdog_hold_s", "enable_grace_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} = {value!r}: must be a finite value > 0")
@@ -158,6 +161,13 @@ class SupervisorLogic:
         self.saw("wire_force", finger, now)
         if force_n >= self.limits.max_wire_force_n:
             self._fault(finger, "over-force", f"wire over-force {force_n:.1f} N (limit {self.limits.max_wire_force_n:g} N)")
+
+    def temperature(self, finger: str, celsius: float) -> None:
+        """A controller's wire-temperature estimate: at or above ``max_wire_temperature_c`` it
+        faults in any state (a NaN estimate, none yet, says nothing)."""
+        if celsius >= self.limits.max_wire_temperature_c:
+            self._fault(finger, "over-temperature", f"wire over-temperature {celsius:.0f} degC estimated "
+                                                    f"(limit {self.limits.max_wire_temperature_c:g} degC)")
 
     def encoder(self, finger: str, wire_position_m: float, now: float) -> None:
         self.saw("encoder", finger, now)

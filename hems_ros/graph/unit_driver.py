@@ -49,11 +49,16 @@ def _valid_duty(duty_percent: float) -> bool:
 
 
 class Sample(NamedTuple):
-    """An encoder sample and the wire tension at the same instant (ActuationUnit.readings)."""
+    """An encoder sample and the wire tension at the same instant (ActuationUnit.readings), and
+    what the drive board measured over the period that ended: the applied duty, the wire's
+    current and voltage while on (NaN at 0 %)."""
     time_s: float
     encoder_counts: int
     encoder_position_m: float
     wire_force_n: float
+    duty_percent: float
+    on_current_a: float
+    on_voltage_v: float
 
 
 class UnitDriver:
@@ -196,7 +201,7 @@ class UnitDriver:
                 self._integrate(run_duty, run, sample_k, last, limit)
                 run = 0
                 self._samples_taken += 1
-                samples.append(Sample(self.time_s, *unit.readings()))
+                samples.append(Sample(self.time_s, *unit.readings(), *self._board(run_duty)))
                 self._sample_time_s, self._sample_steps, self._sample_snapshot = self.time_s, unit.steps, None
                 sample_k = self._next_sample_step()
         if run:
@@ -204,6 +209,14 @@ class UnitDriver:
         if unit.steps > first:
             self.applied_duty = run_duty
         return samples
+
+    def _board(self, duty: float) -> tuple[float, float, float]:
+        """(duty %, on-current A, on-voltage V) of the last step, as the drive board measures them."""
+        if duty <= 0.0:
+            return 0.0, math.nan, math.nan
+        resistance, mean_current = self.unit.electrical()
+        on_current = mean_current / (duty * 0.01)
+        return duty, on_current, on_current * resistance
 
     def _next_sample_step(self) -> int:
         """The step at whose end the next encoder sample falls due."""

@@ -6,6 +6,8 @@ Subscribes
   /hems/supervisor/status        hems_msgs/SupervisorStatus  transient local (heating only while ENABLED)
 Publishes
   /hems/<finger>/encoder         hems_msgs/EncoderReading  best effort, every encoder_period_s (wire side, m)
+  /hems/<finger>/drive           hems_msgs/DriveReading    best effort, with each encoder sample (what the drive board
+                                                           measures: applied duty, on-current and on-voltage)
   /hems/sim/<finger>/wire_tension hems_msgs/WireForce      best effort, same rate (simulation link to the shoulder module)
   /hems/sim/<finger>/state       hems_msgs/ActuatorState   best effort, every state_period_s (simulation truth)
   /diagnostics                   diagnostic_msgs/DiagnosticArray  1 Hz (latency, missed periods, watchdog)
@@ -31,7 +33,7 @@ from __future__ import annotations
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
-from hems_msgs.msg import ActuatorState, DutyCommand, EncoderReading, SupervisorStatus, WireForce
+from hems_msgs.msg import ActuatorState, DriveReading, DutyCommand, EncoderReading, SupervisorStatus, WireForce
 from hems_ros.graph import names
 from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.unit_driver import UnitDriver
@@ -44,7 +46,10 @@ from hems_ros.nodes.params import Spec, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import ActuationUnit, load_params
 
-ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
+ENCODER, TENSION, STATE, DRIVE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState, DriveReading))
+#: Encoder faults a test can inject at run time (``ros2 param set ... sensor_fault stuck_encoder``).
+SENSOR_FAULTS = ("", "stuck_encoder", "encoder_jump", "nan_encoder")
+JUMP_M = 5e-3
 
 PARAMETERS = [
     Spec("finger", "index", "finger this unit drives: " + ", ".join(names.FINGERS), one_of(*names.FINGERS), True),
@@ -62,6 +67,9 @@ PARAMETERS = [
          positive, True),
     Spec("latency_window_s", 60.0, "the latency figures in /diagnostics cover the duty commands of the last "
          "this many seconds", positive, True),
+    Spec("sensor_fault", "", "encoder fault injected from now on, for fault tests: '' (none), stuck_encoder "
+         "(fresh samples, frozen reading), encoder_jump (+5 mm), nan_encoder (NaN position); settable while "
+         "running", one_of(*SENSOR_FAULTS)),
 ]
 
 
@@ -95,6 +103,8 @@ class ActuationUnitNode(LeanNode):
         self.sequence = 0
         self.state_sequence = 0
         self.encoder_pub = self.create_publisher(EncoderReading, names.topic(self.finger, "encoder"), qos.SENSOR)
+        self.drive_pub = self.create_publisher(DriveReading, names.topic(self.finger, "drive"), qos.SENSOR)
+        self.frozen: tuple[int, float] | None = None
         self.tension_pub = self.create_publisher(WireForce, names.sim_topic(self.finger, "wire_tension"), qos.SENSOR)
         self.state_pub = self.create_publisher(ActuatorState, names.sim_topic(self.finger, "state"), qos.SENSOR)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
@@ -164,13 +174,33 @@ class ActuationUnitNode(LeanNode):
         for sample in samples:
             self.sequence += 1
             sec, nanosec = stamp(sample.time_s)
+            counts, position = self.encoder_reading(sample)
             self.encoder_pub.publish(ENCODER.encode(ENCODER.fields(
                 header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
-                counts=sample.encoder_counts, position=sample.encoder_position_m, resolution=self.resolution,
+                counts=counts, position=position, resolution=self.resolution, sequence=self.sequence)))
+            self.drive_pub.publish(DRIVE.encode(DRIVE.fields(
+                header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
+                duty_percent=sample.duty_percent, on_current=sample.on_current_a, on_voltage=sample.on_voltage_v,
                 sequence=self.sequence)))
             self.tension_pub.publish(TENSION.encode(TENSION.fields(
                 header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
                 force=sample.wire_force_n, saturated=False, over_force=False, sequence=self.sequence)))
+
+    def encoder_reading(self, sample) -> tuple[int, float]:
+        """(counts, position m) the encoder reports, with the injected fault if one is set."""
+        fault = self.get_parameter("sensor_fault").value
+        if fault != "stuck_encoder":
+            self.frozen = None
+        if fault == "stuck_encoder":
+            if self.frozen is None:
+                self.frozen = sample.encoder_counts, sample.encoder_position_m
+            return self.frozen
+        if fault == "encoder_jump":
+            jump = int(round(JUMP_M / self.resolution))
+            return sample.encoder_counts + jump, (sample.encoder_counts + jump) * self.resolution
+        if fault == "nan_encoder":
+            return sample.encoder_counts, float("nan")
+        return sample.encoder_counts, sample.encoder_position_m
 
     def publish_state(self) -> None:
         r = self.driver.last_result

@@ -8,6 +8,8 @@ Subscribes
   /hems/<finger>/setpoint    hems_msgs/FingerSetpoint   reliable   (mode position [m] | force [N], tendon side)
   /hems/<finger>/encoder     hems_msgs/EncoderReading   best effort (position-mode feedback)
   /hems/<finger>/wire_force  hems_msgs/WireForce        best effort (force-mode feedback)
+  /hems/<finger>/drive       hems_msgs/DriveReading     best effort (the drive board's readings: the wire
+                             temperature estimate of hems_ros.graph.thermal_guard)
   /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only while ENABLED;
                              read at every status_every-th step; the units stop heating on a
                              state change themselves)
@@ -27,8 +29,9 @@ in duty.
 An invalid setpoint (non-finite, outside the tendon stroke or force range, unknown mode) is
 rejected with a logged error and counted in the status; the last valid setpoint stays.
 Outside ENABLED, after a controller fault (non-finite input), or while the other mode's
-readings lag the feedback by more than ``feedback_lag_s`` (on the unit's stamps), the duty
-sent is 0.
+readings lag the feedback by more than ``feedback_lag_s`` (on the unit's stamps), or while
+the wire temperature estimated from the drive board's readings is at ``cut_temperature_c``
+(until it is back below ``resume_temperature_c``), the duty sent is 0.
 The encoder, force, duty and status topics carry serialized messages (hems_ros.nodes.wire).
 """
 
@@ -36,18 +39,20 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from hems_msgs.msg import (CommandRecord, ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint,
-                           SupervisorStatus, WireForce)
+from hems_msgs.msg import (CommandRecord, ControllerStatus, DriveReading, DutyCommand, EncoderReading,
+                           FingerSetpoint, SupervisorStatus, WireForce)
 from hems_ros.control import STRATEGIES, make_controller, mode_gains
 from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, Setpoint, SetpointError, SetpointLimits, validate
+from hems_ros.graph.thermal_guard import ThermalGuard
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import now_ns, stamp_now
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.nodes.wire import codec, stamp_ns
+from hems_ros.physics import load_params
 
 DUTY, STATUS = codec(DutyCommand), codec(ControllerStatus)
 NO_STAMP = (0, 0)
@@ -71,6 +76,12 @@ PARAMETERS = [
     Spec("feedback_lag_s", 0.1, "0 % duty while the other mode's readings (force in position mode, encoder in "
          "force mode) are older than this against the feedback's, on the unit's stamps, s: without them "
          "over-force and over-travel cannot be seen", positive, True),
+    Spec("physics_config", "ch6_hems_index", "physics parameter set of the unit (a config/physics name or a "
+         "YAML path): the model the wire temperature is estimated with", None, True),
+    Spec("cut_temperature_c", 150.0, "estimated wire temperature at which the duty is held at 0, degC "
+         "(from the drive board's readings, hems_ros.graph.thermal_guard)", positive, True),
+    Spec("resume_temperature_c", 140.0, "estimated wire temperature below which heating may resume, degC",
+         positive, True),
 ]
 
 
@@ -103,6 +114,12 @@ class FingerControllerNode(LeanNode):
         self.status_sequence = 0
         self.status_every = p["status_every"]
         self.feedback_lag_ns = int(round(p["feedback_lag_s"] * 1e9))
+        try:
+            physics = load_params(p["physics_config"])
+            self.guard = ThermalGuard(physics, p["cut_temperature_c"], p["resume_temperature_c"], p["ts"])
+        except (OSError, ValueError) as error:
+            raise ValueError(f"parameters 'physics_config', 'cut_temperature_c', 'resume_temperature_c': "
+                             f"{error}") from None
         self._steps_since_status = 0
         self._reported: tuple | None = None
         self.duty_pub = self.create_publisher(DutyCommand, names.topic(self.finger, "duty"), qos.COMMAND)
@@ -118,6 +135,10 @@ class FingerControllerNode(LeanNode):
                                                qos.SENSOR)}
         self.supervisor_sub = self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
                                                        self.on_supervisor, qos.STATUS)
+        # taken at each control step, before the duty is computed (one reading per sample)
+        self.drive_sub = self.subscribe_serialized(DriveReading, names.topic(self.finger, "drive"), self.on_drive,
+                                                   qos.SENSOR)
+        self.poll(self.drive_sub)
         self._poll_other_feedback()
         # restarted by every control step, so it fires only while no feedback comes: a
         # wake-up of a sleeping process costs more than the status it would send
@@ -190,6 +211,9 @@ class FingerControllerNode(LeanNode):
         if self.setpoint.mode == "position":
             self.control(self.encoder_stamp)
 
+    def on_drive(self, message) -> None:
+        self.guard.reading(message.duty_percent, message.on_current, message.on_voltage)
+
     def on_force(self, message) -> None:
         self.wire_force = message.force
         self.force_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
@@ -214,7 +238,8 @@ class FingerControllerNode(LeanNode):
         status_due = self._steps_since_status >= self.status_every
         if status_due:
             self.drain(self.supervisor_sub)
-        if self.enabled and self._other_fresh(measurement_stamp):
+        self.drain(self.drive_sub)
+        if self.enabled and self._other_fresh(measurement_stamp) and not self.guard.limited:
             self.duty = self.controller.update(self._wire_reference(), self._wire_measurement(self.setpoint.mode))
         else:
             self.duty = 0.0
@@ -243,7 +268,7 @@ class FingerControllerNode(LeanNode):
         return lag <= self.feedback_lag_ns
 
     def _status_key(self) -> tuple:
-        return self.setpoint.mode, self.setpoint.value, self.enabled, self.controller.fault
+        return self.setpoint.mode, self.setpoint.value, self.enabled, self.controller.fault, self.guard.limited
 
     def publish_status(self) -> None:
         self.drain(self._other_feedback())
@@ -267,7 +292,8 @@ class FingerControllerNode(LeanNode):
             wire_position=nan_if_none(self.wire_position),
             force_stamp_sec=self.force_stamp[0], force_stamp_nanosec=self.force_stamp[1],
             wire_force=nan_if_none(self.wire_force), rejected_setpoints=self.rejected,
-            last_rejection=self.last_rejection, sequence=self.status_sequence)))
+            last_rejection=self.last_rejection, wire_temperature_c=self.guard.estimate_c,
+            thermal_limited=self.guard.limited, sequence=self.status_sequence)))
 
 
 def main() -> int:

@@ -14,7 +14,8 @@ Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, trans
 Monitors: lost encoder or force streams (no new reading for lost_s, default 500 ms; shorter
 gaps over stale_s, 50 ms, are counted in /diagnostics), controller heartbeats
 (> heartbeat_timeout_s, default 500 ms), wire over-force (default 50 N), tendon over-travel,
-duty-watchdog flags held watchdog_hold_s (500 ms), and while ENABLED a unit or controller
+a wire temperature estimated at max_wire_temperature_c (170 degC; the controllers cut heating at
+150 degC themselves), duty-watchdog flags held watchdog_hold_s (500 ms), and while ENABLED a unit or controller
 that has not taken ENABLED within enable_grace_s (0.5 s). ``enable`` also waits for every
 unit's state and for its controller's commands to reach it (watchdog flag not held).
 Heating is allowed only in ENABLED: the units and controllers drop every duty to 0 as soon
@@ -67,6 +68,8 @@ PARAMETERS = [
          "inactive controller for longer than this is a fault, s", positive, True),
     Spec("max_wire_force_n", _LIMITS.max_wire_force_n, "wire over-force limit, N", positive, True),
     Spec("max_tendon_position_m", _LIMITS.max_tendon_position_m, "tendon over-travel limit, m", positive, True),
+    Spec("max_wire_temperature_c", _LIMITS.max_wire_temperature_c, "wire over-temperature limit on the "
+         "controllers' estimates (from the drive board's readings), degC", positive, True),
     Spec("check_period_s", 0.02, "monitor period, s: the controller status and state messages are taken "
          "and judged at each check (the controllers' statuses, which carry their readings, come at 50 Hz)",
          positive, True),
@@ -122,6 +125,7 @@ class SupervisorNode(LeanNode):
         now = seconds(self)
         self.logic.saw("heartbeat", finger, now)
         self.logic.sees_enabled(finger, "controller", message.active, now)
+        self.logic.temperature(finger, message.wire_temperature_c)
         # a reading counts as fresh when its stamp moved since the last status (receive-side
         # judgement: no clock comparison between hosts)
         encoder = (message.encoder_stamp_sec, message.encoder_stamp_nanosec)

@@ -166,6 +166,11 @@ class ActuationUnit:
         counts = sensors.encoder_counts(float(self._s[kernel.S_X]), enc.resolution_m, enc.gain)
         return counts, counts * enc.resolution_m, float(self._out[kernel.O_FW])
 
+    def electrical(self) -> tuple[float, float]:
+        """(resistance ohm, mean current A) of the last step: what a drive board measures, without
+        building the rest of :meth:`result`."""
+        return float(self._out[kernel.O_R]), float(self._out[kernel.O_I])
+
     def result(self) -> StepResult:
         """Measurements and truth after the last step: what that :meth:`step` returned."""
         # one conversion of each array to Python floats: reading twenty numpy scalars one by

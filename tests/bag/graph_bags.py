@@ -191,6 +191,9 @@ def _first_active_measurement(bag_path: Path, finger: str) -> int | None:
     return None if first is None else int(stamp_ns(duty, "measurement_stamp")[first])
 
 
+OTHER_FEEDBACK_NS = 40_000_000
+
+
 def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]], list[tuple[int, float]]]:
     """Replay ``reference`` into a fresh controller; (replayed, recorded) duties as (measurement stamp, duty)."""
     finger = reference.finger
@@ -202,9 +205,10 @@ def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]
     try:
         replay.wait_for_controller()
         mode = "position"
-        # Feedback of the mode not being controlled only updates the value the controller
-        # holds for a mode switch, so only its latest sample is sent, just before a setpoint
-        # (and before ENABLED, when the controller computes nothing).
+        # Before ENABLED the controller computes nothing: the latest feedback of each stream
+        # is enough. After it, the other mode's feedback goes in too, every OTHER_FEEDBACK_NS
+        # of its stamps: its freshness gates the duty (feedback_lag_s, 100 ms), and each feed
+        # waits for the controller to take it.
         held = {}
         for topic, data, msg, _ in inputs[:enabled]:
             if topic == setpoint:
@@ -214,24 +218,27 @@ def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]
                 held[topic] = data
         for topic, data in held.items():
             replay.feed(topic, data, False)
-        held.clear()
         replay.enable()
         first_duty = len(replay.duties)
+        held, other_fed = {}, 0
         for topic, data, msg, _ in inputs[enabled + 1:]:
             if topic == names.SUPERVISOR_STATUS_TOPIC:
                 if msg.state_name != "ENABLED":
                     break  # the run ends at the first state change after ENABLED
                 continue
             if topic == setpoint:
-                for held_topic, held_data in held.items():
-                    replay.feed(held_topic, held_data, False)
-                held.clear()
+                if held:         # the value a mode switch starts from: the latest reading
+                    replay.feed(*held.popitem(), False)
                 mode = msg.mode
                 replay.feed(topic, data, False)
             elif (topic == encoder) == (mode == "position"):
                 replay.feed(topic, data, True, stamp_ns_of(msg.header.stamp))
+            elif stamp_ns_of(msg.header.stamp) - other_fed >= OTHER_FEEDBACK_NS:
+                replay.feed(topic, data, False)
+                other_fed = stamp_ns_of(msg.header.stamp)
+                held.clear()
             else:
-                held[topic] = data
+                held = {topic: data}
         replayed = [(stamp_ns_of(d.measurement_stamp), d.duty_percent) for d in replay.duties[first_duty:]]
     finally:
         replay.close()
