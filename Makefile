@@ -14,7 +14,7 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
 MSG_SOURCES := $(wildcard hems_msgs/msg/*.msg hems_msgs/srv/*.srv) hems_msgs/CMakeLists.txt hems_msgs/package.xml
 
-.PHONY: setup demo test test-quick test-graph bench clean check-system
+.PHONY: setup demo test test-quick test-graph test-faults bench clean check-system
 
 setup: check-system $(VENV)/.stamp-hems_ros
 
@@ -56,6 +56,9 @@ test-quick: setup
 
 test-graph: setup
 	tools/run_pytest.sh $(PY) tests -m graph_realtime $(PYTEST_ARGS)
+
+test-faults: setup
+	HEMS_RELIABILITY_PAGE=docs/reliability.md tools/run_pytest.sh $(PY) tests/faults -m faults $(PYTEST_ARGS)
 
 bench: setup
 	@for b in benchmarks/bench_*.py; do echo "== $$b"; $(PY) $$b || exit 1; done

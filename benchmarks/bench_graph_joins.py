@@ -1,58 +1,89 @@
-"""What a process joining the ROS domain does to a running, enabled graph.
+"""Command-line tools joining a running, enabled graph: they must never fault it.
 
 Every command-line tool (`hems setpoint`, `hems status`, `ros2 topic pub`...) is a new DDS
-participant, and every participant of the graph takes part in its discovery. This runs the
-enabled graph with three fingers holding 10-11 mm, then ``--joins`` times runs
-`hems setpoint index ...` as a separate process, and counts the joins after which the
-supervisor left ENABLED (it latches FAULT when a stream stalls for longer than its limit;
-duties are then 0). After a FAULT the benchmark resets and enables through its own client,
-which stays in the domain the whole run so that only the measured commands join. Modes as
-in bench_graph.py: separate processes (16 participants) and composed (one);
-``--no-parameter-services`` starts the separate processes as `hems up
---no-parameter-services` does (the comparison in tests/graph/README.md).
+participant, and every participant of the graph takes part in its discovery; on a two-core
+host that burst holds the graph's streams up by tens of milliseconds. This runs the enabled
+graph with all six fingers holding a tendon position, then ``--joins`` times starts one
+command-line process, in turn: `hems setpoint <finger> <mm>` (the finger and value change
+each time), `hems status`, `hems enable` (already enabled), `hems reset` (nothing to reset)
+and a plain rclpy process that creates a publisher and sends one FingerSetpoint as soon as
+the controller has matched it, as `ros2 topic pub --once` does. It counts the joins after
+which the supervisor left ENABLED, and checks that every setpoint was reached (the finger's
+controller status shows the tendon within 0.5 mm of it). Layouts: the default `hems up` (16
+processes, as `ros2 run` of each node gives) and composed (one process).
 
-Usage: .venv/bin/python benchmarks/bench_graph_joins.py [--joins 8] [--modes separate,composed]
-       [--no-parameter-services]
+Usage: .venv/bin/python benchmarks/bench_graph_joins.py [--joins 200] [--layouts separate,composed]
+       [--markdown FILE]    (the result table, as docs/reliability.md shows it)
 """
 
 from __future__ import annotations
 
 import argparse
 import collections
+import json
+import math
 import subprocess
 import sys
 import time
+from pathlib import Path
 
-from hems_ros.rosenv import apply_network_defaults, use_private_domain
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from hems_ros.rosenv import apply_network_defaults, child_environment, use_private_domain  # noqa: E402
 
 apply_network_defaults()
 DOMAIN_LOCK = use_private_domain()  # no test session or other benchmark shares it
 
-from hems_msgs.msg import SupervisorStatus  # noqa: E402
+from hems_msgs.msg import ControllerStatus, SupervisorStatus  # noqa: E402
 
 from hems_ros.cli.graph_client import GraphClient  # noqa: E402
 from hems_ros.graph import names  # noqa: E402
 from hems_ros.launcher import Graph, GraphOptions  # noqa: E402
 from hems_ros.nodes import qos  # noqa: E402
 
-HOLDING = ("index", "middle", "ring")
-SETTLE_S = 2.0   # after each command, before judging and before the next one
+SETTLE_S = 1.5          # after each command, before judging it
+HOLD_M = 0.010
+REACHED_M = 0.5e-3     # a setpoint counts as reached within this of the tendon position
+KINDS = ("setpoint", "status", "enable", "reset", "topic pub")
+# what `ros2 topic pub --once` does, as a short script (ros2cli is not installed here)
+TOPIC_PUB = """
+import sys, time, rclpy
+from hems_msgs.msg import FingerSetpoint
+from hems_ros.nodes import qos
+rclpy.init()
+node = rclpy.create_node("topic_pub_once")
+pub = node.create_publisher(FingerSetpoint, sys.argv[1], qos.COMMAND)
+deadline = time.monotonic() + 10.0
+while pub.get_subscription_count() < 1 and time.monotonic() < deadline:
+    time.sleep(0.02)
+pub.publish(FingerSetpoint(mode="position", value=float(sys.argv[2])))
+time.sleep(0.1)
+rclpy.shutdown()
+"""
 
 
 def fault_kind(fault: str) -> str:
-    """'index: wire_force stale (60 ms ...)' -> 'wire_force stale'."""
+    """'index: wire_force lost (600 ms ...)' -> 'wire_force lost'."""
     return fault.split(": ", 1)[-1].split(" (")[0].split(" for ")[0]
 
 
-def hold(client: GraphClient, position_m: float) -> None:
-    for finger in HOLDING:
-        client.send_setpoint(finger, "position", position_m)
+def command(kind: str, i: int) -> tuple[list[str], str | None, float | None]:
+    """(argv, finger, tendon position m) of join ``i``."""
+    finger = names.FINGERS[i % len(names.FINGERS)]
+    value_m = HOLD_M + 1e-3 * ((i // len(KINDS)) % 2)
+    hems = [sys.executable, "-m", "hems_ros.cli.main"]
+    if kind == "setpoint":
+        return hems + ["setpoint", finger, f"{value_m * 1e3:g}", "--unit", "mm"], finger, value_m
+    if kind == "topic pub":
+        return [sys.executable, "-c", TOPIC_PUB, names.topic(finger, "setpoint"), repr(value_m)], finger, value_m
+    return hems + [kind], None, None
 
 
-def run(composed: bool, joins: int, parameter_services: bool) -> dict:
-    graph = Graph(GraphOptions(composed=composed, log_level="error", parameter_services=parameter_services))
+def run(composed: bool, joins: int) -> dict:
+    graph = Graph(GraphOptions(composed=composed, log_level="error"))
     graph.start()
     faults: list[tuple[float, str]] = []
+    statuses: dict[str, ControllerStatus] = {}
 
     def on_status(message: SupervisorStatus) -> None:
         if message.state_name != "ENABLED" and (not faults or faults[-1][1] != "; ".join(message.faults)):
@@ -61,58 +92,78 @@ def run(composed: bool, joins: int, parameter_services: bool) -> dict:
     try:
         with GraphClient("hems_bench_joins") as client:
             client.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, on_status, qos.STATUS)
-            ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
+            for finger in names.FINGERS:
+                client.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
+                                                lambda m, f=finger: statuses.__setitem__(f, m),
+                                                qos.CONTROLLER_STATUS)
+            ok, message = client.enable_when_ready(120, reset=True, retry_s=1.0)
             if not ok:
                 return {"error": f"could not enable: {graph.with_exits(message)}"}
-            hold(client, 0.010)
+            for finger in names.FINGERS:
+                client.send_setpoint(finger, "position", HOLD_M, confirm_s=10.0)
             client.spin_for(4.0)
             faults.clear()
-            faulted, kinds = 0, collections.Counter()
+            faulted, kinds, missed, by_kind = 0, collections.Counter(), [], collections.Counter()
             for i in range(joins):
-                started, target_mm = time.monotonic(), str(10 + (i + 1) % 2)
-                print(f"  join {i + 1}/{joins}: hems setpoint index {target_mm} mm", flush=True)
-                # the hems command's own code path, in this interpreter (as the installed script)
-                command = subprocess.run([sys.executable, "-m", "hems_ros.cli.main", "setpoint", "index", target_mm,
-                                          "--mode", "position", "--unit", "mm"], capture_output=True, text=True,
-                                         timeout=60)
-                if command.returncode != 0:
-                    return {"error": f"hems setpoint failed ({command.returncode}): {command.stderr.strip()[-300:]}"}
+                kind = KINDS[i % len(KINDS)]
+                argv, finger, value = command(kind, i)
+                started = time.monotonic()
+                subprocess.run(argv, capture_output=True, text=True, timeout=120, env=child_environment())
                 client.spin_for(SETTLE_S)
+                by_kind[kind] += 1
+                if finger is not None:
+                    shown = statuses.get(finger)
+                    if shown is None or not math.isclose(shown.setpoint, value, abs_tol=1e-9):
+                        missed.append(f"join {i + 1} ({kind} {finger} {value * 1e3:g} mm): not taken")
+                    elif abs(shown.measurement - value) > REACHED_M:
+                        missed.append(f"join {i + 1} ({kind} {finger} {value * 1e3:g} mm): at "
+                                      f"{shown.measurement * 1e3:.2f} mm after {SETTLE_S:g} s")
                 new = [text for t, text in faults if t >= started]
+                print(f"  join {i + 1}/{joins}: {kind}{'' if not new else ' -> ' + new[-1]}", flush=True)
                 if new:
                     faulted += 1
-                    # the supervisor adds faults to its list as they come: count each once per join
                     kinds.update({fault_kind(part) for text in new for part in text.split("; ")})
                     ok, message = client.enable_when_ready(30, reset=True, retry_s=0.5)
                     if not ok:
                         return {"error": f"could not enable again: {message}"}
-                    hold(client, 0.010)
-                    client.spin_for(SETTLE_S)
     finally:
         graph.stop()
-    return {"joins": joins, "faulted": faulted, "kinds": dict(kinds)}
+    return {"joins": joins, "faulted": faulted, "kinds": dict(kinds), "missed": missed, "by_kind": dict(by_kind)}
+
+
+def table(results: dict[str, dict]) -> str:
+    lines = ["| layout | joins (setpoint, status, enable, reset, topic pub) | supervisor left ENABLED | "
+             "setpoints not reached | faults named |", "|---|---|---|---|---|"]
+    for layout, r in results.items():
+        if "error" in r:
+            lines.append(f"| {layout} | - | {r['error']} | - | - |")
+            continue
+        kinds = ", ".join(f"{k} x{n}" for k, n in sorted(r["kinds"].items())) or "-"
+        per_kind = ", ".join(str(r["by_kind"].get(k, 0)) for k in KINDS)
+        lines.append(f"| {layout} | {r['joins']} ({per_kind}) | {r['faulted']} | {len(r['missed'])} | {kinds} |")
+    return "\n".join(lines) + "\n"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--joins", type=int, default=8, help="command-line processes to run per mode (default 8)")
-    parser.add_argument("--modes", default="separate,composed",
-                        help="comma-separated modes to run: separate, composed (default both)")
-    parser.add_argument("--no-parameter-services", dest="parameter_services", action="store_false",
-                        help="separate processes without parameter services (hems up --no-parameter-services)")
+    parser.add_argument("--joins", type=int, default=20, help="command-line processes per layout (default 20)")
+    parser.add_argument("--layouts", default="separate,composed",
+                        help="comma-separated layouts: separate (hems up), composed (default both)")
+    parser.add_argument("--markdown", type=Path, default=None, help="also write the result table to this file")
+    parser.add_argument("--json", type=Path, default=None, help="also write the results as JSON to this file")
     args = parser.parse_args()
     results = {}
-    for mode in args.modes.split(","):
-        print(f"{mode}: {args.joins} joins", flush=True)
-        results[mode] = run(mode == "composed", args.joins, args.parameter_services)
-    print("mode        joins  supervisor left ENABLED  faults named (in how many of those joins)")
-    for mode, r in results.items():
-        if "error" in r:
-            print(f"{mode:10s}  {r['error']}")
-            continue
-        kinds = ", ".join(f"{k} x{n}" for k, n in sorted(r["kinds"].items())) or "-"
-        print(f"{mode:10s}  {r['joins']:5d}  {r['faulted']:4d} ({100 * r['faulted'] / r['joins']:3.0f} %)"
-              f"            {kinds}")
+    for layout in args.layouts.split(","):
+        print(f"{layout}: {args.joins} joins", flush=True)
+        results[layout] = run(layout == "composed", args.joins)
+        for miss in results[layout].get("missed", []):
+            print(f"  not reached: {miss}")
+    text = table(results)
+    print(text)
+    if args.markdown is not None:
+        args.markdown.write_text(text)
+    if args.json is not None:
+        args.json.write_text(json.dumps(results, indent=1))
 
 
 if __name__ == "__main__":

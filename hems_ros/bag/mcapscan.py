@@ -81,7 +81,10 @@ class ScanReport:
 
 def _string(buf: bytes, pos: int) -> tuple[str, int]:
     (length,) = _U32.unpack_from(buf, pos)
-    return str(buf[pos + 4:pos + 4 + length], "utf-8"), pos + 4 + length
+    try:
+        return str(buf[pos + 4:pos + 4 + length], "utf-8"), pos + 4 + length
+    except UnicodeDecodeError:
+        raise BagFormatError(f"the string at byte {pos} is not UTF-8 (a damaged record)") from None
 
 
 def _schema(buf: bytes, pos: int) -> Schema:
@@ -104,6 +107,10 @@ def _channel(buf: bytes, pos: int) -> Channel:
         key, pos = _string(buf, pos)
         metadata[key], pos = _string(buf, pos)
     return Channel(channel_id, schema_id, topic, encoding, metadata)
+
+
+# Writers cut chunks at a few MiB; a size field beyond this is damage, not data.
+_MAX_CHUNK_BYTES = 1 << 30
 
 
 def _decompress(compression: str, data: bytes, size: int, partial: bool) -> bytes:
@@ -187,6 +194,9 @@ class McapScan:
             self._stop(record_start, "file ends inside a chunk header")
             return
         _, _, uncompressed_size, crc = _CHUNK.unpack_from(buf, body)
+        if uncompressed_size > _MAX_CHUNK_BYTES:
+            raise BagFormatError(f"chunk declares {uncompressed_size} bytes uncompressed "
+                                 f"(more than {_MAX_CHUNK_BYTES}); the size field is damaged")
         compression, pos = _string(buf, body + _CHUNK.size)
         if pos + 8 > size:
             self._stop(record_start, "file ends inside a chunk header")
@@ -222,7 +232,8 @@ class McapScan:
             if opcode == OP_CHUNK:
                 try:
                     yield from self._chunk(buf, body, end, pos)
-                except (zstandard.ZstdError, RuntimeError, BagFormatError, struct.error) as error:
+                except (zstandard.ZstdError, RuntimeError, BagFormatError, struct.error,
+                        MemoryError, OverflowError) as error:
                     if end > size:
                         self._stop(pos, f"file ends inside a chunk that cannot be decompressed ({error})")
                         return

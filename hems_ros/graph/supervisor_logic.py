@@ -74,6 +74,9 @@ class MonitorLimits:
     # a controller's wire-temperature estimate (from the drive board's readings) this high: the
     # controller's own cut-off (150 degC by default) did not hold the wire
     max_wire_temperature_c: float = 170.0
+    # no wire moves this fast: the model's fastest contraction is about 35 mm/s at full duty
+    # (docs/experiments.md); a reading that does has jumped (a slipped encoder, a bad count)
+    max_wire_speed_m_s: float = 0.2
     # A lost controller is already caught within 30 ms by each unit's duty watchdog; the
     # heartbeat only has to name it, so it tolerates the scheduling hiccups of a busy host,
     # as long as the watchdog flag does (watchdog_hold_s). At 200 ms it latched FAULT in one
@@ -99,7 +102,7 @@ class MonitorLimits:
 
     def __post_init__(self) -> None:
         for name in ("stale_s", "lost_s", "max_wire_force_n", "max_tendon_position_m", "max_wire_temperature_c",
-                     "heartbeat_timeout_s", "watchdog_hold_s", "enable_grace_s"):
+                     "max_wire_speed_m_s", "heartbeat_timeout_s", "watchdog_hold_s", "enable_grace_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} = {value!r}: must be a finite value > 0")
@@ -133,6 +136,8 @@ class SupervisorLogic:
         self._duty_seen: set[str] = set()
         # (finger, stream) -> [number of gaps longer than stale_s while ENABLED, longest s]
         self._gaps: dict[tuple[str, str], list] = {}
+        # finger -> (stamp s, wire position m) of the latest encoder reading
+        self._readings: dict[str, tuple[float, float]] = {}
 
     # observations -------------------------------------------------------------
     def saw(self, stream: str, finger: str, now: float) -> None:
@@ -159,8 +164,16 @@ class SupervisorLogic:
 
     def wire_force(self, finger: str, force_n: float, now: float) -> None:
         self.saw("wire_force", finger, now)
-        if force_n >= self.limits.max_wire_force_n:
+        if not math.isfinite(force_n):
+            self._fault(finger, "wire_force", f"wire_force reading {force_n} (a failed sensor)")
+        elif force_n >= self.limits.max_wire_force_n:
             self._fault(finger, "over-force", f"wire over-force {force_n:.1f} N (limit {self.limits.max_wire_force_n:g} N)")
+
+    def controller_fault(self, finger: str, fault: str) -> None:
+        """A controller that reports a fault (a non-finite input) sends 0 % until it is reset:
+        the finger is lost to control, which the graph must show."""
+        if fault:
+            self._fault(finger, "controller", f"controller fault: {fault}")
 
     def temperature(self, finger: str, celsius: float) -> None:
         """A controller's wire-temperature estimate: at or above ``max_wire_temperature_c`` it
@@ -169,12 +182,26 @@ class SupervisorLogic:
             self._fault(finger, "over-temperature", f"wire over-temperature {celsius:.0f} degC estimated "
                                                     f"(limit {self.limits.max_wire_temperature_c:g} degC)")
 
-    def encoder(self, finger: str, wire_position_m: float, now: float) -> None:
+    def encoder(self, finger: str, wire_position_m: float, now: float, stamp_s: float | None = None) -> None:
+        """A new encoder reading, received at ``now``; ``stamp_s`` its sample's stamp (the unit's
+        clock), which judges how fast the reading moved without the host's timing."""
         self.saw("encoder", finger, now)
+        if not math.isfinite(wire_position_m):
+            self._fault(finger, "encoder", f"encoder reading {wire_position_m} (a failed sensor)")
+            return
         travel = tendon_position(wire_position_m)
         if travel > self.limits.max_tendon_position_m:
             self._fault(finger, "over-travel", f"tendon over-travel {1e3 * travel:.1f} mm "
                                 f"(limit {1e3 * self.limits.max_tendon_position_m:g} mm)")
+        last = self._readings.get(finger)
+        if stamp_s is not None:
+            self._readings[finger] = (stamp_s, wire_position_m)
+        if last is not None and stamp_s is not None and stamp_s > last[0]:
+            speed = abs(wire_position_m - last[1]) / (stamp_s - last[0])
+            if speed > self.limits.max_wire_speed_m_s:
+                self._fault(finger, "encoder jump", f"encoder jump {1e3 * (wire_position_m - last[1]):+.1f} mm in "
+                                                    f"{1e3 * (stamp_s - last[0]):.0f} ms (faster than "
+                                                    f"{1e3 * self.limits.max_wire_speed_m_s:g} mm/s)")
 
     def _held(self, finger: str, condition: str, holding: bool, now: float, start: float | None = None) -> float:
         """How long ``condition`` has held for ``finger`` by the report received at ``now``
@@ -271,6 +298,7 @@ class SupervisorLogic:
             if missing:
                 return False, "reset refused, faults persist: " + "; ".join(missing)
             self.faults.clear()
+            self._readings.clear()    # a reading from before the repair is no reference for speed
             self.state = State.IDLE
             return True, "reset: IDLE (call enable to heat again)"
         raise ValueError(f"unknown supervisor command {command!r}")

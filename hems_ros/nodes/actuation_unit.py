@@ -42,7 +42,7 @@ from hems_ros.nodes.grid_timer import create_grid_timer
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.wire import codec, seconds_of, stamp
-from hems_ros.nodes.params import Spec, declare, one_of, positive
+from hems_ros.nodes.params import PERIOD_LIMIT, Spec, WINDOW_LIMIT, declare, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import ActuationUnit, load_params
 
@@ -55,18 +55,18 @@ PARAMETERS = [
     Spec("finger", "index", "finger this unit drives: " + ", ".join(names.FINGERS), one_of(*names.FINGERS), True),
     Spec("physics_config", "ch6_hems_index",
          "physics parameter set: a name in config/physics/ or a YAML path", None, True),
-    Spec("physics_dt_s", 0.001, "physics integration step, s (1 kHz default)", positive, True),
+    Spec("physics_dt_s", 0.001, "physics integration step, s (1 kHz default)", PERIOD_LIMIT, True),
     Spec("tick_period_s", 0.01, "period of the integration and encoder-publishing timer, s "
-         "(duty commands are taken at the ticks, at their reception times)", positive, True),
-    Spec("encoder_period_s", 0.01, "encoder and wire-tension publishing period, s (100 Hz)", positive, True),
+         "(duty commands are taken at the ticks, at their reception times)", PERIOD_LIMIT, True),
+    Spec("encoder_period_s", 0.01, "encoder and wire-tension publishing period, s (100 Hz)", PERIOD_LIMIT, True),
     Spec("state_period_s", 0.05, "simulation-truth state publishing period, s (20 Hz; on the tick, so in whole "
-         "tick periods)", positive, True),
-    Spec("control_period_s", 0.01, "controller period Ts, s; the watchdog trips after three", positive, True),
+         "tick periods)", PERIOD_LIMIT, True),
+    Spec("control_period_s", 0.01, "controller period Ts, s; the watchdog trips after three", PERIOD_LIMIT, True),
     Spec("require_supervisor", True, "heat only while the supervisor reports ENABLED", None, True),
     Spec("supervisor_timeout_s", 0.5, "supervisor status older than this withdraws heating permission, s",
-         positive, True),
+         PERIOD_LIMIT, True),
     Spec("latency_window_s", 60.0, "the latency figures in /diagnostics cover the duty commands of the last "
-         "this many seconds", positive, True),
+         "this many seconds", WINDOW_LIMIT, True),
     Spec("sensor_fault", "", "encoder fault injected from now on, for fault tests: '' (none), stuck_encoder "
          "(fresh samples, frozen reading), encoder_jump (+5 mm), nan_encoder (NaN position); settable while "
          "running", one_of(*SENSOR_FAULTS)),

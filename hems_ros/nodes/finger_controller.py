@@ -37,6 +37,8 @@ The encoder, force, duty and status topics carry serialized messages (hems_ros.n
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import fields
 
 from hems_msgs.msg import (CommandRecord, ControllerStatus, DriveReading, DutyCommand, EncoderReading,
@@ -49,7 +51,7 @@ from hems_ros.graph.thermal_guard import ThermalGuard
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import now_ns, stamp_now
 from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
+from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.nodes.wire import codec, stamp_ns
 from hems_ros.physics import load_params
@@ -62,7 +64,7 @@ PARAMETERS = [
          True),
     Spec("strategy", "bpid", "control law: bpid | pid | pipd", one_of(*STRATEGIES), True),
     Spec("mode", "position", "initial mode: position | force (setpoints may switch it)", one_of(*MODES), True),
-    Spec("ts", DEFAULT_TS, "control period Ts, s", positive, True),
+    Spec("ts", DEFAULT_TS, "control period Ts, s", PERIOD_LIMIT, True),
     Spec("n_filter", DEFAULT_N_FILTER, "derivative filter pole N, rad/s", positive, True),
     Spec("pulley_ratio", transmission.PULLEY_RATIO, "tendon / wire displacement ratio of the slider pulley",
          positive, True),
@@ -70,12 +72,12 @@ PARAMETERS = [
          positive, True),
     Spec("max_force_n", SetpointLimits.max_force_n, "largest accepted tendon force setpoint, N", positive, True),
     Spec("idle_status_period_s", 0.1, "status period while no feedback arrives, s (otherwise one per duty)",
-         positive, True),
+         PERIOD_LIMIT, True),
     Spec("status_every", 2, "publish the status with every n-th duty (and whenever mode, setpoint, activity or "
          "fault change): 50 Hz keeps the supervisor's 50 ms stream checks fed at half the messages", positive, True),
     Spec("feedback_lag_s", 0.1, "0 % duty while the other mode's readings (force in position mode, encoder in "
          "force mode) are older than this against the feedback's, on the unit's stamps, s: without them "
-         "over-force and over-travel cannot be seen", positive, True),
+         "over-force and over-travel cannot be seen", PERIOD_LIMIT, True),
     Spec("physics_config", "ch6_hems_index", "physics parameter set of the unit (a config/physics name or a "
          "YAML path): the model the wire temperature is estimated with", None, True),
     Spec("cut_temperature_c", 150.0, "estimated wire temperature at which the duty is held at 0, degC "
@@ -260,6 +262,9 @@ class FingerControllerNode(LeanNode):
         other = self.force_stamp if self.setpoint.mode == "position" else self.encoder_stamp
         if other == NO_STAMP:
             return False
+        reading = self.wire_force if self.setpoint.mode == "position" else self.wire_position
+        if reading is None or not math.isfinite(reading):
+            return False    # a failed sensor says nothing about over-force or over-travel
         lag = (measurement_stamp[0] - other[0]) * 1_000_000_000 + measurement_stamp[1] - other[1]
         if lag > self.feedback_lag_ns:
             self.drain(self._other_feedback())   # polled at the statuses: take what came meanwhile

@@ -32,6 +32,23 @@ def positive(value: Any) -> str | None:
     return None
 
 
+def within(low: float, high: float, unit: str = "s") -> Callable[[Any], str | None]:
+    """A number from ``low`` to ``high``: a period or window the node turns into timers, clock
+    stamps or buffer sizes, which a value of 1e308 (or 1e-300) would overflow."""
+    def check(value: Any) -> str | None:
+        problem = positive(value)
+        if problem is None and not low <= value <= high:
+            problem = f"must be from {low:g} to {high:g} {unit}".rstrip()
+        return problem
+    return check
+
+
+#: a period of a node's timers, s (a microsecond to a minute)
+PERIOD_LIMIT = within(1e-6, 60.0)
+#: a time window a node keeps, s (up to a day)
+WINDOW_LIMIT = within(1e-6, 86400.0)
+
+
 def non_negative(value: Any) -> str | None:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
         return "must be a finite number >= 0"

@@ -24,6 +24,8 @@ from hems_ros.physics.params import ForceSensor
 
 _SENSOR = ForceSensor()
 WIRE_FORCE = codec(WireForce)
+SENSOR_FAULTS = ("", "stuck_force", "force_saturation", "force_noise_burst", "nan_force")
+NOISE_BURST = 50.0
 
 
 PARAMETERS = [
@@ -33,6 +35,11 @@ PARAMETERS = [
     Spec("noise_std_n", _SENSOR.noise_std_n, "force sensor noise standard deviation, N", non_negative, True),
     Spec("seed", _SENSOR.seed, "seed of the noise generator (each sensor adds its index)", None, True),
     Spec("over_force_n", 50.0, "over-force flag threshold, N (wire side)", positive, True),
+    Spec("sensor_fault", "", "force-sensor fault injected from now on, for fault tests: '' (none), stuck_force "
+         "(fresh samples, frozen reading), force_saturation (reads its range), force_noise_burst (noise x50), "
+         "nan_force; settable while running", one_of(*SENSOR_FAULTS)),
+    Spec("fault_finger", "", "the finger whose sensor sensor_fault hits ('' both of the module's)",
+         lambda v: None if v in ("", *names.FINGERS) else f"must be '' or one of {', '.join(names.FINGERS)}"),
 ]
 
 
@@ -46,6 +53,7 @@ class ShoulderModuleNode(LeanNode):
         self.publishers_ = {}
         self.sequences = {}
         self.rngs = {}
+        self.frozen: dict[str, tuple[float, bool]] = {}
         for index, finger in enumerate(names.MODULES[p["module"]]):
             self.publishers_[finger] = self.create_publisher(WireForce, names.topic(finger, "wire_force"), qos.SENSOR)
             self.sequences[finger] = 0
@@ -53,10 +61,25 @@ class ShoulderModuleNode(LeanNode):
             self.subscribe_serialized(WireForce, names.sim_topic(finger, "wire_tension"),
                                       lambda tension, f=finger: self.on_tension(f, tension), qos.SENSOR)
 
+    def fault(self, finger: str) -> str:
+        """The fault injected into ``finger``'s sensor ('' none)."""
+        target = self.get_parameter("fault_finger").value
+        return self.get_parameter("sensor_fault").value if target in ("", finger) else ""
+
     def on_tension(self, finger: str, tension) -> None:
         p = self.params
-        noise = self.rngs[finger].standard_normal() * p["noise_std_n"]
+        fault = self.fault(finger)
+        noise = self.rngs[finger].standard_normal() * p["noise_std_n"] * (NOISE_BURST if fault == "force_noise_burst"
+                                                                           else 1.0)
         force, saturated = sensors.force_reading(tension.force, noise, p["range_max_n"], p["resolution_n"])
+        if fault != "stuck_force":
+            self.frozen.pop(finger, None)
+        if fault == "stuck_force":
+            force, saturated = self.frozen.setdefault(finger, (force, saturated))
+        elif fault == "force_saturation":
+            force, saturated = p["range_max_n"], True
+        elif fault == "nan_force":
+            force = float("nan")
         self.sequences[finger] += 1
         self.publishers_[finger].publish(WIRE_FORCE.encode(tension._replace(
             finger=finger, force=force, saturated=saturated, over_force=force >= p["over_force_n"],

@@ -14,12 +14,12 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
 from hems_ros.nodes.clock_time import to_msg
-from hems_ros.nodes.params import Spec, declare, positive
+from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, positive
 from hems_ros.nodes.runner import run_node
 
 PARAMETERS = [
     Spec("rate", 1.0, "simulated seconds per wall second", positive, True),
-    Spec("period_s", 0.004, "wall-clock publishing period, s", positive, True),
+    Spec("period_s", 0.004, "wall-clock publishing period, s", PERIOD_LIMIT, True),
 ]
 
 

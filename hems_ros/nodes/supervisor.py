@@ -40,7 +40,7 @@ from hems_ros.nodes import qos
 from hems_ros.nodes.grid_timer import create_grid_timer
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.clock_time import seconds, stamp_now
-from hems_ros.nodes.params import Spec, declare, positive
+from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, positive
 from hems_ros.nodes.runner import run_node
 
 _LIMITS = MonitorLimits()
@@ -56,26 +56,28 @@ def _fingers(value) -> str | None:
 PARAMETERS = [
     Spec("fingers", list(names.FINGERS), "fingers to supervise (all six by default)", _fingers, True),
     Spec("stale_s", _LIMITS.stale_s, "an encoder or wire-force stream older than this is not ready for enable, "
-         "and a gap longer than this while ENABLED is counted in /diagnostics, s", positive, True),
+         "and a gap longer than this while ENABLED is counted in /diagnostics, s", PERIOD_LIMIT, True),
     Spec("lost_s", _LIMITS.lost_s, "an encoder or wire-force stream without a new reading for longer than this "
          "while ENABLED is lost: a fault (the units stop heating 3 control periods into any gap), s",
-         positive, True),
+         PERIOD_LIMIT, True),
     Spec("heartbeat_timeout_s", _LIMITS.heartbeat_timeout_s, "a controller heartbeat silent for longer is a fault, s",
-         positive, True),
+         PERIOD_LIMIT, True),
     Spec("watchdog_hold_s", _LIMITS.watchdog_hold_s, "a unit's duty-watchdog flag held this long while ENABLED "
-         "is a fault (a lost controller; the unit itself stops heating after 3 control periods), s", positive, True),
+         "is a fault (a lost controller; the unit itself stops heating after 3 control periods), s", PERIOD_LIMIT, True),
     Spec("enable_grace_s", _LIMITS.enable_grace_s, "while ENABLED, a unit without heating permission or an "
-         "inactive controller for longer than this is a fault, s", positive, True),
+         "inactive controller for longer than this is a fault, s", PERIOD_LIMIT, True),
     Spec("max_wire_force_n", _LIMITS.max_wire_force_n, "wire over-force limit, N", positive, True),
     Spec("max_tendon_position_m", _LIMITS.max_tendon_position_m, "tendon over-travel limit, m", positive, True),
+    Spec("max_wire_speed_m_s", _LIMITS.max_wire_speed_m_s, "an encoder reading moving faster than this (on the "
+         "unit's stamps) has jumped: a fault, m/s", PERIOD_LIMIT, True),
     Spec("max_wire_temperature_c", _LIMITS.max_wire_temperature_c, "wire over-temperature limit on the "
          "controllers' estimates (from the drive board's readings), degC", positive, True),
     Spec("check_period_s", 0.02, "monitor period, s: the controller status and state messages are taken "
          "and judged at each check (the controllers' statuses, which carry their readings, come at 50 Hz)",
-         positive, True),
+         PERIOD_LIMIT, True),
     Spec("status_period_s", 0.1, "status re-publishing period, s (also on every change; at the checks, so in "
-         "whole check periods)", positive, True),
-    Spec("joint_states_period_s", 0.02, "joint_states publishing period, s (at the checks)", positive, True),
+         "whole check periods)", PERIOD_LIMIT, True),
+    Spec("joint_states_period_s", 0.02, "joint_states publishing period, s (at the checks)", PERIOD_LIMIT, True),
 ]
 
 
@@ -126,13 +128,14 @@ class SupervisorNode(LeanNode):
         self.logic.saw("heartbeat", finger, now)
         self.logic.sees_enabled(finger, "controller", message.active, now)
         self.logic.temperature(finger, message.wire_temperature_c)
+        self.logic.controller_fault(finger, message.fault)
         # a reading counts as fresh when its stamp moved since the last status (receive-side
         # judgement: no clock comparison between hosts)
         encoder = (message.encoder_stamp_sec, message.encoder_stamp_nanosec)
         if encoder != (0, 0) and encoder != self.encoder_stamps[finger]:
             self.encoder_stamps[finger] = encoder
             self.position[finger] = message.wire_position
-            self.logic.encoder(finger, message.wire_position, now)
+            self.logic.encoder(finger, message.wire_position, now, encoder[0] + encoder[1] * 1e-9)
         else:
             self.logic.unchanged("encoder", finger, now)
         force = (message.force_stamp_sec, message.force_stamp_nanosec)

@@ -488,3 +488,19 @@ def test_skipping_the_integration_a_rewinding_command_undoes_changes_no_bit():
         assert (full.applied_duty, full.late_commands, full.rejected_commands) == (
             lean.applied_duty, lean.late_commands, lean.rejected_commands)
     assert skipped > 50 and kept > 200
+
+
+def test_a_reading_that_jumps_or_is_not_a_number_is_a_failed_sensor():
+    logic = SupervisorLogic(("index", "middle", "ring"))
+    _ready(logic, 1.0)
+    logic.request("enable", 1.0)
+    # 5 mm in 20 ms of the unit's stamps (250 mm/s): a slipped encoder, whatever the host did
+    logic.encoder("index", 0.010, 1.02, stamp_s=100.00)
+    logic.encoder("index", 0.011, 1.30, stamp_s=100.02)       # 50 mm/s, late to arrive: a motion
+    assert not logic.faults
+    logic.encoder("index", 0.016, 1.31, stamp_s=100.04)
+    logic.wire_force("middle", float("nan"), 1.32)
+    logic.controller_fault("ring", "measurement is nan")
+    kinds = [(f.finger, f.kind) for f in logic.faults]
+    assert kinds == [("index", "encoder jump"), ("middle", "wire_force"), ("ring", "controller")]
+    assert "encoder jump +5.0 mm in 20 ms" in str(logic.faults[0]) and logic.state == State.FAULT
