@@ -71,7 +71,7 @@ def ros_arguments(node: str, params: dict[str, str], options: GraphOptions) -> l
     for key, value in params.items():
         args += ["-p", f"{key}:={value}"]
     if options.sim_time:
-        args += ["-p", "use_sim_time:=true"]
+        args += ["-p", "use_sim_time:=true", "-p", "lockstep:=true"]
     return args + list(options.extra_ros_args)
 
 
@@ -109,13 +109,15 @@ class Graph:
         commands = {}
         if self.options.sim_time:
             commands["sim_clock"] = [sys.executable, "-m", "hems_ros.nodes.sim_clock", "--ros-args",
-                                     "-p", f"rate:={self.options.rate}"]
+                                     "-p", f"rate:={self.options.rate}",
+                                     "-p", "fingers:=" + ",".join(self.options.fingers)]
         if self.options.composed:
             spec_args = [f"{exe}:{node}:" + ",".join(f"{k}={v}" for k, v in params.items())
                          for exe, node, params in specs]
             commands["composed"] = ([sys.executable, "-m", "hems_ros.nodes.composed", *spec_args]
                                     + common_ros_arguments(self.options)
-                                    + (["-p", "use_sim_time:=true"] if self.options.sim_time else [])
+                                    + (["-p", "use_sim_time:=true", "-p", "lockstep:=true"]
+                                       if self.options.sim_time else [])
                                     + list(self.options.extra_ros_args))
         else:
             for executable, node, params in specs:

@@ -36,3 +36,8 @@ positive = _number(float, "a number", params.positive)
 non_negative = _number(float, "a number", params.non_negative)
 positive_int = _number(int, "a whole number", lambda v: None if v > 0 else "must be a whole number > 0")
 non_negative_int = _number(int, "a whole number", lambda v: None if v >= 0 else "must be a whole number >= 0")
+
+
+def positive_or_max(text: str) -> float:
+    """A number > 0, or ``max`` (0.0: no cap; the lockstep clock's ``--rate max``)."""
+    return 0.0 if text == "max" else positive(text)

@@ -9,9 +9,13 @@ import time
 from datetime import datetime
 from pathlib import Path
 
-from hems_ros.cli.numbers import positive
+from hems_ros.cli.numbers import positive, positive_or_max
 from hems_ros.graph import names
 from hems_ros.launcher import Graph, GraphOptions, default_params_file
+
+
+def rate_text(rate: float) -> str:
+    return "max" if rate == 0 else f"{rate:g}"
 
 
 def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
@@ -19,8 +23,10 @@ def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
                         help="run all nodes in one process (one thread, one wait set) instead of one process each")
     parser.add_argument("--sim-time", action="store_true",
                         help="run every node on simulated time from a /clock publisher")
-    parser.add_argument("--rate", type=positive, default=1.0,
-                        help="with --sim-time: simulated seconds per wall second (default 1)")
+    parser.add_argument("--rate", type=positive_or_max, default=1.0,
+                        help="with --sim-time: the most simulated seconds per wall second (default 1), or max "
+                             "(as fast as the graph answers); the clock waits for every node each step, so a "
+                             "run's figures do not depend on the rate")
     parser.add_argument("--params-file", type=Path, default=default_params_file(),
                         help="ROS params file for every node (default config/hems.yaml)")
     parser.add_argument("--extra-params", type=Path, action="append", metavar="FILE",
@@ -147,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"hems up: recording into {recorder.output}", flush=True)
     print(f"hems up: {len(graph.processes)} processes "
           f"({'composed' if options.composed else 'one per node'}"
-          f"{f', sim time x{options.rate:g}' if options.sim_time else ''}); Ctrl-C to stop", flush=True)
+          f"{f', sim time x{rate_text(options.rate)}' if options.sim_time else ''}); Ctrl-C to stop", flush=True)
     started = time.monotonic()
     reported: set[str] = set()
     recorded = True

@@ -92,6 +92,7 @@ class UnitDriver:
         # (on wall-clock time the node advances from tick to tick, sample to sample, and takes
         # commands while the unit is still at the sample: no snapshot and no restore)
         self._sample_time_s: float | None = None
+        self.answered_sample_s: float | None = None     # the sample the latest answering command answered
         self._sample_steps = 0
         self._sample_snapshot: tuple | None = None
 
@@ -118,6 +119,7 @@ class UnitDriver:
         effective_s = now_s
         if self._answers_latest_sample(measurement_stamp_s):
             effective_s = self._sample_time_s
+            self.answered_sample_s = self._sample_time_s
             if self.unit.steps != self._sample_steps:   # moved on: the snapshot was taken on leaving
                 self.unit.restore(self._sample_snapshot)
         elif measurement_stamp_s is not None and measurement_stamp_s > 0:
@@ -130,6 +132,11 @@ class UnitDriver:
         self.last_command_s = effective_s
         if measurement_stamp_s is not None and measurement_stamp_s > 0:
             self.latencies_s.append(now_s - measurement_stamp_s)
+
+    @property
+    def latest_sample_answered(self) -> bool:
+        """A valid command answering the latest encoder sample has come."""
+        return self._sample_time_s is not None and self.answered_sample_s == self._sample_time_s
 
     def reject(self) -> None:
         """A command that cannot be applied: counted, and 0 duty until the next valid one."""

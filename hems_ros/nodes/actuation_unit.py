@@ -31,6 +31,8 @@ The duty, encoder, tension and state topics carry serialized messages (hems_ros.
 
 from __future__ import annotations
 
+import time
+
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
 from hems_msgs.msg import ActuatorState, DriveReading, DutyCommand, EncoderReading, SupervisorStatus, WireForce
@@ -46,6 +48,7 @@ from hems_ros.nodes.params import PERIOD_LIMIT, Spec, WINDOW_LIMIT, declare, one
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import ActuationUnit, load_params
 
+LOCKSTEP_WAIT_S, LOCKSTEP_POLL_S = 0.05, 0.0002
 ENCODER, TENSION, STATE, DRIVE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState, DriveReading))
 #: Encoder faults a test can inject at run time (``ros2 param set ... sensor_fault stuck_encoder``).
 SENSOR_FAULTS = ("", "stuck_encoder", "encoder_jump", "nan_encoder")
@@ -67,6 +70,9 @@ PARAMETERS = [
          PERIOD_LIMIT, True),
     Spec("latency_window_s", 60.0, "the latency figures in /diagnostics cover the duty commands of the last "
          "this many seconds", WINDOW_LIMIT, True),
+    Spec("lockstep", False, "on sim time from the lockstep clock (hems up --sim-time): take the controller's answer "
+         "to the latest sample before each step, waiting for it up to 50 ms of wall time, since the clock moved "
+         "on only after it was sent", None, True),
     Spec("sensor_fault", "", "encoder fault injected from now on, for fault tests: '' (none), stuck_encoder "
          "(fresh samples, frozen reading), encoder_jump (+5 mm), nan_encoder (NaN position); settable while "
          "running", one_of(*SENSOR_FAULTS)),
@@ -110,7 +116,10 @@ class ActuationUnitNode(LeanNode):
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
         self.duty_sub = self.subscribe_serialized(DutyCommand, names.topic(self.finger, "duty"), self.on_duty,
                                                   qos.COMMAND, on_unreadable=self.on_unreadable_duty)
-        if self.wall_clock:
+        # lockstep: answers are taken at the steps, each as if received at its sample
+        self.lockstep = p["lockstep"] and not self.wall_clock
+        self.answering = True
+        if self.wall_clock or self.lockstep:
             self.poll(self.duty_sub)
         self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
         self.state_cadence = Cadence(p["state_period_s"], p["tick_period_s"])
@@ -149,6 +158,8 @@ class ActuationUnitNode(LeanNode):
         # (or start) the heating before the status came
         if self.wall_clock:
             self.drain(self.duty_sub, with_reception_time=True)
+        elif self.lockstep:
+            self.take_answer()
         self.advance_to(now)
         was_allowed = self.driver.heating_allowed(now)
         self.driver.permit_heating(enabled, now)
@@ -161,9 +172,28 @@ class ActuationUnitNode(LeanNode):
         now = seconds(self)
         if self.wall_clock:
             self.drain(self.duty_sub, with_reception_time=True)
+        elif self.lockstep:
+            self.take_answer()
         self.advance_to(now)
         if self.state_cadence.due(now):
             self.publish_state()
+
+    def take_answer(self) -> None:
+        """Lockstep: the clock took this step only after the controller had answered the
+        latest sample, so the answer is here or on its way; it acts from its sample, as the
+        board's would. A controller that stopped answering is not waited for again until it
+        answers."""
+        at = self.driver.time_s
+        deadline = time.monotonic() + LOCKSTEP_WAIT_S
+        while True:
+            self.drain(self.duty_sub, at=at)
+            if self.driver.latest_sample_answered:
+                self.answering = True
+                return
+            if not self.answering or time.monotonic() >= deadline:
+                self.answering = False
+                return
+            time.sleep(LOCKSTEP_POLL_S)
 
     def advance_to(self, now: float) -> None:
         """Integrate the physics up to ``now``; publish the encoder samples that fell due."""

@@ -34,15 +34,18 @@ class LeanNode(Node):
             self.polled = frozenset(subscriptions)
             lean_spin.polled_changed()
 
-    def drain(self, subscription, with_reception_time: bool = False) -> None:
+    def drain(self, subscription, with_reception_time: bool = False, at: float | None = None) -> None:
         """Run ``subscription``'s callback on every message queued for it, oldest first.
 
         ``with_reception_time``: the callback also gets the time the middleware received the
         message (s, system clock, the ROS clock without sim time): when the node took it, at
-        its own convenience, says nothing about when it came."""
+        its own convenience, says nothing about when it came. ``at``: the callback gets this
+        time instead (a lockstep clock says when a message counts as received)."""
         with subscription.handle:
             while (taken := subscription.handle.take_message(subscription.msg_type, subscription.raw)) is not None:
-                if with_reception_time:
+                if at is not None:
+                    subscription.callback(taken[0], at)
+                elif with_reception_time:
                     subscription.callback(taken[0], taken[1]["received_timestamp"] * 1e-9)
                 else:
                     subscription.callback(taken[0])

@@ -1,29 +1,56 @@
-"""Publishes simulated time on /clock, running ``rate`` times faster than the wall clock.
+"""Publishes simulated time on /clock for the nodes started with ``use_sim_time:=true``
+(`hems up --sim-time --rate R`).
 
-Nodes started with ``use_sim_time:=true`` follow it (`hems up --sim-time --rate R`).
-Published every ``period_s`` of wall time (default 4 ms), so each tick advances simulated
-time by ``rate * period_s``; the actuation units integrate in 1 ms steps whatever the tick.
+Lockstep (the default): the clock takes its next 10 ms step only when every finger's unit,
+shoulder module and controller have done their part of the current one and the supervisor
+keeps up (hems_ros.graph.lockstep_clock), so a run's figures do not depend on the host or the
+layout; ``rate`` caps the pace (simulated s per wall s; 0 runs as fast as the graph answers).
+With ``lockstep:=false`` it is a plain clock: every ``period_s`` of wall time it moves on by
+``rate * period_s``, whether the nodes keep up or not.
+
+Subscribes (lockstep)  /hems/<finger>/encoder, /hems/<finger>/wire_force, /hems/<finger>/duty,
+                       /hems/supervisor/status
+Publishes              /clock  rosgraph_msgs/Clock  reliable
 """
 
 from __future__ import annotations
 
 import time
 
-from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
-from hems_ros.nodes.clock_time import to_msg
-from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, positive
+from hems_msgs.msg import DutyCommand, EncoderReading, SupervisorStatus, WireForce
+from hems_ros.graph import names
+from hems_ros.graph.lockstep_clock import LockstepClock
+from hems_ros.nodes import qos
+from hems_ros.nodes.clock_time import from_msg, to_msg
+from hems_ros.nodes.lean_node import LeanNode
+from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, non_negative
 from hems_ros.nodes.runner import run_node
+from hems_ros.nodes.wire import seconds_of
+
+
+def _fingers(value) -> str | None:
+    unknown = [f for f in str(value).split(",") if f and f not in names.FINGERS]
+    return f"unknown fingers {unknown} (known: {', '.join(names.FINGERS)})" if unknown else None
+
 
 PARAMETERS = [
-    Spec("rate", 1.0, "simulated seconds per wall second", positive, True),
-    Spec("period_s", 0.004, "wall-clock publishing period, s", PERIOD_LIMIT, True),
+    Spec("rate", 1.0, "simulated seconds per wall second; with lockstep the most, and 0 runs as fast as the "
+         "graph answers", non_negative, True),
+    Spec("lockstep", True, "advance only when every finger's unit, shoulder module and controller have answered "
+         "the current step", None, True),
+    Spec("fingers", ",".join(names.FINGERS), "comma-separated fingers the lockstep waits for", _fingers, True),
+    Spec("step_s", 0.01, "lockstep: simulated time per step, s (the encoder period)", PERIOD_LIMIT, True),
+    Spec("stall_s", 0.5, "lockstep: a finger that has not answered for this long (wall clock, s) is left out "
+         "until it answers again", PERIOD_LIMIT, True),
+    Spec("period_s", 0.004, "wall-clock publishing period, s (without lockstep; with it, how often the pace "
+         "is checked)", PERIOD_LIMIT, True),
 ]
 
 
-class SimClockNode(Node):
+class SimClockNode(LeanNode):
     """Simulated-time source for the graph."""
 
     def __init__(self, **node_kwargs) -> None:
@@ -33,10 +60,49 @@ class SimClockNode(Node):
         self.wall0 = time.monotonic()
         self.sim0 = 1.0  # time 0 means "no clock yet" to rclpy; start just after it
         self.pub = self.create_publisher(Clock, "/clock", QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
-        self.create_timer(p["period_s"], self.tick)
+        self.lockstep = None
+        if p["lockstep"]:
+            fingers = tuple(f for f in p["fingers"].split(",") if f)
+            self.lockstep = LockstepClock(fingers, start_s=self.sim0, step_s=p["step_s"], rate=self.rate,
+                                          stall_s=p["stall_s"])
+            for finger in fingers:
+                self.subscribe_serialized(EncoderReading, names.topic(finger, "encoder"),
+                                          lambda m, f=finger: self._saw(self.lockstep.encoder, f, m), qos.SENSOR)
+                self.subscribe_serialized(WireForce, names.topic(finger, "wire_force"),
+                                          lambda m, f=finger: self._saw(self.lockstep.force, f, m), qos.SENSOR)
+                self.subscribe_serialized(DutyCommand, names.topic(finger, "duty"), lambda m, f=finger: self._answer(f, m),
+                                          qos.COMMAND)
+            self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
+                                     lambda m: self._advance(self.lockstep.supervisor(from_msg(m.header.stamp))),
+                                     qos.STATUS)
+            self.pub.publish(Clock(clock=to_msg(self.sim0)))
+            self.create_timer(p["period_s"], self._advance)
+            self.create_timer(5.0, self._report_stalls)
+            self._stalls_reported = 0
+        else:
+            self.create_timer(p["period_s"], self.tick)
 
     def tick(self) -> None:
         self.pub.publish(Clock(clock=to_msg(self.sim0 + self.rate * (time.monotonic() - self.wall0))))
+
+    def _saw(self, record, finger: str, message) -> None:
+        record(finger, seconds_of(message.header_stamp_sec, message.header_stamp_nanosec))
+        self._advance()
+
+    def _answer(self, finger: str, message) -> None:
+        self.lockstep.duty(finger, seconds_of(message.measurement_stamp_sec, message.measurement_stamp_nanosec))
+        self._advance()
+
+    def _advance(self, _=None) -> None:
+        now = self.lockstep.try_advance(time.monotonic())
+        if now is not None:
+            self.pub.publish(Clock(clock=to_msg(now)))
+
+    def _report_stalls(self) -> None:
+        if self.lockstep.stalls > self._stalls_reported:
+            self._stalls_reported = self.lockstep.stalls
+            self.get_logger().warning(f"lockstep: {self.lockstep.stalls} steps advanced without every answer "
+                                      f"(taking part now: {', '.join(self.lockstep.joined) or 'none'})")
 
 
 def main() -> int:

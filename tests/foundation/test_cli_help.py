@@ -15,7 +15,7 @@ from hems_ros.cli import numbers
 from hems_ros.cli.main import build_parser
 
 NUMBER_TYPES = {numbers.finite, numbers.positive, numbers.non_negative, numbers.positive_int,
-                numbers.non_negative_int}
+                numbers.non_negative_int, numbers.positive_or_max}
 REFERENCE_BAG = Path(__file__).resolve().parents[2] / "bags" / "demo_grasp_index"
 
 
@@ -57,6 +57,7 @@ def test_every_numeric_option_checks_its_value():
 
 @pytest.mark.parametrize("parse, text, message", [
     (numbers.positive, "nan", "'nan': must be a finite number > 0"),
+    (numbers.positive_or_max, "fast", "'fast' is not a number"),
     (numbers.positive, "inf", "'inf': must be a finite number > 0"),
     (numbers.positive, "0", "'0': must be a finite number > 0"),
     (numbers.non_negative, "-1", "'-1': must be a finite number >= 0"),
