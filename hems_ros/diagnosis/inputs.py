@@ -14,6 +14,7 @@ import yaml
 from hems_ros.diagnosis import bagload, candidates, csvload
 from hems_ros.diagnosis.runs import DiagnosisInputError, Run
 from hems_ros.physics.params import ParamError, UnitParams, load_params
+from hems_ros.physics.yamlload import load_yaml
 
 
 def model(name: str, conditions: Path | None = None, overrides: list[str] = ()) -> UnitParams:
@@ -49,7 +50,7 @@ def _value(text: str):
 def _with_conditions(params: UnitParams, path: Path) -> UnitParams:
     """``params`` with the groups and keys a partial physics YAML gives."""
     try:
-        data = yaml.safe_load(Path(path).read_text())
+        data = load_yaml(Path(path).read_text())
     except OSError as error:
         raise DiagnosisInputError(f"--conditions {path}: {error.strerror or error}") from None
     except yaml.YAMLError as error:

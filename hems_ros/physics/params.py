@@ -31,6 +31,7 @@ from typing import Any, Mapping
 import yaml
 
 from hems_ros.paths import config_path
+from hems_ros.physics.yamlload import load_yaml
 
 LOAD_KINDS = ("hanging_mass", "bias_spring", "hems_finger")
 
@@ -523,7 +524,7 @@ def load_params(path_or_name: str | os.PathLike[str]) -> UnitParams:
             raise ParamError(f"no parameter set named {path_or_name!r} in {config_dir()} "
                              f"(available: {', '.join(available_configs()) or 'none'})")
     try:
-        data = yaml.safe_load(path.read_text())
+        data = load_yaml(path.read_text())
     except yaml.YAMLError as exc:
         raise ParamError(f"{path}: not valid YAML: {exc}") from exc
     return UnitParams.from_dict(data or {}, source=str(path))
