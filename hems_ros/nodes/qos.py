@@ -17,3 +17,6 @@ CONTROLLER_STATUS = SENSOR
 # matched the node, and one that joins later still gets the last hundred.
 COMMAND_LOG = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# /hems/joint_states is for tools outside the graph (RViz, plotting scripts), whose readers are
+# reliable by default and do not match a best-effort writer; a reliable writer serves both.
+JOINT_STATES = COMMAND

@@ -8,7 +8,7 @@ Subscribes  /hems/<finger>/controller_status (best effort, heartbeat): also the 
             /hems/sim/<finger>/state (best effort, duty-watchdog flag, heating permission)
 Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, transient local; on change and every status_period_s
             /hems/supervisor/commands hems_msgs/CommandRecord   reliable, transient local: every service call
-            /hems/joint_states       sensor_msgs/JointState      tendon position (m) and tendon force (N, as effort)
+            /hems/joint_states       sensor_msgs/JointState      reliable: tendon position (m) and tendon force (N, as effort)
             /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz
 
 Monitors: lost encoder or force streams (no new reading for lost_s, default 500 ms; shorter
@@ -94,7 +94,7 @@ class SupervisorNode(LeanNode):
         self.force = {f: float("nan") for f in self.fingers}
         self.published = None
         self.status_pub = self.create_publisher(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
-        self.joints_pub = self.create_publisher(JointState, names.JOINT_STATES_TOPIC, qos.SENSOR)
+        self.joints_pub = self.create_publisher(JointState, names.JOINT_STATES_TOPIC, qos.JOINT_STATES)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
         self.commands_pub = self.create_publisher(CommandRecord, names.SUPERVISOR_COMMANDS_TOPIC, qos.COMMAND_LOG)
         self.commands = 0
