@@ -87,8 +87,14 @@ def node_help(make_node: Callable[[], object], program: str) -> str:
     import inspect
 
     # the class says what the node is; its module documents topics, parameters and behaviour
-    parts = [make_node.__doc__, sys.modules[make_node.__module__].__doc__]
+    module = sys.modules[make_node.__module__]
+    parts = [make_node.__doc__, module.__doc__]
     doc = "\n\n".join(inspect.cleandoc(part) for part in parts if part)
+    specs = getattr(module, "PARAMETERS", ())
+    if specs:
+        doc += "\n\nParameters (-p <name>:=<value>; units in the name or the text):\n" + "\n".join(
+            f"  {spec.name} (default {spec.default!r}{', read-only' if spec.read_only else ''}): {spec.description}"
+            for spec in specs)
     name = os.path.basename(program)
     return (f"usage: {name} [{NO_PARAMETER_SERVICES_FLAG}] [--ros-args -p <parameter>:=<value> ... | "
             f"--params-file <file>]\n\n{doc}\n\n{NO_PARAMETER_SERVICES_FLAG}: no parameter services (ros2 param "

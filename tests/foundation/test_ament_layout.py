@@ -57,3 +57,18 @@ def test_every_node_starts_and_stops_cleanly_on_sigint_and_sigterm(venv, name, t
         assert process.returncode == 0, f"{name} on {stop.name}: exit {process.returncode}: {stderr}"
         assert time.monotonic() - started < 3.0
         assert "Traceback" not in stderr
+
+
+@pytest.mark.parametrize("name", ["actuation_unit", "finger_controller", "shoulder_module", "supervisor", "sim_clock"])
+def test_a_node_help_lists_every_parameter_with_its_default(name):
+    import importlib
+
+    from hems_ros.nodes.runner import node_help
+
+    module = importlib.import_module(f"hems_ros.nodes.{name}")
+    node_class = next(v for v in vars(module).values() if isinstance(v, type) and v.__module__ == module.__name__
+                      and hasattr(v, "__init__") and v.__name__.endswith("Node"))
+    text = node_help(node_class, name)
+    assert module.PARAMETERS
+    for spec in module.PARAMETERS:
+        assert f"  {spec.name} (default {spec.default!r}" in text, spec.name
