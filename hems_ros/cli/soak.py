@@ -137,7 +137,6 @@ def run(args: argparse.Namespace) -> int:
     recorder = RecorderProcess(folder)
     print(f"hems soak: {len(graph.processes)} processes, recording into {recorder.output}, "
           f"{args.minutes:g} min", flush=True)
-    recorded = False
     try:
         with GraphClient("hems_soak") as client:
             wait_until_recording(client, recorder, options.fingers, time.monotonic() + 120.0)

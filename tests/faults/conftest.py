@@ -1,9 +1,9 @@
-"""The fault matrix's graph (tests/faults/matrix.py has its rows and table).
+"""The fault matrix's graph (tests/faults/faultrows.py has its rows and table).
 
 One finger's graph (actuation unit, shoulder module, controller, supervisor; one process each,
 as `ros2 run` of each node gives) stays up for the whole matrix; each row injects one fault
 into a graph that is ENABLED and holding a setpoint, and restores it afterwards. With
-HEMS_RELIABILITY_PAGE set (``make test-faults``) the session writes the matrix into that
+HEMS_RELIABILITY_PAGE set (``make test-faults``) the run writes the matrix into that
 Markdown file, between its fault-matrix markers.
 """
 
