@@ -50,7 +50,7 @@ def render(rows: list[Row]) -> str:
              "| expected |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r.node} | {r.fault} | {_ms(r.zero_duty_ms)} | {_ms(r.fault_ms)} | {r.message or '-'} | "
-                     f"{r.peak_c:.0f} | {r.recovered} | {r.expected} |")
+                     f"{'-' if math.isnan(r.peak_c) else f'{r.peak_c:.0f}'} | {r.recovered} | {r.expected} |")
     return "\n".join(lines) + "\n"
 
 
