@@ -85,8 +85,8 @@ def missed_periods(bag, finger: str) -> tuple[int, int]:
         return 0, 0
     samples = (bag[encoder]["header.stamp.sec"].astype(np.int64) * 1_000_000_000
                + bag[encoder]["header.stamp.nanosec"].astype(np.int64))
-    answered = (bag[duty]["measurement_stamp_sec"].astype(np.int64) * 1_000_000_000
-                + bag[duty]["measurement_stamp_nanosec"].astype(np.int64))
+    answered = (bag[duty]["measurement_stamp.sec"].astype(np.int64) * 1_000_000_000
+                + bag[duty]["measurement_stamp.nanosec"].astype(np.int64))
     within = samples[(samples >= answered.min()) & (samples <= answered.max())]
     return int(np.sum(~np.isin(within, answered))), len(within)
 

@@ -39,8 +39,8 @@ def test_missed_periods_are_encoder_samples_no_duty_answered():
     bag = Bag(Path("b"), {
         "/hems/index/encoder": _topic("/hems/index/encoder", **{"header.stamp.sec": stamps,
                                                                  "header.stamp.nanosec": np.zeros(10, int)}),
-        "/hems/index/duty": _topic("/hems/index/duty", measurement_stamp_sec=answered,
-                                   measurement_stamp_nanosec=np.zeros(6, int)),
+        "/hems/index/duty": _topic("/hems/index/duty", **{"measurement_stamp.sec": answered,
+                                                           "measurement_stamp.nanosec": np.zeros(6, int)}),
     }, [])
     # samples before the first and after the last answer are outside the controlled span
     assert soak.missed_periods(bag, "index") == (2, 8)
