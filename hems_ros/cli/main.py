@@ -11,6 +11,7 @@ import argparse
 import importlib
 import os
 import pkgutil
+import signal
 import sys
 
 import hems_ros
@@ -35,8 +36,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+_SIGNALS: list[int] = []
+
+
+def _on_sigint(signum, frame) -> None:
+    # Python's own reaction, remembered: rclpy's handler, which runs first once a context is
+    # up, shuts the context down, and the verb may then stop on that rather than on this
+    _SIGNALS.append(signum)
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> int:
     apply_network_defaults()
+    signal.signal(signal.SIGINT, _on_sigint)
     try:
         parser = build_parser()
         from rclpy.executors import ExternalShutdownException
@@ -60,7 +72,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"hems {args.verb}: {error}", file=sys.stderr)
         return 1
     except ExternalShutdownException:
-        # rclpy's handler shut the context down on SIGTERM; the verb's own cleanup ran on the way out
+        # rclpy's handler shut the context down on a signal; the verb's own cleanup ran on the way out
+        if signal.SIGINT in _SIGNALS:
+            print(f"hems {args.verb}: interrupted", file=sys.stderr)
+            return 130
         print(f"hems {args.verb}: stopped by SIGTERM", file=sys.stderr)
         return 143
 

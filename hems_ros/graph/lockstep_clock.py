@@ -35,7 +35,7 @@ class LockstepClock:
     start_s: float = 1.0
     step_s: float = 0.01
     rate: float = 1.0           # simulated s per wall s at most; 0: no cap
-    stall_s: float = 0.5
+    stall_s: float = 5.0
     supervisor_lag_s: float = 0.2
     now_s: float = field(init=False)
     stalls: int = field(default=0, init=False)

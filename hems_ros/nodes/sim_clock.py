@@ -43,8 +43,9 @@ PARAMETERS = [
          "the current step", None, True),
     Spec("fingers", ",".join(names.FINGERS), "comma-separated fingers the lockstep waits for", _fingers, True),
     Spec("step_s", 0.01, "lockstep: simulated time per step, s (the encoder period)", PERIOD_LIMIT, True),
-    Spec("stall_s", 0.5, "lockstep: a finger that has not answered for this long (wall clock, s) is left out "
-         "until it answers again", PERIOD_LIMIT, True),
+    Spec("stall_s", 5.0, "lockstep: a finger that has not answered for this long (wall clock, s) is left out "
+         "until it answers again (a stopped controller; a busy host only slows the clock down)", PERIOD_LIMIT,
+         True),
     Spec("period_s", 0.004, "wall-clock publishing period, s (without lockstep; with it, how often the pace "
          "is checked)", PERIOD_LIMIT, True),
 ]

@@ -27,7 +27,7 @@ def test_a_waiting_verb_stops_cleanly(ros_domain_id: int, signal_name: str, code
                              "--timeout", "60"], env=child_environment(), stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     try:
-        time.sleep(3.0)   # imports, rclpy init, then spinning while it waits for a subscriber
+        time.sleep(5.0)   # imports, rclpy init, then spinning while it waits for a subscriber
         assert verb.poll() is None
         verb.send_signal(getattr(signal, signal_name))
         _, err = verb.communicate(timeout=20)
