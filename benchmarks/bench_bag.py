@@ -1,4 +1,4 @@
-"""Bag speed benchmark: write and read the node graph's message mix (floors from issue 6).
+"""Bag speed benchmark: write and read the node graph's message mix.
 
 The mix follows the graph per finger: EncoderReading and WireForce (sensor streams),
 ActuatorState (simulation truth), DutyCommand (controller output), plus one JointState for

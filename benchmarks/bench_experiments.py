@@ -1,4 +1,4 @@
-"""Speed of the full `hems experiment ch5` (issue 4 floor: under 20 s, real-time factor printed).
+"""Speed of the full `hems experiment ch5` (under 20 s; real-time factor printed).
 
 Times the 15 lockstep runs (3 controllers x (three 20 s sines + two 70 s step tests) = 600 s,
 10 simulated minutes) and the whole command (runs, findings, tables, PNGs), in process.

@@ -1,4 +1,4 @@
-"""Full-graph benchmark (issue 5): control-loop latency, missed control periods, total CPU.
+"""Full-graph benchmark: control-loop latency, missed control periods, total CPU.
 
 Runs the 16-node graph for ``--seconds`` (default 60) in separate processes and then
 composed, enabled, every finger holding a 10 mm tendon position, and prints side by side:
@@ -20,7 +20,7 @@ import time
 from hems_ros.rosenv import apply_network_defaults, use_private_domain
 
 apply_network_defaults()
-DOMAIN_LOCK = use_private_domain()  # no test session or other benchmark shares it
+DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
 
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 

@@ -33,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from hems_ros.rosenv import apply_network_defaults, child_environment, use_private_domain  # noqa: E402
 
 apply_network_defaults()
-DOMAIN_LOCK = use_private_domain()  # no test session or other benchmark shares it
+DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
 
 from hems_msgs.msg import ControllerStatus, SupervisorStatus  # noqa: E402
 

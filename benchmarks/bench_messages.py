@@ -1,4 +1,4 @@
-"""Per-message CPU of typed and serialized messages between two processes (issue 5).
+"""Per-message CPU of typed and serialized messages between two processes.
 
 The graph's nodes publish and take their hot topics serialized (hems_ros/nodes/wire.py)
 instead of as rclpy message objects. This benchmark measures both ways side by side on the
@@ -26,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from hems_ros.rosenv import apply_network_defaults, use_private_domain  # noqa: E402
 
 apply_network_defaults()
-DOMAIN_LOCK = use_private_domain()  # no test session or other benchmark shares it
+DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
 
 TOPIC = "/hems_bench/encoder"
 

@@ -1,11 +1,11 @@
 """Physics speed benchmark: the numba kernel against scipy's LSODA on the same equations.
 
-Prints measured numbers and ratios side by side (not a pass/fail test; floors from issue 3):
+Prints measured numbers and ratios side by side (not a pass/fail test; floors):
 - one unit, full model (calibrated sheathed rig), 60 s at 1 kHz: real-time factor (floor 1000x),
   through the batch API (one set) and the stepping API (what a node calls every 1 ms);
 - batch, 256 parameter sets x 30 s, recording slider position and wire force (what a fit
   compares): simulated unit-seconds per wall second (floor 1e5), at the 1 kHz step and at the
-  100 Hz control period (Ts = 10 ms, digest section 4), with the trajectory difference between
+  100 Hz control period (Ts = 10 ms, dissertation chapter 5), with the trajectory difference between
   the two steps, the CPU time and the threads numba used; and at 1 kHz recording every channel
   (mostly the cost of writing 123 MB of records, plus the energy accumulators);
 - the same batch on one thread, CPU time per set-step: the SIMD blocks of kernel.run_batch

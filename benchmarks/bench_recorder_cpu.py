@@ -4,7 +4,7 @@ Starts the graph (index finger only, then all six fingers unless --fingers says 
 the recorder node in its own process with its default topic set, and after a warm-up reads
 the recorder's CPU time (utime + stime from /proc) over --seconds of recording. The graph
 need not be enabled: every stream runs at its full rate from start-up (duty 0 while not
-enabled). Floor from issue 6: at most 20 % of one core at the full graph rate.
+enabled). Floor: at most 20 % of one core at the full graph rate.
 Run: python benchmarks/bench_recorder_cpu.py [--seconds S] [--fingers index all]
 """
 

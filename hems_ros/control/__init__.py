@@ -1,4 +1,4 @@
-"""Discrete controllers of the SMA actuators (digest section 4), plain Python, no ROS.
+"""Discrete controllers of the SMA actuators (dissertation chapter 5), plain Python, no ROS.
 
 ``make_controller`` is the entry point for the per-finger node and the lockstep
 experiments; :mod:`.metrics` and :mod:`.references` hold the figures of merit and the

@@ -1,6 +1,6 @@
 """Machinery shared by the three controllers: scaling, output clamp, faults, mode transfer.
 
-Each concrete controller implements one difference equation of digest section 4 on the
+Each concrete controller implements one difference equation of dissertation chapter 5 on the
 scaled error ``e = scale * (r - y)`` (see :mod:`hems_ros.control.gains` for the scales);
 this base class turns SI inputs into that error and the result into a PWM duty.
 

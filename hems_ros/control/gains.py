@@ -1,4 +1,4 @@
-"""Typed gain sets of the three controllers and the Table 5.1 values (digest section 4).
+"""Typed gain sets of the three controllers and the Table 5.1 values (dissertation chapter 5).
 
 Unit convention
 ---------------
@@ -6,7 +6,7 @@ The controllers take SI inputs (metres of wire displacement, newtons of wire ten
 the gains act on a *scaled* error ``e = scale * (r - y)``, the scale depending on the mode:
 
 ``position_scale`` (default :data:`UM_PER_M` = 1e6, error in micrometres)
-    Table 5.1 prints the gains without units. The digest deduces they fit an error in
+    Table 5.1 prints the gains without units. They fit an error in
     micrometres: with Ki = 0 the wire needs roughly 7-10 % duty to hold a position against
     the 40 N load, which at Kp = 0.8 %/unit is about 10 units of error, and the dissertation
     reports steady-state errors of 0.01-0.02 mm = 10-20 um for PID and BPID. An error in mm

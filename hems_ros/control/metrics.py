@@ -1,4 +1,4 @@
-"""Figures of merit of chapters 5 and 6 (digest sections 4 and 5).
+"""Figures of merit of chapters 5 and 6 (dissertation chapters 5 and 6).
 
 Arrays are 1-D numpy arrays sampled at the control period; r and y share a unit (SI unless
 scaled by the caller) and u is the duty in %. Errors are r - y.

@@ -1,4 +1,4 @@
-"""Reference generators for the dissertation's test protocols (digest sections 4 and 5).
+"""Reference generators for the dissertation's test protocols (dissertation chapters 5 and 6).
 
 Every generator returns ``(t, r)``: ``t = k Ts`` for k = 0 .. n-1 with n = round(duration/Ts)
 (a 20 s test at 100 Hz is 2000 samples, the count behind the IAE sums of Table 5.3) and r in
@@ -6,7 +6,7 @@ SI units, metres of wire displacement or newtons of wire tension. Event times ar
 to whole samples and constant segments are exactly constant, which the PI-PD switching and
 :func:`hems_ros.control.metrics.step_segments` rely on.
 
-Timing the digest leaves open, and the choice made here:
+Timing the dissertation leaves open, and the choice made here:
 
 * Sine: ``base + p2p/2 (1 - cos 2 pi f t)``. The actuator only pulls, so the wave sits
   above the rest position and starts there with zero slope instead of demanding an

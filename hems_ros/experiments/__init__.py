@@ -1,4 +1,4 @@
-"""Closed-loop experiments of the dissertation in simulation (digest sections 4 and 5).
+"""Closed-loop experiments of the dissertation in simulation (dissertation chapters 5 and 6).
 
 :mod:`.lockstep` couples one controller and one actuation unit in process (plant 1 kHz,
 control 100 Hz); :mod:`.chapters` runs the chapter 5 and 6 protocols; :mod:`.report`

@@ -1,4 +1,4 @@
-"""The dissertation's closed-loop experiments in simulation (digest sections 4 and 5).
+"""The dissertation's closed-loop experiments in simulation (dissertation chapters 5 and 6).
 
 Chapter 5: the five references x three controllers (Table 5.1 gains) on the straight
 sheathed actuator with a 40 N hanging mass (``ch5_straight_40n``). Chapter 6: BPID on the
@@ -7,7 +7,7 @@ four force references.
 
 Force references start at the unit's rest wire tension. The protocol generators put the
 rest at 2 N, the bias pretension, but that acts on the tendon behind the x2 pulley, so the
-wire (where the force sensor sits, digest section 1) rests at 4 N and cannot go lower; a
+wire (where the force sensor sits, dissertation chapter 6) rests at 4 N and cannot go lower; a
 reference below it would count an unreachable 2 N into the RMSE of every ascent. The top
 stays at 20 N, the largest amplitude reported.
 """

@@ -1,4 +1,4 @@
-"""The dissertation's results to compare against (digest sections 4 and 5).
+"""The dissertation's results to compare against (dissertation chapters 5 and 6).
 
 Tables 5.2-5.5 (chapter 5, straight actuator with a 40 N mass, three controllers) and
 Tables 6.1-6.2 (chapter 6, HEMS index finger, BPID), keyed by the protocol names of
@@ -71,5 +71,5 @@ CH6_TABLES = {
 CH6_SS_ERROR = {"ch6_position_step": 0.03, "ch6_position_staircase": 0.01,
                 "ch6_force_step": 0.05, "ch6_force_staircase": 0.04}
 CH6_HOLD = {"force": "about 0.1"}
-"""Oscillation about the level while a force is held (digest section 5, N, text not table);
+"""Oscillation about the level while a force is held (dissertation chapter 6, N, text not table);
 the position tests report none (no limit cycles) without a figure."""

@@ -1,6 +1,6 @@
 """The dissertation's claims checked on the lockstep runs, with the evidence for misses.
 
-Each :class:`Finding` states a claim of chapter 5 or 6 (issue 4 "must show"), whether the
+Each :class:`Finding` states a claim of chapter 5 or 6, whether the
 simulation reproduces it, our numbers, and, for a miss, what in the plant explains it (for a
 claim that rests on a choice of ours, such as the force-mode gains, what the choice trades).
 These measurements carry the evidence:
@@ -180,7 +180,7 @@ def cold_start_floor(protocol: str, params: UnitParams | str = COLD_WIRE_PARAMS)
 
     Every step below only moves the wire earlier or further than a real one could, so no
     controller and no plant with that band and heat capacity does better: the wire starts
-    at ambient, takes the drive's ceiling V I (digest section 1: 20 V, 4 A, at most 80 W)
+    at ambient, takes the drive's ceiling V I (dissertation chapter 6: 20 V, 4 A, at most 80 W)
     from the first sample the reference leaves its base, loses no heat and takes no latent
     heat (eq. 4.7 without Q_out and the dH term: T = T_amb + P t / (rho V c_p)), turns to
     austenite along the major heating branch with the stress-free As0, Af0 (eq. 4.17; stress

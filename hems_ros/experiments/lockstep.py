@@ -1,4 +1,4 @@
-"""In-process lockstep of one controller and one actuation unit (digest sections 4 and 5).
+"""In-process lockstep of one controller and one actuation unit (dissertation chapters 5 and 6).
 
 The plant runs at ``dt`` (1 kHz default) through the physics kernel's single step, the
 controller at ``ts`` (100 Hz default); the duty is held constant between control samples
@@ -168,7 +168,7 @@ def figures(t, r, y, u, mode: str, segment: str = "all", rest: float | None = No
 
     ``rmse`` over the protocol's ``segment`` (chapter 5: all; chapter 6: ascending parts,
     or stationary parts by :func:`settled_mask`); ``iae`` is the sample sum of |e| in mm
-    or N (Table 5.3 prints it /1e3); ``macsi`` in % per sample; ``apc_w`` by the digest's
+    or N (Table 5.3 prints it /1e3); ``macsi`` in % per sample; ``apc_w`` by the
     formula. On piecewise-constant references: ``rise_time_s`` (10-90 %, mean over the
     rising jumps), ``overshoot`` (first peak past the new level, largest over the jumps, mm
     or N, on ``y_true`` when given: force-sensor noise is not a motion of the wire),

@@ -1,11 +1,11 @@
-"""Fingers, shoulder modules, node names and topics of the HEMS graph (digest section 1)."""
+"""Fingers, shoulder modules, node names and topics of the HEMS graph (dissertation chapter 6)."""
 
 from __future__ import annotations
 
 NAMESPACE = "/hems"
 FINGERS = ("thumb_flexion", "thumb_abduction", "index", "middle", "ring", "little")
 # Each shoulder module anchors two actuators and houses their two force sensors; the pairing
-# follows the digest's deduced natural pairing (section 1).
+# follows the natural pairing deduced from chapter 6.
 MODULES = {
     "thumb": ("thumb_flexion", "thumb_abduction"),
     "index_middle": ("index", "middle"),

@@ -1,6 +1,6 @@
 """Validation of user setpoints (tendon side).
 
-Limits derived from the digest (section 1): the unit's nominal output with the multiplier
+Limits derived from chapter 6: the unit's nominal output with the multiplier
 is 54 mm of tendon travel, and the wire-force sensors read 0-50 N, which behind the x2
 pulley is 0-25 N of tendon force. Anything outside, non-finite, or in an unknown mode is
 rejected; the caller keeps its last valid setpoint.

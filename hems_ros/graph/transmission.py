@@ -1,4 +1,4 @@
-"""Wire side <-> tendon side through the slider's pulley multiplier (digest section 1).
+"""Wire side <-> tendon side through the slider's pulley multiplier (dissertation chapter 6).
 
 The pulley on the slider doubles the tendon displacement and halves the tendon force.
 Losses along the tendon (capstan, glove friction) are physics, not part of this ideal

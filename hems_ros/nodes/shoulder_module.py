@@ -1,5 +1,5 @@
 """One HEMS shoulder module: the fixed anchor of two actuators with their two wire-force
-sensors (range 0-50 N, resolution, seeded noise, saturation; digest section 1).
+sensors (range 0-50 N, resolution, seeded noise, saturation; dissertation chapter 6).
 
 Subscribes  /hems/sim/<finger>/wire_tension  hems_msgs/WireForce  best effort (physical tension, simulation link)
 Publishes   /hems/<finger>/wire_force        hems_msgs/WireForce  best effort, one reading per tension sample (100 Hz)

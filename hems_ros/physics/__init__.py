@@ -1,6 +1,6 @@
 """SMA actuation-unit physics of the HEMS digital twin (plain numpy/numba, no ROS).
 
-Blocks follow the dissertation (digest section 3): :mod:`electrical` (4.1-4.5),
+Blocks follow the dissertation (dissertation chapter 4): :mod:`electrical` (4.1-4.5),
 :mod:`heat` (4.7-4.12, appendix 4.4), :mod:`kinetics` (4.13-4.25), :mod:`constitutive`
 (4.26-4.31), :mod:`loads` (4.32-4.35); beyond it: :mod:`sheath` (Table 3.1),
 :mod:`friction` (capstan eq. 3.1, glove Coulomb), :mod:`sensors`. :mod:`kernel` holds the

@@ -1,4 +1,4 @@
-"""Calibration of the fewest parameters against the chapter 3 facts (digest section 2).
+"""Calibration of the fewest parameters against the chapter 3 facts (dissertation chapter 3).
 
 Free parameters (everything else stays at Table 4.1 / Table 3.1):
 - ``kinetics.cm_pa_per_c`` = ``kinetics.ca_pa_per_c`` (one value, equal as in Table 4.1):

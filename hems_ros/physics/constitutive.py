@@ -1,4 +1,4 @@
-"""Constitutive block (digest section 3, eqs. 4.26-4.31): Brinson rate law, Reuss mixture.
+"""Constitutive block (eqs. 4.26-4.31): Brinson rate law, Reuss mixture.
 
 dsigma = E(xi) deps + Omega(xi) dxi + Theta(xi) dT, with eps the wire's Cauchy strain,
 elongation positive (the load block converts to the slider's contraction-positive

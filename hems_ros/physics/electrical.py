@@ -1,4 +1,4 @@
-"""Electrical block (digest section 3, eqs. 4.1-4.5) and the drive stages.
+"""Electrical block (eqs. 4.1-4.5) and the drive stages.
 
 Three drives feed the wire: the dissertation's ideal current source (validation runs), the
 HEMS PWM stage (20 V supply, 4 A current limit, duty 0-100 %), and a constant-voltage

@@ -1,6 +1,6 @@
 """Transmission losses between the wire and the load (beyond the dissertation's model).
 
-Capstan friction of the wire in the bent Bowden sheath (digest eq. 3.1):
+Capstan friction of the wire in the bent Bowden sheath (dissertation eq. 3.1):
 F_out / F_in = exp(-mu Theta); mu = 0.04, Theta = pi gives 0.88 (0.84 measured). Coulomb
 friction of the tendon in the glove (chapter 6 force-displacement hysteresis).
 

@@ -1,4 +1,4 @@
-"""Heat block (digest section 3, eqs. 4.7-4.12, appendix 4.4).
+"""Heat block (eqs. 4.7-4.12, appendix 4.4).
 
 Lumped wire heat balance rho V c_p dT/dt = P - Q_out + rho V dH dxi/dt. The kernel solves
 it over each step together with the kinetics, C dT = (P - Q) dt + L dxi (kernel.step):

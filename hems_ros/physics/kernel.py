@@ -4,7 +4,7 @@ Parameters are packed into a flat float64 row (:func:`pack`, index constants ``P
 the batch loop can run many parameter sets in parallel (``prange``); the state is a flat
 row too (``S_*``), and each step writes its derived outputs into ``out`` (``O_*``).
 
-Order inside one step (digest section 3): electrical (R, drive) and heat flows at the start
+Order inside one step (dissertation chapter 4): electrical (R, drive) and heat flows at the start
 of the step -> elastic trial (no transformation: heat balance, constitutive increment at
 fixed strain, implicit wire + load solve) whose effective-temperature change picks heating,
 cooling or neither (kinetics.py) -> the martensite increment dxi solved together with its

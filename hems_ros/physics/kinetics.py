@@ -1,4 +1,4 @@
-"""Phase kinetics block (digest section 3, eqs. 4.13-4.25): Duhem model, Likhachev scaling,
+"""Phase kinetics block (eqs. 4.13-4.25): Duhem model, Likhachev scaling,
 with return-point memory.
 
 Effective temperature (eq. 4.25). Stress shifts the transformation temperatures by

@@ -1,4 +1,4 @@
-"""Load block (digest section 3, eqs. 4.32-4.35) with the HEMS pulley multiplier.
+"""Load block (eqs. 4.32-4.35) with the HEMS pulley multiplier.
 
 The slider position x is the wire's contraction (positive when the wire shortens), so the
 wire strain changes by deps = -dx / L. The load sits behind a pulley of ratio n (tendon

@@ -1,4 +1,4 @@
-"""Typed parameter set of one SMA actuation unit (digest Table 4.1 defaults).
+"""Typed parameter set of one SMA actuation unit (dissertation Table 4.1 defaults).
 
 One :class:`UnitParams` is made of nested, frozen groups. SI units everywhere; temperatures
 stay in degC because the dissertation's equations (h(T), transformation temperatures,
@@ -182,7 +182,7 @@ class Constitutive(_Group):
 
 @dataclass(frozen=True)
 class Drive(_Group):
-    """HEMS PWM stage: one MOSFET per actuator, 20 V supply, 4 A current limit (digest 1).
+    """HEMS PWM stage: one MOSFET per actuator, 20 V supply, 4 A current limit (dissertation chapter 6).
 
     ``source_resistance_ohm``: supply sag, the resistance in series with the wire while the
     MOSFET conducts (supply output, MOSFET, leads, contacts). A measured current below
@@ -250,7 +250,7 @@ class Load(_Group):
 
 @dataclass(frozen=True)
 class Sheath(_Group):
-    """Bowden sheath heat exchange (beyond the dissertation's model; digest Table 3.1).
+    """Bowden sheath heat exchange (beyond the dissertation's model; dissertation Table 3.1).
 
     Wire -> sheath conductance G = 1 / (gap_resistance + PTFE conduction); the sheath node
     (``heat_capacity_j_per_k``) loses heat to air through steel conduction + outer convection.

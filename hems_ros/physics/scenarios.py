@@ -1,7 +1,7 @@
 """Experiment protocols of the dissertation, run on the batch API (shared by the tests,
 the calibration and ``hems validate``).
 
-Definitions used throughout (digest section 2):
+Definitions used throughout (dissertation chapter 3):
 - characterization rig (chapter 3): straight sheathed actuator, 30 N hanging mass + bias
   spring pretensioned to 20 N (stiffness 754 N/m from Table 3.3: (70.70 - 50) N / 27.45 mm),
   4 A current pulses, each from rest at ambient temperature (wire and sheath cold);
@@ -37,7 +37,7 @@ TABLE_32_33 = {
     2.6: (173.55, 26.31, 69.67, 4.42),
     2.8: (186.9, 27.45, 70.70, 5.00),
 }
-# Digest section 5, the chapter 6 characterization of the HEMS unit (same 30 N + 20 N
+# Dissertation chapter 6, the chapter 6 characterization of the HEMS unit (same 30 N + 20 N
 # preload, 4 A pulses, wire resistance 3.6 ohm, so 57.6 W): pulse s -> (energy J, wire
 # displacement mm). 1.6 s is printed (29 mm, 3.22 % strain); 1.0 and 3.0 s follow from the
 # text, "1.0 -> 1.6 s adds about 5 mm, 1.6 -> 3 s only 1 mm more".

@@ -1,4 +1,4 @@
-"""Sensor models: slider encoder and wire-tension force sensor (digest section 1).
+"""Sensor models: slider encoder and wire-tension force sensor (dissertation chapter 6).
 
 Encoder: incremental quadrature encoder on the slider, integer counts of ``resolution_m``
 (default 1 um), nearest count, contraction positive. Force sensor: wire tension at the

@@ -1,4 +1,4 @@
-"""Bowden-sheath thermal model (beyond the dissertation's model; digest section 2, Table 3.1).
+"""Bowden-sheath thermal model (beyond the dissertation's model; dissertation chapter 3, Table 3.1).
 
 The wire inside the PTFE tube exchanges heat with the sheath through the PTFE wall
 (ln(d_o/d_i) / (2 pi k L) = 0.4038 K/W) plus a contact/air-gap resistance (calibrated).

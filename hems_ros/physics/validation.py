@@ -198,7 +198,7 @@ ONSET_FACTS = (
 
 
 def onset_bounds(params: UnitParams | None = None) -> list[OnsetBound]:
-    """Energy balance of the measured short pulses (digest sections 2 and 5) against the model.
+    """Energy balance of the measured short pulses (dissertation chapters 3 and 6) against the model.
 
     A wire that moved fraction f of its saturated stroke has turned f of its martensite to
     austenite and absorbed f rho V dH of latent heat; with no loss at all the rest of the
@@ -408,7 +408,7 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
           "0.5 % strain (4.5 mm), and the model's wire, cooling on its branch after the pulses of 1.6 s and more, "
           f"is back at 4.5 mm at {min(cooled):.0f}-{max(cooled):.0f} degC. If each pulse of a characterization "
           "began as soon as the wire was cooled in that sense, all four rows are within this bound's reach "
-          "of a wire with Table 4.1's transformation temperatures. The digest does not say when the pulses began; the sweep above, "
+          "of a wire with Table 4.1's transformation temperatures. The dissertation does not say when the pulses began; the sweep above, "
           "the calibration and the closed-loop runs start cold.", "",
           "## Calibrated parameters", "",
           "Fewest parameters, fitted by `hems_ros.physics.calibration` (Nelder-Mead on the chapter 3 facts); "

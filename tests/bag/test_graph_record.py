@@ -87,7 +87,7 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
         refaults = 0
         while time.monotonic() - started < 10.0:
             client.spin_for(min(1.0, 10.0 - (time.monotonic() - started)))
-            # a supervisor FAULT on this busy host (a stale stream, issue 5) would stop the
+            # a supervisor FAULT on this busy host (a stale stream) would stop the
             # heating for the rest of the window: re-enable, the recording goes on regardless
             if not client.call("enable", timeout=2)[0]:
                 refaults += 1

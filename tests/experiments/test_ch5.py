@@ -1,4 +1,4 @@
-"""Chapter 5 must-show points of issue 4 on the lockstep runs (docs/experiments.md).
+"""Chapter 5 points on the lockstep runs (docs/experiments.md).
 
 Findings the simulation does not reproduce assert the documented outcome and its evidence.
 """

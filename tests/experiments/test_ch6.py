@@ -1,4 +1,4 @@
-"""Chapter 6 must-show points of issue 4 on the lockstep runs (docs/experiments.md)."""
+"""Chapter 6 points on the lockstep runs (docs/experiments.md)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The real graph in separate processes: tracking, safety paths and bad input (issue 5).
+"""The real graph in separate processes: tracking, safety paths and bad input.
 
 The tests of this module run in order on one graph; each leaves it DISABLED or IDLE, and a
 fixture unlatches and cools it after a failure so that one failure does not cascade.

@@ -121,7 +121,7 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
         time.sleep(0.011)
         node.on_tick()
         heated = node.driver.last_result.energy_joule_j - energy_at_sample
-        # 100 % duty is 4 A into about 4.2 ohm (digest section 2): about 67 W from the sample to the ESTOP
+        # 100 % duty is 4 A into about 4.2 ohm (dissertation chapter 3): about 67 W from the sample to the ESTOP
         heating_s = estop_s - sample_s
         assert heating_s >= 0.003
         assert heated == pytest.approx(67.0 * heating_s, rel=0.25)

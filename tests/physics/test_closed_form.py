@@ -1,4 +1,4 @@
-"""Closed-form facts of the digest: h(T), Churchill-Chu, Table 3.1 resistances, capstan, resistance."""
+"""Closed-form facts of the dissertation: h(T), Churchill-Chu, Table 3.1 resistances, capstan, resistance."""
 
 import math
 
@@ -46,7 +46,7 @@ def test_cold_resistance_near_measured():
         1.0, electrical.phase_resistivity(e.rho0_martensite_ohm_m, e.t0_martensite_c, e.drho_dt_martensite_ohm_m_per_c,
                                           e.drho_dsigma_martensite_ohm_m_per_pa, 22.0, sig), 0.0)
     r = electrical.wire_resistance(rho, p.wire.length_m, 1.0 / p.wire.cross_section_m2)
-    assert 4.0 < r < 4.5  # digest: mean 4.17 ohm over a pulse
+    assert 4.0 < r < 4.5  # chapter 3: mean 4.17 ohm over a pulse
 
 
 def test_pwm_stage_limits_current_and_averages():

@@ -80,7 +80,7 @@ def test_lossless_temperature_is_where_a_wire_without_losses_ends():
 
 
 def test_lossless_temperature_by_hand_and_bad_fraction():
-    # 92.16 J (digest section 5, 1.6 s), 29 of 30 mm moved; Table 4.1 wire: rho V c_p = 0.985 J/K, rho V dH = 28.46 J
+    # 92.16 J (dissertation chapter 6, 1.6 s), 29 of 30 mm moved; Table 4.1 wire: rho V c_p = 0.985 J/K, rho V dH = 28.46 J
     volume = math.pi / 4 * 0.508e-3**2 * 0.9
     c, latent = 6450 * volume * 837.4, 6450 * volume * 24183.52
     assert c == pytest.approx(0.985, abs=1e-3) and latent == pytest.approx(28.46, abs=0.01)
