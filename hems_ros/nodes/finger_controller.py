@@ -87,6 +87,11 @@ PARAMETERS = [
 ]
 
 
+def lag_ns(later: tuple[int, int], earlier: tuple[int, int]) -> int:
+    """Nanoseconds from stamp ``earlier`` to stamp ``later``, both (sec, nanosec)."""
+    return (later[0] - earlier[0]) * 1_000_000_000 + later[1] - earlier[1]
+
+
 def nan_if_none(value: float | None) -> float:
     return float("nan") if value is None else value
 
@@ -265,12 +270,10 @@ class FingerControllerNode(LeanNode):
         reading = self.wire_force if self.setpoint.mode == "position" else self.wire_position
         if reading is None or not math.isfinite(reading):
             return False    # a failed sensor says nothing about over-force or over-travel
-        lag = (measurement_stamp[0] - other[0]) * 1_000_000_000 + measurement_stamp[1] - other[1]
-        if lag > self.feedback_lag_ns:
+        if lag_ns(measurement_stamp, other) > self.feedback_lag_ns:
             self.drain(self._other_feedback())   # polled at the statuses: take what came meanwhile
             other = self.force_stamp if self.setpoint.mode == "position" else self.encoder_stamp
-            lag = (measurement_stamp[0] - other[0]) * 1_000_000_000 + measurement_stamp[1] - other[1]
-        return lag <= self.feedback_lag_ns
+        return lag_ns(measurement_stamp, other) <= self.feedback_lag_ns
 
     def _status_key(self) -> tuple:
         return self.setpoint.mode, self.setpoint.value, self.enabled, self.controller.fault, self.guard.limited
