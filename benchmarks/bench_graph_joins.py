@@ -35,6 +35,7 @@ from hems_ros.rosenv import apply_network_defaults, child_environment, use_priva
 apply_network_defaults()
 DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
 
+from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 from hems_msgs.msg import ControllerStatus, SupervisorStatus  # noqa: E402
 
 from hems_ros.cli.graph_client import GraphClient  # noqa: E402
@@ -98,9 +99,19 @@ def run(composed: bool, joins: int) -> dict:
         if message.state_name != "ENABLED" and (not faults or faults[-1][1] != "; ".join(message.faults)):
             faults.append((time.monotonic(), "; ".join(message.faults) or message.state_name))
 
+    gaps: dict[str, tuple[int, float]] = {}    # the supervisor's sensor gaps: (count, longest ms)
+
+    def on_diagnostics(message: DiagnosticArray) -> None:
+        for status in message.status:
+            for kv in status.values:
+                if kv.key.startswith("gaps "):
+                    count, longest = kv.value.split(", longest ")
+                    gaps[kv.key[5:]] = (int(count), float(longest.split()[0]))
+
     try:
         with GraphClient("hems_bench_joins") as client:
             client.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, on_status, qos.STATUS)
+            client.node.create_subscription(DiagnosticArray, names.DIAGNOSTICS_TOPIC, on_diagnostics, 10)
             for finger in names.FINGERS:
                 client.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
                                                 lambda m, f=finger: shown[f].append((time.monotonic(), m)),
@@ -141,21 +152,26 @@ def run(composed: bool, joins: int) -> dict:
                     ok, message = client.enable_when_ready(30, reset=True, retry_s=0.5)
                     if not ok:
                         return {"error": f"could not enable again: {message}"}
+            client.spin_for(1.5)    # the supervisor's last diagnostics (1 Hz)
     finally:
         graph.stop()
-    return {"joins": joins, "faulted": faulted, "kinds": dict(kinds), "missed": missed, "by_kind": dict(by_kind)}
+    longest = max(gaps.items(), key=lambda kv: kv[1][1], default=("-", (0, 0.0)))
+    return {"joins": joins, "faulted": faulted, "kinds": dict(kinds), "missed": missed, "by_kind": dict(by_kind),
+            "gaps": sum(count for count, _ in gaps.values()), "longest_gap_ms": longest[1][1],
+            "longest_gap_stream": longest[0]}
 
 
 def table(results: dict[str, dict]) -> str:
     lines = ["| layout | joins (setpoint, status, enable, reset, topic pub) | supervisor left ENABLED | "
-             "setpoints not reached | faults named |", "|---|---|---|---|---|"]
+             "setpoints not reached | faults named | sensor gaps over 50 ms (longest) |", "|---|---|---|---|---|---|"]
     for layout, r in results.items():
         if "error" in r:
-            lines.append(f"| {layout} | - | {r['error']} | - | - |")
+            lines.append(f"| {layout} | - | {r['error']} | - | - | - |")
             continue
         kinds = ", ".join(f"{k} x{n}" for k, n in sorted(r["kinds"].items())) or "-"
         per_kind = ", ".join(str(r["by_kind"].get(k, 0)) for k in KINDS)
-        lines.append(f"| {layout} | {r['joins']} ({per_kind}) | {r['faulted']} | {len(r['missed'])} | {kinds} |")
+        lines.append(f"| {layout} | {r['joins']} ({per_kind}) | {r['faulted']} | {len(r['missed'])} | {kinds} | "
+                     f"{r['gaps']} ({r['longest_gap_ms']:.0f} ms, {r['longest_gap_stream']}) |")
     return "\n".join(lines) + "\n"
 
 

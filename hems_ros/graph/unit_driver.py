@@ -20,7 +20,8 @@ Safety gates on the applied duty, checked at every physics step (re-integration 
   flagged, until the next command;
 - heating permission from the supervisor (ENABLED only), which also lapses when the
   supervisor's status is older than ``permission_timeout_s`` and never reaches back before
-  the status that granted it;
+  the status that granted it, and is suspended while the supervisor is not alive
+  (:attr:`UnitDriver.supervisor_alive`, its middleware liveliness);
 - an invalid command (non-finite, outside 0-100 %) is rejected and applies 0 duty.
 """
 
@@ -75,6 +76,7 @@ class UnitDriver:
         self.last_command_s: float | None = None
         self.permission_s: float | None = None
         self.permitted_since_s: float | None = None
+        self.supervisor_alive = True
         self.watchdog_tripped = True
         self.applied_duty = 0.0
         self.rejected_commands = 0
@@ -171,7 +173,7 @@ class UnitDriver:
     def heating_allowed(self, now_s: float) -> bool:
         if not self.require_permission:
             return True
-        return (self.permission_s is not None and self.permitted_since_s <= now_s + 1e-9
+        return (self.supervisor_alive and self.permission_s is not None and self.permitted_since_s <= now_s + 1e-9
                 and now_s - self.permission_s <= self.permission_timeout_s)
 
     def gate(self, now_s: float) -> float:

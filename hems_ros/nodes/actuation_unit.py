@@ -42,6 +42,7 @@ from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
 from hems_ros.nodes.grid_timer import create_grid_timer
 from hems_ros.nodes.lean_node import LeanNode
+from hems_ros.nodes.liveliness import LivelinessWatch
 from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.nodes.params import PERIOD_LIMIT, Spec, WINDOW_LIMIT, declare, one_of, positive
@@ -121,7 +122,10 @@ class ActuationUnitNode(LeanNode):
         self.answering = True
         if self.wall_clock or self.lockstep:
             self.poll(self.duty_sub)
-        self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor, qos.STATUS)
+        supervisor = self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor,
+                                              qos.STATUS)
+        # a stopped or killed supervisor stops the heating within its lease, not its status timeout
+        self.supervisor_watch: LivelinessWatch | None = LivelinessWatch(supervisor)
         self.state_cadence = Cadence(p["state_period_s"], p["tick_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
@@ -174,7 +178,14 @@ class ActuationUnitNode(LeanNode):
             self.drain(self.duty_sub, with_reception_time=True)
         elif self.lockstep:
             self.take_answer()
+        # the supervisor's liveliness as polled now gates the whole tick: a loss stops the
+        # heating from the last tick on, at most one tick early
+        alive = self.supervisor_watch is None or self.supervisor_watch.alive()
+        changed = alive != self.driver.supervisor_alive
+        self.driver.supervisor_alive = alive
         self.advance_to(now)
+        if changed:
+            self.publish_state()
         if self.state_cadence.due(now):
             self.publish_state()
 
@@ -250,12 +261,27 @@ class ActuationUnitNode(LeanNode):
             slider_velocity=r.slider_velocity_m_s, tendon_position=r.tendon_position_m,
             tendon_force=r.tendon_force_n, wire_force=r.wire_force_n, sequence=self.state_sequence)))
 
+    def peers_in_this_process(self, executables: set[str]) -> None:
+        """Node kinds running in this process (composed). A supervisor here cannot stop while
+        the unit runs, and the middleware asserts no liveliness to readers of its own
+        participant: its liveliness is not watched."""
+        if "supervisor" in executables and self.supervisor_watch is not None:
+            self.supervisor_watch.destroy()
+            self.supervisor_watch = None
+            self.driver.supervisor_alive = True
+
+    def destroy_node(self) -> None:
+        if self.supervisor_watch is not None:
+            self.supervisor_watch.destroy()
+        super().destroy_node()
+
     def publish_diagnostics(self) -> None:
         d = self.driver
         p50, p99, worst = d.latency_percentiles()
         values = {"applied_duty_percent": d.applied_duty, "watchdog_tripped": d.watchdog_tripped,
                   "duty_commands": d.commands, "rejected_commands": d.rejected_commands,
                   "missed_control_periods": d.missed_periods, "late_commands": d.late_commands,
+                  "supervisor_liveliness_losses": self.supervisor_watch.losses if self.supervisor_watch else 0,
                   "latency_p50_s": p50, "latency_p99_s": p99,
                   "latency_max_s": worst, "latency_window_s": d.latency_window_s,
                   "simulated_time_s": d.unit.time}

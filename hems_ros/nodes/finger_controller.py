@@ -51,6 +51,7 @@ from hems_ros.graph.thermal_guard import ThermalGuard
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import now_ns, stamp_now
 from hems_ros.nodes.lean_node import LeanNode
+from hems_ros.nodes.liveliness import LivelinessWatch
 from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.nodes.wire import codec, stamp_ns
@@ -139,7 +140,9 @@ class FingerControllerNode(LeanNode):
             "position": self.subscribe_serialized(EncoderReading, names.topic(self.finger, "encoder"),
                                                   self.on_encoder, qos.SENSOR),
             "force": self.subscribe_serialized(WireForce, names.topic(self.finger, "wire_force"), self.on_force,
-                                               qos.SENSOR)}
+                                               qos.WIRE_FORCE)}
+        # a stopped or killed shoulder module stops a position loop within the lease
+        self.force_watch: LivelinessWatch | None = LivelinessWatch(self.feedback["force"])
         self.supervisor_sub = self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
                                                        self.on_supervisor, qos.STATUS)
         # taken at each control step, before the duty is computed (one reading per sample)
@@ -236,6 +239,18 @@ class FingerControllerNode(LeanNode):
             return transmission.wire_position(self.setpoint.value, self.ratio)
         return transmission.wire_force(self.setpoint.value, self.ratio)
 
+    def peers_in_this_process(self, executables: set[str]) -> None:
+        """Node kinds running in this process (composed): a shoulder module here cannot stop
+        while the controller runs, and its liveliness is not asserted to this participant."""
+        if "shoulder_module" in executables and self.force_watch is not None:
+            self.force_watch.destroy()
+            self.force_watch = None
+
+    def destroy_node(self) -> None:
+        if self.force_watch is not None:
+            self.force_watch.destroy()
+        super().destroy_node()
+
     def on_idle(self) -> None:
         self.drain(self.supervisor_sub)
         self.publish_status()
@@ -270,6 +285,8 @@ class FingerControllerNode(LeanNode):
         reading = self.wire_force if self.setpoint.mode == "position" else self.wire_position
         if reading is None or not math.isfinite(reading):
             return False    # a failed sensor says nothing about over-force or over-travel
+        if self.setpoint.mode == "position" and self.force_watch is not None and not self.force_watch.alive():
+            return False    # its module stopped: the readings it sent last are going stale
         if lag_ns(measurement_stamp, other) > self.feedback_lag_ns:
             self.drain(self._other_feedback())   # polled at the statuses: take what came meanwhile
             other = self.force_stamp if self.setpoint.mode == "position" else self.encoder_stamp

@@ -55,7 +55,7 @@ class ShoulderModuleNode(LeanNode):
         self.rngs = {}
         self.frozen: dict[str, tuple[float, bool]] = {}
         for index, finger in enumerate(names.MODULES[p["module"]]):
-            self.publishers_[finger] = self.create_publisher(WireForce, names.topic(finger, "wire_force"), qos.SENSOR)
+            self.publishers_[finger] = self.create_publisher(WireForce, names.topic(finger, "wire_force"), qos.WIRE_FORCE)
             self.sequences[finger] = 0
             self.rngs[finger] = sensors.noise_generator(p["seed"] + index)
             self.subscribe_serialized(WireForce, names.sim_topic(finger, "wire_tension"),

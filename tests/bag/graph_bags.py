@@ -82,7 +82,7 @@ class ControllerReplay:
             names.topic(finger, "encoder"): self.node.create_publisher(
                 EncoderReading, names.topic(finger, "encoder"), qos.SENSOR),
             names.topic(finger, "wire_force"): self.node.create_publisher(
-                WireForce, names.topic(finger, "wire_force"), qos.SENSOR),
+                WireForce, names.topic(finger, "wire_force"), qos.WIRE_FORCE),
         }
         self.status = self.node.create_publisher(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
 

@@ -5,9 +5,11 @@ affected unit stops heating and until the supervisor latches FAULT (with a messa
 finger and the fault), then recovers the graph (restart, reset, enable, the setpoint reached).
 
 Real processes over Fast DDS; ``make test-faults`` runs it and writes the table into
-docs/reliability.md. The limits asserted are those of the design (README, Safety): the duty
-watchdog (30 ms, so within 50 ms), the other-sensor lag (100 ms on the unit's stamps), a lost
-stream or heartbeat (500 ms), the units' permission timeout (500 ms).
+docs/reliability.md. The limits asserted are those of the design (docs/user-guide.md,
+Safety): zero duty within 50 ms of a stopped or killed controller (the duty watchdog, 30 ms),
+shoulder module (its liveliness, as the controller watches it, 30 ms lease) or supervisor
+(its liveliness, as the units watch it), and FAULT latched within 500 ms (a lost stream or
+heartbeat: 350 ms, then up to a status period to be seen).
 """
 
 from __future__ import annotations
@@ -131,12 +133,12 @@ def _signal(graph, node: str, how: str) -> float:
 SCENARIOS = [
     (CONTROLLER, "SIGKILL", ("signal", CONTROLLER, "SIGKILL"), 50, "heartbeat"),
     (CONTROLLER, "SIGSTOP 1 s", ("signal", CONTROLLER, "SIGSTOP"), 50, "heartbeat"),
-    (MODULE, "SIGKILL", ("signal", MODULE, "SIGKILL"), 150, "wire_force lost"),
-    (MODULE, "SIGSTOP 1 s", ("signal", MODULE, "SIGSTOP"), 150, "wire_force lost"),
+    (MODULE, "SIGKILL", ("signal", MODULE, "SIGKILL"), 50, "wire_force lost"),
+    (MODULE, "SIGSTOP 1 s", ("signal", MODULE, "SIGSTOP"), 50, "wire_force lost"),
     (UNIT, "SIGKILL", ("signal", UNIT, "SIGKILL"), 50, "lost"),
     (UNIT, "SIGSTOP 1 s", ("signal", UNIT, "SIGSTOP"), 50, "lost"),
-    (SUPERVISOR, "SIGKILL", ("signal", SUPERVISOR, "SIGKILL"), 600, None),
-    (SUPERVISOR, "SIGSTOP 1 s", ("signal", SUPERVISOR, "SIGSTOP"), 600, None),
+    (SUPERVISOR, "SIGKILL", ("signal", SUPERVISOR, "SIGKILL"), 50, None),
+    (SUPERVISOR, "SIGSTOP 1 s", ("signal", SUPERVISOR, "SIGSTOP"), 50, None),
     (CONTROLLER, "setpoint flood (20,000)", ("flood", names.topic(FINGER, "setpoint"), "FingerSetpoint"), None, None),
     (UNIT, "duty flood (20,000 x 0 %)", ("flood", names.topic(FINGER, "duty"), "DutyCommand"), None, None),
     (MODULE, "tension flood (20,000)", ("flood", names.sim_topic(FINGER, "wire_tension"), "WireForce"), None, None),
@@ -207,7 +209,7 @@ def test_fault(matrix_graph, node, fault, inject, zero_limit_ms, fault_words):
     elif fault_words is None:
         assert fault_ms is None or node == SUPERVISOR, message
     else:
-        assert fault_ms is not None and fault_ms <= 600 + 200 * (kind == "signal"), (fault_ms, message)
+        assert fault_ms is not None and fault_ms <= 500, (fault_ms, message)
         assert FINGER in message and fault_words in message, message
     if not math.isfinite(zero_ms or 0.0):
         pytest.fail(f"zero duty measure {zero_ms}")

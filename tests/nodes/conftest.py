@@ -35,6 +35,52 @@ def matched_publisher():
 
 
 @pytest.fixture
+def other_participant(ros_domain_id):
+    """A node in a context of its own (its own DDS participant): the middleware asserts a
+    writer's liveliness to readers of other participants only."""
+    import rclpy
+    from rclpy.context import Context
+
+    other = Context()
+    rclpy.init(context=other)
+    node = rclpy.create_node("other_participant", context=other)
+    yield node
+    node.destroy_node()
+    rclpy.try_shutdown(context=other)
+
+
+def _wait_alive(watch, seconds: float = 10.0) -> None:
+    import time
+
+    deadline = time.monotonic() + seconds
+    while not watch.alive():
+        assert time.monotonic() < deadline, "the writer never became alive"
+        time.sleep(0.01)
+
+
+@pytest.fixture
+def wait_alive():
+    """wait_alive(watch): until a LivelinessWatch sees a writer alive (10 s at most)."""
+    return _wait_alive
+
+
+@pytest.fixture
+def live_supervisor(other_participant):
+    """live_supervisor(unit): a SupervisorStatus writer the unit under test sees alive (its
+    liveliness gates the heating); returns (its node, the publisher)."""
+    from hems_msgs.msg import SupervisorStatus
+    from hems_ros.nodes import qos
+
+    def make(unit):
+        publisher = other_participant.create_publisher(SupervisorStatus, "/hems/supervisor/status", qos.STATUS)
+        _wait_alive(unit.supervisor_watch)
+        unit.driver.supervisor_alive = True
+        return other_participant, publisher
+
+    return make
+
+
+@pytest.fixture
 def one_round(context):
     """one_round(node): wait once on ``node``'s subscriptions and timers in the nodes' spin
     loop (hems_ros.nodes.lean_spin) and run what is ready, as a node process does."""

@@ -35,6 +35,9 @@ def one_finger(context):
             ShoulderModuleNode(context=context),
             FingerControllerNode(context=context, **_remapped(*controller_remaps)),
             supervisor])
+        for node in nodes:
+            if hasattr(node, "peers_in_this_process"):
+                node.peers_in_this_process({"actuation_unit", "shoulder_module", "finger_controller", "supervisor"})
 
         def spin():
             try:

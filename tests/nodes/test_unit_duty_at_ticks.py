@@ -90,7 +90,8 @@ def test_units_tick_at_their_shoulder_modules_phase_on_wall_clock_time(context):
         node.destroy_node()
 
 
-def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(context, matched_publisher):
+def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(context, matched_publisher,
+                                                                          live_supervisor):
     """An ESTOP stops the heating when it comes: a command that came earlier still heats from
     the sample it answers up to the ESTOP, not only until the unit's previous tick."""
     import rclpy
@@ -106,6 +107,7 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
     helper = rclpy.create_node("duty_sender", context=context)
     try:
         publisher = matched_publisher(helper, DutyCommand, "/hems/index/duty", qos.COMMAND)
+        live_supervisor(node)
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         sample_s = tick_just_after_a_sample(node)
         energy_at_sample = node.driver.last_result.energy_joule_j   # the tick stopped at the sample
@@ -130,7 +132,7 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
         node.destroy_node()
 
 
-def test_a_repeated_enabled_status_only_moves_the_permission_on(context):
+def test_a_repeated_enabled_status_only_moves_the_permission_on(context, live_supervisor):
     """The supervisor's 10 Hz ENABLED wakes every unit at once: while heating is allowed it
     neither takes the queued commands nor integrates (the gates read the same for every step
     up to it), it only moves the lapse time on; a status after a lapse takes the full path."""
@@ -138,6 +140,7 @@ def test_a_repeated_enabled_status_only_moves_the_permission_on(context):
 
     node = unit(context, require_supervisor=True)
     try:
+        live_supervisor(node)
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         granted_s = node.driver.permission_s
         time.sleep(0.025)
@@ -151,6 +154,42 @@ def test_a_repeated_enabled_status_only_moves_the_permission_on(context):
         node.driver.permission_s -= 1.0     # as if the heartbeats had stopped: lapsed
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         assert node.driver.time_s > integrated_s
+        assert node.driver.heating_allowed(node.driver.time_s)
+    finally:
+        node.destroy_node()
+
+
+def test_a_supervisor_that_is_no_longer_alive_stops_the_heating_until_it_is_again(context, live_supervisor):
+    """The supervisor's liveliness (its middleware's, lease qos.SUPERVISOR_LEASE_S) gates the
+    heating at every tick; the permission itself stays, so a supervisor that comes back
+    within its status timeout lets the unit heat again without a new ENABLED."""
+    from hems_msgs.msg import SupervisorStatus
+    from hems_ros.nodes import qos
+
+    node = unit(context, require_supervisor=True)
+    try:
+        helper, writer = live_supervisor(node)
+        node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
+        time.sleep(0.011)
+        node.on_tick()
+        assert node.driver.heating_allowed(node.driver.time_s)
+        helper.destroy_publisher(writer)
+        deadline = time.monotonic() + 2.0
+        while node.driver.supervisor_alive:
+            assert time.monotonic() < deadline, "the unit still sees a supervisor that left"
+            time.sleep(0.005)
+            node.on_tick()
+        assert not node.driver.heating_allowed(node.driver.time_s)
+        assert node.driver.gate(node.driver.time_s) == 0.0
+        assert node.supervisor_watch.losses == 1
+        helper.create_publisher(SupervisorStatus, "/hems/supervisor/status", qos.STATUS)
+        deadline = time.monotonic() + 10.0
+        while not node.driver.supervisor_alive:
+            assert time.monotonic() < deadline, "the unit never saw the supervisor come back"
+            time.sleep(0.005)
+            node.on_tick()
+        time.sleep(0.011)
+        node.on_tick()
         assert node.driver.heating_allowed(node.driver.time_s)
     finally:
         node.destroy_node()
