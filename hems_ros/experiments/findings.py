@@ -183,7 +183,7 @@ def cold_start_floor(protocol: str, params: UnitParams | str = COLD_WIRE_PARAMS)
     at ambient, takes the drive's ceiling V I (dissertation chapter 6: 20 V, 4 A, at most 80 W)
     from the first sample the reference leaves its base, loses no heat and takes no latent
     heat (eq. 4.7 without Q_out and the dH term: T = T_amb + P t / (rho V c_p)), turns to
-    austenite along the major heating branch with the stress-free As0, Af0 (eq. 4.17; stress
+    austenite along the major heating branch with the stress-free As0, Af0 (eq. 4.21; stress
     only raises them, eq. 4.25) and gives the full recoverable stroke eps_L L for it.
     Returns the floor, its ratio to Table 6.1 and how long the bound's wire takes to catch up
     with the reference (s).

@@ -5,7 +5,7 @@ wire's current and voltage while it conducted (hems_msgs/DriveReading). The guar
 unit's model (the physics kernel) on that applied duty, which gives the wire temperature the
 energy put in implies with the model's heat balance, and checks it against the wire itself:
 the measured resistance V/I against the model's, the difference moved onto the temperature
-through the resistance law's slope (eqs. 4.3-4.5 at the model's phase mixture). No encoder
+through the resistance law's slope (eqs. 4.2-4.4 at the model's phase mixture). No encoder
 or force reading enters, so a stuck sensor that keeps a controller heating cannot hide the
 heat (docs/reliability.md).
 
@@ -52,7 +52,7 @@ class ThermalGuard:
 
     def _correction(self, measured_ohm: float, state: dict[str, float]) -> float:
         """Temperature difference the measured resistance asks for, from the resistance law's
-        temperature slope at the model's state (eq. 4.5 in both phases, mixed by eq. 4.4)."""
+        temperature slope at the model's state (eq. 4.4 in both phases, mixed by eq. 4.3)."""
         p = self.model.params
         el = p.electrical
         xi = state["martensite_fraction"]

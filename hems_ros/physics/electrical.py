@@ -24,19 +24,19 @@ DRIVE_NAMES = {"duty": DRIVE_DUTY, "current": DRIVE_CURRENT, "voltage": DRIVE_VO
 
 @jit
 def phase_resistivity(rho0, t0_c, drho_dt, drho_dsigma, temperature_c, stress_pa):
-    """Resistivity of one phase, eq. 4.5: rho = rho0 + (T - T0) drho/dT + sigma drho/dsigma."""
+    """Resistivity of one phase, eq. 4.4: rho = rho0 + (T - T0) drho/dT + sigma drho/dsigma."""
     return rho0 + (temperature_c - t0_c) * drho_dt + stress_pa * drho_dsigma
 
 
 @jit
 def mixture_resistivity(xi, rho_martensite, rho_austenite):
-    """Phases in series, eq. 4.4: rho = rho_M xi + rho_A (1 - xi)."""
+    """Phases in series, eq. 4.3: rho = rho_M xi + rho_A (1 - xi)."""
     return rho_martensite * xi + rho_austenite * (1.0 - xi)
 
 
 @jit
 def wire_resistance(resistivity, length_m, inv_cross_section_per_m2):
-    """R = rho l / S with the current wire length l (eqs. 4.2-4.3); takes 1/S (a constant of
+    """R = rho l / S with the current wire length l (eq. 4.2); takes 1/S (a constant of
     the parameter set that the batch would otherwise divide by in every step)."""
     return resistivity * length_m * inv_cross_section_per_m2
 

@@ -21,13 +21,13 @@ APPENDIX_AIR_CONDUCTIVITY = 0.0257
 
 @jit
 def convection_coefficient(temperature_c, h0, h2):
-    """h(T) = h0 + h2 T^2, T in degC (eq. 4.12); h(22) = 42.51 W/m2K with Table 4.1."""
+    """h(T) = h0 + h2 T^2, T in degC (eq. 4.10); h(22) = 42.51 W/m2K with Table 4.1."""
     return h0 + h2 * temperature_c * temperature_c
 
 
 @jit
 def convection_loss(temperature_c, ambient_c, h0, h2, area_m2):
-    """Q = h(T) A (T - T_amb) (eq. 4.10)."""
+    """Q = h(T) A (T - T_amb) (eq. 4.9)."""
     return convection_coefficient(temperature_c, h0, h2) * area_m2 * (temperature_c - ambient_c)
 
 

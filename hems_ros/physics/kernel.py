@@ -169,7 +169,7 @@ def initial_state(params: UnitParams, temperature_c: float | None = None) -> np.
 
     Wire and sheath start at the ambient temperature plus ``params.start.temperature_offset_c``
     (a rig still warm from earlier work), or at ``temperature_c`` when given; a wire warmed
-    from cold stays martensite only below the stress-free As0 (eq. 4.17), so a start at or
+    from cold stays martensite only below the stress-free As0 (eq. 4.21), so a start at or
     above it is refused.
     """
     if temperature_c is None:

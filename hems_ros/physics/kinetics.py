@@ -3,8 +3,8 @@ with return-point memory.
 
 Effective temperature (eq. 4.25). Stress shifts the transformation temperatures by
 sigma/C, so a branch evaluated at T with shifted temperatures equals the same branch at the
-effective temperature with the zero-stress temperatures: the heating branch z+ (eq. 4.17)
-is a function of u_A = T - sigma/C_A, the cooling branch z- (eq. 4.18) of
+effective temperature with the zero-stress temperatures: the heating branch z+ (eq. 4.21)
+is a function of u_A = T - sigma/C_A, the cooling branch z- (eq. 4.23) of
 u_M = T - sigma/C_M. The kinetics are written in u: the increments of eqs. 4.22-4.24 are
 dxi = dz/du * ratio * du, with du = dT - dsigma/C. A stiffening bias spring (stress rising
 as the wire contracts) then moves the state along its branch instead of off it, which is
@@ -22,7 +22,7 @@ stack of reversal points (u_A, u_M, xi) and follow Madelung's rules, as in Preis
 - a branch with no earlier reversal ahead of it (the outermost branches, and the first
   heating from the martensitic start) is the printed law, eqs. 4.22-4.24;
 - a branch that starts at reversal point r with the earlier reversal point t ahead of it
-  (the top two of the stack) is the active major branch (4.17 or 4.18) scaled through both
+  (the top two of the stack) is the active major branch (4.21 or 4.23) scaled through both
   points, xi = xi_t + (xi_r - xi_t) (z(u) - z(u_t)) / (z(u_r) - z(u_t)), so it reaches t
   exactly;
 - reaching t closes the minor loop: r and t are wiped out and the state continues on the
@@ -157,13 +157,13 @@ def _tanh_branch(temperature_c, start_c, inv_width):
 
 @jit_inline
 def heating_branch(temperature_c, a_s, inv_width):
-    """z+(T) = 1/2 tanh[2((As - T)/(Af - As) + 1/2)] + 1/2 and dz+/dT (eqs. 4.17, 4.20);
+    """z+(T) = 1/2 tanh[2((As - T)/(Af - As) + 1/2)] + 1/2 and dz+/dT (eq. 4.21 and its derivative);
     ``inv_width`` = 1/(Af - As)."""
     return _tanh_branch(temperature_c, a_s, inv_width)
 
 
 def heating_branch_temperature(transformed_fraction: float, a_s: float, a_f: float) -> float:
-    """Temperature at which the major heating branch (eq. 4.17) has turned ``transformed_fraction``
+    """Temperature at which the major heating branch (eq. 4.21) has turned ``transformed_fraction``
     of the martensite to austenite: z+(T) = 1 - f solved for T, T = As + (Af - As)(1/2 - atanh(1 - 2 f)/2).
 
     Pass the stress-shifted As, Af (eq. 4.25) for a loaded wire.
@@ -175,7 +175,7 @@ def heating_branch_temperature(transformed_fraction: float, a_s: float, a_f: flo
 
 @jit_inline
 def cooling_branch(temperature_c, m_f, inv_width):
-    """z-(T) = 1/2 tanh[2((Mf - T)/(Ms - Mf) + 1/2)] + 1/2 and dz-/dT (eqs. 4.18, 4.21);
+    """z-(T) = 1/2 tanh[2((Mf - T)/(Ms - Mf) + 1/2)] + 1/2 and dz-/dT (eq. 4.23 and its derivative);
     ``inv_width`` = 1/(Ms - Mf)."""
     return _tanh_branch(temperature_c, m_f, inv_width)
 

@@ -110,7 +110,7 @@ class WireGeometry(_Group):
 
 @dataclass(frozen=True)
 class Electrical(_Group):
-    """Resistivity of each phase, linear in temperature and stress (eqs. 4.4-4.5)."""
+    """Resistivity of each phase, linear in temperature and stress (eq. 4.4)."""
 
     _GROUP = "electrical"
     rho0_martensite_ohm_m: float = 94.585e-8

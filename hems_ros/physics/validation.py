@@ -203,7 +203,7 @@ def onset_bounds(params: UnitParams | None = None) -> list[OnsetBound]:
     A wire that moved fraction f of its saturated stroke has turned f of its martensite to
     austenite and absorbed f rho V dH of latent heat; with no loss at all the rest of the
     pulse energy heats it to :func:`hems_ros.physics.heat.lossless_temperature_c`, an upper
-    bound. The model's wire reaches the same fraction on its major heating branch (eq. 4.17)
+    bound. The model's wire reaches the same fraction on its major heating branch (eq. 4.21)
     at the stress-shifted As, Af of the 50 N preload (eq. 4.25). Where the bound is below the
     branch temperature, no wire with the model's transformation temperatures and heat
     constants can move as early as the measured one did from ambient; ``start_c`` is how warm
@@ -379,7 +379,7 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
           "heat; with no heat loss at all the rest of the pulse energy heats it to "
           "T_amb + (E - f rho V dH) / (rho V c_p) (eq. 4.7 integrated, "
           "`heat.lossless_temperature_c`), an upper bound. The model's wire reaches f on its heating "
-          "branch (eq. 4.17) at the 50 N preload's As, Af (eq. 4.25; calibrated C_A) at the "
+          "branch (eq. 4.21) at the 50 N preload's As, Af (eq. 4.25; calibrated C_A) at the "
           "temperature in the next column. Section 5 is the chapter 6 characterization of the HEMS "
           "unit (same preload, 3.6 ohm, 57.6 W); its 1.0 s row is 29 mm less the 5 mm the text says "
           "1.0 -> 1.6 s adds, its stroke the 30 mm after 3 s.", "",
@@ -473,17 +473,25 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
           "issue's 0.02 for every reversal (next section).",
           "", "![loops](figures/validation_loops.png)", "",
           "![minor loops and resistance](figures/validation_minor_loops_resistance.png)", "",
+          '## Where the code departs from the printed model',
+          "",
+          'Besides the effective temperature and the return-point memory (next section), three places where the code keeps or extends the printed model knowingly:',
+          "",
+          "- **Thermoelastic sign (eqs. 4.26-4.31).** Theta(xi) = alpha(xi) E(xi), with the (1 + nu) factor on the austenite term, enters dsigma = E deps + Omega dxi + Theta dT with the printed sign: heating at fixed strain raises the tensile stress, where thermal expansion of a held wire lowers it. Kept as printed; with Table 4.1's alpha and E the term is below 1 MPa per degree, small beside the transformation's stress.",
+          "- **Load damping everywhere (eq. 4.33).** The dissertation gives the damping b for the hanging mass (F = m x'' + b x' + m g); the code applies the load's b to the bias spring and to the HEMS finger as well (referred to the wire through the pulley), since a tendon and glove dissipate too. The chapter 5 and 6 figures that the diagnosis workflow examines depend on it (docs/diagnosis.md).",
+          "- **Appendix convection inputs as printed.** `heat.appendix_h` feeds the appendix's own Grashof (1.6947) and Prandtl (0.591) numbers into the Churchill-Chu correlation, so the check of h = 42.51 W/m2K tests the correlation's code against the printed result, not the air properties behind it: from air's tabulated properties at 22 degC (kinematic viscosity 1.52e-5 m2/s, Pr 0.71) `heat.grashof_number` gives Gr 1.29 and the correlation h = 42.48 W/m2K.",
+          "",
           "## Phase kinetics: effective temperature and return-point memory", "",
           "What `hems_ros/physics/kinetics.py` adds to the printed Duhem/Likhachev law, and why.", "",
           "- **Effective temperature.** Eq. 4.25 shifts Ms, Mf, As, Af by sigma/C. A branch evaluated at T "
           "with shifted temperatures is the same branch at u = T - sigma/C with the zero-stress ones "
-          "(u_A = T - sigma/C_A for z+, eq. 4.17; u_M = T - sigma/C_M for z-, eq. 4.18), so the kinetics take "
+          "(u_A = T - sigma/C_A for z+, eq. 4.21; u_M = T - sigma/C_M for z-, eq. 4.23), so the kinetics take "
           "u as their input: eqs. 4.22-4.24 become dxi = dz/du * ratio * du with du = dT - dsigma/C. Heating "
           "means u_A rises, cooling means u_M falls. Under the 12 N spring the stress rises by up to 150 MPa as "
           "the wire contracts (a 22 degC shift at C = 6.89 MPa/degC), so T alone does not say where the state "
           "is on its branch.",
           "- **One step, solved together.** du depends on the stress change of the same step, which depends "
-          "on dxi through the constitutive law (4.26) and the load; the latent heat (4.10) ties dT to dxi too. "
+          "on dxi through the constitutive law (4.26) and the load; the latent heat (eq. 4.7) ties dT to dxi too. "
           "`kernel.step` first makes an elastic trial (no transformation) whose change of u picks heating, "
           "cooling or neither, then solves the scalar equation xi + dxi = X(u(dxi)) for dxi, where u(dxi) "
           "follows from the heat balance, the constitutive increment and the implicit load solve, and X is "
