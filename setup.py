@@ -24,7 +24,10 @@ setup(
         (f"share/{PACKAGE}/config/physics", glob("config/physics/*.yaml")),
         (f"share/{PACKAGE}/config/measurements", glob("config/measurements/*")),
     ],
-    install_requires=["setuptools"],
+    # ROS packages (rclpy, the message packages) come from the ROS installation (package.xml)
+    install_requires=["setuptools", "numpy", "scipy", "threadpoolctl", "numba", "llvmlite", "pyyaml", "mcap",
+                      "lz4", "zstandard", "matplotlib"],
+    extras_require={"test": ["pytest", "hypothesis", "rosbags", "mcap-ros2-support"]},
     zip_safe=True,
     maintainer="HEMS digital twin developers",
     description="HEMS soft hand exoskeleton digital twin (ROS 2 nodes, SMA physics, BPID control)",
