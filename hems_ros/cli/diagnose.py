@@ -46,7 +46,9 @@ def register(subparsers) -> None:
     parser.add_argument("runs", nargs="*", metavar="RUN", help="measured runs to fit on")
     parser.add_argument("--heldout", nargs="+", default=[], metavar="RUN",
                         help="runs to test on only (default: the tool holds out every third cycle, "
-                             "or every third row of a table)")
+                             "or every third row of a table). A separate run recorded with other inputs is "
+                             "the stronger test, and the only one of an effect that acts at a run's start "
+                             "(a warm wire shows in the first cycle alone)")
     parser.add_argument("--model", default=DEFAULT_MODEL,
                         help=f"starting model: a config/physics name or a YAML path (default {DEFAULT_MODEL}, "
                              "the dissertation's Table 4.1 wire)")

@@ -7,8 +7,9 @@ Forward selection: at each step every candidate not yet in the model is fitted t
 with those already in it (their parameters refitted too) and ranked by its information
 criterion (BIC, training data). The best is accepted when it removes a fair share of what
 is left to explain in the training data (``MIN_SHARE``) and lowers the held-out cost by
-more than the noise can (``MIN_GAIN``): the held-out data decide whether it generalises,
-the training data, which hold most of the samples, how much it explains. A recalibration
+more than the noise can (``MIN_GAIN``) and by a material share of the starting model's gap
+(``MATERIAL``): the held-out data decide whether it generalises, the training data, which
+hold most of the samples, how much it explains. A recalibration
 that does as well as the best effect (training cost within ``TIE``) is taken instead: a
 parameter that is simply off comes before new physics. A fit whose parameter ends on a
 bound is a finding, not an explanation. Then backward elimination drops what the later
@@ -42,6 +43,11 @@ MIN_SHARE = 0.3
 TIE = 0.1
 #: Named effects must at least halve the excess RMS over the noise floor.
 EXPLAINED = 0.5
+#: Each term must remove at least this share of the starting model's held-out excess RMS:
+#: where the truth has another form than the candidates (a current limit where the library
+#: has a source resistance), later terms otherwise keep shaving the mismatch left at low
+#: noise, a little each, and get named.
+MATERIAL = 0.05
 MAX_TERMS = 4
 
 
@@ -88,10 +94,12 @@ class Search:
         return out
 
 
-def _better(new: Fit, current: Fit) -> bool:
+def _better(new: Fit, current: Fit, start: Fit) -> bool:
     """``new`` explains a fair share of what ``current`` leaves (training data, where most of
-    the data are), and that carries over to the held-out data beyond the noise."""
+    the data are), and that carries over to the held-out data beyond the noise and is a
+    material part of the starting model's gap."""
     return (current.heldout - new.heldout >= MIN_GAIN
+            and excess(current.heldout) - excess(new.heldout) >= MATERIAL * excess(start.heldout)
             and current.train - new.train >= MIN_SHARE * max(current.train - 1.0, 0.0)
             and new.bic < current.bic and not new.pinned)
 
@@ -124,7 +132,7 @@ def run_search(data, base: UnitParams, candidates: list[Candidate],
                               progress=say)
         ranked = sorted(fits, key=lambda f: f.bic)
         findings += [p for f in ranked for p in f.pinned if p not in findings]
-        eligible = [f for f in ranked if _better(f, current)]
+        eligible = [f for f in ranked if _better(f, current, start)]
         if not eligible:
             steps.append(Step(ranked, None, []))
             break
@@ -137,18 +145,18 @@ def run_search(data, base: UnitParams, candidates: list[Candidate],
         steps.append(Step(ranked, chosen, rivals))
         say(f"  accepted {chosen.structure[-1].name}: held-out cost {current.heldout:.3g} -> {chosen.heldout:.3g}")
         current = chosen
-    current, dropped = _eliminate(data, base, current, say)
+    current, dropped = _eliminate(data, base, current, start, say)
     return Search(start, steps, current, dropped, _verdict(start, current, steps), findings)
 
 
-def _eliminate(data, base: UnitParams, current: Fit, say) -> tuple[Fit, list[str]]:
+def _eliminate(data, base: UnitParams, current: Fit, start: Fit, say) -> tuple[Fit, list[str]]:
     """Drop terms the others made unnecessary (held-out cost no worse without them)."""
     dropped = []
     while len(current.structure) > 1:
         subsets = [tuple(c for c in current.structure if c is not t) for t in current.structure]
         fits = fit_structures(data, base, subsets, _warm(current, base))
         best = min(fits, key=lambda f: f.heldout)
-        if _better(current, best):
+        if _better(current, best, start):
             break
         gone = next(c.name for c in current.structure if c not in best.structure)
         say(f"  dropped {gone}: held-out cost {current.heldout:.3g} -> {best.heldout:.3g} without it")

@@ -119,9 +119,16 @@ CASES = SINGLE + OTHERS
 
 
 # --------------------------------------------------------------------------- input profiles
-def pulse_profile() -> np.ndarray:
-    """Duty per 10 ms sample: eight pulses of different length and duty, one every 8 s."""
-    plan = [(1.6, 100), (1.2, 70), (2.0, 100), (1.4, 85), (1.8, 60), (1.0, 100), (2.2, 80), (1.5, 100)]
+PULSES = ((1.6, 100), (1.2, 70), (2.0, 100), (1.4, 85), (1.8, 60), (1.0, 100), (2.2, 80), (1.5, 100))
+STAIRS_MM = (5.0, 10.0, 15.0)
+#: The held-out recording: the same kind of input at other lengths, duties and levels within
+#: the fitted ranges, so a correction that only fits the fitted inputs does not carry over.
+HELDOUT_PULSES = ((1.3, 90), (2.1, 75), (1.1, 100), (1.7, 65), (1.9, 95), (1.4, 80), (2.2, 70), (1.2, 85))
+HELDOUT_STAIRS_MM = (8.0, 14.0, 4.0)
+
+
+def pulse_profile(plan=PULSES) -> np.ndarray:
+    """Duty per 10 ms sample: pulses of (length s, duty %), one every 8 s."""
     n = int(round(8.0 / SAMPLE_S))
     duty = np.zeros(n * len(plan))
     for i, (length, level) in enumerate(plan):
@@ -129,22 +136,28 @@ def pulse_profile() -> np.ndarray:
     return duty
 
 
-def staircase_profile(base: UnitParams) -> np.ndarray:
-    """Duty per 10 ms sample a BPID recorded on ``base``: 5, 10, 15 mm for 3 s each, back to
+def staircase_profile(base: UnitParams, levels_mm=STAIRS_MM) -> np.ndarray:
+    """Duty per 10 ms sample a BPID recorded on ``base``: the levels for 3 s each, back to
     rest for 8 s, three times."""
-    one = np.concatenate([np.zeros(100)] + [np.full(300, level) for level in (5e-3, 10e-3, 15e-3)]
+    one = np.concatenate([np.zeros(100)] + [np.full(300, level * 1e-3) for level in levels_mm]
                          + [np.zeros(800)])
     reference = np.tile(one, 3)
     _, duty, *_ = simulate_loop(reference, "bpid", "position", base)
     return duty
 
 
-def profile(name: str, base: UnitParams) -> np.ndarray:
-    return pulse_profile() if name == "pulses" else staircase_profile(base)
+def profile(name: str, base: UnitParams) -> tuple[np.ndarray, np.ndarray]:
+    """The fitted recording's duty and the held-out recording's. A separate recording is held
+    out rather than cycles of one, as a lab keeps a validation run: an effect that acts at the
+    start of a run (a warm start) shows only in its first cycle."""
+    if name == "pulses":
+        return pulse_profile(), pulse_profile(HELDOUT_PULSES)
+    return staircase_profile(base), staircase_profile(base, HELDOUT_STAIRS_MM)
 
 
 # --------------------------------------------------------------------------- measurements
-def measure(case: Case, duty: np.ndarray, noise: str, seed: int, base: UnitParams | None = None) -> TimeSeriesRun:
+def measure(case: Case, duty: np.ndarray, noise: str, seed: int | list[int], base: UnitParams | None = None,
+            name: str = "") -> TimeSeriesRun:
     """The case's truth driven by ``duty`` (per 10 ms sample), read by noisy sensors."""
     base = base or load_params(BASE)
     truth = base.replace(dict(case.truth)) if case.truth else base
@@ -163,7 +176,7 @@ def measure(case: Case, duty: np.ndarray, noise: str, seed: int, base: UnitParam
     x = np.rint((x + rng.normal(0.0, sx, x.size)) / POSITION_STEP) * POSITION_STEP
     f = np.clip(np.rint((f + rng.normal(0.0, sf, f.size)) / FORCE_STEP) * FORCE_STEP, 0.0,
                 truth.force_sensor.range_max_n)
-    return TimeSeriesRun(name=f"{case.name}-{noise}", source="synthetic", kind="driven", time=t, drive="duty",
+    return TimeSeriesRun(name=name or f"{case.name}-{noise}", source="synthetic", kind="driven", time=t, drive="duty",
                          drive_values=duty, outputs={"position": x, "wire_force": f},
                          resolution={"position": POSITION_STEP, "wire_force": FORCE_STEP})
 
@@ -222,8 +235,10 @@ def outcome(case: Case, prof: str, noise: str, seed: int, d: Diagnosis) -> Outco
 
 
 def run_case(case: Case, prof: str, noise: str, seed: int, base: UnitParams | None = None,
-             duty: np.ndarray | None = None, progress=None) -> Outcome:
+             duties: tuple[np.ndarray, np.ndarray] | None = None, progress=None) -> Outcome:
+    """Fit on one recording of the profile, hold out the other (its own noise draw)."""
     base = base or load_params(BASE)
-    duty = profile(prof, base) if duty is None else duty
-    run = measure(case, duty, noise, seed, base)
-    return outcome(case, prof, noise, seed, diagnose([run], [], base, progress=progress))
+    fitted, heldout = profile(prof, base) if duties is None else duties
+    run = measure(case, fitted, noise, seed, base)
+    check = measure(case, heldout, noise, [seed, 1], base, name=f"{case.name}-{noise}-heldout")
+    return outcome(case, prof, noise, seed, diagnose([run], [check], base, progress=progress))
