@@ -170,11 +170,17 @@ class UnitDriver:
             self.permission_s = self.permitted_since_s = None
             self.applied_duty = 0.0
 
-    def heating_allowed(self, now_s: float) -> bool:
+    def permitted(self, now_s: float) -> bool:
+        """The supervisor's ENABLED taken and not lapsed: what the unit reports as its
+        permission (the supervisor faults a unit that has not taken its ENABLED)."""
         if not self.require_permission:
             return True
-        return (self.supervisor_alive and self.permission_s is not None and self.permitted_since_s <= now_s + 1e-9
+        return (self.permission_s is not None and self.permitted_since_s <= now_s + 1e-9
                 and now_s - self.permission_s <= self.permission_timeout_s)
+
+    def heating_allowed(self, now_s: float) -> bool:
+        """Permitted, and the supervisor alive (a transient loss suspends the heating only)."""
+        return self.permitted(now_s) and (self.supervisor_alive or not self.require_permission)
 
     def gate(self, now_s: float) -> float:
         """The duty the PWM stage applies at ``now_s`` after the safety gates."""

@@ -150,7 +150,7 @@ class ActuationUnitNode(LeanNode):
     def on_supervisor(self, message: SupervisorStatus) -> None:
         now = seconds(self)
         enabled = message.state == SupervisorStatus.ENABLED
-        if enabled and self.driver.heating_allowed(now):
+        if enabled and self.driver.permitted(now):
             # the periodic ENABLED that keeps the permission alive: allowed without a break
             # from the last step to now, so it only moves the lapse time on, and the wake-up
             # that six units take at once stays short
@@ -165,9 +165,9 @@ class ActuationUnitNode(LeanNode):
         elif self.lockstep:
             self.take_answer()
         self.advance_to(now)
-        was_allowed = self.driver.heating_allowed(now)
+        was_allowed = self.driver.permitted(now)
         self.driver.permit_heating(enabled, now)
-        if was_allowed != self.driver.heating_allowed(now):
+        if was_allowed != self.driver.permitted(now):
             # the moment heating stopped, for the record; the moment it was allowed, for the
             # supervisor, which faults a unit that has not taken its ENABLED
             self.publish_state()
@@ -253,7 +253,7 @@ class ActuationUnitNode(LeanNode):
         self.state_pub.publish(STATE.encode(STATE.fields(
             header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="",
             finger=self.finger, duty_percent=self.driver.applied_duty,
-            watchdog_tripped=self.driver.watchdog_tripped, heating_allowed=self.driver.heating_allowed(at),
+            watchdog_tripped=self.driver.watchdog_tripped, heating_allowed=self.driver.permitted(at),
             wire_temperature_c=r.wire_temperature_c,
             martensite_fraction=r.martensite_fraction, resistance=r.resistance_ohm, current=r.current_a,
             electrical_power=r.electrical_power_w, electrical_energy=r.energy_joule_j, stress=r.stress_pa,
@@ -281,6 +281,7 @@ class ActuationUnitNode(LeanNode):
         values = {"applied_duty_percent": d.applied_duty, "watchdog_tripped": d.watchdog_tripped,
                   "duty_commands": d.commands, "rejected_commands": d.rejected_commands,
                   "missed_control_periods": d.missed_periods, "late_commands": d.late_commands,
+                  "supervisor_liveliness": self.supervisor_watch.state if self.supervisor_watch else "not watched",
                   "supervisor_liveliness_losses": self.supervisor_watch.losses if self.supervisor_watch else 0,
                   "latency_p50_s": p50, "latency_p99_s": p99,
                   "latency_max_s": worst, "latency_window_s": d.latency_window_s,

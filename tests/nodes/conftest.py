@@ -53,7 +53,7 @@ def _wait_alive(watch, seconds: float = 10.0) -> None:
     import time
 
     deadline = time.monotonic() + seconds
-    while not watch.alive():
+    while not (watch.alive() and watch.established):
         assert time.monotonic() < deadline, "the writer never became alive"
         time.sleep(0.01)
 
