@@ -1,7 +1,7 @@
 """Graph CPU of this working tree against another commit, side by side in one graph.
 
 The separate-process graph's CPU moves by 10 % and more between runs minutes apart on a
-shared host (tests/graph/README.md), more than most changes to a node; runs of two
+shared host (docs/design.md), more than most changes to a node; runs of two
 versions one after the other then compare the host's phases, not the code. Here half of
 each node kind runs the other commit's code (``PYTHONPATH`` on a ``git worktree`` of it)
 and half this tree's, in one graph, so both halves see the same host; a second run swaps

@@ -61,6 +61,6 @@ def supervisor_check_delay(period_s: float, now_s: float) -> float:
     check therefore runs SUPERVISOR_PHASE_S after the first pair's tick, so its status
     (taking the reports first costs about 0.7 ms) goes out after that pair's chain (encoder,
     controller, duty: about 1.2 ms at the median) and the units have handled it before the
-    next pair ticks, 3.3 ms after the first (tests/graph/README.md).
+    next pair ticks, 3.3 ms after the first (docs/design.md).
     """
     return grid_delay(SUPERVISOR_PHASE_S, period_s, now_s)

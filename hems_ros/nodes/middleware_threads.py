@@ -3,7 +3,7 @@
 When a node sends a message, the receiving process's listener thread wakes and, under the
 default policy, usually preempts the sender on its core, which then finishes its period's
 work after the listener with cold caches: a scheduler trace of the separate-process graph
-counted about 1,600 such preemptions a second (tests/graph/README.md). A SCHED_BATCH thread
+counted about 1,600 such preemptions a second (docs/design.md). A SCHED_BATCH thread
 does not preempt on wake-up: it runs once the sender sleeps (the trace's senders ran on for
 about 0.2-0.7 ms on average) or at once on an idle core. The nodes' main threads keep the default policy, so a
 node woken for its data still preempts whatever runs. Five alternating 20 s runs of the

@@ -24,7 +24,7 @@ WIRE_FORCE = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=R
 # not match the best-effort writer). Best effort: each status supersedes the last within 20 ms,
 # and a reliable reader held every later status back behind a lost one until the writer's next
 # heartbeat repaired it, about 200 ms at 50 Hz; the supervisor then saw the controller as dead
-# (processes joining the domain, benchmarks/bench_graph_joins.py, tests/graph/README.md).
+# (processes joining the domain, benchmarks/bench_graph_joins.py, docs/design.md).
 CONTROLLER_STATUS = SENSOR
 # What a node was commanded (hems_msgs/CommandRecord): every record reaches a recorder that has
 # matched the node, and one that joins later still gets the last hundred.

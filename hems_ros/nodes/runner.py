@@ -13,7 +13,7 @@ from hems_ros.rosenv import apply_network_defaults
 # Every rclpy node offers six parameter services (twelve DDS endpoints, more than half of a
 # graph node's), and every participant announces all of its endpoints to each process that
 # joins the domain: with sixteen participants on two cores, fewer endpoints means fewer joins
-# that hold the graph's streams up past the supervisor's limit (figures: tests/graph/README.md).
+# that hold the graph's streams up past the supervisor's limit (figures: docs/design.md).
 # Without them `ros2 param` does not reach the node, so they stay on unless asked
 # (`hems up --no-parameter-services`).
 NO_PARAMETER_SERVICES_FLAG = "--no-parameter-services"
@@ -21,7 +21,7 @@ NO_PARAMETER_SERVICES_FLAG = "--no-parameter-services"
 
 def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
              spin: Callable[[object], None] | None = None,
-             config_errors: tuple[type[Exception], ...] = (ValueError,)) -> int:
+             config_errors: tuple[type[Exception], ...] = (ValueError,), defer_middleware: bool = True) -> int:
     """Initialise rclpy, spin the node until Ctrl-C or SIGTERM, shut down cleanly.
 
     ``-h``/``--help`` before ``--ros-args`` prints the node's documentation and exits.
@@ -30,6 +30,7 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     A ``config_errors`` exception (``ValueError`` by default) raised while constructing the
     node is a configuration error: it is printed with the node's name and the process exits
     with code 2. ``spin(node)`` replaces ``rclpy.spin`` for nodes that drive their own executor.
+    ``defer_middleware`` puts the middleware's threads under SCHED_BATCH (middleware_threads).
     """
     args = sys.argv if argv is None else argv
     user_args = args[1:args.index("--ros-args")] if "--ros-args" in args else args[1:]
@@ -50,7 +51,8 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     try:
         node = make_node(**node_kwargs)
         freeze_long_lived_objects()
-        defer_middleware_threads()
+        if defer_middleware:
+            defer_middleware_threads()
         if spin is None:
             from hems_ros.nodes import lean_spin
 

@@ -3,7 +3,7 @@
 On the graph's hot topics (encoder, wire tension and force, duty, controller status,
 simulation state) the nodes publish bytes and subscribe with ``raw=True``: rclpy then skips
 building a Python message object and converting it field by field, which cost more than the
-nodes' own work per message (benchmarks/bench_graph.py, tests/graph/README.md). The bytes
+nodes' own work per message (benchmarks/bench_graph.py, docs/design.md). The bytes
 are exactly what a typed publisher sends, so ``ros2 topic echo``, the recorder and any other
 subscriber see ordinary messages.
 

@@ -3,7 +3,7 @@ stream in the bag, decoded equal by three readers.
 
 In the default run on the one-finger graph (4 node processes, every kind of stream at the
 full per-finger rates). On the full 16-process graph it runs with the other real-time graph
-tests (`-m graph_realtime`, tests/graph/README.md). The recorder joins the running graph, and
+tests (`-m graph_realtime`, docs/design.md). The recorder joins the running graph, and
 while it creates its ~40 subscriptions the topics it already records can lose samples (see
 hems_ros/nodes/recorder.py); the 10 s window therefore opens 2 s after the recorder has
 subscribed to every topic. In 10 consecutive runs here all 10 passed; 3 of them had such

@@ -49,7 +49,7 @@ def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000
     return target
 
 
-# Out of the default run with the other real-time graph tests (tests/graph/README.md). The
+# Out of the default run with the other real-time graph tests (docs/design.md). The
 # plant is simulated anew; it repeats the original because a unit applies each duty from the
 # sample it answers (hems_ros/graph/unit_driver.py), whatever the transport delay. The force
 # sensor's noise is drawn per sample from the shoulder module's start, which lies at another

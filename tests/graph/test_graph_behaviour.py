@@ -119,7 +119,7 @@ def wait_until_active(rec, since: float, timeout_s: float = 2.0) -> None:
     status that enabled it, never from before; in the runs where a setpoint sent right after
     the enable call had its first heating duty answer a sample taken before the setpoint,
     the wire started later than in the lockstep and peaked at 20.04-20.15 mm instead of
-    20.06 (tests/graph/README.md)."""
+    20.06 (docs/design.md)."""
     deadline = time.monotonic() + timeout_s
     while not any(m.active for _, m in rec.since(names.topic(FINGER, "controller_status"), since)):
         assert time.monotonic() < deadline, f"the {FINGER} controller did not report active"

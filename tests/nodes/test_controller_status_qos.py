@@ -1,6 +1,6 @@
 """The controller status is offered best effort: a reliable reader held every later status
 back behind a lost one until the writer's next heartbeat (about 200 ms at 50 Hz), and the
-supervisor took that for a dead controller (tests/graph/README.md)."""
+supervisor took that for a dead controller (docs/design.md)."""
 
 from __future__ import annotations
 
