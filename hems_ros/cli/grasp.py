@@ -6,7 +6,6 @@ import argparse
 import contextlib
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 from hems_ros.cli.numbers import finite, non_negative, positive

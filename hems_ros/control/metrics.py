@@ -40,15 +40,19 @@ def _arrays(*arrays):
     return out
 
 
+def rms(e) -> float:
+    """Root mean square of the residuals ``e`` (nan if there are none)."""
+    e = np.asarray(e, dtype=float).ravel()
+    return float(np.sqrt(np.mean(e * e))) if e.size else math.nan
+
+
 def rmse(r, y, mask=None) -> float:
     """Root mean square of r - y, over ``mask`` if given (nan if the mask is empty)."""
     r, y = _arrays(r, y)
     e = r - y
     if mask is not None:
         e = e[np.asarray(mask, dtype=bool)]
-    if e.size == 0:
-        return math.nan
-    return float(np.sqrt(np.mean(e * e)))
+    return rms(e)
 
 
 def iae_integral(t, r, y) -> float:

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hems_ros.control import metrics
 from hems_ros.diagnosis.dataset import Prediction, Split
 from hems_ros.experiments.lockstep import run_protocol
 from hems_ros.diagnosis.runs import FIGURE_UNITS, DiagnosisInputError, FeatureRun, FeatureTest
@@ -116,7 +117,7 @@ class FeatureData:
         mask = (self.split.train if which == "train" else self.split.heldout)[0]
         errs = [prediction.outputs[j].get(name, math.nan) - t.figures[name]
                 for j, ((_, t), take) in enumerate(zip(self.tests, mask)) if take and name in t.figures]
-        return float(np.sqrt(np.mean(np.square(errs)))) if errs else math.nan
+        return metrics.rms(errs)
 
 
 def _loop_figures(protocol: str, strategy: str, sets: list[UnitParams]) -> list[dict[str, float]]:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hems_ros.control import metrics
 from hems_ros.diagnosis.candidates import PHASES
 from hems_ros.diagnosis.dataset import Prediction, TimeSeriesData
 from hems_ros.diagnosis.runs import FIGURE_UNITS, OUTPUT_UNITS
@@ -56,7 +57,7 @@ def table(data, prediction: Prediction) -> list[Row]:
                    for run, sim, seg in zip(data.runs, prediction.outputs, data.segments) if name in run.outputs]
             r = np.concatenate(res) if res else np.zeros(0)
             if r.size:
-                rows.append(Row(phase, name, int(r.size), float(np.sqrt(np.mean(r**2))) * scale, unit,
+                rows.append(Row(phase, name, int(r.size), metrics.rms(r) * scale, unit,
                                 float(np.mean((r / data.sigma[name]) ** 2))))
     return rows
 
@@ -69,7 +70,7 @@ def _figure_table(data, prediction: Prediction) -> list[Row]:
                       for j, (_, t) in enumerate(data.tests) if name in t.figures])
         w = np.array([_weights(data, name, t.figures[name]) for _, t in data.tests if name in t.figures])
         r = np.where(np.isfinite(r), r, 1e3 * w)
-        rows.append(Row(name, name, int(r.size), float(np.sqrt(np.mean(r**2))) * scale, unit,
+        rows.append(Row(name, name, int(r.size), metrics.rms(r) * scale, unit,
                         float(np.mean((r / w) ** 2))))
     return rows
 
@@ -84,7 +85,7 @@ def cycles(data: TimeSeriesData, prediction: Prediction, name: str) -> list[tupl
         for c in range(seg.n_cycles):
             m = seg.cycle == c
             r = sim[name][m] - run.outputs[name][m]
-            out.append((run.name, c + 1, float(np.sqrt(np.mean(r**2))) * scale, bool(test[m].any())))
+            out.append((run.name, c + 1, metrics.rms(r) * scale, bool(test[m].any())))
     return out
 
 

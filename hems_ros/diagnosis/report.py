@@ -104,7 +104,7 @@ def _num(v: float, digits: int = 3) -> str:
 
 def markdown(d: Diagnosis, figures: list[str]) -> str:
     """report.md: verdict, gap, where the disagreement sits, the candidates, the model."""
-    s, g = d.search, d.gap
+    g = d.gap
     lines = [f"# Diagnosis: {d.model_name} against the measurement", "", f"**{d.summary_line()}**", "",
              f"Data: {_data_line(d)}. {d.data.split.description}.", ""]
     if isinstance(d.data, TimeSeriesData):

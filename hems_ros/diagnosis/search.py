@@ -30,7 +30,7 @@ from typing import Callable
 import numpy as np
 
 from hems_ros.diagnosis.candidates import Candidate
-from hems_ros.diagnosis.fit import Fit, Space, Structure, fit_structures
+from hems_ros.diagnosis.fit import Fit, Space, fit_structures
 from hems_ros.physics.params import UnitParams
 
 #: Held-out cost left to explain below which there is nothing to explain.

@@ -92,7 +92,7 @@ def authority_split(run: LockstepRun) -> dict[str, float]:
     return {
         "cooling_share": float(np.sum(e[cooling] ** 2)) / total,
         "heating_share": float(np.sum(e[heating] ** 2)) / total,
-        "rmse_unsaturated": float(np.sqrt(np.mean(e[free] ** 2))) if free.any() else math.nan,
+        "rmse_unsaturated": metrics.rms(e[free]),
     }
 
 

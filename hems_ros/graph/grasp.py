@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hems_ros.control import metrics
+
 
 @dataclass(frozen=True)
 class GraspPlan:
@@ -64,7 +66,7 @@ class FingerSummary:
 def _window_rmse(t: np.ndarray, y: np.ndarray, target: float, start: float, end: float) -> float:
     # half a microsecond of slack: stamps pass through float seconds on both sides
     mask = (t >= start - 5e-7) & (t < end - 5e-7)
-    return float(np.sqrt(np.mean((y[mask] - target) ** 2))) if mask.any() else float("nan")
+    return metrics.rms(y[mask] - target)
 
 
 class PhaseTracker:

@@ -45,7 +45,7 @@ from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.liveliness import LivelinessWatch
 from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.wire import codec, seconds_of, stamp
-from hems_ros.nodes.params import PERIOD_LIMIT, Spec, WINDOW_LIMIT, declare, one_of, positive
+from hems_ros.nodes.params import PERIOD_LIMIT, Spec, WINDOW_LIMIT, declare, one_of
 from hems_ros.nodes.runner import run_node
 from hems_ros.physics import ActuationUnit, load_params
 

@@ -11,7 +11,7 @@ import pytest
 from hems_ros.diagnosis import candidates as lib
 from hems_ros.diagnosis import replay, search, suite
 from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned
-from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
+from hems_ros.diagnosis.runs import TimeSeriesRun
 from hems_ros.diagnosis.search import Step, _verdict
 from hems_ros.diagnosis.workflow import diagnose
 from hems_ros.physics.params import load_params

@@ -17,8 +17,7 @@ import pytest
 
 from diagnostic_msgs.msg import DiagnosticArray
 
-from hems_msgs.msg import (ActuatorState, ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint,
-                           SupervisorStatus, WireForce)
+from hems_msgs.msg import (ActuatorState, ControllerStatus, DutyCommand, EncoderReading, SupervisorStatus, WireForce)
 from hems_ros.graph import names, transmission
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import from_msg
