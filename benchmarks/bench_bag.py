@@ -29,10 +29,9 @@ FINGERS = ("thumb_flexion", "thumb_abduction", "index", "middle", "ring", "littl
 
 def message_mix(count: int) -> list[tuple[str, str, bytes]]:
     """``count`` serialized messages cycling through the graph's topics, values varying."""
+    from hems_msgs.msg import ActuatorState, DutyCommand, EncoderReading, WireForce
     from rclpy.serialization import serialize_message
     from sensor_msgs.msg import JointState
-
-    from hems_msgs.msg import ActuatorState, DutyCommand, EncoderReading, WireForce
 
     topics = []
     for finger in FINGERS:

@@ -49,8 +49,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from hems_ros.bag import BagWriter, cdr, msgdefs, offered_qos  # noqa: E402
 from hems_ros.diagnosis import batching, dataset, replay, search  # noqa: E402
-from hems_ros.diagnosis import fit as fit_module  # noqa: E402
 from hems_ros.diagnosis import candidates as library  # noqa: E402
+from hems_ros.diagnosis import fit as fit_module  # noqa: E402
 from hems_ros.diagnosis.bagload import load_bag_runs  # noqa: E402
 from hems_ros.diagnosis.workflow import diagnose, prepare  # noqa: E402
 from hems_ros.experiments.lockstep import simulate_loop  # noqa: E402

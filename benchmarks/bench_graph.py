@@ -24,7 +24,7 @@ DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
 
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 
-from hems_ros.cli.graph_client import GraphClient  # noqa: E402
+from hems_ros.client.graph_client import GraphClient  # noqa: E402
 from hems_ros.graph import names  # noqa: E402
 from hems_ros.launcher import Graph, GraphOptions  # noqa: E402
 

@@ -27,7 +27,7 @@ from pathlib import Path
 
 from bench_graph import cpu_by_process, host_line  # reserves this run's ROS domain
 
-from hems_ros.cli.graph_client import GraphClient
+from hems_ros.client.graph_client import GraphClient
 from hems_ros.graph import names
 from hems_ros.launcher import Graph, GraphOptions, warm_physics_cache
 from hems_ros.rosenv import child_environment

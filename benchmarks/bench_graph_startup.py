@@ -23,8 +23,8 @@ from pathlib import Path
 from bench_graph_joins import fault_kind  # reserves this run's ROS domain
 
 from hems_ros.bag.recording import RecorderProcess
-from hems_ros.cli.graph_client import GraphClient
-from hems_ros.cli.up import wait_until_recording
+from hems_ros.client.graph_client import GraphClient
+from hems_ros.client.recording import wait_until_recording
 from hems_ros.graph import names
 from hems_ros.launcher import Graph, GraphOptions
 

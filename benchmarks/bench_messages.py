@@ -34,8 +34,8 @@ TOPIC = "/hems_bench/encoder"
 def subscriber(serialized: bool, count: int) -> None:
     """Child process: take ``count`` messages (or give up after 60 s) and print CPU per message."""
     import rclpy
-
     from hems_msgs.msg import EncoderReading
+
     from hems_ros.nodes import lean_spin, qos
     from hems_ros.nodes.wire import codec
 
@@ -65,8 +65,8 @@ def subscriber(serialized: bool, count: int) -> None:
 
 def publish(serialized: bool, count: int) -> dict:
     import rclpy
-
     from hems_msgs.msg import EncoderReading
+
     from hems_ros.nodes import qos
     from hems_ros.nodes.wire import codec
 

@@ -32,7 +32,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from scipy.integrate import solve_ivp  # noqa: E402
 
-from hems_ros.physics import ActuationUnit, constitutive, electrical, heat, kinetics, load_params, sheath, simulate  # noqa: E402
+from hems_ros.physics import (  # noqa: E402
+    ActuationUnit,
+    constitutive,
+    electrical,
+    heat,
+    kinetics,
+    load_params,
+    sheath,
+    simulate,
+)
 from hems_ros.physics import kernel as K  # noqa: E402
 from hems_ros.physics.batch import CHANNELS  # noqa: E402
 from hems_ros.physics.electrical import DRIVE_NAMES  # noqa: E402
@@ -176,8 +185,8 @@ def main() -> int:
         cur = current_profile(30.0, step)
         every = max(1, int(round(0.01 / step)))
         simulate(sets, step, current=cur[:10])
-        t, cpu, t_median = timed_cpu(lambda: simulate(sets, step, current=cur, record_every=every,
-                                                      channels=["slider_position_m", "wire_force_n"]), repeat=7)
+        t, cpu, t_median = timed_cpu(lambda step=step, cur=cur, every=every: simulate(
+            sets, step, current=cur, record_every=every, channels=["slider_position_m", "wire_force_n"]), repeat=7)
         rate = 256 * 30.0 / t
         print(f"batch 256 sets x 30 s, dt {step * 1e3:4.0f} ms : {t * 1e3:8.1f} ms  {rate:10.0f} unit-s per wall-s "
               f"(floor 1e5: {rate / 1e5:.2f} x floor; fastest of 7, median {256 * 30.0 / t_median / 1e5:.2f} x floor; "

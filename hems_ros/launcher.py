@@ -20,6 +20,7 @@ from hems_ros.nodes.runner import NO_PARAMETER_SERVICES_FLAG
 from hems_ros.paths import config_path
 from hems_ros.rosenv import child_environment, die_with_parent
 
+
 def default_params_file() -> Path:
     """config/hems.yaml of the source tree, or of share/hems_ros when installed elsewhere."""
     return config_path("hems.yaml")

@@ -9,7 +9,15 @@
 
 from hems_ros.bag.mcapscan import BagFormatError, ScanReport
 from hems_ros.bag.reader import (
-    Bag, BagInfo, BagWarning, RawMessage, TopicData, bag_files, bag_info, iter_messages, load_bag,
+    Bag,
+    BagInfo,
+    BagWarning,
+    RawMessage,
+    TopicData,
+    bag_files,
+    bag_info,
+    iter_messages,
+    load_bag,
 )
 from hems_ros.bag.selection import DEFAULT_RECORD_REGEX, TopicSelection
 from hems_ros.bag.writer import BagSummary, BagWriter, offered_qos

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hems_ros.bag.cdr import SCALARS, HEADER_SIZE, LITTLE_ENDIAN_KINDS, CdrError, Column, Decoder
+from hems_ros.bag.cdr import HEADER_SIZE, LITTLE_ENDIAN_KINDS, SCALARS, CdrError, Column, Decoder
 from hems_ros.bag.msgdefs import PRIMITIVES, Field
 
 _U32 = struct.Struct("<I")

@@ -52,7 +52,7 @@ def register(subparsers) -> None:
 
 
 def run_trigger(command: str, args: argparse.Namespace) -> int:
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     with GraphClient() as client:
         ok, message = client.call(command, args.timeout)
@@ -92,7 +92,7 @@ def run_setpoint(args: argparse.Namespace) -> int:
     except ValueError as error:
         print(f"setpoint rejected: {error}", file=sys.stderr)
         return 2
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     unit = "m" if mode == "position" else "N"
     with GraphClient() as client:
@@ -156,7 +156,7 @@ def format_status(snap) -> str:
 
 
 def run_status(args: argparse.Namespace) -> int:
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     with GraphClient() as client:
         snap = client.snapshot(seconds=args.listen)

@@ -16,7 +16,8 @@ from pathlib import Path
 
 from hems_ros.cli import grasp
 from hems_ros.cli.numbers import positive
-from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder, wait_until_recording
+from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder
+from hems_ros.client.recording import wait_until_recording
 from hems_ros.launcher import Graph
 
 
@@ -44,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"demo: {error}", file=sys.stderr)
         return 2
     from hems_ros.bag.recording import RecorderProcess
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     graph = Graph(options)
     graph.start()

@@ -11,7 +11,13 @@ from pathlib import Path
 from hems_ros.cli.numbers import finite, non_negative, positive
 from hems_ros.graph import names
 from hems_ros.graph.grasp import (
-    FingerTrace, GraspPlan, PhaseTracker, format_summary, plot, summarize, tracking_report,
+    FingerTrace,
+    GraspPlan,
+    PhaseTracker,
+    format_summary,
+    plot,
+    summarize,
+    tracking_report,
 )
 from hems_ros.graph.setpoints import SetpointLimits, validate
 
@@ -70,9 +76,9 @@ class GraspListener:
     """
 
     def __init__(self, client, fingers=names.FINGERS) -> None:
+        from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
         from sensor_msgs.msg import JointState
 
-        from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
         from hems_ros.nodes import qos
         from hems_ros.nodes.clock_time import from_msg
 
@@ -244,7 +250,7 @@ def run(args: argparse.Namespace) -> int:
         return 2
     from rclpy.executors import ExternalShutdownException
 
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     with GraphClient("hems_grasp", sim_time=args.sim_time) as client:
         try:

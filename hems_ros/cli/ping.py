@@ -56,12 +56,16 @@ def stop_process(process: subprocess.Popen, timeout: float = 5.0) -> int:
 def ping(count: int, rate: float, timeout: float) -> dict:
     """Send ``count`` probes; return round-trip times (s) and the list of bad answers."""
     import rclpy
+    from hems_msgs.msg import DutyCommand, EncoderReading
     from rclpy.node import Node
 
-    from hems_msgs.msg import DutyCommand, EncoderReading
-    from hems_ros.cli.graph_client import checked
+    from hems_ros.client.graph_client import checked
     from hems_ros.nodes.ping_responder import (
-        COUNTS_PER_PERCENT, METRES_PER_PERCENT, PING_QOS, REPLY_TOPIC, REQUEST_TOPIC,
+        COUNTS_PER_PERCENT,
+        METRES_PER_PERCENT,
+        PING_QOS,
+        REPLY_TOPIC,
+        REQUEST_TOPIC,
     )
 
     rclpy.init(args=[])

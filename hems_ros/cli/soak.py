@@ -12,7 +12,8 @@ import time
 from pathlib import Path
 
 from hems_ros.cli.numbers import non_negative_int, positive
-from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder, wait_until_recording
+from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder
+from hems_ros.client.recording import wait_until_recording
 from hems_ros.graph import names, soak
 from hems_ros.launcher import Graph
 from hems_ros.rosenv import child_environment
@@ -129,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
 
     from hems_ros.bag.reader import load_bag
     from hems_ros.bag.recording import RecorderProcess
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.nodes import qos
 
     graph = Graph(options)

@@ -14,11 +14,11 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from hems_ros.cli.numbers import non_negative, positive, positive_int
-from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder, wait_until_recording
-from hems_ros.graph import names, transmission
+from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder
+from hems_ros.client.recording import wait_until_recording
+from hems_ros.client.step_figures import step_figures
+from hems_ros.graph import transmission
 from hems_ros.physics.params import load_params
 
 # A setpoint the controller status does not show within this long ends the run: the figures
@@ -52,70 +52,6 @@ def register(subparsers) -> None:
     parser.add_argument("--ready-timeout", type=positive, default=60.0, help="seconds to wait for the graph")
 
 
-def step_span(values: np.ndarray) -> tuple[int, int]:
-    """Indices of the setpoint messages that start and end the last step in ``values``: the
-    first of the last run of equal non-zero values (a setpoint sent again repeats it) and the
-    next message after that run. ValueError when the messages hold no such step."""
-    values = np.asarray(values, dtype=float)
-    raised = np.flatnonzero(values != 0.0)
-    if raised.size == 0 or raised[-1] == values.size - 1:
-        raise ValueError(f"{values.size} setpoint messages ({', '.join(f'{v:g}' for v in values)} m) "
-                         "hold no step up and back to 0")
-    last = raised[-1]
-    first = last
-    while first > 0 and values[first - 1] == values[last]:
-        first -= 1
-    return int(first), int(last + 1)
-
-
-def _taken_at(bag, finger: str, value: float, sent_s: float) -> float:
-    """When the finger's controller took the setpoint ``value`` sent at ``sent_s``: the stamp
-    of its first accepted /commands record of that value from then on (the graph's clock, so on
-    sim time the sample it acted from), or ``sent_s`` for a bag without the records."""
-    topic = names.topic(finger, "commands")
-    records = bag[topic] if topic in bag else None
-    if records is None or len(records) == 0:
-        return sent_s
-    stamp = records.stamp
-    taken = np.flatnonzero(records["accepted"] & (records["value"] == value) & (stamp >= sent_s - 1e-3))
-    return float(stamp[taken[0]]) if taken.size else sent_s
-
-
-def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.0,
-                 step_s: float | None = None) -> dict[str, float]:
-    """RMSE (whole step), overshoot (first peak, :func:`hems_ros.control.metrics.overshoot`) and
-    steady-state error (mean over its last ``settle_s``), tendon mm.
-
-    The step runs from the moment the controller took its setpoint (:func:`_taken_at`) for
-    ``step_s`` (default: until the controller took the next one): a tool that sends the setpoints
-    late, or a clock that ran on meanwhile, then changes neither the start nor the length the
-    figures cover. ValueError when the bag does not hold the step's setpoints (:func:`step_span`)."""
-    from hems_ros.bag import load_bag
-    from hems_ros.control import metrics
-
-    topics = [names.topic(finger, s) for s in ("encoder", "setpoint", "commands")]
-    bag = load_bag(bag_path, topics=topics)
-    if topics[0] not in bag or topics[1] not in bag:
-        raise ValueError(f"{finger}: bag {bag_path} holds no {topics[0]} or {topics[1]}")
-    encoder, setpoint = bag[topics[0]], bag[topics[1]]
-    t, y = encoder.stamp, 1e3 * transmission.tendon_position(encoder["position"], ratio)
-    try:
-        rise, fall = step_span(setpoint["value"])
-    except ValueError as error:
-        raise ValueError(f"{finger}: bag {bag_path}: {error}") from None
-    values = setpoint["value"]
-    start = _taken_at(bag, finger, values[rise], setpoint.stamp[rise])
-    end = _taken_at(bag, finger, values[fall], setpoint.stamp[fall])
-    if step_s is not None:
-        end = min(end, start + step_s)
-    height = 1e3 * values[rise]
-    during = (t >= start) & (t < end)
-    settled = (t >= end - settle_s) & (t < end)
-    return {"rmse_mm": metrics.rmse(y[during], np.full(int(during.sum()), height)),
-            "overshoot_mm": metrics.overshoot(y[during], metrics.StepSegment(0, int(during.sum()), 0.0, height)),
-            "steady_state_error_mm": float(np.mean(height - y[settled]))}
-
-
 def run(args: argparse.Namespace) -> int:
     from hems_ros.bag.recording import RecorderProcess
     from hems_ros.cli.up import print_bag
@@ -132,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     if args.physics_config:
         overrides += ["-p", f"physics_config:={args.physics_config}"]
     options.extra_ros_args = tuple(overrides)
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph
 
     graph = Graph(options)

@@ -46,33 +46,6 @@ def default_bag(prefix: str) -> Path:
     return Path("bags") / datetime.now().strftime(f"{prefix}_%Y%m%d_%H%M%S")
 
 
-def graph_topics(fingers) -> list[str]:
-    """Topics a recording of the graph must hold before the run starts (setpoints included:
-    their publisher is reliable but not latched, so a recorder joining late misses one)."""
-    topics = [names.SUPERVISOR_STATUS_TOPIC]
-    for finger in fingers:
-        topics += [names.topic(finger, s) for s in ("encoder", "wire_force", "duty", "setpoint")]
-    return topics
-
-
-def wait_until_recording(client, recorder, fingers, deadline: float) -> None:
-    """Send every finger's controller its start setpoint (position 0), which creates the
-    client's setpoint publishers, wait until ``recorder`` holds :func:`graph_topics`, setpoints
-    included, then until its setpoint readers have matched the client's writers, so that the
-    run's first real setpoint is recorded (a subscribed reader not matched yet loses it: once
-    here a step's bag held one of its four setpoints). ``deadline`` is a time.monotonic()
-    value; TimeoutError when it passes, the recorder's RuntimeError passes through."""
-    for finger in fingers:
-        while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
-            pass
-    recorder.wait_for_topics(graph_topics(fingers), timeout=max(1.0, deadline - time.monotonic()))
-    # two readers per setpoint writer: the controller's and the recorder's
-    unmatched = client.fingers_without_readers(fingers, 2, max(1.0, deadline - time.monotonic()))
-    if unmatched:
-        raise TimeoutError("the recorder's setpoint readers did not match this tool's writers in time: "
-                           + ", ".join(names.topic(f, "setpoint") for f in unmatched))
-
-
 def bag_folder(record, prefix: str) -> Path:
     """The folder ``--record`` asks for; ValueError if it is already used (checked before the graph starts)."""
     folder = default_bag(prefix) if record is True else Path(record)

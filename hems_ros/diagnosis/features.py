@@ -17,8 +17,8 @@ import numpy as np
 
 from hems_ros.control import metrics
 from hems_ros.diagnosis.dataset import Prediction, Split
-from hems_ros.experiments.lockstep import run_protocol
 from hems_ros.diagnosis.runs import FIGURE_UNITS, DiagnosisInputError, FeatureRun, FeatureTest
+from hems_ros.experiments.lockstep import run_protocol
 from hems_ros.physics.batch import simulate
 from hems_ros.physics.params import UnitParams
 

@@ -30,8 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hems_ros.control import DEFAULT_N_FILTER, DEFAULT_TS, make_controller
-from hems_ros.control import metrics
+from hems_ros.control import DEFAULT_N_FILTER, DEFAULT_TS, make_controller, metrics
 from hems_ros.control.references import PROTOCOLS, Protocol
 from hems_ros.physics import kernel, sensors
 from hems_ros.physics.electrical import DRIVE_NAMES

@@ -18,8 +18,18 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from hems_ros.control import FORCE_MODE_BPID  # noqa: E402
 from hems_ros.experiments.dissertation import (  # noqa: E402
-    CH5_PROTOCOLS, CH5_RISE_TIME_S, CH5_SS_ERROR_MM, CH5_STRATEGIES, CH5_TABLES, CH6_FORCE,
-    CH6_HOLD, CH6_POSITION, CH6_SS_ERROR, CH6_TABLES, PROTOCOL_LABELS, STRATEGY_LABELS,
+    CH5_PROTOCOLS,
+    CH5_RISE_TIME_S,
+    CH5_SS_ERROR_MM,
+    CH5_STRATEGIES,
+    CH5_TABLES,
+    CH6_FORCE,
+    CH6_HOLD,
+    CH6_POSITION,
+    CH6_SS_ERROR,
+    CH6_TABLES,
+    PROTOCOL_LABELS,
+    STRATEGY_LABELS,
 )
 from hems_ros.experiments.findings import Finding  # noqa: E402
 

@@ -34,19 +34,19 @@ from __future__ import annotations
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-
 from hems_msgs.msg import ActuatorState, DriveReading, DutyCommand, EncoderReading, SupervisorStatus, WireForce
+
 from hems_ros.graph import names
 from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
+from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.grid_timer import create_grid_timer
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.liveliness import LivelinessWatch
-from hems_ros.nodes.clock_time import seconds, stamp_now
-from hems_ros.nodes.wire import codec, seconds_of, stamp
-from hems_ros.nodes.params import PERIOD_LIMIT, Spec, WINDOW_LIMIT, declare, one_of
+from hems_ros.nodes.params import PERIOD_LIMIT, WINDOW_LIMIT, Spec, declare, one_of
 from hems_ros.nodes.runner import run_node
+from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.physics import ActuationUnit, load_params
 
 LOCKSTEP_WAIT_S, LOCKSTEP_POLL_S = 0.05, 0.0002

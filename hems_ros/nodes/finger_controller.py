@@ -38,11 +38,19 @@ The encoder, force, duty and status topics carry serialized messages (hems_ros.n
 from __future__ import annotations
 
 import math
-
 from dataclasses import fields
 
-from hems_msgs.msg import (CommandRecord, ControllerStatus, DriveReading, DutyCommand, EncoderReading,
-                           FingerSetpoint, SupervisorStatus, WireForce)
+from hems_msgs.msg import (
+    CommandRecord,
+    ControllerStatus,
+    DriveReading,
+    DutyCommand,
+    EncoderReading,
+    FingerSetpoint,
+    SupervisorStatus,
+    WireForce,
+)
+
 from hems_ros.control import STRATEGIES, make_controller, mode_gains
 from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
 from hems_ros.graph import names, transmission

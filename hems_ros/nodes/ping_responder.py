@@ -8,10 +8,10 @@ so the caller can check that field values crossed the wire intact both ways.
 
 from __future__ import annotations
 
+from hems_msgs.msg import DutyCommand, EncoderReading
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-from hems_msgs.msg import DutyCommand, EncoderReading
 from hems_ros.nodes.runner import run_node
 
 REQUEST_TOPIC = "/hems/ping/request"

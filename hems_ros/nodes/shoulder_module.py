@@ -11,8 +11,8 @@ Each reading carries ``saturated`` (clipped at 0 or the range) and ``over_force`
 
 from __future__ import annotations
 
-
 from hems_msgs.msg import WireForce
+
 from hems_ros.graph import names
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode

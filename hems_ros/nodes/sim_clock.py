@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import time
 
+from hems_msgs.msg import DutyCommand, EncoderReading, SupervisorStatus, WireForce
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
-from hems_msgs.msg import DutyCommand, EncoderReading, SupervisorStatus, WireForce
 from hems_ros.graph import names
 from hems_ros.graph.lockstep_clock import LockstepClock
 from hems_ros.nodes import qos

@@ -29,17 +29,17 @@ from __future__ import annotations
 import dataclasses
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from hems_msgs.msg import ActuatorState, CommandRecord, ControllerStatus, SupervisorStatus
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
-from hems_msgs.msg import ActuatorState, CommandRecord, ControllerStatus, SupervisorStatus
 from hems_ros.graph import names, transmission
 from hems_ros.graph.cadence import Cadence, supervisor_check_delay
 from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
 from hems_ros.nodes import qos
+from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.grid_timer import create_grid_timer
 from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, positive
 from hems_ros.nodes.runner import run_node
 

@@ -42,7 +42,8 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
-from hems_ros.physics import constitutive, electrical, friction, heat, jit as jit_options, kinetics, loads, sheath
+from hems_ros.physics import constitutive, electrical, friction, heat, kinetics, loads, sheath
+from hems_ros.physics import jit as jit_options
 from hems_ros.physics.jit import OPTIONS, jit, jit_inline
 from hems_ros.physics.params import UnitParams
 

@@ -19,9 +19,8 @@ with a hanging mass it is unconditionally stable (the wire-mass resonance is ~46
 
 from __future__ import annotations
 
-from hems_ros.physics.jit import jit
-
 from hems_ros.physics.friction import transmitted_force
+from hems_ros.physics.jit import jit
 
 
 @jit

@@ -5,7 +5,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-
 HERE = Path(__file__).resolve().parent
 PUBLISHER_SCRIPT = HERE / "synthetic_publisher.py"
 sys.path.insert(0, str(HERE))
@@ -85,7 +84,7 @@ def write_bag(folder: Path, count: int = 300, chunk_size: int = 4096, compressio
 
     written: dict[str, list] = {}
     with BagWriter(folder, compression=compression, chunk_size=chunk_size) as writer:
-        for k, (topic, (type_name, factory)) in enumerate((topics or TOPICS).items()):
+        for k, (topic, (type_name, _)) in enumerate((topics or TOPICS).items()):
             writer.add_topic(topic, type_name, [offered_qos(k % 2 == 0, topic.endswith("status"), 10)])
         for i in range(count):
             for k, (topic, (_, factory)) in enumerate((topics or TOPICS).items()):

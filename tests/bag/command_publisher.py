@@ -29,9 +29,8 @@ def main() -> int:
     args = parser.parse_args()
 
     import rclpy
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-
     from hems_msgs.msg import FingerSetpoint
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     rclpy.init()
     node = rclpy.create_node("command_publisher")
@@ -49,6 +48,7 @@ def main() -> int:
     shown = []
     if args.until_taken:
         from hems_msgs.msg import ControllerStatus
+
         from hems_ros.nodes import qos
 
         node.create_subscription(ControllerStatus, args.topic.rsplit("/", 1)[0] + "/controller_status",

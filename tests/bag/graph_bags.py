@@ -59,10 +59,16 @@ class ControllerReplay:
 
     def __init__(self, finger: str) -> None:
         import rclpy
+        from hems_msgs.msg import (
+            ControllerStatus,
+            DutyCommand,
+            EncoderReading,
+            FingerSetpoint,
+            SupervisorStatus,
+            WireForce,
+        )
         from rclpy.executors import SingleThreadedExecutor
 
-        from hems_msgs.msg import ControllerStatus, DutyCommand, EncoderReading, FingerSetpoint, SupervisorStatus
-        from hems_msgs.msg import WireForce
         from hems_ros.nodes import qos
 
         self.finger = finger
@@ -134,9 +140,8 @@ def controller_inputs(bag_path: Path, finger: str):
     Returns (inputs, first_enabled_index): inputs are (topic, raw bytes, decoded message, time taken) of the
     setpoint, encoder and wire-force streams and the supervisor status.
     """
-    from rclpy.serialization import deserialize_message
-
     from hems_msgs.msg import EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
+    from rclpy.serialization import deserialize_message
 
     types = {names.topic(finger, "setpoint"): FingerSetpoint, names.topic(finger, "encoder"): EncoderReading,
              names.topic(finger, "wire_force"): WireForce, names.SUPERVISOR_STATUS_TOPIC: SupervisorStatus}

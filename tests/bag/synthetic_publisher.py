@@ -59,10 +59,10 @@ def main() -> int:
     args = parser.parse_args()
 
     import rclpy
+    from hems_msgs.msg import SupervisorStatus
     from rclpy.node import Node
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-    from hems_msgs.msg import SupervisorStatus
     from hems_ros.nodes.recorder import message_class
 
     rclpy.init()

@@ -29,7 +29,7 @@ QUICK_SETPOINTS_MM = [21.0, 22.0, 23.0, 24.0]
 
 
 def test_every_setpoint_and_supervisor_call_is_in_the_bag(ros_domain_id, tmp_path, venv):
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
 
     output = tmp_path / "session"

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bag_helpers import log_time, write_bag, T0, TOPICS
+from bag_helpers import T0, TOPICS, log_time, write_bag
 
 from hems_ros.bag import load_bag
 from hems_ros.bag.export import csv_name, export_csv

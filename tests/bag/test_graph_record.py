@@ -24,7 +24,7 @@ from graph_bags import stamp_ns
 
 from hems_ros.bag import load_bag
 from hems_ros.bag.recording import RecorderProcess
-from hems_ros.cli.up import graph_topics
+from hems_ros.client.recording import graph_topics
 from hems_ros.graph import names
 
 FINGER = "index"   # the finger whose streams are also read back with rosbags and mcap
@@ -49,7 +49,8 @@ def stream_topic(finger: str, stream: str) -> str:
 ])
 def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int, tmp_path: Path, fingers) -> None:
     from hems_msgs.msg import ActuatorState, ControllerStatus, DutyCommand, EncoderReading, WireForce
-    from hems_ros.cli.graph_client import GraphClient
+
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
     from hems_ros.nodes import qos
 

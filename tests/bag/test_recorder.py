@@ -160,9 +160,9 @@ def listener(ros_domain_id: int):
     """A subscription to /hems/index/setpoint, as a controller has: the topic is in the graph
     before any publisher."""
     import rclpy
+    from hems_msgs.msg import FingerSetpoint
     from rclpy.context import Context
 
-    from hems_msgs.msg import FingerSetpoint
     from hems_ros.nodes import qos
 
     context = Context()

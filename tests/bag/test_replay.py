@@ -34,11 +34,10 @@ def make_bag(folder: Path, count: int = 11) -> None:
 @pytest.mark.parametrize("rate", [1.0, 2.0])
 def test_replay_keeps_timing_remaps_and_publishes_clock(ros_domain_id: int, tmp_path: Path, rate: float) -> None:
     import rclpy
+    from hems_msgs.msg import DutyCommand, SupervisorStatus
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from rosgraph_msgs.msg import Clock
-
-    from hems_msgs.msg import DutyCommand, SupervisorStatus
 
     make_bag(tmp_path / "bag")
     context = rclpy.Context()

@@ -105,10 +105,10 @@ def test_corrupt_chunk_is_skipped_and_named(finished, tmp_path: Path) -> None:
 
 
 def test_unknown_schema_is_skipped_with_a_warning_naming_the_topic(tmp_path: Path) -> None:
+    from hems_msgs.msg import WireForce
     from mcap.writer import Writer
     from rclpy.serialization import serialize_message
 
-    from hems_msgs.msg import WireForce
     from hems_ros.bag.msgdefs import full_definition
 
     path = tmp_path / "mixed.mcap"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from graph_bags import REFERENCES
 
-from hems_ros.cli.step import step_figures
+from hems_ros.client.step_figures import step_figures
 
 
 def test_step_figures_of_the_reference_bag():
@@ -23,14 +23,14 @@ def test_step_figures_of_the_reference_bag():
     ([0.0, 0.01, 0.0, 0.0, 0.02, 0.0, 0.0], (4, 5)),   # the last step counts
 ])
 def test_step_span_finds_the_step_among_the_setpoints(values, span):
-    from hems_ros.cli.step import step_span
+    from hems_ros.client.step_figures import step_span
 
     assert step_span(values) == span
 
 
 @pytest.mark.parametrize("values", [[0.0], [0.0, 0.0, 0.02], []])
 def test_step_span_names_a_recording_without_the_step(values):
-    from hems_ros.cli.step import step_span
+    from hems_ros.client.step_figures import step_span
 
     with pytest.raises(ValueError, match=f"{len(values)} setpoint messages .* hold no step up and back to 0"):
         step_span(values)

@@ -84,7 +84,7 @@ def test_diagnose_names_the_hidden_damping_from_the_measured_topics(venv: Path, 
 @pytest.mark.slow
 @pytest.mark.graph_realtime
 def test_a_fresh_recording_is_diagnosed_the_same(venv: Path, ros_domain_id: int, tmp_path: Path) -> None:
-    from hems_ros.cli.step import step_figures
+    from hems_ros.client.step_figures import step_figures
 
     bag = tmp_path / "bag"
     # the committed bag's run with three cycles, the fewest the default held-out split takes

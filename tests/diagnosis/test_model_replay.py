@@ -8,9 +8,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from hems_ros.diagnosis.workflow import diagnose
 from hems_ros.diagnosis import replay
 from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
+from hems_ros.diagnosis.workflow import diagnose
 from hems_ros.physics.batch import simulate
 from hems_ros.physics.params import load_params
 

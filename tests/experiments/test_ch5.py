@@ -7,11 +7,20 @@ from __future__ import annotations
 
 import pytest
 
-from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH5_RISE_TIME_S
 from hems_ros.experiments.chapters import CH5_PARAMS
-from hems_ros.experiments.findings import (MARGIN, authority_split, bilinear_activity, filter_sweep, gain_grid,
-                                         perturbation_spread, rate_check, ratios, repeated_ratios,
-                                         table_4_1_stress_slope)
+from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH5_RISE_TIME_S
+from hems_ros.experiments.findings import (
+    MARGIN,
+    authority_split,
+    bilinear_activity,
+    filter_sweep,
+    gain_grid,
+    perturbation_spread,
+    rate_check,
+    ratios,
+    repeated_ratios,
+    table_4_1_stress_slope,
+)
 from hems_ros.physics import load_params
 from hems_ros.physics.scenarios import characterization_rig, pulse_responses
 

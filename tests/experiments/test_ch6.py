@@ -8,8 +8,14 @@ from hems_ros.control import FORCE_MODE_BPID
 from hems_ros.experiments.chapters import CH6_PARAMS, force_protocol, rest_wire_tension
 from hems_ros.experiments.dissertation import CH6_TABLES
 from hems_ros.experiments.findings import (
-    COLD_WIRE_PARAMS, FORCE_STEPS, WARM_START_C, authority_split, cold_start_floor, force_gain_sweep,
-    force_noise_free, warm_start_ratios,
+    COLD_WIRE_PARAMS,
+    FORCE_STEPS,
+    WARM_START_C,
+    authority_split,
+    cold_start_floor,
+    force_gain_sweep,
+    force_noise_free,
+    warm_start_ratios,
 )
 from hems_ros.experiments.lockstep import run_protocol
 from hems_ros.physics import load_params

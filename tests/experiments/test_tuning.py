@@ -43,7 +43,7 @@ def test_params_file_gives_the_finger_controllers_the_tuned_gains(tuned, tmp_pat
     import rclpy
     from rclpy.parameter_client import AsyncParameterClient
 
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
 
     gains = tuned[0]

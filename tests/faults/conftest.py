@@ -22,10 +22,10 @@ from faultrows import BEGIN, END, FINGER, ROWS, Observer, render
 @pytest.fixture(scope="module")
 def matrix_graph(ros_domain_id):
     import rclpy
+    from hems_msgs.msg import ActuatorState, ControllerStatus, DriveReading, SupervisorStatus
     from rclpy.executors import SingleThreadedExecutor
 
-    from hems_msgs.msg import ActuatorState, ControllerStatus, DriveReading, SupervisorStatus
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.graph import names
     from hems_ros.launcher import Graph, GraphOptions
     from hems_ros.nodes import qos

@@ -7,7 +7,7 @@ import pytest
 
 @pytest.fixture(scope="module")
 def graph(venv):
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.graph import names
     from hems_ros.launcher import Graph, GraphOptions
 

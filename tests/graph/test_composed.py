@@ -12,13 +12,12 @@ import time
 
 import numpy as np
 import pytest
-
 from hems_msgs.msg import EncoderReading, SupervisorStatus
+from recording import Recorder
+
 from hems_ros.graph import names, transmission
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import from_msg
-
-from recording import Recorder
 
 pytestmark = pytest.mark.slow
 
@@ -26,7 +25,7 @@ FINGER = "index"
 
 
 def test_composed_graph_tracks_a_step_and_stops_on_ctrl_c(ros_domain_id: int) -> None:
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
 
     graph = Graph(GraphOptions(fingers=(FINGER,), composed=True, log_level="warn"))

@@ -14,15 +14,13 @@ import time
 
 import numpy as np
 import pytest
-
 from diagnostic_msgs.msg import DiagnosticArray
+from hems_msgs.msg import ActuatorState, ControllerStatus, DutyCommand, EncoderReading, SupervisorStatus, WireForce
+from recording import Recorder
 
-from hems_msgs.msg import (ActuatorState, ControllerStatus, DutyCommand, EncoderReading, SupervisorStatus, WireForce)
 from hems_ros.graph import names, transmission
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import from_msg
-
-from recording import Recorder
 
 pytestmark = [pytest.mark.slow, pytest.mark.graph_realtime]
 

@@ -10,8 +10,8 @@ from hems_ros.graph.grasp import FingerSummary, FingerTrace, GraspPlan, PhaseTra
 from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
 from hems_ros.graph.supervisor_logic import STREAMS, MonitorLimits, State, SupervisorLogic
 from hems_ros.graph.unit_driver import UnitDriver
-from hems_ros.physics import ActuationUnit, load_params
 from hems_ros.launcher import Graph, GraphOptions
+from hems_ros.physics import ActuationUnit, load_params
 
 
 @pytest.mark.parametrize("mode, value, reason", [

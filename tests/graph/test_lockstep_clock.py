@@ -46,7 +46,7 @@ def test_the_rate_caps_the_pace_and_a_slow_graph_sets_it():
 def test_the_supervisor_may_lag_by_its_limit_only():
     clock = LockstepClock(("index",), start_s=1.0, step_s=0.01, rate=0.0, supervisor_lag_s=0.2)
     clock.supervisor(1.0)
-    for k in range(25):
+    for _ in range(25):
         _answer_all(clock, ("index",), clock.now_s)
         if clock.try_advance(0.0) is None:
             break

@@ -24,7 +24,7 @@ FINGER = "index"
 
 @pytest.fixture(scope="module")
 def one_finger_graph(ros_domain_id):
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
 
     graph = Graph(GraphOptions(fingers=(FINGER,), composed=True, log_level="warn"))

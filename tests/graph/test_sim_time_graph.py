@@ -17,7 +17,7 @@ FINGER = "index"
 
 
 def test_a_sim_time_graph_keeps_heating_and_reaches_its_setpoint(ros_domain_id):
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
 
     graph = Graph(GraphOptions(fingers=(FINGER,), composed=True, sim_time=True, log_level="warn"))

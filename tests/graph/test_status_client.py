@@ -7,7 +7,7 @@ import time
 
 
 def test_snapshot_waits_for_the_supervisor_beyond_its_listen_time(venv, ros_domain_id):
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     supervisor = subprocess.Popen([str(venv / "bin" / "python"), "-m", "hems_ros.nodes.supervisor"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -27,8 +27,9 @@ def test_snapshot_waits_for_the_supervisor_beyond_its_listen_time(venv, ros_doma
 
 def test_status_rows_name_a_unit_or_controller_that_has_not_taken_enabled():
     from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
+
     from hems_ros.cli.commands import format_status
-    from hems_ros.cli.graph_client import Snapshot
+    from hems_ros.client.graph_client import Snapshot
 
     snap = Snapshot(controllers={f: ControllerStatus(finger=f, mode="position", active=f != "middle")
                                  for f in ("index", "middle", "ring")},
@@ -44,8 +45,9 @@ def test_status_rows_name_a_unit_or_controller_that_has_not_taken_enabled():
 
 def test_a_finger_heard_without_its_state_or_force_keeps_the_snapshot_listening_and_shows_dashes():
     from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus, WireForce
+
     from hems_ros.cli.commands import format_status
-    from hems_ros.cli.graph_client import Snapshot
+    from hems_ros.client.graph_client import Snapshot
 
     snap = Snapshot(controllers={"index": ControllerStatus(finger="index", mode="force", setpoint=10.0)},
                     supervisor=SupervisorStatus(state=SupervisorStatus.ENABLED, state_name="ENABLED"))

@@ -13,7 +13,7 @@ pytestmark = pytest.mark.slow
 
 def test_step_records_a_step_and_prints_its_figures(venv, ros_domain_id, tmp_path):
     from hems_ros.bag import load_bag
-    from hems_ros.cli.step import step_figures
+    from hems_ros.client.step_figures import step_figures
 
     bag = tmp_path / "step"
     result = subprocess.run([str(venv / "bin" / "hems"), "step", "--composed", "--log-level", "warn",

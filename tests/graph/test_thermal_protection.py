@@ -34,9 +34,9 @@ def _set_fault(node, fault: str) -> None:
 
 def test_a_stuck_encoder_cannot_overheat_the_wire(ros_domain_id):
     import rclpy
-
     from hems_msgs.msg import ActuatorState, ControllerStatus
-    from hems_ros.cli.graph_client import GraphClient
+
+    from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
     from hems_ros.nodes import qos
 

@@ -9,9 +9,9 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
-
 from hems_msgs.msg import ControllerStatus, DriveReading
-from hems_ros.cli.graph_client import GraphClient
+
+from hems_ros.client.graph_client import GraphClient
 from hems_ros.graph import names
 from hems_ros.nodes import qos
 

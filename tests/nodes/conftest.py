@@ -69,6 +69,7 @@ def live_supervisor(other_participant):
     """live_supervisor(unit): a SupervisorStatus writer the unit under test sees alive (its
     liveliness gates the heating); returns (its node, the publisher)."""
     from hems_msgs.msg import SupervisorStatus
+
     from hems_ros.nodes import qos
 
     def make(unit):

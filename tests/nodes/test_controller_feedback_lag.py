@@ -66,6 +66,7 @@ def test_a_force_sensor_whose_module_stopped_stops_a_position_loop_within_its_le
     import time
 
     from hems_msgs.msg import WireForce
+
     from hems_ros.graph.setpoints import Setpoint
     from hems_ros.nodes import qos
     from hems_ros.nodes.finger_controller import FingerControllerNode

@@ -29,8 +29,8 @@ def test_control_steps_hold_off_the_idle_status_and_silence_lets_it_fire(context
 
 def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context, matched_publisher):
     import rclpy
-
     from hems_msgs.msg import WireForce
+
     from hems_ros.nodes import qos
     from hems_ros.nodes.finger_controller import FingerControllerNode
 
@@ -54,8 +54,8 @@ def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context, 
 
 def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_status(context, matched_publisher):
     import rclpy
-
     from hems_msgs.msg import SupervisorStatus
+
     from hems_ros.nodes import qos
     from hems_ros.nodes.finger_controller import FingerControllerNode
 
@@ -87,8 +87,8 @@ def test_after_a_pause_the_controller_reports_the_queued_encoder_reading_not_the
     # timer ready and encoder readings queued; an idle status sent first repeated the reading
     # from before the pause, which the supervisor took for a stale encoder (FAULT).
     import rclpy
-
     from hems_msgs.msg import EncoderReading
+
     from hems_ros.nodes import qos
     from hems_ros.nodes.finger_controller import FingerControllerNode
 

@@ -9,10 +9,10 @@ import time
 
 def test_the_controller_status_is_offered_best_effort_and_a_best_effort_reader_gets_it(context):
     import rclpy
+    from hems_msgs.msg import ControllerStatus
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import ReliabilityPolicy
 
-    from hems_msgs.msg import ControllerStatus
     from hems_ros.nodes import qos
     from hems_ros.nodes.finger_controller import FingerControllerNode
 

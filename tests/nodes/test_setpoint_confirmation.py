@@ -15,9 +15,9 @@ class StandInController:
 
     def __init__(self, context, drop_first: bool = False, reject: bool = False, status: bool = True) -> None:
         import rclpy
+        from hems_msgs.msg import ControllerStatus, FingerSetpoint
         from rclpy.executors import SingleThreadedExecutor
 
-        from hems_msgs.msg import ControllerStatus, FingerSetpoint
         from hems_ros.nodes import qos
 
         self.received = 0
@@ -53,7 +53,7 @@ class StandInController:
 
 @pytest.fixture
 def client(ros_domain_id):
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     with GraphClient("confirm_test") as graph_client:
         yield graph_client

@@ -8,11 +8,11 @@ import time
 
 def test_enable_judges_the_reports_received_since_the_last_check(context, matched_publisher):
     import rclpy
+    from hems_msgs.msg import ActuatorState, ControllerStatus
     from rclpy.duration import Duration
     from rclpy.parameter import Parameter
     from std_srvs.srv import Trigger
 
-    from hems_msgs.msg import ActuatorState, ControllerStatus
     from hems_ros.nodes import qos
     from hems_ros.nodes.clock_time import to_msg
     from hems_ros.nodes.supervisor import SupervisorNode

@@ -83,7 +83,7 @@ def _supervisor_state(client, seconds: float, until: str | None = None):
 def test_enable_is_refused_while_the_units_watchdog_sees_no_duty_commands(one_finger):
     """The controller runs and reports fresh readings, but its commands go to another topic:
     before, this unit was enabled and the watchdog flag latched FAULT about 100 ms later."""
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     supervisor = one_finger(controller_remaps=["/hems/index/duty:=/hems/index/duty_nowhere"])
     with GraphClient("enable_gate") as client:
@@ -95,7 +95,7 @@ def test_enable_is_refused_while_the_units_watchdog_sees_no_duty_commands(one_fi
 def test_a_unit_that_has_not_taken_enabled_faults_within_the_grace(one_finger):
     """The unit's status reader listens on another topic: it gets its duty commands (watchdog
     clear, enable accepted) but never the permission to heat."""
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     supervisor = one_finger(unit_remaps=["/hems/supervisor/status:=/hems/supervisor/status_nowhere"])
     with GraphClient("enable_gate") as client:
@@ -111,7 +111,7 @@ def test_a_unit_that_has_not_taken_enabled_faults_within_the_grace(one_finger):
 
 
 def test_a_healthy_finger_is_enabled_and_stays_enabled(one_finger):
-    from hems_ros.cli.graph_client import GraphClient
+    from hems_ros.client.graph_client import GraphClient
 
     one_finger()
     with GraphClient("enable_gate") as client:

@@ -46,10 +46,9 @@ def test_duty_commands_wake_the_unit_only_on_sim_time(context):
 
 def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sample(context, matched_publisher):
     import rclpy
-
     from builtin_interfaces.msg import Time
-
     from hems_msgs.msg import DutyCommand
+
     from hems_ros.nodes import qos
 
     node = unit(context)
@@ -95,12 +94,10 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
     """An ESTOP stops the heating when it comes: a command that came earlier still heats from
     the sample it answers up to the ESTOP, not only until the unit's previous tick."""
     import rclpy
-
     from builtin_interfaces.msg import Time
-
+    from hems_msgs.msg import DutyCommand, SupervisorStatus
     from rclpy.duration import Duration
 
-    from hems_msgs.msg import DutyCommand, SupervisorStatus
     from hems_ros.nodes import qos
 
     node = unit(context, require_supervisor=True)
@@ -164,6 +161,7 @@ def test_a_supervisor_that_is_no_longer_alive_stops_the_heating_until_it_is_agai
     heating at every tick; the permission itself stays, so a supervisor that comes back
     within its status timeout lets the unit heat again without a new ENABLED."""
     from hems_msgs.msg import SupervisorStatus
+
     from hems_ros.nodes import qos
 
     node = unit(context, require_supervisor=True)

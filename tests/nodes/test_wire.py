@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 
 import pytest
+from hems_msgs.msg import ActuatorState, ControllerStatus, DutyCommand, EncoderReading, WireForce
 from rclpy.serialization import deserialize_message, serialize_message
 
-from hems_msgs.msg import ActuatorState, ControllerStatus, DutyCommand, EncoderReading, WireForce
 from hems_ros.bag.cdr import CdrError
 from hems_ros.nodes.wire import codec, seconds_of, stamp
 

@@ -7,12 +7,12 @@ import time
 from dataclasses import dataclass, field
 
 import rclpy
+from hems_msgs.msg import ActuatorState, ControllerStatus, FingerSetpoint, SupervisorStatus, WireForce
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 
-from hems_msgs.msg import ActuatorState, ControllerStatus, FingerSetpoint, SupervisorStatus, WireForce
 from hems_ros.graph import names
 from hems_ros.nodes import qos
 

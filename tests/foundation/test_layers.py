@@ -1,0 +1,48 @@
+"""Code stays in its layer: the plain-Python core imports no ROS, library code imports no
+command-line verb, and benchmarks reach the graph through the client package."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+CORE = ("physics", "control", "diagnosis", "experiments", "bag")
+ROS = ("rclpy", "hems_msgs", "std_msgs", "sensor_msgs", "diagnostic_msgs", "std_srvs", "rosgraph_msgs",
+       "rcl_interfaces", "builtin_interfaces")
+
+
+def _imports(path: Path) -> set[str]:
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names.add(node.module)
+            names.update(f"{node.module}.{alias.name}" for alias in node.names)
+    return names
+
+
+def _is_verb(name: str) -> bool:
+    return name == "hems_ros.cli" or name.startswith("hems_ros.cli.")
+
+
+def _offenders(paths, bad) -> list[str]:
+    return sorted(f"{p.relative_to(REPO)}: {name}" for p in paths for name in _imports(p) if bad(name))
+
+
+def test_the_core_imports_no_ros() -> None:
+    paths = [p for layer in CORE for p in (REPO / "hems_ros" / layer).rglob("*.py")]
+    assert not _offenders(paths, lambda n: n.split(".")[0] in ROS)
+
+
+def test_library_code_imports_no_verb() -> None:
+    paths = [p for p in (REPO / "hems_ros").rglob("*.py") if "cli" not in p.relative_to(REPO / "hems_ros").parts]
+    allowed = {"hems_ros/executables.py"}   # the console-script table names the verbs' entry point
+    assert not [o for o in _offenders(paths, _is_verb)
+                if o.split(":")[0] not in allowed]
+
+
+def test_benchmarks_use_the_client_package_not_the_verbs() -> None:
+    paths = list((REPO / "benchmarks").glob("*.py"))
+    assert not _offenders(paths, _is_verb)
