@@ -251,11 +251,7 @@ def spin_until_expired(node: Recorder) -> None:
 def main(argv: list[str] | None = None) -> int:
     from hems_ros.nodes.runner import run_node
 
-    # The recorder is the graph's sink: a listener thread that waits under SCHED_BATCH lets the
-    # middleware's receive queues fill and drop messages on a loaded host; it sends nothing
-    # whose sender it could preempt.
-    return run_node(Recorder, argv, spin=spin_until_expired, config_errors=(ValueError, OSError),
-                    defer_middleware=False)
+    return run_node(Recorder, argv, spin=spin_until_expired, config_errors=(ValueError, OSError))
 
 if __name__ == "__main__":
     raise SystemExit(main())

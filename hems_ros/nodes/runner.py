@@ -21,7 +21,7 @@ NO_PARAMETER_SERVICES_FLAG = "--no-parameter-services"
 
 def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
              spin: Callable[[object], None] | None = None,
-             config_errors: tuple[type[Exception], ...] = (ValueError,), defer_middleware: bool = True) -> int:
+             config_errors: tuple[type[Exception], ...] = (ValueError,)) -> int:
     """Initialise rclpy, spin the node until Ctrl-C or SIGTERM, shut down cleanly.
 
     ``-h``/``--help`` before ``--ros-args`` prints the node's documentation and exits.
@@ -30,7 +30,6 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     A ``config_errors`` exception (``ValueError`` by default) raised while constructing the
     node is a configuration error: it is printed with the node's name and the process exits
     with code 2. ``spin(node)`` replaces ``rclpy.spin`` for nodes that drive their own executor.
-    ``defer_middleware`` puts the middleware's threads under SCHED_BATCH (middleware_threads).
     """
     args = sys.argv if argv is None else argv
     user_args = args[1:args.index("--ros-args")] if "--ros-args" in args else args[1:]
@@ -51,8 +50,7 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     try:
         node = make_node(**node_kwargs)
         freeze_long_lived_objects()
-        if defer_middleware:
-            defer_middleware_threads()
+        defer_middleware_threads()
         if spin is None:
             from hems_ros.nodes import lean_spin
 
