@@ -27,7 +27,7 @@ setup(
     # ROS packages (rclpy, the message packages) come from the ROS installation (package.xml)
     install_requires=["setuptools", "numpy", "scipy", "threadpoolctl", "numba", "llvmlite", "pyyaml", "mcap",
                       "lz4", "zstandard", "matplotlib"],
-    extras_require={"test": ["pytest", "hypothesis", "rosbags", "mcap-ros2-support", "ruff"]},
+    extras_require={"test": ["pytest", "hypothesis", "rosbags", "mcap-ros2-support", "ruff", "mypy"]},
     zip_safe=True,
     maintainer="HEMS digital twin developers",
     description="HEMS soft hand exoskeleton digital twin (ROS 2 nodes, SMA physics, BPID control)",

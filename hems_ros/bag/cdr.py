@@ -14,6 +14,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,7 @@ class Column:
     """One leaf field of a flattened message."""
 
     name: str
-    dtype: object  # numpy dtype for scalars, ``object`` for strings and sequences
+    dtype: Any  # numpy dtype for scalars, ``object`` for strings and sequences
     kind: str      # "scalar", "string", "array" (numpy per message) or "list"
 
 
@@ -286,7 +287,7 @@ def build_encoder(type_name: str, types: dict[str, list[Field]]) -> Encoder:
     source += "    return bytes(out)\n"
     namespace: dict[str, object] = {"pack": struct.pack, "HEAD": CDR_LE_HEADER}
     exec(compile(source, f"<cdr encode {type_name}>", "exec"), namespace)  # noqa: S102 - parsed definitions only
-    body = namespace["encode_body"]
+    body: Callable[[tuple], bytes] = namespace["encode_body"]  # type: ignore[assignment]
 
     def encode(values: tuple) -> bytes:
         try:

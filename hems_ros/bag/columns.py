@@ -26,7 +26,7 @@ class _Slot:
     kind: str                        # as Column.kind: scalar, string, array; "strings" for string[]
     offset: int = 0
     width: int = 0                   # string bytes without NUL, or element count of an array
-    dtype: np.dtype | None = None
+    dtype: np.dtype = np.dtype("u1")   # of a scalar or array slot
     parts: tuple[tuple[int, int], ...] = ()  # (offset, width) per string of a string array
 
 

@@ -201,9 +201,8 @@ def load_bag(path: str | os.PathLike, topics: Iterable[str] | None = None, regex
     for file in bag_files(path):
         scan = McapScan(file, lambda channel: selection.matches(channel.topic))
         sinks: dict[int, tuple[list[bytes], list[int], list[int]] | None] = {}
-        for channel_id, log_time, publish_time, data in scan.messages():
-            sink = sinks.get(channel_id, False)
-            if sink is False:
+        for channel_id, log_time, publish_time, payload in scan.messages():
+            if channel_id not in sinks:
                 channel = scan.channels[channel_id]
                 decoder = decoders.for_channel(channel, scan.schemas)
                 sink = None
@@ -211,8 +210,9 @@ def load_bag(path: str | os.PathLike, topics: Iterable[str] | None = None, regex
                     entry = collected.setdefault(channel.topic, (decoder, [], [], []))
                     sink = entry[1:]
                 sinks[channel_id] = sink
+            sink = sinks[channel_id]
             if sink is not None:
-                sink[0].append(data)
+                sink[0].append(payload)
                 sink[1].append(log_time)
                 sink[2].append(publish_time)
         reports.append(scan.report)

@@ -120,7 +120,7 @@ class BagWriter:
         self._stream = open(self.file, "xb")
         self._mcap = Writer(self._stream, chunk_size=chunk_size, compression=COMPRESSIONS[compression])
         self._mcap.start(profile=PROFILE, library=LIBRARY)
-        self._chunk_indexes: list = self._mcap._Writer__chunk_indices  # see _WrittenRecord
+        self._chunk_indexes: list = vars(self._mcap)["_Writer__chunk_indices"]  # see _WrittenRecord
         self._compacted = 0
         self._schemas: dict[str, int] = {}
         self._topics: dict[str, TopicRecord] = {}

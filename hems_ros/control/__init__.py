@@ -53,9 +53,8 @@ def make_controller(
         cls = CONTROLLERS[strategy]
     except KeyError:
         raise ValueError(f"strategy must be one of {STRATEGIES}, got {strategy!r}") from None
-    if gains is None:
-        gains = TABLE_5_1[strategy]
-    return cls(gains, mode, ts=ts, n_filter=n_filter, transfer_tau=transfer_tau)
+    chosen = TABLE_5_1[strategy] if gains is None else gains
+    return cls(chosen, mode, ts=ts, n_filter=n_filter, transfer_tau=transfer_tau)
 
 
 __all__ = [

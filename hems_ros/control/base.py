@@ -46,6 +46,7 @@ Initial conditions
 from __future__ import annotations
 
 import math
+from typing import Any
 
 DUTY_MIN = 0.0
 DUTY_MAX = 100.0
@@ -98,12 +99,14 @@ class Controller:
     """
 
     strategy = ""
-    gains_type: type = object
+    gains_type: type[Any] = object
+    gains: Any          # the gains_type instance
+    _bias: float
     fault: str | None
 
     def __init__(
         self,
-        gains,
+        gains: Any,
         mode: str,
         ts: float = DEFAULT_TS,
         n_filter: float = DEFAULT_N_FILTER,

@@ -13,6 +13,8 @@ anti-windup of :mod:`hems_ros.control.base` acts.
 
 from __future__ import annotations
 
+from typing import Any
+
 from hems_ros.control.base import Controller, integral_cut
 from hems_ros.control.gains import PIDGains
 
@@ -35,7 +37,7 @@ class PIDController(Controller):
     """Eq 5.5 on the scaled error; Table 5.1: Kp 0.8, Ki 0, Kd 0.05."""
 
     strategy = "pid"
-    gains_type = PIDGains
+    gains_type: type[Any] = PIDGains
 
     def _setup(self) -> None:
         g = self.gains

@@ -29,6 +29,7 @@ Timing the dissertation leaves open, and the choice made here:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import Callable
 
 import numpy as np
@@ -145,7 +146,7 @@ def _protocols() -> dict[str, Protocol]:
         *(
             Protocol(
                 f"ch5_sine_{f}", 5, "position", "all", f"sine 20 mm p-p at {f} Hz, 20 s",
-                lambda ts, f=f: sine(f, CH5_STROKE, ts),
+                partial(sine, f, CH5_STROKE),
             )
             for f in (0.125, 0.25, 0.5)
         ),
@@ -177,7 +178,7 @@ def _protocols() -> dict[str, Protocol]:
         *(
             Protocol(
                 f"ch6_force_sine_{f}", 6, "force", "ascending", f"sine 2-20 N at {f} Hz",
-                lambda ts, f=f: sine(f, force_span, ts, base=CH6_FORCE_REST),
+                partial(sine, f, force_span, base=CH6_FORCE_REST),
             )
             for f in (0.125, 0.25)
         ),

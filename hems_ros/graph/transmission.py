@@ -5,10 +5,17 @@ Losses along the tendon (capstan, glove friction) are physics, not part of this 
 conversion, which is what a controller or the supervisor can compute from the sensors.
 """
 
+from __future__ import annotations
+
+from typing import TypeVar
+
+import numpy as np
+
 PULLEY_RATIO = 2.0
+ArrayOrFloat = TypeVar("ArrayOrFloat", float, np.ndarray)
 
 
-def tendon_position(wire_position_m: float, ratio: float = PULLEY_RATIO) -> float:
+def tendon_position(wire_position_m: ArrayOrFloat, ratio: float = PULLEY_RATIO) -> ArrayOrFloat:
     return wire_position_m * ratio
 
 

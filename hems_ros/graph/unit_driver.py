@@ -120,9 +120,11 @@ class UnitDriver:
             raise ValueError(f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %")
         effective_s = now_s
         if self._answers_latest_sample(measurement_stamp_s):
+            assert self._sample_time_s is not None      # _answers_latest_sample checked it
             effective_s = self._sample_time_s
             self.answered_sample_s = self._sample_time_s
             if self.unit.steps != self._sample_steps:   # moved on: the snapshot was taken on leaving
+                assert self._sample_snapshot is not None
                 self.unit.restore(self._sample_snapshot)
         elif measurement_stamp_s is not None and measurement_stamp_s > 0:
             self.late_commands += 1
@@ -175,7 +177,8 @@ class UnitDriver:
         permission (the supervisor faults a unit that has not taken its ENABLED)."""
         if not self.require_permission:
             return True
-        return (self.permission_s is not None and self.permitted_since_s <= now_s + 1e-9
+        return (self.permission_s is not None and self.permitted_since_s is not None
+                and self.permitted_since_s <= now_s + 1e-9
                 and now_s - self.permission_s <= self.permission_timeout_s)
 
     def heating_allowed(self, now_s: float) -> bool:

@@ -52,7 +52,7 @@ def _invalidate_stale_cache() -> None:
     here = Path(__file__).resolve()
     digest = hashlib.sha256()
     for module in (constitutive, electrical, friction, heat, jit_options, kinetics, loads, sheath):
-        digest.update(Path(module.__file__).read_bytes())
+        digest.update(Path(str(module.__file__)).read_bytes())
     stamp = here.parent / "__pycache__" / "kernel.deps"
     try:
         if stamp.is_file() and stamp.read_text() == digest.hexdigest():

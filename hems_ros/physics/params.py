@@ -54,7 +54,7 @@ class _Group:
     """Shared checks of a parameter group: finite floats, bools where declared."""
 
     def __post_init__(self) -> None:
-        for f in fields(self):
+        for f in fields(self):  # type: ignore[arg-type]  # the dataclass subclasses
             value = getattr(self, f.name)
             if f.type in ("bool", bool):
                 if not isinstance(value, bool):

@@ -14,7 +14,7 @@ DISTRIBUTION = {"yaml": "pyyaml", "mcap_ros2": "mcap-ros2-support"}
 # provided by the ROS installation (package.xml exec_depend), not by PyPI requirements
 ROS = {"rclpy", "rosidl_runtime_py", "builtin_interfaces", "std_msgs", "sensor_msgs", "diagnostic_msgs",
        "std_srvs", "rosgraph_msgs", "rcl_interfaces", "ament_index_python", "hems_msgs"}
-TEST_ONLY = {"pytest", "hypothesis", "rosbags", "mcap-ros2-support", "ruff"}
+TEST_ONLY = {"pytest", "hypothesis", "rosbags", "mcap-ros2-support", "ruff", "mypy"}
 
 
 def _imported_top_levels() -> set[str]:

@@ -1,4 +1,5 @@
-"""ruff (ruff.toml: pyflakes, pycodestyle, import order, bugbear) holds over the code."""
+"""ruff (ruff.toml: pyflakes, pycodestyle, import order, bugbear) holds over the code, and mypy
+(mypy.ini) over the plain-Python core and the client."""
 
 from __future__ import annotations
 
@@ -13,4 +14,11 @@ def test_ruff_finds_nothing() -> None:
     ruff = Path(sys.executable).with_name("ruff")
     done = subprocess.run([str(ruff), "check", "--no-cache", "hems_ros", "tests", "benchmarks", "tools"],
                           cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-1000:]
+
+
+def test_mypy_finds_nothing_in_the_core_and_the_client() -> None:
+    """mypy.ini names the packages: physics, control, graph, bag, client."""
+    done = subprocess.run([sys.executable, "-m", "mypy", "--no-incremental"], cwd=REPO, capture_output=True,
+                          text=True, timeout=600)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-1000:]
