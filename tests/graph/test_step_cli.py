@@ -23,7 +23,7 @@ def test_step_records_a_step_and_prints_its_figures(venv, ros_domain_id, tmp_pat
     printed = re.search(r"step: index: rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), steady_state_error_mm (-?[\d.]+)",
                         result.stdout)
     assert printed, result.stdout
-    figures = step_figures(bag, "index", 2.0)
+    figures = step_figures(bag, "index", 2.0, step_s=4.0)
     assert [float(v) for v in printed.groups()] == pytest.approx(
         [figures["rmse_mm"], figures["overshoot_mm"], figures["steady_state_error_mm"]], abs=5e-4)
     # the index unit with Table 5.1's gains: 0.060 mm overshoot and steady-state error by hand
