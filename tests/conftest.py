@@ -1,7 +1,7 @@
-"""Test-session environment: DDS on loopback only and a ROS domain of this session's own.
+"""Test-run environment: DDS on loopback only and a ROS domain of this run's own.
 
-The domain id is reserved with an exclusive lock file for the whole session, so two test
-sessions on one machine (a developer's and CI's, say) never share a DDS domain. It is set
+The domain id is reserved with an exclusive lock file for the whole run, so two test
+runs on one machine (a developer's and CI's, say) never share a DDS domain. It is set
 in ``os.environ`` before any test starts, so every child process inherits it.
 """
 
@@ -32,12 +32,12 @@ def pytest_configure(config: pytest.Config) -> None:
 
 def pytest_unconfigure(config: pytest.Config) -> None:
     if _domain_lock is not None:
-        _domain_lock.close()  # releases the domain for the next session
+        _domain_lock.close()  # releases the domain for the next run
 
 
 @pytest.fixture(scope="session")
 def ros_domain_id() -> int:
-    """The DDS domain this test session owns (also in ``os.environ['ROS_DOMAIN_ID']``)."""
+    """The DDS domain this test run owns (also in ``os.environ['ROS_DOMAIN_ID']``)."""
     return int(os.environ["ROS_DOMAIN_ID"])
 
 

@@ -50,17 +50,17 @@ from hems_ros.physics.params import UnitParams
 
 def _invalidate_stale_cache() -> None:
     here = Path(__file__).resolve()
-    digest = hashlib.sha256()
+    sources = hashlib.sha256()
     for module in (constitutive, electrical, friction, heat, jit_options, kinetics, loads, sheath):
-        digest.update(Path(str(module.__file__)).read_bytes())
+        sources.update(Path(str(module.__file__)).read_bytes())
     stamp = here.parent / "__pycache__" / "kernel.deps"
     try:
-        if stamp.is_file() and stamp.read_text() == digest.hexdigest():
+        if stamp.is_file() and stamp.read_text() == sources.hexdigest():
             return
         for cached in stamp.parent.glob("*.nb[ic]"):
             cached.unlink()
         stamp.parent.mkdir(exist_ok=True)
-        stamp.write_text(digest.hexdigest())
+        stamp.write_text(sources.hexdigest())
     except OSError:
         pass  # read-only install: sources cannot change under it either
 

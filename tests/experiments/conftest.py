@@ -1,4 +1,4 @@
-"""Session-wide lockstep runs: chapter 5 (15 runs) and chapter 6 (8 runs) once per session."""
+"""Lockstep runs shared by the tests: chapter 5 (15 runs) and chapter 6 (8 runs) once per test run."""
 
 from __future__ import annotations
 

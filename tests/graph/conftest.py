@@ -21,7 +21,7 @@ def graph(venv):
         for finger in names.FINGERS:  # create every endpoint the tests use before they start
             client.send_setpoint(finger, "position", 0.0)
         client.spin_for(2.0)
-        # a node left running by another test of this session shares the domain and would
+        # a node left running by another test of this run shares the domain and would
         # answer the same samples (a second controller's duty wins every other period)
         seen = [f"{ns.rstrip('/')}/{name}" for name, ns in client.node.get_node_names_and_namespaces()]
         assert not {n for n in seen if seen.count(n) > 1}, f"nodes twice in the test domain: {sorted(seen)}"

@@ -1,7 +1,7 @@
 """A bad parameter stops a node at start-up with a message naming it and exit code 2.
 
 Each node runs as the installed executable would (``python -m hems_ros.nodes.<node>``) in
-the session's ROS domain; none gets as far as spinning.
+the test run's ROS domain; none gets as far as spinning.
 """
 
 from __future__ import annotations
