@@ -24,14 +24,12 @@ class LivelinessWatch:
         self._alive = True
         self.established = False  # a matched writer has been reported alive
         self.losses = 0           # alive -> lost transitions seen
-        self.counts = (0, 0)      # the latest (alive, not alive) writer counts
 
     def alive(self) -> bool:
         """Not lost (see the class documentation)."""
         with self._event:
             status = self._event.take_event()
         if status is not None:
-            self.counts = (status.alive_count, status.not_alive_count)
             self.established = self.established or status.alive_count > 0
             alive = status.alive_count > 0 or (not self.established and status.not_alive_count == 0)
             self.losses += self._alive and not alive
