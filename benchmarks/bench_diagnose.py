@@ -47,7 +47,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from hems_ros.bag import BagWriter, cdr, msgdefs, offered_qos  # noqa: E402
+from hems_ros.bag import BagWriter, offered_qos  # noqa: E402
+from hems_ros.codec import cdr, msgdefs  # noqa: E402
 from hems_ros.diagnosis import batching, dataset, replay, search  # noqa: E402
 from hems_ros.diagnosis import candidates as library  # noqa: E402
 from hems_ros.diagnosis import fit as fit_module  # noqa: E402

@@ -8,16 +8,15 @@ hems_ros/nodes/composed.py). Children die with the launcher even if it is killed
 
 from __future__ import annotations
 
-import signal
 import subprocess
 import sys
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from hems_ros.graph import names
 from hems_ros.nodes.runner import NO_PARAMETER_SERVICES_FLAG
 from hems_ros.paths import config_path
+from hems_ros.processes import stop_processes
 from hems_ros.rosenv import child_environment, die_with_parent
 
 
@@ -164,23 +163,9 @@ class Graph:
         return f"{message} (exited: " + ", ".join(f"{name} with code {code}" for name, code in exited) + ")"
 
     def stop(self, grace_s: float = 2.5) -> dict[str, int]:
-        """SIGTERM every child, SIGKILL what is left after ``grace_s``; return exit codes.
-
-        SIGTERM, not SIGINT: a running node stops on either (rclpy's handler), but a process
-        still loading Python ends on SIGTERM without an import traceback, and a background
-        job of a non-interactive shell ignores SIGINT until rclpy installs its handler."""
-        for process in self.processes.values():
-            if process.poll() is None:
-                process.send_signal(signal.SIGTERM)
-        deadline = time.monotonic() + grace_s
-        self.killed = []
-        for name, process in self.processes.items():
-            try:
-                process.wait(max(0.0, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
-                self.killed.append(name)
+        """SIGTERM every child, SIGKILL what is left after ``grace_s``; return exit codes."""
+        killed = stop_processes(self.processes.values(), grace_s)
+        self.killed = [name for name, p in self.processes.items() if p in killed]
         return {name: p.returncode for name, p in self.processes.items()}
 
     def __enter__(self) -> "Graph":

@@ -22,6 +22,8 @@ from hems_ros.paths import config_path
 DISCOVERY_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 DEFAULT_DISCOVERY_RANGE = "LOCALHOST"
 PROFILES_VARIABLE = "FASTDDS_DEFAULT_PROFILES_FILE"
+PROFILES_FILE = "fastdds_profiles.xml"
+RECORDER_PROFILES_FILE = "fastdds_recorder.xml"
 
 
 PR_SET_PDEATHSIG = 1
@@ -38,17 +40,21 @@ def apply_network_defaults(env: dict[str, str] | os._Environ | None = None):
     unless set) and the ament prefix."""
     target = os.environ if env is None else env
     target.setdefault(DISCOVERY_VARIABLE, DEFAULT_DISCOVERY_RANGE)
-    target.setdefault(PROFILES_VARIABLE, str(config_path("fastdds_profiles.xml")))
+    target.setdefault(PROFILES_VARIABLE, str(config_path(PROFILES_FILE)))
     prefixes = [p for p in target.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
     if sys.prefix not in prefixes:
         target["AMENT_PREFIX_PATH"] = os.pathsep.join(prefixes + [sys.prefix])
     return target
 
 
-def child_environment(extra: dict[str, str] | None = None) -> dict[str, str]:
-    """A copy of this process's environment for a child process, with the defaults applied."""
+def child_environment(extra: dict[str, str] | None = None, profiles: str = PROFILES_FILE) -> dict[str, str]:
+    """A copy of this process's environment for a child process, with the defaults applied;
+    ``profiles``: the project's Fast DDS profiles file the child takes unless the user named
+    one of their own."""
     env = dict(os.environ)
     apply_network_defaults(env)
+    if env[PROFILES_VARIABLE] == str(config_path(PROFILES_FILE)):
+        env[PROFILES_VARIABLE] = str(config_path(profiles))
     if extra:
         env.update(extra)
     return env

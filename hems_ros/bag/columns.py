@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hems_ros.bag.cdr import HEADER_SIZE, LITTLE_ENDIAN_KINDS, SCALARS, CdrError, Column, Decoder
-from hems_ros.bag.msgdefs import PRIMITIVES, Field
+from hems_ros.codec.cdr import HEADER_SIZE, LITTLE_ENDIAN_KINDS, SCALARS, CdrError, Column, Decoder
+from hems_ros.codec.msgdefs import PRIMITIVES, Field
 
 _U32 = struct.Struct("<I")
 

@@ -18,9 +18,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from hems_ros.bag import cdr, columns, msgdefs
+from hems_ros.bag import columns
 from hems_ros.bag.mcapscan import BagFormatError, Channel, McapScan, ScanReport, Schema
 from hems_ros.bag.selection import TopicSelection
+from hems_ros.codec import cdr, msgdefs
 
 __all__ = ["Bag", "BagFormatError", "BagInfo", "BagWarning", "RawMessage", "TopicData",
            "bag_files", "bag_info", "iter_messages", "load_bag"]

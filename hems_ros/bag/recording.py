@@ -24,7 +24,8 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from hems_ros.bag.reader import BagInfo, bag_info
-from hems_ros.rosenv import child_environment, die_with_parent
+from hems_ros.processes import stop_process
+from hems_ros.rosenv import RECORDER_PROFILES_FILE, child_environment, die_with_parent
 
 READY_MARK = "]: recording "
 FINISHED_MARK = "]: bag finished: "
@@ -58,7 +59,8 @@ class RecorderProcess:
         self.log: list[str] = []
         self.result: BagInfo | None = None
         self._changed = threading.Condition()
-        env = child_environment({"RCUTILS_LOGGING_BUFFERED_STREAM": "0", "PYTHONUNBUFFERED": "1"})
+        env = child_environment({"RCUTILS_LOGGING_BUFFERED_STREAM": "0", "PYTHONUNBUFFERED": "1"},
+                                RECORDER_PROFILES_FILE)
         self.process = subprocess.Popen(
             recorder_command(self.output, topics, regex, duration, **options),  # type: ignore[arg-type]
             env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
@@ -102,13 +104,7 @@ class RecorderProcess:
         (the same again once stopped)."""
         if self.result is not None:
             return self.result
-        if self.process.poll() is None:
-            self.process.send_signal(signal.SIGTERM)
-            try:
-                self.process.wait(timeout)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
+        stop_process(self.process, timeout)
         return self._finish()
 
     def kill(self) -> None:

@@ -20,7 +20,7 @@ import yaml
 from mcap.data_stream import RecordBuilder
 from mcap.writer import CompressionType, Writer
 
-from hems_ros.bag import msgdefs
+from hems_ros.codec import msgdefs
 
 METADATA_VERSION = 9
 PROFILE = "ros2"

@@ -9,6 +9,7 @@ import sys
 import time
 
 from hems_ros.cli.numbers import positive, positive_int
+from hems_ros.processes import stop_process
 from hems_ros.rosenv import child_environment
 
 
@@ -40,17 +41,6 @@ def spawn_responder() -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "hems_ros.nodes.ping_responder"], env=child_environment()
     )
-
-
-def stop_process(process: subprocess.Popen, timeout: float = 5.0) -> int:
-    if process.poll() is None:
-        process.terminate()
-        try:
-            process.wait(timeout)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
-    return process.returncode
 
 
 def ping(count: int, rate: float, timeout: float) -> dict:

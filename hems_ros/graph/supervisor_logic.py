@@ -67,11 +67,10 @@ class MonitorLimits:
     stale_s: float = 0.05
     # a sensor stream without a new reading for this long while ENABLED is lost: FAULT. The
     # units are at 0 % duty 30 ms into any gap (module docstring), so this only decides when
-    # the loss is named. At 0.35 s, joins on a host loaded further by a test run faulted the
-    # graph 4 times in 400 (355-360 ms gaps; docs/reliability.md): the loss is named after
-    # 0.5 s, and a lost encoder, seen through the controller's status, up to its idle period
-    # (0.1 s) later
-    lost_s: float = 0.5
+    # the loss is named: with the checks (20 ms) and the status that carries the FAULT, within
+    # 0.5 s of the loss. Command-line joins delay single streams of the separate-process graph
+    # by up to some 390 ms on the two-core host (docs/reliability.md)
+    lost_s: float = 0.4
     max_wire_force_n: float = 50.0
     max_tendon_position_m: float = 0.056
     # a controller's wire-temperature estimate (from the drive board's readings) this high: the
@@ -85,7 +84,7 @@ class MonitorLimits:
     # as long as the watchdog flag does (watchdog_hold_s). At 200 ms it latched FAULT in one
     # `make demo` of fifteen: two controllers silent 200 ms together just after ENABLED on the
     # two-core host, both running again within 10 ms of the fault.
-    heartbeat_timeout_s: float = 0.5
+    heartbeat_timeout_s: float = 0.4
     # The unit's own watchdog has already set its duty to 0 after 30 ms; the flag held this
     # long means a duty path that does not deliver (a dead controller is named by its
     # heartbeat too). Shorter holds latched FAULT on a live graph just after start-up: at
@@ -244,8 +243,10 @@ class SupervisorLogic:
             self._fault(finger, condition, f"{component} has not taken ENABLED for {1e3 * held:.0f} ms: {consequence}")
 
     def check_streams(self, now: float) -> None:
-        """While ENABLED, fault every controller heartbeat silent for longer than its timeout
-        (the sensor streams are judged by :meth:`unchanged`).
+        """While ENABLED, fault every controller heartbeat silent for longer than its timeout,
+        and every unit whose state reports stopped for longer than ``lost_s`` (a lost unit stops
+        its encoder too, but its controller then reports only at its idle period; the sensor
+        streams themselves are judged by :meth:`unchanged`).
 
         When this check itself comes late (the supervisor was not scheduled for a while),
         the messages that arrived meanwhile are still queued and every stream would look
@@ -257,8 +258,11 @@ class SupervisorLogic:
             return
         for finger in self.fingers:
             seen = self._last_seen.get(("heartbeat", finger))
-            if seen is not None and now - seen > self.limits.heartbeat_timeout_s:
+            if seen is not None and now - max(seen, self._enabled_at) > self.limits.heartbeat_timeout_s:
                 self._fault(finger, "heartbeat", f"heartbeat stale ({1e3 * (now - seen):.0f} ms without a message)")
+            seen = self._last_seen.get(("unit state", finger))
+            if seen is not None and now - max(seen, self._enabled_at) > self.limits.lost_s:
+                self._fault(finger, "unit state", f"unit state lost ({1e3 * (now - seen):.0f} ms without a report)")
 
     def missing_streams(self, now: float) -> list[str]:
         """Streams never seen or currently stale: the reasons enabling is refused."""

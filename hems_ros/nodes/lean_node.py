@@ -14,7 +14,7 @@ import time
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 
-from hems_ros.bag.cdr import CdrError
+from hems_ros.codec.cdr import CdrError
 from hems_ros.nodes import lean_spin
 from hems_ros.nodes.wire import codec
 

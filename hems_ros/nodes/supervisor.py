@@ -11,9 +11,9 @@ Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, trans
             /hems/joint_states       sensor_msgs/JointState      reliable: tendon position (m) and tendon force (N, as effort)
             /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz
 
-Monitors: lost encoder or force streams (no new reading for lost_s, default 500 ms; shorter
-gaps over stale_s, 50 ms, are counted in /diagnostics), controller heartbeats
-(> heartbeat_timeout_s, default 500 ms), wire over-force (default 50 N), tendon over-travel,
+Monitors: lost encoder or force streams and unit state reports (no new reading for lost_s,
+default 400 ms; shorter gaps over stale_s, 50 ms, are counted in /diagnostics), controller
+heartbeats (> heartbeat_timeout_s, default 400 ms), wire over-force (default 50 N), tendon over-travel,
 a wire temperature estimated at max_wire_temperature_c (170 degC; the controllers cut heating at
 150 degC themselves), duty-watchdog flags held watchdog_hold_s (500 ms), and while ENABLED a unit or controller
 that has not taken ENABLED within enable_grace_s (0.5 s). ``enable`` also waits for every

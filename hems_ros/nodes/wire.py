@@ -9,7 +9,7 @@ subscriber see ordinary messages.
 
 A codec reads and writes one message type as a named tuple of its leaf fields, nested names
 joined by ``_`` (``header_stamp_sec``, ``measurement_stamp_nanosec``); the layout comes from
-the installed ``.msg`` definitions through :mod:`hems_ros.bag.cdr`. No rclpy import here.
+the installed ``.msg`` definitions through :mod:`hems_ros.codec.cdr`. No rclpy import here.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 
-from hems_ros.bag import cdr, msgdefs
+from hems_ros.codec import cdr, msgdefs
 
 NS_PER_S = 1_000_000_000
 
@@ -31,7 +31,7 @@ class Codec:
     _decode: Callable[[bytes], tuple]
 
     def decode(self, data: bytes) -> tuple:
-        """The message as :attr:`fields`; :class:`hems_ros.bag.cdr.CdrError` if malformed."""
+        """The message as :attr:`fields`; :class:`hems_ros.codec.cdr.CdrError` if malformed."""
         return self.fields._make(self._decode(data))
 
 

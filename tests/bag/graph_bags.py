@@ -13,6 +13,7 @@ from hems_ros.bag import iter_messages, load_bag
 from hems_ros.graph import names, transmission
 from hems_ros.graph.grasp import FingerTrace, GraspPlan, PhaseTracker, summarize
 from hems_ros.launcher import GraphOptions, executable_path, ros_arguments
+from hems_ros.processes import stop_process
 from hems_ros.rosenv import child_environment
 
 REPO = Path(__file__).resolve().parents[2]
@@ -40,16 +41,6 @@ def start_node(executable: str, node: str, params: dict[str, str], extra: tuple[
     options = GraphOptions(extra_ros_args=extra, log_level="warn")
     return subprocess.Popen(executable_path(executable) + ros_arguments(node, params, options),
                             env=child_environment())
-
-
-def stop(process: subprocess.Popen) -> None:
-    if process.poll() is None:
-        process.terminate()
-        try:
-            process.wait(10)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
 
 
 class ControllerReplay:
@@ -247,7 +238,7 @@ def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]
         replayed = [(stamp_ns_of(d.measurement_stamp), d.duty_percent) for d in replay.duties[first_duty:]]
     finally:
         replay.close()
-        stop(controller)
+        stop_process(controller, 10.0)
     duty = load_bag(reference.path, topics=[names.topic(finger, "duty")])[names.topic(finger, "duty")]
     recorded = list(zip(stamp_ns(duty, "measurement_stamp").tolist(), duty["duty_percent"].tolist()))
     start = next(i for i, (stamp, _) in enumerate(recorded) if stamp == replayed[0][0])

@@ -15,6 +15,7 @@ from synthetic_publisher import STATUS_TOPIC, STREAMS, expected_values
 
 from hems_ros.bag import load_bag
 from hems_ros.bag.recording import RecorderProcess, record_for
+from hems_ros.processes import stop_process
 from hems_ros.rosenv import child_environment
 
 TOPICS = list(STREAMS) + [STATUS_TOPIC]
@@ -244,8 +245,7 @@ def test_a_waiting_subscription_takes_a_latched_sample_sent_before_it_matched(li
         time.sleep(2.0)   # the writer's history reaches the new reader once they have matched
     finally:
         if publisher is not None:
-            publisher.terminate()
-            publisher.wait(timeout=10)
+            stop_process(publisher, 10.0)
         info = recorder.stop()
     assert info.topics["/hems/index/setpoint"].count == 1
     assert recorded_values(output) == pytest.approx([0.007], abs=1e-12)

@@ -109,7 +109,7 @@ def test_unknown_schema_is_skipped_with_a_warning_naming_the_topic(tmp_path: Pat
     from mcap.writer import Writer
     from rclpy.serialization import serialize_message
 
-    from hems_ros.bag.msgdefs import full_definition
+    from hems_ros.codec.msgdefs import full_definition
 
     path = tmp_path / "mixed.mcap"
     with open(path, "wb") as stream:

@@ -9,9 +9,10 @@ import pytest
 import yaml
 from bag_helpers import T0, TOPICS, log_time, write_bag
 
-from hems_ros.bag import BagWriter, bag_info, iter_messages, load_bag, msgdefs
-from hems_ros.bag.cdr import build_decoder
+from hems_ros.bag import BagWriter, bag_info, iter_messages, load_bag
 from hems_ros.bag.columns import decode_columns
+from hems_ros.codec import msgdefs
+from hems_ros.codec.cdr import build_decoder
 
 FIELDS = {
     "/hems/index/wire_force": ["finger", "force", "saturated", "over_force", "sequence"],

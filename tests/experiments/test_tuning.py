@@ -12,6 +12,7 @@ import yaml
 from hems_ros.control import TABLE_5_1
 from hems_ros.experiments.dissertation import CH6_POSITION
 from hems_ros.experiments.tuning import compare, params_file_text, rig, tune_bpid
+from hems_ros.processes import stop_process
 
 
 @pytest.fixture(scope="module")
@@ -68,5 +69,4 @@ def test_params_file_gives_the_finger_controllers_the_tuned_gains(tuned, tmp_pat
         # the tuned gains over config/hems.yaml, whose other settings (ts) still hold
         assert values == [gains.kp, gains.kd, gains.kb, 0.01]
     finally:
-        process.terminate()
-        process.wait(timeout=10)
+        stop_process(process, 10.0)

@@ -6,6 +6,8 @@ import json
 import subprocess
 import time
 
+from hems_ros.processes import stop_process
+
 PUBLISHER = r"""
 import time, rclpy
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -45,8 +47,7 @@ def test_setpoint_crosses_between_two_processes(venv):
     try:
         received = subprocess.run([python, "-c", SUBSCRIBER], capture_output=True, text=True, timeout=60)
     finally:
-        publisher.terminate()
-        publisher.wait(10)
+        stop_process(publisher, 10.0)
     assert received.returncode == 0, received.stderr
     fields = json.loads(received.stdout.strip().splitlines()[-1])
     assert fields["pid"] not in (publisher.pid, None)

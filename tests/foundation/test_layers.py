@@ -1,5 +1,6 @@
 """Code stays in its layer: the plain-Python core imports no ROS, library code imports no
-command-line verb, and benchmarks reach the graph through the client package."""
+command-line verb, benchmarks and tests reach the graph through the client package, and the
+nodes take the message codec from its own package (only the recorder writes bags)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import ast
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-CORE = ("physics", "control", "diagnosis", "experiments", "bag")
+CORE = ("physics", "control", "diagnosis", "experiments", "bag", "codec")
 ROS = ("rclpy", "hems_msgs", "std_msgs", "sensor_msgs", "diagnostic_msgs", "std_srvs", "rosgraph_msgs",
        "rcl_interfaces", "builtin_interfaces")
 
@@ -46,3 +47,18 @@ def test_library_code_imports_no_verb() -> None:
 def test_benchmarks_use_the_client_package_not_the_verbs() -> None:
     paths = list((REPO / "benchmarks").glob("*.py"))
     assert not _offenders(paths, _is_verb)
+
+
+# the tests of the verbs themselves: argument parsing, formatting, the verb run in-process
+VERB_TESTS = {"tests/bag/test_replay.py", "tests/diagnosis/test_cli.py", "tests/foundation/test_cli_help.py",
+              "tests/fuzz/test_fuzz_inputs.py", "tests/graph/test_status_client.py"}
+
+
+def test_tests_use_the_client_package_except_the_tests_of_the_verbs() -> None:
+    paths = [p for p in (REPO / "tests").rglob("*.py") if str(p.relative_to(REPO)) not in VERB_TESTS]
+    assert not _offenders(paths, _is_verb)
+
+
+def test_of_the_nodes_only_the_recorder_imports_the_bag_package() -> None:
+    paths = [p for p in (REPO / "hems_ros" / "nodes").glob("*.py") if p.name != "recorder.py"]
+    assert not _offenders(paths, lambda n: n == "hems_ros.bag" or n.startswith("hems_ros.bag."))

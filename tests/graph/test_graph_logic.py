@@ -43,9 +43,12 @@ def _ready(logic, now):
         logic.watchdog(finger, False, now)
 
 
-def _report(logic, finger: str, now: float, encoder_moved: bool = True) -> None:
-    """What the supervisor node does with a controller status (fresh force reading)."""
+def _report(logic, finger: str, now: float, encoder_moved: bool = True, unit: bool = True) -> None:
+    """What the supervisor node does with a controller status (fresh force reading) and, at the
+    same check, the unit's state report (unless ``unit`` is False)."""
     logic.saw("heartbeat", finger, now)
+    if unit:
+        logic.saw("unit state", finger, now)
     if encoder_moved:
         logic.encoder(finger, 0.01, now)
     else:
@@ -54,7 +57,7 @@ def _report(logic, finger: str, now: float, encoder_moved: bool = True) -> None:
 
 
 def test_supervisor_enables_only_with_every_stream_alive_and_latches_faults():
-    logic = SupervisorLogic(("index", "middle"))
+    logic = SupervisorLogic(("index", "middle"), MonitorLimits(lost_s=0.5))
     ok, message = logic.request("enable", 0.0)
     assert not ok and "index: no encoder yet" in message
     _ready(logic, 1.0)
@@ -74,6 +77,24 @@ def test_supervisor_enables_only_with_every_stream_alive_and_latches_faults():
     assert not ok and "middle: encoder stale" in message
     _ready(logic, 1.55)
     assert logic.request("reset", 1.55)[0] and logic.state == State.IDLE and not logic.faults
+
+
+def test_a_unit_whose_reports_stop_is_lost_while_its_controller_still_reports():
+    """A stopped unit stops its encoder too, but its controller then reports only at its idle
+    period; the unit's own reports name the loss at lost_s."""
+    logic = SupervisorLogic(("index",), MonitorLimits(lost_s=0.4))
+    _ready(logic, 1.0)
+    logic.request("enable", 1.0)
+    faulted_at = None
+    for k in range(1, 23):
+        now = 1.0 + 0.02 * k
+        logic.check_streams(now)
+        _report(logic, "index", now, unit=False)
+        if faulted_at is None and logic.state == State.FAULT:
+            faulted_at = now
+    assert faulted_at == pytest.approx(1.40, abs=0.021)
+    assert [(f.finger, f.kind) for f in logic.faults] == [("index", "unit state")]
+    assert "index: unit state lost (4" in str(logic.faults[0])
 
 
 def test_a_sensor_gap_shorter_than_a_loss_is_counted_not_latched():

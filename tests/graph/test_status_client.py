@@ -5,6 +5,8 @@ from __future__ import annotations
 import subprocess
 import time
 
+from hems_ros.processes import stop_process
+
 
 def test_snapshot_waits_for_the_supervisor_beyond_its_listen_time(venv, ros_domain_id):
     from hems_ros.client.graph_client import GraphClient
@@ -21,8 +23,7 @@ def test_snapshot_waits_for_the_supervisor_beyond_its_listen_time(venv, ros_doma
         assert elapsed < 30.0
         assert snap.controllers == {}
     finally:
-        supervisor.terminate()
-        supervisor.wait(timeout=10)
+        stop_process(supervisor, 10.0)
 
 
 def test_status_rows_name_a_unit_or_controller_that_has_not_taken_enabled():

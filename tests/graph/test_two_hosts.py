@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from hems_ros.launcher import Graph, GraphOptions, warm_physics_cache
+from hems_ros.processes import stop_processes
 from hems_ros.rosenv import child_environment
 
 pytestmark = [pytest.mark.slow]
@@ -86,15 +87,7 @@ def _run(ns: dict[str, str], split: bool) -> dict:
         assert done.returncode == 0, done.stdout + done.stderr[-2000:]
         return json.loads(done.stdout.strip().splitlines()[-1])
     finally:
-        for process in processes:
-            if process.poll() is None:
-                process.terminate()
-        for process in processes:
-            try:
-                process.wait(5)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        stop_processes(processes, 5.0)
 
 
 def test_step_and_estop_across_two_namespaces(namespaces):

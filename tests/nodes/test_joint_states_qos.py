@@ -7,6 +7,7 @@ import subprocess
 import time
 
 from hems_ros.launcher import GraphOptions, executable_path, ros_arguments
+from hems_ros.processes import stop_process
 from hems_ros.rosenv import child_environment
 
 
@@ -32,6 +33,5 @@ def test_default_and_best_effort_subscribers_both_receive_joint_states(ros_domai
         assert len(default) >= 5 and len(best_effort) >= 5, (len(default), len(best_effort))
         assert list(default[-1].name) == ["thumb_flexion", "thumb_abduction", "index", "middle", "ring", "little"]
     finally:
-        process.terminate()
-        process.wait(10)
+        stop_process(process, 10.0)
         rclpy.try_shutdown(context=context)

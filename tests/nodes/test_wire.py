@@ -8,7 +8,7 @@ import pytest
 from hems_msgs.msg import ActuatorState, ControllerStatus, DutyCommand, EncoderReading, WireForce
 from rclpy.serialization import deserialize_message, serialize_message
 
-from hems_ros.bag.cdr import CdrError
+from hems_ros.codec.cdr import CdrError
 from hems_ros.nodes.wire import codec, seconds_of, stamp
 
 HOT_TYPES = (EncoderReading, WireForce, DutyCommand, ControllerStatus, ActuatorState)

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from hems_ros.bag.msgdefs import PRIMITIVES, DefinitionError, Field
+from hems_ros.codec.msgdefs import PRIMITIVES, DefinitionError, Field
 
 HEADER_SIZE = 4
 CDR_LE_HEADER = b"\x00\x01\x00\x00"
