@@ -106,8 +106,7 @@ def host_speed_s() -> float:
 def wake_round_trip_us(rounds: int = 5000) -> float:
     """Mean microseconds for two processes to wake each other once over a pipe: a second
     reading of the host beside the Python loop, which kept its speed in a phase where the same
-    graph took 1.02-1.29 cores instead of 0.76-0.86 (2026-11-24). Read in that slow phase only
-    so far (12-19 us); whether it tells the phases apart is still to be seen."""
+    graph took 1.02-1.29 cores instead of 0.76-0.86."""
     to_child, from_parent = os.pipe()
     from_child, to_parent = os.pipe()
     pid = os.fork()

@@ -35,6 +35,8 @@ class GraphOptions:
     sim_time: bool = False
     rate: float = 1.0
     fingers: tuple[str, ...] = names.FINGERS
+    # every node's namespace (two hands in one domain: /left and /right)
+    namespace: str = names.NAMESPACE
     extra_ros_args: tuple[str, ...] = ()
     log_level: str = "info"
     # False: the separate processes start without parameter services (no `ros2 param`), which
@@ -63,7 +65,11 @@ def common_ros_arguments(options: GraphOptions) -> list[str]:
     args = ["--ros-args", "--params-file", str(options.params_file)]
     for extra in options.extra_params_files:
         args += ["--params-file", str(extra)]
-    return args + ["--log-level", options.log_level]
+    return args + namespace_arguments(options) + ["--log-level", options.log_level]
+
+
+def namespace_arguments(options: GraphOptions) -> list[str]:
+    return [] if options.namespace == names.NAMESPACE else ["-r", f"__ns:={options.namespace}"]
 
 
 def ros_arguments(node: str, params: dict[str, str], options: GraphOptions) -> list[str]:
@@ -110,7 +116,8 @@ class Graph:
         if self.options.sim_time:
             commands["sim_clock"] = [sys.executable, "-m", "hems_ros.nodes.sim_clock", "--ros-args",
                                      "-p", f"rate:={self.options.rate}",
-                                     "-p", "fingers:=" + ",".join(self.options.fingers)]
+                                     "-p", "fingers:=" + ",".join(self.options.fingers),
+                                     *namespace_arguments(self.options)]
         if self.options.composed:
             spec_args = [f"{exe}:{node}:" + ",".join(f"{k}={v}" for k, v in params.items())
                          for exe, node, params in specs]

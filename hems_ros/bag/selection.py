@@ -6,8 +6,14 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+
+def record_regex(namespace: str = "/hems") -> str:
+    """The whole graph under ``namespace``, diagnostics and sim time."""
+    return re.escape(namespace.rstrip("/")) + r"/.*|/diagnostics|/clock"
+
+
 #: What ``hems record`` takes when given nothing: the whole HEMS graph, diagnostics and sim time.
-DEFAULT_RECORD_REGEX = r"/hems/.*|/diagnostics|/clock"
+DEFAULT_RECORD_REGEX = record_regex()
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ import argparse
 import math
 import sys
 
-from hems_ros.cli.numbers import positive
+from hems_ros.cli.numbers import add_namespace_argument, positive
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
 
@@ -20,11 +20,12 @@ def register(subparsers) -> None:
                           ("reset", "clear a latched FAULT or ESTOP (refused while a fault persists)")):
         parser = subparsers.add_parser(command, help=text, description=text + ".")
         parser.add_argument("--timeout", type=positive, default=10.0, help="seconds to wait for the supervisor")
+        add_namespace_argument(parser)
         parser.set_defaults(func=lambda args, c=command: run_trigger(c, args))
 
     parser = subparsers.add_parser(
         "setpoint", help="send a finger setpoint (tendon side)",
-        description="Publish hems_msgs/FingerSetpoint on /hems/<finger>/setpoint. Values are tendon side: "
+        description="Publish hems_msgs/FingerSetpoint on <namespace>/<finger>/setpoint (/hems/index/setpoint). Values are tendon side: "
                     "position in m (or mm with --unit mm), force in N. Checked here against the same limits "
                     "the controller applies (tendon stroke 0-54 mm, force 0-25 N). Then waits until the "
                     "finger's controller status shows the setpoint, sending it again meanwhile (a controller "
@@ -41,6 +42,7 @@ def register(subparsers) -> None:
     parser.add_argument("--timeout", type=positive, default=5.0,
                         help="seconds to wait for the controller to subscribe, and again for its status "
                              "to show the setpoint (default 5)")
+    add_namespace_argument(parser)
     parser.set_defaults(func=run_setpoint)
 
     parser = subparsers.add_parser(
@@ -48,13 +50,14 @@ def register(subparsers) -> None:
         description="Listen to the graph briefly and print one row per finger (tendon side: position in "
                     "mm, force in N; duty in %) and the supervisor state.")
     parser.add_argument("--listen", type=positive, default=1.5, help="seconds to listen (default 1.5)")
+    add_namespace_argument(parser)
     parser.set_defaults(func=run_status)
 
 
 def run_trigger(command: str, args: argparse.Namespace) -> int:
     from hems_ros.client.graph_client import GraphClient
 
-    with GraphClient() as client:
+    with GraphClient(namespace=args.namespace) as client:
         ok, message = client.call(command, args.timeout)
     print(f"{command}: {message}", file=sys.stdout if ok else sys.stderr)
     return 0 if ok else 1
@@ -95,9 +98,9 @@ def run_setpoint(args: argparse.Namespace) -> int:
     from hems_ros.client.graph_client import GraphClient
 
     unit = "m" if mode == "position" else "N"
-    with GraphClient() as client:
-        # one wait for every controller: on a graph brought up with fewer fingers, "all" used
-        # to wait --timeout for each missing one in turn
+    with GraphClient(namespace=args.namespace) as client:
+        # one wait for every controller: on a graph brought up with fewer fingers, "all" would
+        # otherwise wait --timeout for each missing one in turn
         missing = client.fingers_without_readers(fingers, timeout=args.timeout)
         results = {f: client.send_setpoint(f, mode, value, timeout=0.0 if f in missing else args.timeout,
                                            confirm_s=args.timeout)
@@ -158,7 +161,7 @@ def format_status(snap) -> str:
 def run_status(args: argparse.Namespace) -> int:
     from hems_ros.client.graph_client import GraphClient
 
-    with GraphClient() as client:
+    with GraphClient(namespace=args.namespace) as client:
         snap = client.snapshot(seconds=args.listen)
     print(format_status(snap))
     return 0 if snap.supervisor is not None else 1

@@ -45,15 +45,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"demo: {error}", file=sys.stderr)
         return 2
     from hems_ros.bag.recording import RecorderProcess
+    from hems_ros.bag.selection import record_regex
     from hems_ros.client.graph_client import GraphClient
 
     graph = Graph(options)
     graph.start()
-    recorder = RecorderProcess(record)
+    recorder = RecorderProcess(record, regex=record_regex(options.namespace))
     print(f"demo: started {len(graph.processes)} processes, recording into {record}; waiting for every stream",
           flush=True)
     try:
-        with GraphClient("hems_demo", sim_time=options.sim_time) as client:
+        with GraphClient("hems_demo", sim_time=options.sim_time, namespace=options.namespace) as client:
             try:
                 wait_until_recording(client, recorder, options.fingers, time.monotonic() + args.ready_timeout)
             except (TimeoutError, RuntimeError) as error:

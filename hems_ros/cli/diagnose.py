@@ -99,10 +99,11 @@ def _say(quiet: bool):
 
 
 def run(args: argparse.Namespace) -> int:
-    from hems_ros.diagnosis import candidates, inputs, report
+    from hems_ros.diagnosis import candidates, inputs
     from hems_ros.diagnosis.runs import DiagnosisInputError
     from hems_ros.diagnosis.workflow import diagnose
     from hems_ros.physics.params import ParamError
+    from hems_ros.reports import diagnosis as report
 
     if args.list_candidates:
         print(candidates.describe_library())
@@ -128,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_suite(args: argparse.Namespace) -> int:
-    from hems_ros.diagnosis import suite_report
+    from hems_ros.reports import diagnosis_suite as suite_report
 
     say = _say(False)
     result = suite_report.run(args.out, seed=args.seed, quick=args.quick, dissertation=not args.no_dissertation,

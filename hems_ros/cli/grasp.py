@@ -8,7 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from hems_ros.cli.numbers import finite, non_negative, positive
+from hems_ros.cli.numbers import add_namespace_argument, finite, non_negative, positive
 from hems_ros.graph import names
 from hems_ros.graph.grasp import (
     FingerTrace,
@@ -51,6 +51,7 @@ def register(subparsers) -> None:
     parser.add_argument("--sim-time", action="store_true",
                         help="the graph runs on /clock (hems up --sim-time): phase durations in simulated "
                              "seconds, setpoints stamped with the graph's time")
+    add_namespace_argument(parser)
     parser.set_defaults(func=run)
 
 
@@ -88,13 +89,13 @@ class GraspListener:
         self.traces = {f: FingerTrace.empty() for f in fingers}
         self.phases = {f: PhaseTracker() for f in fingers}
         self.statuses: list = []
-        self.subs = [self.node.create_subscription(JointState, names.JOINT_STATES_TOPIC, self._on_joints, qos.SENSOR),
-                     self.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
+        self.subs = [self.node.create_subscription(JointState, names.joint_states_topic(client.namespace), self._on_joints, qos.SENSOR),
+                     self.node.create_subscription(SupervisorStatus, names.supervisor_status_topic(client.namespace),
                                                    self._on_supervisor, qos.STATUS)]
         for finger in fingers:
-            self.subs.append(self.node.create_subscription(ActuatorState, names.sim_topic(finger, "state"),
+            self.subs.append(self.node.create_subscription(ActuatorState, names.sim_topic(finger, "state", client.namespace),
                                                            lambda m, f=finger: self._on_state(f, m), qos.SENSOR))
-            self.subs.append(self.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
+            self.subs.append(self.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status", client.namespace),
                                                            lambda m, f=finger: self._on_status(f, m), qos.CONTROLLER_STATUS))
 
     def start(self) -> None:
@@ -120,8 +121,12 @@ class GraspListener:
             self.statuses.append(message)
 
     def _on_state(self, finger: str, message) -> None:
-        if self.collecting:
-            self.traces[finger].energy_j.append(message.electrical_energy)
+        trace = self.traces[finger]
+        if not self.collecting:
+            # the latest one before the grasp: the energy is read between samples that bracket it
+            del trace.energy_t[:], trace.energy_j[:]
+        trace.energy_t.append(self.seconds(message.header.stamp))
+        trace.energy_j.append(message.electrical_energy)
 
     def _on_status(self, finger: str, message) -> None:
         if not self.collecting:
@@ -134,12 +139,16 @@ class GraspListener:
 
 def require_controllers(client, fingers) -> None:
     """RuntimeError naming the fingers whose controller is not running, before any setpoint
-    is sent: one missing controller used to stop the grasp only when its turn came, 5 s per
-    finger, while the fingers before it were already heating."""
+    is sent: found only when its turn came, a missing controller would stop the grasp after
+    5 s per finger, while the fingers before it were already heating."""
     missing = client.fingers_without_readers(fingers)
     if missing:
         raise RuntimeError(f"no finger_controller for {', '.join(missing)} (a graph brought up with "
                            "hems up --fingers needs the same --fingers here)")
+
+
+# the state messages come every 50 ms, a phase starts up to a control period after its setpoint
+COLLECT_AFTER_S = 0.2
 
 
 def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspListener | None = None):
@@ -158,6 +167,8 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspLis
             if missing:
                 raise RuntimeError(f"no finger_controller for {', '.join(missing)}")
             client.spin_graph_time(duration)
+        # every stream's first sample past the last phase's end (which the graph's stamps set)
+        client.spin_graph_time(COLLECT_AFTER_S)
     finally:
         listener.close()
     return listener.traces, {f: tracker.starts for f, tracker in listener.phases.items()}, listener.statuses
@@ -206,8 +217,8 @@ def _disable(client, who: str) -> None:
 
 def disable_from_new_process() -> tuple[bool, str]:
     """`hems disable` in a process of its own, for a process whose ROS context a signal has
-    shut down (a default context cannot be initialised again): an interrupted
-    `hems grasp --enable` used to leave the graph ENABLED, heating to its last setpoint."""
+    shut down (a default context cannot be initialised again): otherwise an interrupted
+    `hems grasp --enable` would leave the graph ENABLED, heating to its last setpoint."""
     try:
         done = subprocess.run([sys.executable, "-m", "hems_ros.cli.main", "disable"], capture_output=True,
                               text=True, timeout=30)
@@ -252,7 +263,7 @@ def run(args: argparse.Namespace) -> int:
 
     from hems_ros.client.graph_client import GraphClient
 
-    with GraphClient("hems_grasp", sim_time=args.sim_time) as client:
+    with GraphClient("hems_grasp", sim_time=args.sim_time, namespace=args.namespace) as client:
         try:
             if args.enable:
                 traces, phase_starts, statuses = enabled_grasp(client, plan, fingers, args.enable_timeout, "grasp")

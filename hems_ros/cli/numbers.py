@@ -41,3 +41,19 @@ non_negative_int = _number(int, "a whole number", lambda v: None if v >= 0 else 
 def positive_or_max(text: str) -> float:
     """A number > 0, or ``max`` (0.0: no cap; the lockstep clock's ``--rate max``)."""
     return 0.0 if text == "max" else positive(text)
+
+
+def namespace(text: str) -> str:
+    """argparse type of ``--namespace``: a graph namespace, made absolute."""
+    from hems_ros.graph.names import check_namespace
+
+    try:
+        return check_namespace(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def add_namespace_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--namespace", type=namespace, default="/hems",
+                        help="the graph's namespace (default /hems): two hands in one ROS domain run "
+                             "as, e.g., hems up --namespace left and hems up --namespace right")

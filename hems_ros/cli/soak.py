@@ -130,23 +130,24 @@ def run(args: argparse.Namespace) -> int:
 
     from hems_ros.bag.reader import load_bag
     from hems_ros.bag.recording import RecorderProcess
+    from hems_ros.bag.selection import record_regex
     from hems_ros.client.graph_client import GraphClient
     from hems_ros.nodes import qos
 
     graph = Graph(options)
     graph.start()
-    recorder = RecorderProcess(folder)
+    recorder = RecorderProcess(folder, regex=record_regex(options.namespace))
     print(f"hems soak: {len(graph.processes)} processes, recording into {recorder.output}, "
           f"{args.minutes:g} min", flush=True)
     try:
-        with GraphClient("hems_soak") as client:
+        with GraphClient("hems_soak", namespace=options.namespace) as client:
             wait_until_recording(client, recorder, options.fingers, time.monotonic() + 120.0)
             ok, message = client.enable_when_ready(120.0, reset=True, retry_s=1.0)
             if not ok:
                 print(f"hems soak: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)
                 return 1
             run_ = _Soak(args, graph, recorder, client, options.fingers)
-            client.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, run_.on_status,
+            client.node.create_subscription(SupervisorStatus, names.supervisor_status_topic(options.namespace), run_.on_status,
                                             qos.STATUS)
             run_.run()
             for finger in options.fingers:

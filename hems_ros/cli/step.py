@@ -54,6 +54,7 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from hems_ros.bag.recording import RecorderProcess
+    from hems_ros.bag.selection import record_regex
     from hems_ros.cli.up import print_bag
 
     try:
@@ -73,10 +74,10 @@ def run(args: argparse.Namespace) -> int:
 
     graph = Graph(options)
     graph.start()
-    recorder = RecorderProcess(record)
+    recorder = RecorderProcess(record, regex=record_regex(options.namespace))
     finished = None
     try:
-        with GraphClient("hems_step", sim_time=options.sim_time) as client:
+        with GraphClient("hems_step", sim_time=options.sim_time, namespace=options.namespace) as client:
             wait_until_recording(client, recorder, options.fingers, time.monotonic() + args.ready_timeout)
             ok, message = client.enable_when_ready(args.ready_timeout)
             if not ok:
@@ -105,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
     print_bag("step", finished)
     for finger in options.fingers:
         try:
-            figures = step_figures(record, finger, args.pulley_ratio, step_s=args.step_s)
+            figures = step_figures(record, finger, args.pulley_ratio, step_s=args.step_s, namespace=options.namespace)
         except ValueError as error:
             print(f"step: {error}", file=sys.stderr)
             return 1

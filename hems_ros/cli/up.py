@@ -9,7 +9,7 @@ import time
 from datetime import datetime
 from pathlib import Path
 
-from hems_ros.cli.numbers import positive, positive_or_max
+from hems_ros.cli.numbers import add_namespace_argument, positive, positive_or_max
 from hems_ros.graph import names
 from hems_ros.launcher import Graph, GraphOptions, default_params_file
 
@@ -36,6 +36,7 @@ def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
                         help="comma-separated fingers to bring up (default all six: " + ",".join(names.FINGERS) + ")")
     parser.add_argument("--log-level", default="info", choices=("debug", "info", "warn", "error"),
                         help="ROS log level of the nodes")
+    add_namespace_argument(parser)
     parser.add_argument("--no-parameter-services", dest="parameter_services", action="store_false",
                         help="start the separate processes without their ROS parameter services (ros2 param "
                              "then does not reach them): a process joining the domain (hems setpoint, ros2 topic "
@@ -85,7 +86,7 @@ def graph_options(args: argparse.Namespace) -> GraphOptions:
     return GraphOptions(params_file=args.params_file, extra_params_files=extra,
                         composed=args.composed, sim_time=args.sim_time,
                         rate=args.rate, fingers=fingers, log_level=args.log_level,
-                        parameter_services=args.parameter_services)
+                        parameter_services=args.parameter_services, namespace=args.namespace)
 
 
 def register(subparsers) -> None:
@@ -121,8 +122,9 @@ def run(args: argparse.Namespace) -> int:
     recorder = None
     if record is not None:
         from hems_ros.bag.recording import RecorderProcess
+        from hems_ros.bag.selection import record_regex
 
-        recorder = RecorderProcess(record)
+        recorder = RecorderProcess(record, regex=record_regex(options.namespace))
         print(f"hems up: recording into {recorder.output}", flush=True)
     print(f"hems up: {len(graph.processes)} processes "
           f"({'composed' if options.composed else 'one per node'}"

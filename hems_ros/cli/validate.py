@@ -35,8 +35,9 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hems_ros.physics import calibration, validation
+    from hems_ros.physics import calibration
     from hems_ros.physics.params import ParamError, UnitParams, config_dir, load_params, save_params
+    from hems_ros.reports import validation
 
     start = time.perf_counter()
     params = None

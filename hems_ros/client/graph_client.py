@@ -67,13 +67,15 @@ class Snapshot:
 
 
 class GraphClient:
-    def __init__(self, name: str = "hems_cli", sim_time: bool = False) -> None:
+    def __init__(self, name: str = "hems_cli", sim_time: bool = False, namespace: str = names.NAMESPACE) -> None:
         """``sim_time``: the graph runs on /clock (``hems up --sim-time``); the client then
-        stamps its setpoints with the graph's time and :meth:`spin_graph_time` counts it."""
+        stamps its setpoints with the graph's time and :meth:`spin_graph_time` counts it.
+        ``namespace``: the graph's (``hems up --namespace``)."""
         if not rclpy.ok():
             rclpy.init(args=[])
         self.sim_time = sim_time
-        self.node = Node(f"{name}_{int(time.time() * 1e3) % 100000}", namespace=names.NAMESPACE,
+        self.namespace = namespace
+        self.node = Node(f"{name}_{int(time.time() * 1e3) % 100000}", namespace=namespace,
                          parameter_overrides=[Parameter("use_sim_time", value=True)] if sim_time else [])
         self._setpoint_pubs: dict[str, object] = {}
         # Endpoints are kept for the client's life: every new endpoint is announced to all
@@ -122,7 +124,7 @@ class GraphClient:
     def _service_client(self, command: str):
         client = self._service_clients.get(command)
         if client is None:
-            client = self._service_clients[command] = self.node.create_client(Trigger, names.service(command))
+            client = self._service_clients[command] = self.node.create_client(Trigger, names.service(command, self.namespace))
         return client
 
     def call(self, command: str, timeout: float = 10.0) -> tuple[bool, str]:
@@ -142,7 +144,7 @@ class GraphClient:
         if command == "enable":
             self._service_client("estop")
         if not client.wait_for_service(timeout_sec=timeout):
-            return False, f"no supervisor answers {names.service(command)} (is the graph up?)"
+            return False, f"no supervisor answers {names.service(command, self.namespace)} (is the graph up?)"
         # The middleware drops a response sent before the service has matched this client's
         # response reader (wait_for_service sees only the request side), which a new process
         # meets now and then: ask again. The four commands give the same answer when repeated.
@@ -155,7 +157,7 @@ class GraphClient:
                 return future.result().success, future.result().message
             client.remove_pending_request(future)
             if time.monotonic() >= deadline:
-                return False, f"{names.service(command)} did not answer within {timeout:g} s"
+                return False, f"{names.service(command, self.namespace)} did not answer within {timeout:g} s"
 
     def enable_when_ready(self, timeout: float, reset: bool = False, retry_s: float = 2.0) -> tuple[bool, str]:
         """Call ``enable`` until the supervisor accepts it (it refuses while streams are still
@@ -188,7 +190,7 @@ class GraphClient:
         writer's heartbeat (every 3 s), which a process that exits at once never sends:
         without the check, one `hems setpoint` of 60 against a one-finger graph here left the
         controller on its old setpoint."""
-        topic = names.topic(finger, "setpoint")
+        topic = names.topic(finger, "setpoint", self.namespace)
         if confirm_s is not None:
             self._watch_status(finger)   # discovered while the setpoint writer is being matched
         publisher = self._setpoint_publisher(finger)
@@ -226,7 +228,7 @@ class GraphClient:
         """The supervisor's latest status (transient local: the last one comes at once to a
         new reader), or None when none comes within ``timeout`` s."""
         got: list = []
-        sub = self.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, got.append, qos.STATUS)
+        sub = self.node.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.namespace), got.append, qos.STATUS)
         deadline = time.monotonic() + timeout
         while not got and time.monotonic() < deadline:
             checked(rclpy.spin_once, self.node, timeout_sec=0.02)
@@ -236,7 +238,7 @@ class GraphClient:
     def _setpoint_publisher(self, finger: str):
         publisher = self._setpoint_pubs.get(finger)
         if publisher is None:
-            publisher = self.node.create_publisher(FingerSetpoint, names.topic(finger, "setpoint"), qos.COMMAND)
+            publisher = self.node.create_publisher(FingerSetpoint, names.topic(finger, "setpoint", self.namespace), qos.COMMAND)
             self._setpoint_pubs[finger] = publisher
         return publisher
 
@@ -261,7 +263,7 @@ class GraphClient:
     def _watch_status(self, finger: str) -> None:
         if finger not in self._status_subs:
             self._status_subs[finger] = self.node.create_subscription(
-                ControllerStatus, names.topic(finger, "controller_status"),
+                ControllerStatus, names.topic(finger, "controller_status", self.namespace),
                 lambda m, f=finger: self._statuses.__setitem__(f, m), qos.CONTROLLER_STATUS)
 
     def snapshot(self, fingers=names.FINGERS, seconds: float = 0.5, supervisor_wait_s: float = 5.0) -> Snapshot:
@@ -270,17 +272,17 @@ class GraphClient:
         then waits for a periodic announcement, seconds later, and `hems status` reported a
         running supervisor as not running, or a finger's position and force as missing."""
         snap = Snapshot()
-        subs = [self.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
+        subs = [self.node.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.namespace),
                                               lambda m: setattr(snap, "supervisor", m), qos.STATUS)]
         for finger in fingers:
             subs.append(self.node.create_subscription(
-                ControllerStatus, names.topic(finger, "controller_status"),
+                ControllerStatus, names.topic(finger, "controller_status", self.namespace),
                 lambda m, f=finger: snap.controllers.__setitem__(f, m), qos.CONTROLLER_STATUS))
             subs.append(self.node.create_subscription(
-                ActuatorState, names.sim_topic(finger, "state"), lambda m, f=finger: snap.states.__setitem__(f, m),
+                ActuatorState, names.sim_topic(finger, "state", self.namespace), lambda m, f=finger: snap.states.__setitem__(f, m),
                 qos.SENSOR))
             subs.append(self.node.create_subscription(
-                WireForce, names.topic(finger, "wire_force"), lambda m, f=finger: snap.forces.__setitem__(f, m),
+                WireForce, names.topic(finger, "wire_force", self.namespace), lambda m, f=finger: snap.forces.__setitem__(f, m),
                 qos.SENSOR))
         self.spin_for(seconds)
         deadline = time.monotonic() + supervisor_wait_s

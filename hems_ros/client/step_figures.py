@@ -26,11 +26,11 @@ def step_span(values: np.ndarray) -> tuple[int, int]:
     return int(first), int(last + 1)
 
 
-def _taken_at(bag, finger: str, value: float, sent_s: float) -> float:
+def _taken_at(bag, finger: str, value: float, sent_s: float, namespace: str = names.NAMESPACE) -> float:
     """When the finger's controller took the setpoint ``value`` sent at ``sent_s``: the stamp
     of its first accepted /commands record of that value from then on (the graph's clock, so on
     sim time the sample it acted from), or ``sent_s`` for a bag without the records."""
-    topic = names.topic(finger, "commands")
+    topic = names.topic(finger, "commands", namespace)
     records = bag[topic] if topic in bag else None
     if records is None or len(records) == 0:
         return sent_s
@@ -40,7 +40,7 @@ def _taken_at(bag, finger: str, value: float, sent_s: float) -> float:
 
 
 def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.0,
-                 step_s: float | None = None) -> dict[str, float]:
+                 step_s: float | None = None, namespace: str = names.NAMESPACE) -> dict[str, float]:
     """RMSE (whole step), overshoot (first peak, :func:`hems_ros.control.metrics.overshoot`) and
     steady-state error (mean over its last ``settle_s``), tendon mm.
 
@@ -51,7 +51,7 @@ def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.
     from hems_ros.bag import load_bag
     from hems_ros.control import metrics
 
-    topics = [names.topic(finger, s) for s in ("encoder", "setpoint", "commands")]
+    topics = [names.topic(finger, s, namespace) for s in ("encoder", "setpoint", "commands")]
     bag = load_bag(bag_path, topics=topics)
     if topics[0] not in bag or topics[1] not in bag:
         raise ValueError(f"{finger}: bag {bag_path} holds no {topics[0]} or {topics[1]}")
@@ -62,8 +62,8 @@ def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.
     except ValueError as error:
         raise ValueError(f"{finger}: bag {bag_path}: {error}") from None
     values = setpoint["value"]
-    start = _taken_at(bag, finger, values[rise], setpoint.stamp[rise])
-    end = _taken_at(bag, finger, values[fall], setpoint.stamp[fall])
+    start = _taken_at(bag, finger, values[rise], setpoint.stamp[rise], namespace)
+    end = _taken_at(bag, finger, values[fall], setpoint.stamp[fall], namespace)
     if step_s is not None:
         end = min(end, start + step_s)
     height = 1e3 * values[rise]

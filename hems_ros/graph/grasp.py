@@ -43,13 +43,14 @@ class FingerTrace:
     t: list[float]
     position_m: list[float]
     force_n: list[float]
-    energy_j: list[float]      # the unit's Joule heat since it started, at its state messages
+    energy_t: list[float]      # stamps of the unit's state messages, s
+    energy_j: list[float]      # the unit's Joule heat since it started, at those messages
     duty_t: list[float]
     duty_percent: list[float]
 
     @classmethod
     def empty(cls) -> "FingerTrace":
-        return cls([], [], [], [], [], [])
+        return cls([], [], [], [], [], [], [])
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,15 @@ class FingerSummary:
     energy_j: float
     approach_rmse_mm: float      # over the whole approach, rise included
     hold_rmse_n: float           # over the whole hold, force build-up included
+
+
+def change_over(t, y, start: float, end: float) -> float:
+    """y(end) - y(start), each interpolated between the two samples that bracket it; NaN when the
+    samples do not reach over both instants (a reader that matched late, a run cut short)."""
+    t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
+    if t.size == 0 or t[0] > start or t[-1] < end:
+        return float("nan")
+    return float(np.interp(end, t, y) - np.interp(start, t, y))
 
 
 def _window_rmse(t: np.ndarray, y: np.ndarray, target: float, start: float, end: float) -> float:
@@ -99,12 +109,14 @@ def summarize(finger: str, trace: FingerTrace, plan: GraspPlan, phase_starts: li
     t = np.asarray(trace.t)
     x = np.asarray(trace.position_m)
     f = np.asarray(trace.force_n)
-    (a0, a1), (h0, h1) = phase_windows(plan, phase_starts)[:2]
+    windows = phase_windows(plan, phase_starts)
+    (a0, a1), (h0, h1) = windows[:2]
     settle = plan.settle_window_s
     pos = _window_rmse(t, x, plan.approach_m, a1 - settle, a1)
     force = _window_rmse(t, f, plan.force_n, h1 - settle, h1)
-    # from the unit's own accumulator: integrating sampled power aliases the 100 Hz duty changes
-    energy = trace.energy_j[-1] - trace.energy_j[0] if len(trace.energy_j) > 1 else 0.0
+    # from the unit's own accumulator over the whole grasp: integrating sampled power aliases
+    # the 100 Hz duty changes
+    energy = change_over(trace.energy_t, trace.energy_j, a0, windows[-1][1])
     peak = float(np.nanmax(f)) if len(f) else float("nan")
     return FingerSummary(finger, 1e3 * pos, force, peak, energy, 1e3 * _window_rmse(t, x, plan.approach_m, a0, a1),
                          _window_rmse(t, f, plan.force_n, h0, h1))

@@ -1,4 +1,8 @@
-"""Fingers, shoulder modules, node names and topics of the HEMS graph (dissertation chapter 6)."""
+"""Fingers, shoulder modules, node names and topics of the HEMS graph (dissertation chapter 6).
+
+A graph lives in one namespace, ``/hems`` unless told otherwise (``hems up --namespace left``,
+``ros2 run ... --ros-args -r __ns:=/left``), so that two hands share a domain: every topic and
+service below takes it; the nodes take their own (``Node.get_namespace()``)."""
 
 from __future__ import annotations
 
@@ -34,24 +38,48 @@ def check_module(module: str) -> str:
     return module
 
 
-def topic(finger: str, stream: str) -> str:
-    """Per-finger topic: duty, encoder, wire_force, setpoint, controller_status, commands."""
-    return f"{NAMESPACE}/{finger}/{stream}"
+def check_namespace(text: str) -> str:
+    """A graph namespace as the command line gives it ("left", "/left", "/lab/left"), made
+    absolute; each token a ROS name token (letters, digits, underscores, not starting with a
+    digit)."""
+    tokens = [t for t in text.strip().split("/") if t]
+    if not tokens or any(not t.replace("_", "a").isalnum() or not t.isascii() or t[0].isdigit() for t in tokens):
+        raise ValueError(f"namespace {text!r}: expected tokens of letters, digits and underscores, "
+                         "not starting with a digit, e.g. left or /lab/left")
+    return "/" + "/".join(tokens)
 
 
-def sim_topic(finger: str, stream: str) -> str:
+def topic(finger: str, stream: str, namespace: str = NAMESPACE) -> str:
+    """Per-finger topic: duty, encoder, drive, wire_force, setpoint, controller_status, commands."""
+    return f"{namespace.rstrip('/')}/{finger}/{stream}"
+
+
+def sim_topic(finger: str, stream: str, namespace: str = NAMESPACE) -> str:
     """Simulation-only link (not available on hardware): state, wire_tension."""
-    return f"{NAMESPACE}/sim/{finger}/{stream}"
+    return f"{namespace.rstrip('/')}/sim/{finger}/{stream}"
 
 
-SUPERVISOR_STATUS_TOPIC = f"{NAMESPACE}/supervisor/status"
-SUPERVISOR_COMMANDS_TOPIC = f"{NAMESPACE}/supervisor/commands"
-JOINT_STATES_TOPIC = f"{NAMESPACE}/joint_states"
+def supervisor_status_topic(namespace: str = NAMESPACE) -> str:
+    return f"{namespace.rstrip('/')}/supervisor/status"
+
+
+def supervisor_commands_topic(namespace: str = NAMESPACE) -> str:
+    return f"{namespace.rstrip('/')}/supervisor/commands"
+
+
+def joint_states_topic(namespace: str = NAMESPACE) -> str:
+    return f"{namespace.rstrip('/')}/joint_states"
+
+
+def service(name: str, namespace: str = NAMESPACE) -> str:
+    return f"{namespace.rstrip('/')}/supervisor/{name}"
+
+
+SUPERVISOR_STATUS_TOPIC = supervisor_status_topic()
+SUPERVISOR_COMMANDS_TOPIC = supervisor_commands_topic()
+JOINT_STATES_TOPIC = joint_states_topic()
+# shared by every graph of the domain: each status names its node, namespace included
 DIAGNOSTICS_TOPIC = "/diagnostics"
-
-
-def service(name: str) -> str:
-    return f"{NAMESPACE}/supervisor/{name}"
 
 
 def node_names() -> list[tuple[str, str, dict[str, str]]]:

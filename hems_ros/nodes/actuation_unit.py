@@ -85,6 +85,7 @@ class ActuationUnitNode(LeanNode):
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("actuation_unit", namespace=names.NAMESPACE, **node_kwargs)
+        self.graph_ns = self.get_namespace()
         p = declare(self, PARAMETERS)
         self.finger = p["finger"]
         try:
@@ -109,20 +110,20 @@ class ActuationUnitNode(LeanNode):
         self.resolution = physics.encoder.resolution_m
         self.sequence = 0
         self.state_sequence = 0
-        self.encoder_pub = self.create_publisher(EncoderReading, names.topic(self.finger, "encoder"), qos.SENSOR)
-        self.drive_pub = self.create_publisher(DriveReading, names.topic(self.finger, "drive"), qos.SENSOR)
+        self.encoder_pub = self.create_publisher(EncoderReading, names.topic(self.finger, "encoder", self.graph_ns), qos.SENSOR)
+        self.drive_pub = self.create_publisher(DriveReading, names.topic(self.finger, "drive", self.graph_ns), qos.SENSOR)
         self.frozen: tuple[int, float] | None = None
-        self.tension_pub = self.create_publisher(WireForce, names.sim_topic(self.finger, "wire_tension"), qos.SENSOR)
-        self.state_pub = self.create_publisher(ActuatorState, names.sim_topic(self.finger, "state"), qos.SENSOR)
+        self.tension_pub = self.create_publisher(WireForce, names.sim_topic(self.finger, "wire_tension", self.graph_ns), qos.SENSOR)
+        self.state_pub = self.create_publisher(ActuatorState, names.sim_topic(self.finger, "state", self.graph_ns), qos.SENSOR)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
-        self.duty_sub = self.subscribe_serialized(DutyCommand, names.topic(self.finger, "duty"), self.on_duty,
+        self.duty_sub = self.subscribe_serialized(DutyCommand, names.topic(self.finger, "duty", self.graph_ns), self.on_duty,
                                                   qos.COMMAND, on_unreadable=self.on_unreadable_duty)
         # lockstep: answers are taken at the steps, each as if received at its sample
         self.lockstep = p["lockstep"] and not self.wall_clock
         self.answering = True
         if self.wall_clock or self.lockstep:
             self.poll(self.duty_sub)
-        supervisor = self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, self.on_supervisor,
+        supervisor = self.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.graph_ns), self.on_supervisor,
                                               qos.STATUS)
         # a stopped or killed supervisor stops the heating within its lease, not its status timeout
         self.supervisor_watch: LivelinessWatch | None = LivelinessWatch(supervisor)

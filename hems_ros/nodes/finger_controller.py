@@ -110,6 +110,7 @@ class FingerControllerNode(LeanNode):
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("finger_controller", namespace=names.NAMESPACE, **node_kwargs)
+        self.graph_ns = self.get_namespace()
         p = declare(self, PARAMETERS)
         self.mode_gains = {mode: self._declare_gains(p["strategy"], mode) for mode in MODES}
         self.finger = p["finger"]
@@ -138,23 +139,23 @@ class FingerControllerNode(LeanNode):
                              f"{error}") from None
         self._steps_since_status = 0
         self._reported: tuple | None = None
-        self.duty_pub = self.create_publisher(DutyCommand, names.topic(self.finger, "duty"), qos.COMMAND)
-        self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status"),
+        self.duty_pub = self.create_publisher(DutyCommand, names.topic(self.finger, "duty", self.graph_ns), qos.COMMAND)
+        self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status", self.graph_ns),
                                                 qos.CONTROLLER_STATUS)
-        self.commands_pub = self.create_publisher(CommandRecord, names.topic(self.finger, "commands"), qos.COMMAND_LOG)
+        self.commands_pub = self.create_publisher(CommandRecord, names.topic(self.finger, "commands", self.graph_ns), qos.COMMAND_LOG)
         self.commands = 0
-        self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint"), self.on_setpoint, qos.COMMAND)
+        self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint", self.graph_ns), self.on_setpoint, qos.COMMAND)
         self.feedback = {
-            "position": self.subscribe_serialized(EncoderReading, names.topic(self.finger, "encoder"),
+            "position": self.subscribe_serialized(EncoderReading, names.topic(self.finger, "encoder", self.graph_ns),
                                                   self.on_encoder, qos.SENSOR),
-            "force": self.subscribe_serialized(WireForce, names.topic(self.finger, "wire_force"), self.on_force,
+            "force": self.subscribe_serialized(WireForce, names.topic(self.finger, "wire_force", self.graph_ns), self.on_force,
                                                qos.WIRE_FORCE)}
         # a stopped or killed shoulder module stops a position loop within the lease
         self.force_watch: LivelinessWatch | None = LivelinessWatch(self.feedback["force"])
-        self.supervisor_sub = self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
+        self.supervisor_sub = self.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.graph_ns),
                                                        self.on_supervisor, qos.STATUS)
         # taken at each control step, before the duty is computed (one reading per sample)
-        self.drive_sub = self.subscribe_serialized(DriveReading, names.topic(self.finger, "drive"), self.on_drive,
+        self.drive_sub = self.subscribe_serialized(DriveReading, names.topic(self.finger, "drive", self.graph_ns), self.on_drive,
                                                    qos.SENSOR)
         self.poll(self.drive_sub)
         self._poll_other_feedback()

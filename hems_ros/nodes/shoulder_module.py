@@ -48,6 +48,7 @@ class ShoulderModuleNode(LeanNode):
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("shoulder_module", namespace=names.NAMESPACE, **node_kwargs)
+        self.graph_ns = self.get_namespace()
         p = declare(self, PARAMETERS)
         self.params = p
         self.publishers_ = {}
@@ -55,10 +56,10 @@ class ShoulderModuleNode(LeanNode):
         self.rngs = {}
         self.frozen: dict[str, tuple[float, bool]] = {}
         for index, finger in enumerate(names.MODULES[p["module"]]):
-            self.publishers_[finger] = self.create_publisher(WireForce, names.topic(finger, "wire_force"), qos.WIRE_FORCE)
+            self.publishers_[finger] = self.create_publisher(WireForce, names.topic(finger, "wire_force", self.graph_ns), qos.WIRE_FORCE)
             self.sequences[finger] = 0
             self.rngs[finger] = sensors.noise_generator(p["seed"] + index)
-            self.subscribe_serialized(WireForce, names.sim_topic(finger, "wire_tension"),
+            self.subscribe_serialized(WireForce, names.sim_topic(finger, "wire_tension", self.graph_ns),
                                       lambda tension, f=finger: self.on_tension(f, tension), qos.SENSOR)
 
     def fault(self, finger: str) -> str:

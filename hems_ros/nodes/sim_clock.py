@@ -56,6 +56,7 @@ class SimClockNode(LeanNode):
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("sim_clock", namespace="/hems", **node_kwargs)
+        self.graph_ns = self.get_namespace()
         p = declare(self, PARAMETERS)
         self.rate = p["rate"]
         self.wall0 = time.monotonic()
@@ -67,13 +68,13 @@ class SimClockNode(LeanNode):
             self.lockstep = LockstepClock(fingers, start_s=self.sim0, step_s=p["step_s"], rate=self.rate,
                                           stall_s=p["stall_s"])
             for finger in fingers:
-                self.subscribe_serialized(EncoderReading, names.topic(finger, "encoder"),
+                self.subscribe_serialized(EncoderReading, names.topic(finger, "encoder", self.graph_ns),
                                           lambda m, f=finger: self._saw(self.lockstep.encoder, f, m), qos.SENSOR)
-                self.subscribe_serialized(WireForce, names.topic(finger, "wire_force"),
+                self.subscribe_serialized(WireForce, names.topic(finger, "wire_force", self.graph_ns),
                                           lambda m, f=finger: self._saw(self.lockstep.force, f, m), qos.SENSOR)
-                self.subscribe_serialized(DutyCommand, names.topic(finger, "duty"), lambda m, f=finger: self._answer(f, m),
+                self.subscribe_serialized(DutyCommand, names.topic(finger, "duty", self.graph_ns), lambda m, f=finger: self._answer(f, m),
                                           qos.COMMAND)
-            self.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
+            self.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.graph_ns),
                                      lambda m: self._advance(self.lockstep.supervisor(from_msg(m.header.stamp))),
                                      qos.STATUS)
             self.pub.publish(Clock(clock=to_msg(self.sim0)))

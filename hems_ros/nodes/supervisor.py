@@ -86,6 +86,7 @@ class SupervisorNode(LeanNode):
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("supervisor", namespace=names.NAMESPACE, **node_kwargs)
+        self.graph_ns = self.get_namespace()
         p = declare(self, PARAMETERS)
         self.fingers = tuple(p["fingers"])
         self.logic = SupervisorLogic(self.fingers, MonitorLimits(**{
@@ -93,10 +94,10 @@ class SupervisorNode(LeanNode):
         self.position = {f: float("nan") for f in self.fingers}
         self.force = {f: float("nan") for f in self.fingers}
         self.published = None
-        self.status_pub = self.create_publisher(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
-        self.joints_pub = self.create_publisher(JointState, names.JOINT_STATES_TOPIC, qos.JOINT_STATES)
+        self.status_pub = self.create_publisher(SupervisorStatus, names.supervisor_status_topic(self.graph_ns), qos.STATUS)
+        self.joints_pub = self.create_publisher(JointState, names.joint_states_topic(self.graph_ns), qos.JOINT_STATES)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
-        self.commands_pub = self.create_publisher(CommandRecord, names.SUPERVISOR_COMMANDS_TOPIC, qos.COMMAND_LOG)
+        self.commands_pub = self.create_publisher(CommandRecord, names.supervisor_commands_topic(self.graph_ns), qos.COMMAND_LOG)
         self.commands = 0
         self.encoder_stamps = {f: None for f in self.fingers}
         self.force_stamps = {f: None for f in self.fingers}
@@ -108,13 +109,13 @@ class SupervisorNode(LeanNode):
         self.monitored = []
         for finger in self.fingers:
             self.monitored.append(self.subscribe_serialized(
-                ControllerStatus, names.topic(finger, "controller_status"),
+                ControllerStatus, names.topic(finger, "controller_status", self.graph_ns),
                 lambda m, f=finger: self.on_controller(f, m), qos.CONTROLLER_STATUS))
             self.monitored.append(self.subscribe_serialized(
-                ActuatorState, names.sim_topic(finger, "state"), lambda m, f=finger: self.on_state(f, m), qos.SENSOR))
+                ActuatorState, names.sim_topic(finger, "state", self.graph_ns), lambda m, f=finger: self.on_state(f, m), qos.SENSOR))
         self.poll(*self.monitored)
         for command in names.SUPERVISOR_SERVICES:
-            self.create_service(Trigger, names.service(command),
+            self.create_service(Trigger, names.service(command, self.graph_ns),
                                 lambda request, response, c=command: self.on_command(c, response))
         create_grid_timer(self, p["check_period_s"], lambda now: supervisor_check_delay(p["check_period_s"], now),
                           self.check)

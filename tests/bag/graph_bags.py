@@ -255,7 +255,8 @@ def grasp_metrics(bag_path: Path, finger: str, plan: GraspPlan, phase_starts: li
     common, ei, fi = np.intersect1d(stamp_ns(encoder), stamp_ns(force), return_indices=True)
     trace = FingerTrace(list(common * 1e-9), list(transmission.tendon_position(encoder["position"][ei])),
                         list(transmission.tendon_force(force["force"][fi])),
-                        list(state["electrical_energy"]), list(duty.stamp), list(duty["duty_percent"]))
+                        list(state.stamp), list(state["electrical_energy"]), list(duty.stamp),
+                        list(duty["duty_percent"]))
     return summarize(finger, trace, plan, phase_starts)
 
 

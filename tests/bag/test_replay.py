@@ -92,7 +92,8 @@ def test_remap_syntax() -> None:
 
 @pytest.mark.parametrize("signal_name", ["SIGTERM", "SIGINT"])
 def test_a_signal_stops_replay_cleanly(ros_domain_id: int, tmp_path: Path, signal_name: str) -> None:
-    # SIGTERM used to end in a traceback (waiting for acknowledgements on a context already shut down)
+    # a replay waiting for acknowledgements on a context the signal has shut down must not end
+    # in a traceback
     import signal
 
     make_bag(tmp_path / "bag", count=101)   # 10 s at 10 Hz

@@ -8,8 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from hems_ros.diagnosis import candidates, csvload, dissertation, inputs, suite, suite_report
+from hems_ros.diagnosis import candidates, csvload, dissertation, inputs, suite
 from hems_ros.paths import config_path
+from hems_ros.reports import diagnosis_suite as suite_report
 
 REPO = Path(__file__).resolve().parents[2]
 PAGE = REPO / "docs" / "diagnosis.md"

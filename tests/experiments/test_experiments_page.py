@@ -7,7 +7,7 @@ import difflib
 import re
 from pathlib import Path
 
-from hems_ros.experiments.report import docs_page
+from hems_ros.reports.experiments import docs_page
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 

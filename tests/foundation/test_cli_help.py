@@ -113,7 +113,8 @@ def test_replay_api_refuses_bad_numbers(keyword, value, message):
     (["grasp", "--fingers", "index,pinky"], 2, "grasp: unknown finger 'pinky': expected one of thumb_flexion, thumb_abduction"),
 ])
 def test_bad_inputs_stop_before_anything_starts(tmp_path, argv, code, message):
-    # each used to start the graph or the runs first (or, for the topic, replay nothing and exit 0)
+    # each is refused before the graph or the runs start (and a replay of a missing topic does not
+    # replay nothing and exit 0)
     blocker = tmp_path / "a_file"
     blocker.write_text("not a folder")
     argv = [a.format(file=blocker) for a in argv]

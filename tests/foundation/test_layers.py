@@ -8,7 +8,7 @@ import ast
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-CORE = ("physics", "control", "diagnosis", "experiments", "bag", "codec")
+CORE = ("physics", "control", "diagnosis", "experiments", "bag", "codec", "reports")
 ROS = ("rclpy", "hems_msgs", "std_msgs", "sensor_msgs", "diagnostic_msgs", "std_srvs", "rosgraph_msgs",
        "rcl_interfaces", "builtin_interfaces")
 
@@ -62,3 +62,9 @@ def test_tests_use_the_client_package_except_the_tests_of_the_verbs() -> None:
 def test_of_the_nodes_only_the_recorder_imports_the_bag_package() -> None:
     paths = [p for p in (REPO / "hems_ros" / "nodes").glob("*.py") if p.name != "recorder.py"]
     assert not _offenders(paths, lambda n: n == "hems_ros.bag" or n.startswith("hems_ros.bag."))
+
+
+def test_reports_sit_above_the_analyses() -> None:
+    paths = [p for layer in ("physics", "control", "diagnosis", "experiments", "graph")
+             for p in (REPO / "hems_ros" / layer).rglob("*.py")]
+    assert not _offenders(paths, lambda n: n == "hems_ros.reports" or n.startswith("hems_ros.reports."))

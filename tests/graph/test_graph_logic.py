@@ -359,13 +359,16 @@ def test_grasp_summary_numbers():
     t = np.round(np.arange(0.0, 5.0, 0.01), 2)
     position = np.where(t < 1.0, 0.0, plan.approach_m)              # reaches the target after 1 s
     force = np.where(t < 2.5, 5.0, plan.force_n + 0.1)              # 0.1 N high once built up
-    trace = FingerTrace(list(t), list(position), list(force), [3.0, 45.0], [], [])
+    # the unit's accumulator, read between samples: 7 J at the start (0 s), 45 J at the end (5 s)
+    trace = FingerTrace(list(t), list(position), list(force), [-0.5, 4.5, 5.5], [3.0, 43.0, 47.0], [], [])
     summary = summarize("index", trace, plan, [0.0, 2.0, 4.0])
     assert summary.approach_rmse_mm == pytest.approx(1e3 * plan.approach_m * math.sqrt(0.5))
     assert summary.position_rmse_mm == 0.0
     assert summary.hold_rmse_n == pytest.approx(math.sqrt((0.5 * 25.0 + 1.5 * 0.01) / 2.0))
     assert summary.force_rmse_n == pytest.approx(0.1)
-    assert summary.peak_force_n == pytest.approx(10.1) and summary.energy_j == 42.0
+    assert summary.peak_force_n == pytest.approx(10.1) and summary.energy_j == pytest.approx(45.0 - 7.0)
+    cut_short = FingerTrace(list(t), list(position), list(force), [0.5, 4.5], [5.0, 43.0], [], [])
+    assert math.isnan(summarize("index", cut_short, plan, [0.0, 2.0, 4.0]).energy_j)
 
 
 

@@ -91,8 +91,8 @@ def test_setpoint_all_waits_once_for_the_missing_controllers(one_finger_graph, v
 
 @pytest.mark.parametrize("signal_name", ["SIGTERM", "SIGINT"])
 def test_a_grasp_that_enabled_the_graph_disables_it_when_stopped(one_finger_graph, venv, tmp_path, signal_name):
-    # rclpy's handler takes the process's ROS context with the signal; the graph used to stay
-    # ENABLED, the finger heating to its last setpoint
+    # rclpy's handler takes the process's ROS context with the signal; a tool that could not
+    # disable the graph then would leave it ENABLED, the finger heating to its last setpoint
     graph, client = one_finger_graph
     grasp = subprocess.Popen([str(venv / "bin" / "hems"), "grasp", "--enable", "--fingers", FINGER,
                               "--plot", str(tmp_path / "grasp.png")], stdout=subprocess.PIPE, stderr=subprocess.PIPE)

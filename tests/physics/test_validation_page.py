@@ -5,7 +5,7 @@ from __future__ import annotations
 import difflib
 from pathlib import Path
 
-from hems_ros.physics import validation
+from hems_ros.reports import validation
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 
