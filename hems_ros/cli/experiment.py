@@ -43,9 +43,10 @@ def _folder(args, chapter: str) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hems_ros.experiments import chapters, findings
+    from hems_ros.experiments import chapters
     from hems_ros.physics import load_params
     from hems_ros.reports import experiments as report
+    from hems_ros.reports import findings
 
     if args.docs is not None and args.chapter != "all":
         print("--docs needs chapter 'all' (docs/experiments.md covers both chapters)")

@@ -3,7 +3,7 @@
 ``write_ch5`` / ``write_ch6`` put ``<chapter>.md`` (tables: dissertation, ours, ratio) and
 PNG figures (reference and measurement, error, duty against time, like the dissertation's
 figures 5.x and 6.x) into a results folder; ``write_docs`` assembles docs/experiments.md
-from both with the findings of :mod:`hems_ros.experiments.findings`.
+from both with the findings of :mod:`hems_ros.reports.findings`.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from hems_ros.experiments.dissertation import (  # noqa: E402
     PROTOCOL_LABELS,
     STRATEGY_LABELS,
 )
-from hems_ros.experiments.findings import Finding  # noqa: E402
+from hems_ros.reports.findings import Finding  # noqa: E402
 
 DPI = 80
 COLORS = {"pid": "tab:blue", "pipd": "tab:orange", "bpid": "tab:green"}

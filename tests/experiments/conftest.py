@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from hems_ros.experiments import chapters, findings
+from hems_ros.experiments import chapters
 from hems_ros.physics import load_params
+from hems_ros.reports import findings
 
 
 @pytest.fixture(scope="session")

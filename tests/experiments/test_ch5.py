@@ -10,7 +10,6 @@ import pytest
 from hems_ros.experiments.chapters import CH5_PARAMS
 from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH5_RISE_TIME_S
 from hems_ros.experiments.findings import (
-    MARGIN,
     authority_split,
     bilinear_activity,
     filter_sweep,
@@ -23,6 +22,7 @@ from hems_ros.experiments.findings import (
 )
 from hems_ros.physics import load_params
 from hems_ros.physics.scenarios import characterization_rig, pulse_responses
+from hems_ros.reports.findings import MARGIN
 
 STEPS = ("ch5_step", "ch5_staircase")
 
