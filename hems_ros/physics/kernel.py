@@ -29,8 +29,9 @@ options (error model, multiply-add contraction) are in jit.py.
 
 Numba's on-disk cache only tracks each function's own file, while the kernel inlines the
 equation modules and all of them take their compilation options from jit.py;
-:func:`_invalidate_stale_cache` drops every cached physics function when any of these files
-changed.
+:func:`use_current_cache` drops every cached physics function when any of these files
+changed. Every run builds its parameter row with :func:`pack` before its first step, so pack
+checks the cache, once per process, before numba loads anything from it.
 """
 
 from __future__ import annotations
@@ -47,8 +48,16 @@ from hems_ros.physics import jit as jit_options
 from hems_ros.physics.jit import OPTIONS, jit, jit_inline
 from hems_ros.physics.params import UnitParams
 
+_cache_checked = False
 
-def _invalidate_stale_cache() -> None:
+
+def use_current_cache() -> None:
+    """Delete the cached compilations of the physics functions when the sources they inline
+    changed since they were cached (a hash of those sources kept beside the cache)."""
+    global _cache_checked
+    if _cache_checked:
+        return
+    _cache_checked = True
     here = Path(__file__).resolve()
     sources = hashlib.sha256()
     for module in (constitutive, electrical, friction, heat, jit_options, kinetics, loads, sheath):
@@ -64,8 +73,6 @@ def _invalidate_stale_cache() -> None:
     except OSError:
         pass  # read-only install: sources cannot change under it either
 
-
-_invalidate_stale_cache()
 
 # ---------------------------------------------------------------- packed parameters
 (P_L0, P_S, P_AREA, P_CW, P_LAT,
@@ -113,6 +120,7 @@ def pack(params: UnitParams, temperature_drive: bool = False) -> np.ndarray:
     ``temperature_drive``: the row for electrical.DRIVE_TEMPERATURE, whose imposed temperature
     leaves the latent heat nothing to change (P_LAT = P_TPX = 0; see the module docstring).
     """
+    use_current_cache()
     w, th, el, ki, co = params.wire, params.thermal, params.electrical, params.kinetics, params.constitutive
     ld = params.load
     p = np.zeros(N_P)
