@@ -70,10 +70,11 @@ def fault_kind(fault: str) -> str:
     return fault.split(": ", 1)[-1].split(" (")[0].split(" for ")[0]
 
 
-def reached(statuses: list, value: float) -> bool:
-    """The finger came within REACHED_M of ``value`` or went past it (an SMA finger that
-    overshoots comes back only as its wire cools, which can outlast SETTLE_S)."""
-    first = statuses[0].measurement - value
+def reached(statuses: list, value: float, start_m: float) -> bool:
+    """The finger, at ``start_m`` before the join, came within REACHED_M of ``value`` or went
+    past it (an SMA finger that overshoots comes back only as its wire cools, which can outlast
+    SETTLE_S)."""
+    first = start_m - value
     return any(abs(m.measurement - value) <= REACHED_M or (m.measurement - value) * first < 0 for m in statuses)
 
 
@@ -138,10 +139,13 @@ def run(composed: bool, joins: int) -> dict:
                 client.spin_for(SETTLE_S)
                 by_kind[kind] += 1
                 if finger is not None:
+                    # the statuses that came while the tool ran are taken only now, the oldest
+                    # dropped by the reader's history: the start is the last one before the join
+                    before = [m for t, m in shown[finger] if t < started]
                     since = [m for t, m in shown[finger] if t >= started]
                     if not since or not math.isclose(since[-1].setpoint, value, abs_tol=1e-9):
                         missed.append(f"join {i + 1} ({kind} {finger} {value * 1e3:g} mm): not taken")
-                    elif not reached(since, value):
+                    elif not reached(since, value, (before or since)[-1 if before else 0].measurement):
                         missed.append(f"join {i + 1} ({kind} {finger} {value * 1e3:g} mm): at "
                                       f"{since[-1].measurement * 1e3:.2f} mm after {SETTLE_S:g} s")
                 new = [text for t, text in faults if t >= started]
