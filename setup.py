@@ -25,13 +25,28 @@ setup(
         (f"share/{PACKAGE}/config/measurements", glob("config/measurements/*")),
     ],
     # ROS packages (rclpy, the message packages) come from the ROS installation (package.xml)
-    install_requires=["setuptools", "numpy", "scipy", "threadpoolctl", "numba", "llvmlite", "pyyaml", "mcap",
-                      "lz4", "zstandard", "matplotlib"],
-    extras_require={"test": ["pytest", "hypothesis", "rosbags", "mcap-ros2-support", "ruff", "mypy"]},
+    install_requires=[
+        "setuptools",
+        "numpy",
+        "scipy",
+        "threadpoolctl",
+        "numba",
+        "llvmlite",
+        "pyyaml",
+        "mcap",
+        "lz4",
+        "zstandard",
+        "matplotlib",
+    ],
+    extras_require={
+        "test": ["pytest", "hypothesis", "rosbags", "mcap-ros2-support", "ruff", "mypy"]
+    },
     zip_safe=True,
     maintainer="HEMS digital twin developers",
     description="HEMS soft hand exoskeleton digital twin (ROS 2 nodes, SMA physics, BPID control)",
     license="Apache-2.0",
     python_requires=">=3.11",
-    entry_points={"console_scripts": [f"{name} = {target}" for name, target in EXECUTABLES.items()]},
+    entry_points={
+        "console_scripts": [f"{name} = {target}" for name, target in EXECUTABLES.items()]
+    },
 )

@@ -35,22 +35,31 @@ def message_mix(count: int) -> list[tuple[str, str, bytes]]:
 
     topics = []
     for finger in FINGERS:
-        topics += [(f"/hems/{finger}/encoder", "hems_msgs/msg/EncoderReading"),
-                   (f"/hems/{finger}/wire_force", "hems_msgs/msg/WireForce"),
-                   (f"/hems/sim/{finger}/state", "hems_msgs/msg/ActuatorState"),
-                   (f"/hems/{finger}/duty", "hems_msgs/msg/DutyCommand")]
+        topics += [
+            (f"/hems/{finger}/encoder", "hems_msgs/msg/EncoderReading"),
+            (f"/hems/{finger}/wire_force", "hems_msgs/msg/WireForce"),
+            (f"/hems/sim/{finger}/state", "hems_msgs/msg/ActuatorState"),
+            (f"/hems/{finger}/duty", "hems_msgs/msg/DutyCommand"),
+        ]
     topics.append(("/hems/joint_states", "sensor_msgs/msg/JointState"))
     out = []
     for i in range(count):
         topic, type_name = topics[i % len(topics)]
         finger = topic.split("/")[-2]
         if type_name.endswith("EncoderReading"):
-            msg = EncoderReading(finger=finger, counts=i, position=i * 1e-5, resolution=1e-5, sequence=i)
+            msg = EncoderReading(
+                finger=finger, counts=i, position=i * 1e-5, resolution=1e-5, sequence=i
+            )
         elif type_name.endswith("WireForce"):
             msg = WireForce(finger=finger, force=0.01 * i, sequence=i)
         elif type_name.endswith("ActuatorState"):
-            msg = ActuatorState(finger=finger, wire_temperature_c=25.0 + i % 50, stress=1e6 * (i % 7),
-                                wire_force=0.1 * (i % 100), sequence=i)
+            msg = ActuatorState(
+                finger=finger,
+                wire_temperature_c=25.0 + i % 50,
+                stress=1e6 * (i % 7),
+                wire_force=0.1 * (i % 100),
+                sequence=i,
+            )
         elif type_name.endswith("DutyCommand"):
             msg = DutyCommand(finger=finger, duty_percent=float(i % 100), sequence=i)
         else:
@@ -69,7 +78,9 @@ def bench(count: int) -> dict[str, float]:
             channels = {}
             for topic, type_name, _ in mix[:200]:
                 if topic not in channels:
-                    channels[topic] = writer.add_topic(topic, type_name, [offered_qos(False, False, 10)])
+                    channels[topic] = writer.add_topic(
+                        topic, type_name, [offered_qos(False, False, 10)]
+                    )
             write = writer.write
             for i, (topic, _, data) in enumerate(mix):
                 write(channels[topic], 1_000_000_000 + i * 20_000, data)
@@ -84,8 +95,12 @@ def bench(count: int) -> dict[str, float]:
     decoded = sum(len(t) for t in bag.topics.values())
     if decoded != count or info.message_count != count:
         raise SystemExit(f"read back {decoded} (info {info.message_count}) of {count} messages")
-    return {"write": count / write_s, "read": count / read_s, "info": count / info_s,
-            "bytes_per_message": size / count}
+    return {
+        "write": count / write_s,
+        "read": count / read_s,
+        "info": count / info_s,
+        "bytes_per_message": size / count,
+    }
 
 
 def main() -> int:
@@ -93,11 +108,18 @@ def main() -> int:
     parser.add_argument("--messages", type=int, default=200_000)
     args = parser.parse_args()
     result = bench(args.messages)
-    print(f"bag benchmark: {args.messages} messages, graph mix, zstd chunks, "
-          f"{result['bytes_per_message']:.1f} bytes/message on disk")
-    print(f"  write {result['write']:>10,.0f} msg/s   floor {WRITE_FLOOR:,}   ratio {result['write'] / WRITE_FLOOR:.2f}")
-    print(f"  read  {result['read']:>10,.0f} msg/s   floor {READ_FLOOR:,}  ratio {result['read'] / READ_FLOOR:.2f}"
-          "   (decoded into numpy columns)")
+    print(
+        f"bag benchmark: {args.messages} messages, graph mix, zstd chunks, "
+        f"{result['bytes_per_message']:.1f} bytes/message on disk"
+    )
+    print(
+        f"  write {result['write']:>10,.0f} msg/s   floor {WRITE_FLOOR:,}   ratio "
+        f"{result['write'] / WRITE_FLOOR:.2f}"
+    )
+    print(
+        f"  read  {result['read']:>10,.0f} msg/s   floor {READ_FLOOR:,}  ratio "
+        f"{result['read'] / READ_FLOOR:.2f}   (decoded into numpy columns)"
+    )
     print(f"  info  {result['info']:>10,.0f} msg/s   (scan and count, no decode)")
     return 0 if result["write"] >= WRITE_FLOOR and result["read"] >= READ_FLOOR else 1
 

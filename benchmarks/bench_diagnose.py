@@ -64,22 +64,28 @@ MODEL = "ch6_hems_index"
 HIDDEN = {"load.damping_n_s_per_m": 260.0}
 SAMPLE_S = 0.01
 DT = 1e-3
-LEVEL_M = 10e-3                 # wire side
-CYCLE_S = (1.0, 6.0, 8.0)       # at rest, holding LEVEL_M, cooling back: 15 s
+LEVEL_M = 10e-3  # wire side
+CYCLE_S = (1.0, 6.0, 8.0)  # at rest, holding LEVEL_M, cooling back: 15 s
 CYCLES = 8
 FORCE_NOISE_N = 0.03
 FORCE_SEED = 7
-STATUS_EVERY = 2                # controller status with every 2nd duty (finger_controller default)
-STATE_EVERY = 5                 # simulation truth at 20 Hz (actuation_unit state_period_s 0.05)
+STATUS_EVERY = 2  # controller status with every 2nd duty (finger_controller default)
+STATE_EVERY = 5  # simulation truth at 20 Hz (actuation_unit state_period_s 0.05)
 # A wall-clock graph stamps in ns since the epoch; start on the 10 ms grid.
 T0_NS = 1_750_000_000 * 1_000_000_000
 # Reception after the source stamp, as the recorder logs it; the duty is computed from the
 # encoder sample and published a little later, the sensor's force relayed by the shoulder module.
-LAG_NS = {"encoder": 150_000, "wire_tension": 180_000, "wire_force": 450_000, "duty": 700_000,
-          "controller_status": 800_000, "state": 250_000}
+LAG_NS = {
+    "encoder": 150_000,
+    "wire_tension": 180_000,
+    "wire_force": 450_000,
+    "duty": 700_000,
+    "controller_status": 800_000,
+    "state": 250_000,
+}
 DUTY_COMPUTE_NS = 400_000
-TRANSPORT_NS = 100_000          # publish to reception: the recorder keeps the writer's time as publish time
-SETPOINT_LEAD_NS = 3_000_000    # a setpoint arrives a few ms before the control step that uses it
+TRANSPORT_NS = 100_000  # publish to reception: the recorder keeps the writer's time as publish time
+SETPOINT_LEAD_NS = 3_000_000  # a setpoint arrives a few ms before the control step that uses it
 
 
 # --------------------------------------------------------------------------- the input bag
@@ -98,10 +104,10 @@ class Truth:
     duty: np.ndarray
     counts: np.ndarray
     position: np.ndarray
-    tension: np.ndarray          # true wire force (the simulation's wire_tension topic)
-    force: np.ndarray            # the force sensor's reading
+    tension: np.ndarray  # true wire force (the simulation's wire_tension topic)
+    force: np.ndarray  # the force sensor's reading
     saturated: np.ndarray
-    channels: dict[str, np.ndarray] = field(default_factory=dict)   # kernel channels per sample
+    channels: dict[str, np.ndarray] = field(default_factory=dict)  # kernel channels per sample
 
 
 def make_truth() -> Truth:
@@ -116,24 +122,44 @@ def make_truth() -> Truth:
     # state after k control periods (record k - 1)
     state0 = kernel.initial_state(truth)
     first = {name: state0[kernel.STATE_NAMES.index(name)] for name in kernel.STATE_NAMES}
-    first.update(wire_force_n=truth.wire.cross_section_m2 * state0[kernel.S_SIG], resistance_ohm=0.0,
-                 current_a=0.0, electrical_power_w=0.0, tendon_force_n=truth.load.static_force_n(),
-                 tendon_position_m=0.0)
+    first.update(
+        wire_force_n=truth.wire.cross_section_m2 * state0[kernel.S_SIG],
+        resistance_ohm=0.0,
+        current_a=0.0,
+        electrical_power_w=0.0,
+        tendon_force_n=truth.load.static_force_n(),
+        tendon_position_m=0.0,
+    )
     channels = {name: np.concatenate([[first[name]], res[name][0][:-1]]) for name in first}
     enc = truth.encoder
     counts = sensors.encoder_counts_array(channels["slider_position_m"], enc.resolution_m, enc.gain)
     noise = np.random.default_rng(FORCE_SEED).standard_normal(ref.size) * FORCE_NOISE_N
     fs = truth.force_sensor
-    force, saturated = sensors.force_reading_array(channels["wire_force_n"], noise, fs.range_max_n,
-                                                   fs.resolution_n)
-    return Truth(ref, duty, counts, counts * enc.resolution_m, channels["wire_force_n"], force, saturated,
-                 channels)
+    force, saturated = sensors.force_reading_array(
+        channels["wire_force_n"], noise, fs.range_max_n, fs.resolution_n
+    )
+    return Truth(
+        ref,
+        duty,
+        counts,
+        counts * enc.resolution_m,
+        channels["wire_force_n"],
+        force,
+        saturated,
+        channels,
+    )
 
 
 def encoders() -> dict[str, cdr.Encoder]:
     out = {}
-    for name in ("EncoderReading", "WireForce", "DutyCommand", "FingerSetpoint", "ControllerStatus",
-                 "ActuatorState"):
+    for name in (
+        "EncoderReading",
+        "WireForce",
+        "DutyCommand",
+        "FingerSetpoint",
+        "ControllerStatus",
+        "ActuatorState",
+    ):
         type_name = f"hems_msgs/msg/{name}"
         types = msgdefs.parse_full_definition(type_name, msgdefs.full_definition(type_name))
         out[name] = cdr.build_encoder(type_name, types)
@@ -150,13 +176,21 @@ def write_bag(folder: Path, t: Truth) -> int:
         "wire_force": (names.topic(FINGER, "wire_force"), "WireForce", sensor_qos),
         "duty": (names.topic(FINGER, "duty"), "DutyCommand", command_qos),
         "setpoint": (names.topic(FINGER, "setpoint"), "FingerSetpoint", command_qos),
-        "controller_status": (names.topic(FINGER, "controller_status"), "ControllerStatus", sensor_qos),
+        "controller_status": (
+            names.topic(FINGER, "controller_status"),
+            "ControllerStatus",
+            sensor_qos,
+        ),
         "wire_tension": (names.sim_topic(FINGER, "wire_tension"), "WireForce", sensor_qos),
         "state": (names.sim_topic(FINGER, "state"), "ActuatorState", sensor_qos),
     }
     period_ns = int(round(SAMPLE_S * 1e9))
     model = load_params(MODEL)
-    ratio, wire_length, resolution = model.load.pulley_ratio, model.wire.length_m, model.encoder.resolution_m
+    ratio, wire_length, resolution = (
+        model.load.pulley_ratio,
+        model.wire.length_m,
+        model.encoder.resolution_m,
+    )
     c = t.channels
     messages: list[tuple[int, str, bytes]] = []
 
@@ -171,37 +205,98 @@ def write_bag(folder: Path, t: Truth) -> int:
         if t.reference[k] != previous:
             # `hems setpoint` stamps the header with its clock when it publishes
             s_sec, s_nsec = divmod(at - SETPOINT_LEAD_NS, 1_000_000_000)
-            add("setpoint", at - SETPOINT_LEAD_NS + 300_000,
-                (s_sec, s_nsec, "", "position", float(t.reference[k] * ratio)))
+            add(
+                "setpoint",
+                at - SETPOINT_LEAD_NS + 300_000,
+                (s_sec, s_nsec, "", "position", float(t.reference[k] * ratio)),
+            )
             previous = t.reference[k]
-        add("encoder", at + LAG_NS["encoder"],
-            (sec, nsec, "", FINGER, int(t.counts[k]), float(t.position[k]), resolution, seq))
-        add("wire_tension", at + LAG_NS["wire_tension"],
-            (sec, nsec, "", FINGER, float(t.tension[k]), False, False, seq))
-        add("wire_force", at + LAG_NS["wire_force"],
-            (sec, nsec, "", FINGER, float(t.force[k]), bool(t.saturated[k]), False, seq))
+        add(
+            "encoder",
+            at + LAG_NS["encoder"],
+            (sec, nsec, "", FINGER, int(t.counts[k]), float(t.position[k]), resolution, seq),
+        )
+        add(
+            "wire_tension",
+            at + LAG_NS["wire_tension"],
+            (sec, nsec, "", FINGER, float(t.tension[k]), False, False, seq),
+        )
+        add(
+            "wire_force",
+            at + LAG_NS["wire_force"],
+            (sec, nsec, "", FINGER, float(t.force[k]), bool(t.saturated[k]), False, seq),
+        )
         d_sec, d_nsec = divmod(at + DUTY_COMPUTE_NS, 1_000_000_000)
-        add("duty", at + LAG_NS["duty"], (d_sec, d_nsec, "", FINGER, float(t.duty[k]), sec, nsec, seq))
+        add(
+            "duty",
+            at + LAG_NS["duty"],
+            (d_sec, d_nsec, "", FINGER, float(t.duty[k]), sec, nsec, seq),
+        )
         if k % STATUS_EVERY == STATUS_EVERY - 1:
             error = (t.reference[k] - t.position[k]) * ratio
-            add("controller_status", at + LAG_NS["controller_status"],
-                (d_sec, d_nsec, "", FINGER, "bpid", "position", True, float(t.reference[k] * ratio),
-                 float(t.position[k] * ratio), float(error), float(t.duty[k]), "", sec, nsec,
-                 float(t.position[k]), sec, nsec, float(t.force[k]), 0, "", seq // STATUS_EVERY))
+            add(
+                "controller_status",
+                at + LAG_NS["controller_status"],
+                (
+                    d_sec,
+                    d_nsec,
+                    "",
+                    FINGER,
+                    "bpid",
+                    "position",
+                    True,
+                    float(t.reference[k] * ratio),
+                    float(t.position[k] * ratio),
+                    float(error),
+                    float(t.duty[k]),
+                    "",
+                    sec,
+                    nsec,
+                    float(t.position[k]),
+                    sec,
+                    nsec,
+                    float(t.force[k]),
+                    0,
+                    "",
+                    seq // STATUS_EVERY,
+                ),
+            )
         if k % STATE_EVERY == 0:
             x = float(c["slider_position_m"][k])
-            add("state", at + LAG_NS["state"],
-                (sec, nsec, "", FINGER, float(t.duty[k - 1] if k else 0.0), False, True,
-                 float(c["wire_temperature_c"][k]), float(c["martensite_fraction"][k]),
-                 float(c["resistance_ohm"][k]), float(c["current_a"][k]), float(c["electrical_power_w"][k]),
-                 float(c["energy_joule_j"][k]), float(c["stress_pa"][k]), x / wire_length,
-                 float(c["sheath_temperature_c"][k]), x, float(c["slider_velocity_m_s"][k]),
-                 float(c["tendon_position_m"][k]), float(c["tendon_force_n"][k]), float(c["wire_force_n"][k]),
-                 k // STATE_EVERY + 1))
-    messages.sort(key=lambda m: m[0])     # the recorder writes in order of reception
+            add(
+                "state",
+                at + LAG_NS["state"],
+                (
+                    sec,
+                    nsec,
+                    "",
+                    FINGER,
+                    float(t.duty[k - 1] if k else 0.0),
+                    False,
+                    True,
+                    float(c["wire_temperature_c"][k]),
+                    float(c["martensite_fraction"][k]),
+                    float(c["resistance_ohm"][k]),
+                    float(c["current_a"][k]),
+                    float(c["electrical_power_w"][k]),
+                    float(c["energy_joule_j"][k]),
+                    float(c["stress_pa"][k]),
+                    x / wire_length,
+                    float(c["sheath_temperature_c"][k]),
+                    x,
+                    float(c["slider_velocity_m_s"][k]),
+                    float(c["tendon_position_m"][k]),
+                    float(c["tendon_force_n"][k]),
+                    float(c["wire_force_n"][k]),
+                    k // STATE_EVERY + 1,
+                ),
+            )
+    messages.sort(key=lambda m: m[0])  # the recorder writes in order of reception
     with BagWriter(folder) as writer:
-        channel = {s: writer.add_topic(topic, f"hems_msgs/msg/{kind}", qos)
-                   for s, (topic, kind, qos) in topics.items()}
+        channel = {
+            s: writer.add_topic(topic, f"hems_msgs/msg/{kind}", qos)
+            for s, (topic, kind, qos) in topics.items()
+        }
         for log_ns, stream, data in messages:
             writer.write(channel[stream], log_ns, data, log_ns - TRANSPORT_NS)
     return len(messages)
@@ -220,7 +315,7 @@ class Probe:
         self.predict_s = 0.0
         self.sim_calls = self.sim_sets = 0
         self.sim_s = 0.0
-        self.fits: list[tuple[int, float]] = []     # (structures, seconds) per fit_structures call
+        self.fits: list[tuple[int, float]] = []  # (structures, seconds) per fit_structures call
         self.rounds = 0
 
     def install(self) -> None:
@@ -303,9 +398,21 @@ def time_diagnosis(run, model, repeat: int, probe: Probe) -> Timing:
         probe.reset()
         start, cpu = time.perf_counter(), time.process_time()
         result = diagnose([run], [], model)
-        rows.append((time.perf_counter() - start, time.process_time() - cpu, probe.predict_calls,
-                     probe.predict_sets, probe.predict_s, probe.sim_calls, probe.sim_sets, probe.sim_s,
-                     list(probe.fits), probe.rounds, result))
+        rows.append(
+            (
+                time.perf_counter() - start,
+                time.process_time() - cpu,
+                probe.predict_calls,
+                probe.predict_sets,
+                probe.predict_s,
+                probe.sim_calls,
+                probe.sim_sets,
+                probe.sim_s,
+                list(probe.fits),
+                probe.rounds,
+                result,
+            )
+        )
     walls = [r[0] for r in rows]
     mid = sorted(rows, key=lambda r: r[0])[len(rows) // 2]
     return Timing(walls, *mid)
@@ -313,14 +420,18 @@ def time_diagnosis(run, model, repeat: int, probe: Probe) -> Timing:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=3,
-                        help="timed diagnoses per configuration (median printed)")
+    parser.add_argument(
+        "--repeat", type=int, default=3, help="timed diagnoses per configuration (median printed)"
+    )
     args = parser.parse_args()
     model = load_params(MODEL)
     cores = os.cpu_count() or 1
-    print(f"diagnosis benchmark: {CYCLES} x {sum(CYCLE_S):g} s position steps 0 -> {LEVEL_M * 1e3:g} mm "
-          f"(wire side) of the {FINGER} finger, truth {MODEL} with "
-          + ", ".join(f"{k} {v:g}" for k, v in HIDDEN.items()) + f" (model {model.load.damping_n_s_per_m:g})")
+    print(
+        f"diagnosis benchmark: {CYCLES} x {sum(CYCLE_S):g} s position steps 0 -> {LEVEL_M * 1e3:g} "
+        f"mm (wire side) of the {FINGER} finger, truth {MODEL} with "
+        + ", ".join(f"{k} {v:g}" for k, v in HIDDEN.items())
+        + f" (model {model.load.damping_n_s_per_m:g})"
+    )
 
     start = time.perf_counter()
     truth = make_truth()
@@ -331,31 +442,43 @@ def main() -> int:
         count = write_bag(folder, truth)
         write_s = time.perf_counter() - start
         size = sum(f.stat().st_size for f in folder.iterdir())
-        print(f"input: closed loop + truth replay {make_s:.1f} s; bag of {count} messages on 7 topics, "
-              f"{size / 1e6:.2f} MB, written in {write_s:.2f} s")
-        load_bag_runs(folder)           # imports and decoder generation out of the timing
+        print(
+            f"input: closed loop + truth replay {make_s:.1f} s; bag of {count} messages on "
+            f"7 topics, {size / 1e6:.2f} MB, written in {write_s:.2f} s"
+        )
+        load_bag_runs(folder)  # imports and decoder generation out of the timing
         load_s, runs = median_time(lambda: load_bag_runs(folder), 3)
     run = runs[0]
     period = float(np.median(np.diff(run.time)))
     length_s = run.n_samples * period
-    print(f"run: {run.name}, {run.n_samples} samples every {period * 1e3:g} ms = {length_s:g} s, outputs "
-          f"{', '.join(run.outputs)}, {len(run.setpoints)} setpoints, "
-          f"notes: {'; '.join(run.notes) or 'none'}")
+    print(
+        f"run: {run.name}, {run.n_samples} samples every {period * 1e3:g} ms = {length_s:g} s, "
+        f"outputs {', '.join(run.outputs)}, {len(run.setpoints)} setpoints, "
+        f"notes: {'; '.join(run.notes) or 'none'}"
+    )
     pool = library.applicable(model, frozenset({run.drive}), frozenset(run.outputs))
-    print(f"library: {len(pool)} applicable of {len(library.ALL)} candidates "
-          f"({', '.join(c.name for c in pool)})")
+    print(
+        f"library: {len(pool)} applicable of {len(library.ALL)} candidates "
+        f"({', '.join(c.name for c in pool)})"
+    )
 
     probe = Probe()
     probe.install()
     data = prepare([run], [])
-    data.predict([model])           # numba's cache and the first replay out of the timing
+    data.predict([model])  # numba's cache and the first replay out of the timing
     prepare_s, data = median_time(lambda: prepare([run], []), 3)
     replay_s, _ = median_time(lambda: data.predict([model]), 5)
 
-    print(f"threads: numba {numba.get_num_threads()}, on {cores} cores; load average (1 min) before the "
-          f"diagnoses {os.getloadavg()[0]:.1f}")
-    diagnose([run], [], model)      # untimed: compile-cache load, first calls
-    timings = {"as shipped (BLAS on 1 thread during the fits)": time_diagnosis(run, model, args.repeat, probe)}
+    print(
+        f"threads: numba {numba.get_num_threads()}, on {cores} cores; load average (1 min) before "
+        f"the diagnoses {os.getloadavg()[0]:.1f}"
+    )
+    diagnose([run], [], model)  # untimed: compile-cache load, first calls
+    timings = {
+        "as shipped (BLAS on 1 thread during the fits)": time_diagnosis(
+            run, model, args.repeat, probe
+        )
+    }
     # The fits' linear algebra is on 16,000 x 3 matrices, too small to gain from BLAS threads;
     # the comparison shows what two dozen fit threads calling a threaded BLAS would cost.
     limit = fit_module.threadpool_limits
@@ -379,41 +502,60 @@ def main() -> int:
         row(f"diagnosis, full library, {label}", t.wall)
     for label, t in timings.items():
         total = load_s + t.wall
-        print(f"{label}: diagnosis wall times {', '.join(f'{w:.1f}' for w in t.walls)} s "
-              f"(median of {len(t.walls)}), CPU {t.cpu:.1f} s in the median run ({t.cpu / t.wall:.2f} cores "
-              f"busy); goal under {GOAL_S:g} s for "
-              f"{length_s:g} s: load + diagnosis {total:.1f} s = {total / GOAL_S:.2f} x goal "
-              f"({'under' if total < GOAL_S else 'OVER'} the goal)")
+        print(
+            f"{label}: diagnosis wall times {', '.join(f'{w:.1f}' for w in t.walls)} s "
+            f"(median of {len(t.walls)}), CPU {t.cpu:.1f} s in the median run "
+            f"({t.cpu / t.wall:.2f} cores busy); goal under {GOAL_S:g} s for "
+            f"{length_s:g} s: load + diagnosis {total:.1f} s = {total / GOAL_S:.2f} x goal "
+            f"({'under' if total < GOAL_S else 'OVER'} the goal)"
+        )
     first = next(iter(timings.values())).result
     print(f"verdict: {first.summary_line()}")
     for label, t in list(timings.items())[1:]:
         line = t.result.summary_line()
         print(f"verdict, {label}: " + ("the same" if line == first.summary_line() else line))
-    named = "; ".join(f"{n['effect']} " + ", ".join(f"{k} {p['si_value']:.4g}"
-                                                   for k, p in n['parameters'].items())
-                      for n in first.named())
-    print(f"named: {named or 'nothing'} (truth: " + ", ".join(f"{k} {v:g}" for k, v in HIDDEN.items()) + ")")
+    named = "; ".join(
+        f"{n['effect']} "
+        + ", ".join(f"{k} {p['si_value']:.4g}" for k, p in n['parameters'].items())
+        for n in first.named()
+    )
+    print(
+        f"named: {named or 'nothing'} (truth: "
+        + ", ".join(f"{k} {v:g}" for k, v in HIDDEN.items())
+        + ")"
+    )
 
     for label, t in timings.items():
         fit_s = sum(s for _, s in t.fits)
         threads = max((n for n, _ in t.fits), default=0) * fit_module.STARTS
         print()
-        print(f"where the time goes, {label} (median run): {t.calls} model evaluations (dataset.predict) of "
-              f"{t.sets} parameter sets, {t.sim_sets} distinct physics sets simulated in {t.sim_calls} "
-              "batches")
-        print(f"  predict {t.predict_s:.1f} s ({t.predict_s / t.wall:.0%} of the wall time), of which the "
-              f"batch simulation {t.sim_s:.1f} s: {t.sim_sets * length_s / max(t.sim_s, 1e-9):,.0f} "
-              f"simulated unit-s per wall-s at dt 1 ms, {t.sim_s / max(t.sim_sets, 1) * 1e3:.1f} ms per set "
-              f"(one set alone {replay_s * 1e3:.0f} ms)")
-        print(f"  outside predict (least squares in up to {threads} fit threads at once, waiting, "
-              "localise): "
-              f"{t.wall - t.predict_s:.1f} s ({(t.wall - t.predict_s) / t.wall:.0%})")
-        print(f"  fit_structures: {len(t.fits)} calls, {fit_s:.1f} s, {t.rounds} barrier rounds; per call "
-              + ", ".join(f"{n} structures {s:.1f} s" for n, s in t.fits))
+        print(
+            f"where the time goes, {label} (median run): {t.calls} model evaluations "
+            f"(dataset.predict) of {t.sets} parameter sets, {t.sim_sets} distinct physics sets "
+            f"simulated in {t.sim_calls} batches"
+        )
+        print(
+            f"  predict {t.predict_s:.1f} s ({t.predict_s / t.wall:.0%} of the wall time), of "
+            f"which the batch simulation {t.sim_s:.1f} s: "
+            f"{t.sim_sets * length_s / max(t.sim_s, 1e-9):,.0f} simulated unit-s per wall-s at dt "
+            f"1 ms, {t.sim_s / max(t.sim_sets, 1) * 1e3:.1f} ms per set (one set alone "
+            f"{replay_s * 1e3:.0f} ms)"
+        )
+        print(
+            f"  outside predict (least squares in up to {threads} fit threads at once, waiting, "
+            "localise): "
+            f"{t.wall - t.predict_s:.1f} s ({(t.wall - t.predict_s) / t.wall:.0%})"
+        )
+        print(
+            f"  fit_structures: {len(t.fits)} calls, {fit_s:.1f} s, {t.rounds} barrier "
+            f"rounds; per call " + ", ".join(f"{n} structures {s:.1f} s" for n, s in t.fits)
+        )
     print()
-    print(f"numba threading layer {threading_layer}; load average (1 min) at the end: "
-          f"{os.getloadavg()[0]:.1f} on "
-          f"{cores} cores (wall times need idle cores)")
+    print(
+        f"numba threading layer {threading_layer}; load average (1 min) at the end: "
+        f"{os.getloadavg()[0]:.1f} on "
+        f"{cores} cores (wall times need idle cores)"
+    )
     return 0
 
 

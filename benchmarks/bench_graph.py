@@ -55,15 +55,26 @@ def node_kind(pid: int) -> str:
 
 def run(composed: bool, seconds: float) -> dict:
     # the units' latency statistics then cover the measured interval, not the start-up
-    graph = Graph(GraphOptions(composed=composed, log_level="error",
-                               extra_ros_args=("-p", f"latency_window_s:={float(seconds)!r}")))
+    graph = Graph(
+        GraphOptions(
+            composed=composed,
+            log_level="error",
+            extra_ros_args=("-p", f"latency_window_s:={float(seconds)!r}"),
+        )
+    )
     graph.start()
     latest: dict[str, dict[str, str]] = {}
     try:
         with GraphClient("hems_bench") as client:
             client.node.create_subscription(
-                DiagnosticArray, names.DIAGNOSTICS_TOPIC,
-                lambda m: [latest.__setitem__(s.name, {kv.key: kv.value for kv in s.values}) for s in m.status], 10)
+                DiagnosticArray,
+                names.DIAGNOSTICS_TOPIC,
+                lambda m: [
+                    latest.__setitem__(s.name, {kv.key: kv.value for kv in s.values})
+                    for s in m.status
+                ],
+                10,
+            )
             ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
             if not ok:
                 return {"error": f"could not enable: {graph.with_exits(message)}"}
@@ -76,7 +87,9 @@ def run(composed: bool, seconds: float) -> dict:
             cpu1, elapsed = cpu_by_process(graph.pids), time.monotonic() - t0
             by_kind: dict[str, list[float]] = {}
             for pid, used in cpu1.items():
-                by_kind.setdefault(node_kind(pid), []).append((used - cpu0.get(pid, used)) / elapsed)
+                by_kind.setdefault(node_kind(pid), []).append(
+                    (used - cpu0.get(pid, used)) / elapsed
+                )
             state = client.snapshot(seconds=1.0).supervisor
     finally:
         graph.stop()
@@ -84,14 +97,21 @@ def run(composed: bool, seconds: float) -> dict:
     p50 = max(float(v["latency_p50_s"]) for v in units.values())
     p99 = max(float(v["latency_p99_s"]) for v in units.values())
     worst = max(float(v["latency_max_s"]) for v in units.values())
-    missed = sum(int(v["missed_control_periods"]) - int(start.get(k, v)["missed_control_periods"])
-                 for k, v in units.items())
+    missed = sum(
+        int(v["missed_control_periods"]) - int(start.get(k, v)["missed_control_periods"])
+        for k, v in units.items()
+    )
     periods = len(units) * seconds / 0.01
-    return {"p50_ms": 1e3 * p50, "p99_ms": 1e3 * p99, "max_ms": 1e3 * worst,
-            "missed_pct": 100 * missed / periods, "cpu_cores": sum(sum(v) for v in by_kind.values()),
-            "cpu_by_kind": by_kind,
-            "supervisor": state.state_name if state else "no status",
-            "faults": list(state.faults) if state else []}
+    return {
+        "p50_ms": 1e3 * p50,
+        "p99_ms": 1e3 * p99,
+        "max_ms": 1e3 * worst,
+        "missed_pct": 100 * missed / periods,
+        "cpu_cores": sum(sum(v) for v in by_kind.values()),
+        "cpu_by_kind": by_kind,
+        "supervisor": state.state_name if state else "no status",
+        "faults": list(state.faults) if state else [],
+    }
 
 
 def host_speed_s() -> float:
@@ -127,31 +147,50 @@ def wake_round_trip_us(rounds: int = 5000) -> float:
 
 
 def host_line() -> str:
-    return (f"host speed {host_speed_s():.2f} s (a 3-million-addition Python loop; lower is quicker), "
-            f"wake-up round trip {wake_round_trip_us():.1f} us (two processes over a pipe)")
+    return (
+        f"host speed {host_speed_s():.2f} s (a 3-million-addition Python loop; lower is quicker), "
+        f"wake-up round trip {wake_round_trip_us():.1f} us (two processes over a pipe)"
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=60.0, help="measured time per mode, s (default 60)")
-    parser.add_argument("--modes", default="separate,composed",
-                        help="comma-separated modes to run: separate, composed (default both)")
+    parser.add_argument(
+        "--seconds", type=float, default=60.0, help="measured time per mode, s (default 60)"
+    )
+    parser.add_argument(
+        "--modes",
+        default="separate,composed",
+        help="comma-separated modes to run: separate, composed (default both)",
+    )
     args = parser.parse_args()
-    print(f"graph benchmark, {args.seconds:g} s per mode, load average {os.getloadavg()[0]:.1f}, "
-          + host_line())
-    print(f"{'mode':<10} {'p50 ms':>7} {'p99 ms':>7} {'max ms':>7} {'missed %':>9} {'CPU cores':>10}  "
-          f"{'p99/floor':>9} {'missed/floor':>12} {'CPU/floor':>9}  supervisor")
+    print(
+        f"graph benchmark, {args.seconds:g} s per mode, load average {os.getloadavg()[0]:.1f}, "
+        + host_line()
+    )
+    print(
+        f"{'mode':<10} {'p50 ms':>7} {'p99 ms':>7} {'max ms':>7} {'missed %':>9} "
+        f"{'CPU cores':>10}  {'p99/floor':>9} {'missed/floor':>12} {'CPU/floor':>9}  supervisor"
+    )
     for mode in args.modes.split(","):
         r = run(mode == "composed", args.seconds)
         if "error" in r:
             print(f"{mode:<10} {r['error']}")
             continue
-        print(f"{mode:<10} {r['p50_ms']:>7.2f} {r['p99_ms']:>7.2f} {r['max_ms']:>7.2f} {r['missed_pct']:>9.3f} "
-              f"{r['cpu_cores']:>10.2f}  {r['p99_ms'] / 5.0:>9.2f} {r['missed_pct'] / 0.5:>12.2f} "
-              f"{r['cpu_cores'] / 1.0:>9.2f}  {r['supervisor']}")
-        print(" " * 10 + " CPU cores by node: " + ", ".join(
-            f"{kind} {sum(v):.2f}" + (f" ({len(v)} x {sum(v) / len(v):.3f})" if len(v) > 1 else "")
-            for kind, v in sorted(r["cpu_by_kind"].items(), key=lambda kv: -sum(kv[1]))))
+        print(
+            f"{mode:<10} {r['p50_ms']:>7.2f} {r['p99_ms']:>7.2f} {r['max_ms']:>7.2f} "
+            f"{r['missed_pct']:>9.3f} {r['cpu_cores']:>10.2f}  {r['p99_ms'] / 5.0:>9.2f} "
+            f"{r['missed_pct'] / 0.5:>12.2f} {r['cpu_cores'] / 1.0:>9.2f}  {r['supervisor']}"
+        )
+        print(
+            " " * 10
+            + " CPU cores by node: "
+            + ", ".join(
+                f"{kind} {sum(v):.2f}"
+                + (f" ({len(v)} x {sum(v) / len(v):.3f})" if len(v) > 1 else "")
+                for kind, v in sorted(r["cpu_by_kind"].items(), key=lambda kv: -sum(kv[1]))
+            )
+        )
         if r["faults"]:
             print(" " * 10 + " supervisor faults: " + "; ".join(r["faults"]))
         print(" " * 10 + f" after the run: {host_line()}")

@@ -41,28 +41,48 @@ FIRST_HALF = {"fingers": ("thumb_flexion", "index", "ring"), "modules": ("thumb"
 @contextmanager
 def worktree(rev: str):
     """A detached checkout of ``rev`` in a temporary folder, removed afterwards."""
-    sha = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--verify", f"{rev}^{{commit}}"],
-                         capture_output=True, text=True)
+    sha = subprocess.run(
+        ["git", "-C", str(REPO), "rev-parse", "--verify", f"{rev}^{{commit}}"],
+        capture_output=True,
+        text=True,
+    )
     if sha.returncode != 0:
         sys.exit(f"bench_graph_ab: {rev!r} is not a commit of {REPO}: {sha.stderr.strip()}")
     with tempfile.TemporaryDirectory(prefix="hems-ab-") as parent:
         path = Path(parent) / "tree"
-        subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", "--quiet", str(path),
-                        sha.stdout.strip()], check=True)
+        subprocess.run(
+            [
+                "git",
+                "-C",
+                str(REPO),
+                "worktree",
+                "add",
+                "--detach",
+                "--quiet",
+                str(path),
+                sha.stdout.strip(),
+            ],
+            check=True,
+        )
         try:
             # its units would otherwise all compile the physics kernel at once at start-up
             warm_physics_cache({**child_environment(), "PYTHONPATH": str(path)})
             yield sha.stdout.strip(), path
         finally:
-            subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(path)], check=False)
+            subprocess.run(
+                ["git", "-C", str(REPO), "worktree", "remove", "--force", str(path)], check=False
+            )
 
 
 def other_half(swapped: bool) -> set[str]:
     """Node names that run the other commit's code."""
     fingers = set(FIRST_HALF["fingers"]) ^ (set(names.FINGERS) if swapped else set())
     modules = set(FIRST_HALF["modules"]) ^ (set(names.MODULES) if swapped else set())
-    return ({f"actuation_unit_{f}" for f in fingers} | {f"finger_controller_{f}" for f in fingers}
-            | {f"shoulder_module_{m}" for m in modules})
+    return (
+        {f"actuation_unit_{f}" for f in fingers}
+        | {f"finger_controller_{f}" for f in fingers}
+        | {f"shoulder_module_{m}" for m in modules}
+    )
 
 
 def run(tree: Path, swapped: bool, seconds: float) -> dict[str, dict[str, list[float]]]:
@@ -88,7 +108,9 @@ def run(tree: Path, swapped: bool, seconds: float) -> dict[str, dict[str, list[f
     for name, pid in pids.items():
         kind = next((k for k in KINDS if name.startswith(k)), None)
         if kind is not None and pid in before and pid in after:
-            result[kind]["other" if name in other else "this"].append((after[pid] - before[pid]) / elapsed)
+            result[kind]["other" if name in other else "this"].append(
+                (after[pid] - before[pid]) / elapsed
+            )
     return result
 
 
@@ -98,19 +120,29 @@ def mean(values: list[float]) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--against", default="HEAD", help="commit whose code the other half runs (default HEAD)")
-    parser.add_argument("--seconds", type=float, default=30.0, help="measured time per run, s (default 30)")
+    parser.add_argument(
+        "--against", default="HEAD", help="commit whose code the other half runs (default HEAD)"
+    )
+    parser.add_argument(
+        "--seconds", type=float, default=30.0, help="measured time per run, s (default 30)"
+    )
     args = parser.parse_args()
     with worktree(args.against) as (sha, tree):
-        print(f"graph A/B benchmark: this tree against {args.against} ({sha[:8]}), 2 runs x {args.seconds:g} s "
-              f"with the halves swapped; {host_line()}", flush=True)
+        print(
+            f"graph A/B benchmark: this tree against {args.against} ({sha[:8]}), 2 runs "
+            f"x {args.seconds:g} s with the halves swapped; {host_line()}",
+            flush=True,
+        )
         totals = {kind: {"this": [], "other": []} for kind in KINDS}
         for swapped in (False, True):
             for kind, sides in run(tree, swapped, args.seconds).items():
                 for side, values in sides.items():
                     totals[kind][side].extend(values)
             print(f"  run {int(swapped) + 1} of 2 done", flush=True)
-    print(f"{'node kind':<18} {'this tree':>10} {sha[:8]:>10} {'ratio':>7}   (CPU cores per process, mean)")
+    print(
+        f"{'node kind':<18} {'this tree':>10} {sha[:8]:>10} {'ratio':>7}   (CPU cores per "
+        f"process, mean)"
+    )
     for kind, sides in totals.items():
         this, other = mean(sides["this"]), mean(sides["other"])
         print(f"{kind:<18} {this:>10.4f} {other:>10.4f} {this / other:>7.3f}")

@@ -30,7 +30,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from hems_ros.rosenv import apply_network_defaults, child_environment, use_private_domain  # noqa: E402
+from hems_ros.rosenv import (  # noqa: E402
+    apply_network_defaults,
+    child_environment,
+    use_private_domain,
+)
 
 apply_network_defaults()
 DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
@@ -43,10 +47,10 @@ from hems_ros.graph import names  # noqa: E402
 from hems_ros.launcher import Graph, GraphOptions  # noqa: E402
 from hems_ros.nodes import qos  # noqa: E402
 
-SETTLE_S = 1.5          # after each command, before judging it
+SETTLE_S = 1.5  # after each command, before judging it
 HOLD_M = 0.010
-REACHED_M = 0.5e-3     # a setpoint counts as reached within this of the tendon position
-SETTLE_HOLD_S = 60.0   # at most this long for every finger to settle at HOLD_M before the joins
+REACHED_M = 0.5e-3  # a setpoint counts as reached within this of the tendon position
+SETTLE_HOLD_S = 60.0  # at most this long for every finger to settle at HOLD_M before the joins
 KINDS = ("setpoint", "status", "enable", "reset", "topic pub")
 # what `ros2 topic pub --once` does, as a short script (ros2cli is not installed here)
 TOPIC_PUB = """
@@ -75,7 +79,10 @@ def reached(statuses: list, value: float, start_m: float) -> bool:
     past it (an SMA finger that overshoots comes back only as its wire cools, which can outlast
     SETTLE_S)."""
     first = start_m - value
-    return any(abs(m.measurement - value) <= REACHED_M or (m.measurement - value) * first < 0 for m in statuses)
+    return any(
+        abs(m.measurement - value) <= REACHED_M or (m.measurement - value) * first < 0
+        for m in statuses
+    )
 
 
 def command(kind: str, i: int) -> tuple[list[str], str | None, float | None]:
@@ -86,7 +93,11 @@ def command(kind: str, i: int) -> tuple[list[str], str | None, float | None]:
     if kind == "setpoint":
         return hems + ["setpoint", finger, f"{value_m * 1e3:g}", "--unit", "mm"], finger, value_m
     if kind == "topic pub":
-        return [sys.executable, "-c", TOPIC_PUB, names.topic(finger, "setpoint"), repr(value_m)], finger, value_m
+        return (
+            [sys.executable, "-c", TOPIC_PUB, names.topic(finger, "setpoint"), repr(value_m)],
+            finger,
+            value_m,
+        )
     return hems + [kind], None, None
 
 
@@ -97,10 +108,12 @@ def run(composed: bool, joins: int) -> dict:
     shown: dict[str, collections.deque] = {f: collections.deque(maxlen=400) for f in names.FINGERS}
 
     def on_status(message: SupervisorStatus) -> None:
-        if message.state_name != "ENABLED" and (not faults or faults[-1][1] != "; ".join(message.faults)):
+        if message.state_name != "ENABLED" and (
+            not faults or faults[-1][1] != "; ".join(message.faults)
+        ):
             faults.append((time.monotonic(), "; ".join(message.faults) or message.state_name))
 
-    gaps: dict[str, tuple[int, float]] = {}    # the supervisor's sensor gaps: (count, longest ms)
+    gaps: dict[str, tuple[int, float]] = {}  # the supervisor's sensor gaps: (count, longest ms)
 
     def on_diagnostics(message: DiagnosticArray) -> None:
         for status in message.status:
@@ -111,12 +124,19 @@ def run(composed: bool, joins: int) -> dict:
 
     try:
         with GraphClient("hems_bench_joins") as client:
-            client.node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, on_status, qos.STATUS)
-            client.node.create_subscription(DiagnosticArray, names.DIAGNOSTICS_TOPIC, on_diagnostics, 10)
+            client.node.create_subscription(
+                SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, on_status, qos.STATUS
+            )
+            client.node.create_subscription(
+                DiagnosticArray, names.DIAGNOSTICS_TOPIC, on_diagnostics, 10
+            )
             for finger in names.FINGERS:
-                client.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
-                                                lambda m, f=finger: shown[f].append((time.monotonic(), m)),
-                                                qos.CONTROLLER_STATUS)
+                client.node.create_subscription(
+                    ControllerStatus,
+                    names.topic(finger, "controller_status"),
+                    lambda m, f=finger: shown[f].append((time.monotonic(), m)),
+                    qos.CONTROLLER_STATUS,
+                )
             ok, message = client.enable_when_ready(120, reset=True, retry_s=1.0)
             if not ok:
                 return {"error": f"could not enable: {graph.with_exits(message)}"}
@@ -126,7 +146,9 @@ def run(composed: bool, joins: int) -> dict:
             # the joins start once every finger holds its position
             settle_end = time.monotonic() + SETTLE_HOLD_S
             while time.monotonic() < settle_end and not all(
-                    shown[f] and abs(shown[f][-1][1].measurement - HOLD_M) < REACHED_M / 2 for f in names.FINGERS):
+                shown[f] and abs(shown[f][-1][1].measurement - HOLD_M) < REACHED_M / 2
+                for f in names.FINGERS
+            ):
                 client.spin_for(0.2)
             client.spin_for(1.0)
             faults.clear()
@@ -135,7 +157,9 @@ def run(composed: bool, joins: int) -> dict:
                 kind = KINDS[i % len(KINDS)]
                 argv, finger, value = command(kind, i)
                 started = time.monotonic()
-                subprocess.run(argv, capture_output=True, text=True, timeout=120, env=child_environment())
+                subprocess.run(
+                    argv, capture_output=True, text=True, timeout=120, env=child_environment()
+                )
                 client.spin_for(SETTLE_S)
                 by_kind[kind] += 1
                 if finger is not None:
@@ -144,48 +168,78 @@ def run(composed: bool, joins: int) -> dict:
                     before = [m for t, m in shown[finger] if t < started]
                     since = [m for t, m in shown[finger] if t >= started]
                     if not since or not math.isclose(since[-1].setpoint, value, abs_tol=1e-9):
-                        missed.append(f"join {i + 1} ({kind} {finger} {value * 1e3:g} mm): not taken")
-                    elif not reached(since, value, (before or since)[-1 if before else 0].measurement):
-                        missed.append(f"join {i + 1} ({kind} {finger} {value * 1e3:g} mm): at "
-                                      f"{since[-1].measurement * 1e3:.2f} mm after {SETTLE_S:g} s")
+                        missed.append(
+                            f"join {i + 1} ({kind} {finger} {value * 1e3:g} mm): not taken"
+                        )
+                    elif not reached(
+                        since, value, (before or since)[-1 if before else 0].measurement
+                    ):
+                        missed.append(
+                            f"join {i + 1} ({kind} {finger} {value * 1e3:g} mm): at "
+                            f"{since[-1].measurement * 1e3:.2f} mm after {SETTLE_S:g} s"
+                        )
                 new = [text for t, text in faults if t >= started]
-                print(f"  join {i + 1}/{joins}: {kind}{'' if not new else ' -> ' + new[-1]}", flush=True)
+                print(
+                    f"  join {i + 1}/{joins}: {kind}{'' if not new else ' -> ' + new[-1]}",
+                    flush=True,
+                )
                 if new:
                     faulted += 1
                     kinds.update({fault_kind(part) for text in new for part in text.split("; ")})
                     ok, message = client.enable_when_ready(30, reset=True, retry_s=0.5)
                     if not ok:
                         return {"error": f"could not enable again: {message}"}
-            client.spin_for(1.5)    # the supervisor's last diagnostics (1 Hz)
+            client.spin_for(1.5)  # the supervisor's last diagnostics (1 Hz)
     finally:
         graph.stop()
     longest = max(gaps.items(), key=lambda kv: kv[1][1], default=("-", (0, 0.0)))
-    return {"joins": joins, "faulted": faulted, "kinds": dict(kinds), "missed": missed, "by_kind": dict(by_kind),
-            "gaps": sum(count for count, _ in gaps.values()), "longest_gap_ms": longest[1][1],
-            "longest_gap_stream": longest[0]}
+    return {
+        "joins": joins,
+        "faulted": faulted,
+        "kinds": dict(kinds),
+        "missed": missed,
+        "by_kind": dict(by_kind),
+        "gaps": sum(count for count, _ in gaps.values()),
+        "longest_gap_ms": longest[1][1],
+        "longest_gap_stream": longest[0],
+    }
 
 
 def table(results: dict[str, dict]) -> str:
-    lines = ["| layout | joins (setpoint, status, enable, reset, topic pub) | supervisor left ENABLED | "
-             "setpoints not reached | faults named | sensor gaps over 50 ms (longest) |", "|---|---|---|---|---|---|"]
+    lines = [
+        "| layout | joins (setpoint, status, enable, reset, topic pub) | supervisor left ENABLED | "
+        "setpoints not reached | faults named | sensor gaps over 50 ms (longest) |",
+        "|---|---|---|---|---|---|",
+    ]
     for layout, r in results.items():
         if "error" in r:
             lines.append(f"| {layout} | - | {r['error']} | - | - | - |")
             continue
         kinds = ", ".join(f"{k} x{n}" for k, n in sorted(r["kinds"].items())) or "-"
         per_kind = ", ".join(str(r["by_kind"].get(k, 0)) for k in KINDS)
-        lines.append(f"| {layout} | {r['joins']} ({per_kind}) | {r['faulted']} | {len(r['missed'])} | {kinds} | "
-                     f"{r['gaps']} ({r['longest_gap_ms']:.0f} ms, {r['longest_gap_stream']}) |")
+        lines.append(
+            f"| {layout} | {r['joins']} ({per_kind}) | {r['faulted']} | {len(r['missed'])} | "
+            f"{kinds} | {r['gaps']} ({r['longest_gap_ms']:.0f} ms, {r['longest_gap_stream']}) |"
+        )
     return "\n".join(lines) + "\n"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--joins", type=int, default=20, help="command-line processes per layout (default 20)")
-    parser.add_argument("--layouts", default="separate,composed",
-                        help="comma-separated layouts: separate (hems up), composed (default both)")
-    parser.add_argument("--markdown", type=Path, default=None, help="also write the result table to this file")
-    parser.add_argument("--json", type=Path, default=None, help="also write the results as JSON to this file")
+    parser.add_argument(
+        "--joins", type=int, default=20, help="command-line processes per layout (default 20)"
+    )
+    parser.add_argument(
+        "--layouts",
+        default="separate,composed",
+        help="comma-separated layouts: separate (hems up), composed (default both)",
+    )
+    parser.add_argument(
+        "--markdown", type=Path, default=None, help="also write the result table to this file"
+    )
+    parser.add_argument(
+        "--json", type=Path, default=None, help="also write the results as JSON to this file"
+    )
     args = parser.parse_args()
     results = {}
     for layout in args.layouts.split(","):

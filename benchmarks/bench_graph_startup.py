@@ -39,7 +39,9 @@ def start_once(composed: bool, heat_s: float, bag: Path) -> str | None:
     recorder = RecorderProcess(bag)
     try:
         with GraphClient("hems_bench_startup") as client:
-            wait_until_recording(client, recorder, names.FINGERS, time.monotonic() + READY_TIMEOUT_S)
+            wait_until_recording(
+                client, recorder, names.FINGERS, time.monotonic() + READY_TIMEOUT_S
+            )
             ok, message = client.enable_when_ready(READY_TIMEOUT_S, retry_s=0.5)
             if not ok:
                 raise RuntimeError(f"could not enable: {graph.with_exits(message)}")
@@ -53,16 +55,27 @@ def start_once(composed: bool, heat_s: float, bag: Path) -> str | None:
         graph.stop()
     if status is None:
         return "no supervisor status"
-    return None if status.state_name == "ENABLED" else (status.faults[0] if status.faults else status.state_name)
+    return (
+        None
+        if status.state_name == "ENABLED"
+        else (status.faults[0] if status.faults else status.state_name)
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--starts", type=int, default=10, help="graph starts per mode (default 10)")
-    parser.add_argument("--modes", default="separate,composed",
-                        help="comma-separated modes to run: separate, composed (default both)")
-    parser.add_argument("--heat-s", type=float, default=2.0,
-                        help="seconds of heating watched after the enable (default 2)")
+    parser.add_argument(
+        "--modes",
+        default="separate,composed",
+        help="comma-separated modes to run: separate, composed (default both)",
+    )
+    parser.add_argument(
+        "--heat-s",
+        type=float,
+        default=2.0,
+        help="seconds of heating watched after the enable (default 2)",
+    )
     args = parser.parse_args()
     results: dict[str, tuple[int, collections.Counter]] = {}
     scratch = Path(tempfile.mkdtemp(prefix="hems_bench_startup_"))
@@ -82,7 +95,9 @@ def main() -> None:
     for mode, (starts, faults) in results.items():
         left = sum(faults.values())
         kinds = ", ".join(f"{k} x{n}" for k, n in sorted(faults.items())) or "-"
-        print(f"{mode:10s}  {starts:6d}  {left:4d} ({100 * left / starts:3.0f} %)            {kinds}")
+        print(
+            f"{mode:10s}  {starts:6d}  {left:4d} ({100 * left / starts:3.0f} %)            {kinds}"
+        )
 
 
 if __name__ == "__main__":

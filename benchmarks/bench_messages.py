@@ -51,12 +51,17 @@ def subscriber(serialized: bool, count: int) -> None:
         else:
             seen.append(message.position + message.header.stamp.sec)
 
-    subscription = node.create_subscription(EncoderReading, TOPIC, on_message, qos.SENSOR, raw=serialized)
+    subscription = node.create_subscription(
+        EncoderReading, TOPIC, on_message, qos.SENSOR, raw=serialized
+    )
     print("ready", flush=True)
     deadline = time.monotonic() + 60.0
     cpu0 = time.process_time()
-    lean_spin.loop(node.context, lambda: ([subscription], [], []),
-                   keep_going=lambda: len(seen) < count and time.monotonic() < deadline)
+    lean_spin.loop(
+        node.context,
+        lambda: ([subscription], [], []),
+        keep_going=lambda: len(seen) < count and time.monotonic() < deadline,
+    )
     cpu_us = 1e6 * (time.process_time() - cpu0) / max(len(seen), 1)
     print(json.dumps({"taken": len(seen), "cpu_us": cpu_us}), flush=True)
     node.destroy_node()
@@ -70,8 +75,18 @@ def publish(serialized: bool, count: int) -> dict:
     from hems_ros.nodes import qos
     from hems_ros.nodes.wire import codec
 
-    child = subprocess.Popen([sys.executable, __file__, "--subscriber", "serialized" if serialized else "typed",
-                              "--count", str(count)], stdout=subprocess.PIPE, text=True)
+    child = subprocess.Popen(
+        [
+            sys.executable,
+            __file__,
+            "--subscriber",
+            "serialized" if serialized else "typed",
+            "--count",
+            str(count),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert child.stdout.readline().strip() == "ready"
         rclpy.init()
@@ -86,22 +101,39 @@ def publish(serialized: bool, count: int) -> dict:
         for k in range(count):
             t0 = time.thread_time()
             if serialized:
-                publisher.publish(encoder.encode(encoder.fields(
-                    header_stamp_sec=k, header_stamp_nanosec=k, header_frame_id="", finger="index", counts=k,
-                    position=k * 1e-6, resolution=1e-6, sequence=k)))
+                publisher.publish(
+                    encoder.encode(
+                        encoder.fields(
+                            header_stamp_sec=k,
+                            header_stamp_nanosec=k,
+                            header_frame_id="",
+                            finger="index",
+                            counts=k,
+                            position=k * 1e-6,
+                            resolution=1e-6,
+                            sequence=k,
+                        )
+                    )
+                )
             else:
-                message = EncoderReading(finger="index", counts=k, position=k * 1e-6, resolution=1e-6, sequence=k)
+                message = EncoderReading(
+                    finger="index", counts=k, position=k * 1e-6, resolution=1e-6, sequence=k
+                )
                 message.header.stamp.sec, message.header.stamp.nanosec = k, k
                 publisher.publish(message)
             spent += time.thread_time() - t0
-            time.sleep(0.001)   # 1 kHz: the subscriber keeps up, so nothing is lost in its queue
+            time.sleep(0.001)  # 1 kHz: the subscriber keeps up, so nothing is lost in its queue
         received = json.loads(child.communicate(timeout=90)[0].splitlines()[-1])
         node.destroy_node()
         rclpy.shutdown()
     finally:
         if child.poll() is None:
             child.kill()
-    return {"publish_us": 1e6 * spent / count, "take_us": received["cpu_us"], "taken": received["taken"]}
+    return {
+        "publish_us": 1e6 * spent / count,
+        "take_us": received["cpu_us"],
+        "taken": received["taken"],
+    }
 
 
 def main() -> None:
@@ -112,15 +144,19 @@ def main() -> None:
     if args.subscriber:
         subscriber(args.subscriber == "serialized", args.count)
         return
-    print(f"EncoderReading between two processes, {args.count} messages per variant at 1 kHz, "
-          f"load average {os.getloadavg()[0]:.1f}")
+    print(
+        f"EncoderReading between two processes, {args.count} messages per variant at 1 kHz, "
+        f"load average {os.getloadavg()[0]:.1f}"
+    )
     results = {name: publish(name == "serialized", args.count) for name in ("typed", "serialized")}
     print(f"{'variant':<11} {'publish us':>11} {'take us':>9} {'taken':>7}")
     for name, r in results.items():
         print(f"{name:<11} {r['publish_us']:>11.1f} {r['take_us']:>9.1f} {r['taken']:>7}")
     typed, raw = results["typed"], results["serialized"]
-    print(f"typed / serialized: publish {typed['publish_us'] / raw['publish_us']:.2f}x, "
-          f"take {typed['take_us'] / raw['take_us']:.2f}x")
+    print(
+        f"typed / serialized: publish {typed['publish_us'] / raw['publish_us']:.2f}x, "
+        f"take {typed['take_us'] / raw['take_us']:.2f}x"
+    )
 
 
 if __name__ == "__main__":

@@ -87,9 +87,17 @@ def lsoda_rhs(p):
     def rhs(_t, y, cur):
         temp, xi, sig, x, v, ts, th = y
         rho = electrical.mixture_resistivity(
-            xi, electrical.phase_resistivity(p[K.P_RHO0M], p[K.P_T0M], p[K.P_DRDTM], p[K.P_DRDSM], temp, sig),
-            electrical.phase_resistivity(p[K.P_RHO0A], p[K.P_T0A], p[K.P_DRDTA], p[K.P_DRDSA], temp, sig))
-        _, power = electrical.current_source(cur, electrical.wire_resistance(rho, p[K.P_L0] - x, p[K.P_INV_S]))
+            xi,
+            electrical.phase_resistivity(
+                p[K.P_RHO0M], p[K.P_T0M], p[K.P_DRDTM], p[K.P_DRDSM], temp, sig
+            ),
+            electrical.phase_resistivity(
+                p[K.P_RHO0A], p[K.P_T0A], p[K.P_DRDTA], p[K.P_DRDSA], temp, sig
+            ),
+        )
+        _, power = electrical.current_source(
+            cur, electrical.wire_resistance(rho, p[K.P_L0] - x, p[K.P_INV_S])
+        )
         if p[K.P_SHEATH] > 0:
             q_sh, q_sa = sheath.sheath_heat_flows(temp, ts, th, p[K.P_GWS], p[K.P_GSA])
             q_ha = sheath.helix_heat_loss(th, p[K.P_TAMB], p[K.P_GHA])
@@ -105,8 +113,9 @@ def lsoda_rhs(p):
         u_m, u_a = kinetics.effective_temperatures(temp, sig, p[K.P_INV_CM], p[K.P_INV_CA])
         heating = dtemp0 - dsig0 * p[K.P_INV_CA] > 0
         inv_c = p[K.P_INV_CA] if heating else p[K.P_INV_CM]
-        slope = kinetics.transformation_slope(u_a, u_m, xi, heating, p[K.P_MF0], p[K.P_INV_MW], p[K.P_AS0],
-                                              p[K.P_INV_AW])
+        slope = kinetics.transformation_slope(
+            u_a, u_m, xi, heating, p[K.P_MF0], p[K.P_INV_MW], p[K.P_AS0], p[K.P_INV_AW]
+        )
         du_dxi = lat / c_w - (omega + theta * lat / c_w) * inv_c
         dxi = slope * (dtemp0 - dsig0 * inv_c) / (1.0 - slope * du_dxi)
         dtemp = dtemp0 + lat / c_w * dxi
@@ -128,8 +137,16 @@ def run_lsoda(params, current: np.ndarray, dt: float) -> np.ndarray:
     out = np.empty(current.size)
     for a, b in zip(bounds[:-1], bounds[1:]):
         t_eval = (np.arange(a, b) + 1) * dt
-        sol = solve_ivp(rhs, (a * dt, b * dt), y, method="LSODA", t_eval=t_eval, args=(current[a],),
-                        rtol=1e-6, atol=[1e-6, 1e-8, 1.0, 1e-9, 1e-9, 1e-6, 1e-6])
+        sol = solve_ivp(
+            rhs,
+            (a * dt, b * dt),
+            y,
+            method="LSODA",
+            t_eval=t_eval,
+            args=(current[a],),
+            rtol=1e-6,
+            atol=[1e-6, 1e-8, 1.0, 1e-9, 1e-9, 1e-6, 1e-6],
+        )
         out[a:b] = sol.y[3]
         y = sol.y[:, -1]
     return out
@@ -145,15 +162,28 @@ def set_by_set(sets, current: np.ndarray, every: int) -> np.ndarray:
     channels = np.array([K.S_X, K.N_S + K.O_FW])
     records = np.zeros((2, len(sets), current.size // every))
     failed_at = np.zeros(len(sets), dtype=np.int64)
-    K._run_sets(packed, states, DRIVE_NAMES["current"], drives, 1e-3, every, channels, records, failed_at, 0,
-                len(sets))
+    K._run_sets(
+        packed,
+        states,
+        DRIVE_NAMES["current"],
+        drives,
+        1e-3,
+        every,
+        channels,
+        records,
+        failed_at,
+        0,
+        len(sets),
+    )
     return records
 
 
 def main() -> int:
     params = load_params("sheathed_calibrated")
     dt = 1e-3
-    print("physics benchmark (calibrated sheathed rig: 30 N mass + 20 N spring, 4 A x 2 s every 10 s)")
+    print(
+        "physics benchmark (calibrated sheathed rig: 30 N mass + 20 N spring, 4 A x 2 s every 10 s)"
+    )
     cur60 = current_profile(60.0, dt)
     simulate(params, dt, current=cur60[:10])  # compile / load the cache
 
@@ -166,60 +196,97 @@ def main() -> int:
             unit.step(current=c)
 
     t_step = timed(stepping, repeat=1)
-    print(f"one unit, 60 s at 1 kHz, batch API : {t_batch1 * 1e3:8.1f} ms  real-time factor {60 / t_batch1:9.0f}x "
-          f"(floor 1000x: {60 / t_batch1 / 1000:.1f} x floor)")
-    print(f"one unit, 60 s at 1 kHz, step API  : {t_step * 1e3:8.1f} ms  real-time factor {60 / t_step:9.0f}x "
-          f"(a node needs 1x)")
+    print(
+        f"one unit, 60 s at 1 kHz, batch API : {t_batch1 * 1e3:8.1f} ms  real-time factor "
+        f"{60 / t_batch1:9.0f}x (floor 1000x: {60 / t_batch1 / 1000:.1f} x floor)"
+    )
+    print(
+        f"one unit, 60 s at 1 kHz, step API  : {t_step * 1e3:8.1f} ms  real-time factor "
+        f"{60 / t_step:9.0f}x (a node needs 1x)"
+    )
 
     cur30 = current_profile(30.0, dt)
     lsoda_s = timed(lambda: run_lsoda(params, cur30, dt), repeat=1)
     x_lsoda = run_lsoda(params, cur30, dt)
     x_kernel = simulate(params, dt, current=cur30).slider_position_m[0]
     diff = np.max(np.abs(x_lsoda - x_kernel)) / np.ptp(x_kernel)
-    print(f"LSODA baseline, one unit 30 s      : {lsoda_s * 1e3:8.1f} ms  real-time factor {30 / lsoda_s:9.1f}x; "
-          f"kernel / LSODA speed {lsoda_s / (t_batch1 / 2):.0f}x; max |x_kernel - x_LSODA| = {diff:.2%} of stroke")
+    print(
+        f"LSODA baseline, one unit 30 s      : {lsoda_s * 1e3:8.1f} ms  real-time factor "
+        f"{30 / lsoda_s:9.1f}x; kernel / LSODA speed {lsoda_s / (t_batch1 / 2):.0f}x; max "
+        f"|x_kernel - x_LSODA| = {diff:.2%} of stroke"
+    )
 
-    sets = [params.replace({"sheath.liner_helix_resistance_k_per_w": r}) for r in np.linspace(1.0, 4.0, 256)]
+    sets = [
+        params.replace({"sheath.liner_helix_resistance_k_per_w": r})
+        for r in np.linspace(1.0, 4.0, 256)
+    ]
     threads = numba.get_num_threads()
     for step in (1e-3, 1e-2):
         cur = current_profile(30.0, step)
         every = max(1, int(round(0.01 / step)))
         simulate(sets, step, current=cur[:10])
-        t, cpu, t_median = timed_cpu(lambda step=step, cur=cur, every=every: simulate(
-            sets, step, current=cur, record_every=every, channels=["slider_position_m", "wire_force_n"]), repeat=7)
+        t, cpu, t_median = timed_cpu(
+            lambda step=step, cur=cur, every=every: simulate(
+                sets,
+                step,
+                current=cur,
+                record_every=every,
+                channels=["slider_position_m", "wire_force_n"],
+            ),
+            repeat=7,
+        )
         rate = 256 * 30.0 / t
-        print(f"batch 256 sets x 30 s, dt {step * 1e3:4.0f} ms : {t * 1e3:8.1f} ms  {rate:10.0f} unit-s per wall-s "
-              f"(floor 1e5: {rate / 1e5:.2f} x floor; fastest of 7, median {256 * 30.0 / t_median / 1e5:.2f} x floor; "
-              f"LSODA at this rate: {30 / lsoda_s:.1f}, ratio {rate / (30 / lsoda_s):.0f}x); CPU {cpu * 1e3:.0f} ms "
-              f"on {threads} threads ({numba.threading_layer()}), {cpu / (256 * cur.size) * 1e9:.1f} ns per set-step")
+        print(
+            f"batch 256 sets x 30 s, dt {step * 1e3:4.0f} ms : {t * 1e3:8.1f} ms  {rate:10.0f} "
+            f"unit-s per wall-s (floor 1e5: {rate / 1e5:.2f} x floor; fastest of 7, median "
+            f"{256 * 30.0 / t_median / 1e5:.2f} x floor; LSODA at this rate: {30 / lsoda_s:.1f}, "
+            f"ratio {rate / (30 / lsoda_s):.0f}x); CPU {cpu * 1e3:.0f} ms on {threads} threads "
+            f"({numba.threading_layer()}), {cpu / (256 * cur.size) * 1e9:.1f} ns per set-step"
+        )
 
     cur = current_profile(30.0, 1e-3)
     t_all, _, _ = timed_cpu(lambda: simulate(sets, 1e-3, current=cur, record_every=10), repeat=5)
     mb = len(CHANNELS) * 256 * (cur.size // 10) * 8 / 1e6
-    print(f"the same at dt 1 ms recording every channel ({len(CHANNELS)} channels, {mb:.0f} MB of records, energy "
-          f"accumulators on): {256 * 30.0 / t_all:10.0f} unit-s per wall-s "
-          f"({256 * 30.0 / t_all / 1e5:.2f} x floor, fastest of 5)")
+    print(
+        f"the same at dt 1 ms recording every channel ({len(CHANNELS)} channels, {mb:.0f} MB of "
+        f"records, energy accumulators on): {256 * 30.0 / t_all:10.0f} unit-s per wall-s "
+        f"({256 * 30.0 / t_all / 1e5:.2f} x floor, fastest of 5)"
+    )
 
     # Per-thread cost, one thread (CPU time: robust to other load on the machine): the SIMD
     # blocks against the same sets run one by one through kernel.step (the batch before blocks)
     cur = current_profile(30.0, 1e-3)
     numba.set_num_threads(1)
-    _, cpu_blocks, _ = timed_cpu(lambda: simulate(sets, 1e-3, current=cur, record_every=10,
-                                                  channels=["slider_position_m", "wire_force_n"]), repeat=7)
+    _, cpu_blocks, _ = timed_cpu(
+        lambda: simulate(
+            sets, 1e-3, current=cur, record_every=10, channels=["slider_position_m", "wire_force_n"]
+        ),
+        repeat=7,
+    )
     numba.set_num_threads(threads)
     _, cpu_sets, _ = timed_cpu(lambda: set_by_set(sets, cur, 10), repeat=1)
-    per_step = {name: c / (256 * cur.size) for name, c in (("blocks", cpu_blocks), ("sets", cpu_sets))}
+    per_step = {
+        name: c / (256 * cur.size) for name, c in (("blocks", cpu_blocks), ("sets", cpu_sets))
+    }
     cores = os.cpu_count() or 1
-    print(f"one thread, dt 1 ms, ns per set-step: SIMD blocks {per_step['blocks'] * 1e9:.1f}, set by set "
-          f"{per_step['sets'] * 1e9:.1f} (ratio {per_step['sets'] / per_step['blocks']:.1f}x); on {cores} idle cores "
-          f"that is {cores * 1e-3 / per_step['blocks']:.0f} vs {cores * 1e-3 / per_step['sets']:.0f} unit-s per wall-s "
-          f"(floor 1e5: {cores * 1e-3 / per_step['blocks'] / 1e5:.2f} x floor)")
+    print(
+        f"one thread, dt 1 ms, ns per set-step: SIMD blocks {per_step['blocks'] * 1e9:.1f}, set by "
+        f"set {per_step['sets'] * 1e9:.1f} (ratio {per_step['sets'] / per_step['blocks']:.1f}x); "
+        f"on {cores} idle cores that is {cores * 1e-3 / per_step['blocks']:.0f} vs "
+        f"{cores * 1e-3 / per_step['sets']:.0f} unit-s per wall-s (floor 1e5: "
+        f"{cores * 1e-3 / per_step['blocks'] / 1e5:.2f} x floor)"
+    )
     load = os.getloadavg()[0]
-    print(f"load average (1 min) at the end: {load:.1f} on {cores} cores; wall figures need idle cores, the "
-          f"one-thread CPU figures much less so")
+    print(
+        f"load average (1 min) at the end: {load:.1f} on {cores} cores; wall figures need idle "
+        f"cores, the one-thread CPU figures much less so"
+    )
     fine = simulate(params, 1e-3, current=cur30, record_every=10).slider_position_m[0]
     coarse = simulate(params, 1e-2, current=current_profile(30.0, 1e-2)).slider_position_m[0]
-    print(f"dt 10 ms vs 1 ms trajectory difference: {np.max(np.abs(fine - coarse)) / np.ptp(fine):.2%} of stroke")
+    print(
+        f"dt 10 ms vs 1 ms trajectory difference: "
+        f"{np.max(np.abs(fine - coarse)) / np.ptp(fine):.2%} of stroke"
+    )
     return 0
 
 

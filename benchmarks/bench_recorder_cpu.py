@@ -41,9 +41,14 @@ def measure(fingers: tuple[str, ...], seconds: float, warmup: float) -> dict[str
         with tempfile.TemporaryDirectory() as tmp:
             recorder = RecorderProcess(Path(tmp) / "bench")
             try:
-                recorder.wait_for_topics([names.topic(f, "encoder") for f in fingers]
-                                         + [names.topic(f, "duty") for f in fingers], timeout=90)
-                time.sleep(warmup)  # imports and discovery of the last endpoints are not steady state
+                recorder.wait_for_topics(
+                    [names.topic(f, "encoder") for f in fingers]
+                    + [names.topic(f, "duty") for f in fingers],
+                    timeout=90,
+                )
+                time.sleep(
+                    warmup
+                )  # imports and discovery of the last endpoints are not steady state
                 before = bag_info_count(recorder)
                 cpu0, wall0 = cpu_seconds(recorder.process.pid), time.monotonic()
                 time.sleep(seconds)
@@ -53,8 +58,12 @@ def measure(fingers: tuple[str, ...], seconds: float, warmup: float) -> dict[str
                 info = recorder.stop()
     finally:
         graph.stop()
-    return {"share": (cpu1 - cpu0) / (wall1 - wall0), "rate": (after - before) / (wall1 - wall0),
-            "messages": info.message_count, "topics": sum(1 for t in info.topics.values() if t.count)}
+    return {
+        "share": (cpu1 - cpu0) / (wall1 - wall0),
+        "rate": (after - before) / (wall1 - wall0),
+        "messages": info.message_count,
+        "topics": sum(1 for t in info.topics.values() if t.count),
+    }
 
 
 def bag_info_count(recorder: RecorderProcess) -> int:
@@ -64,20 +73,33 @@ def bag_info_count(recorder: RecorderProcess) -> int:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=20.0, help="measured recording time per graph")
-    parser.add_argument("--warmup", type=float, default=5.0, help="seconds of recording before measuring")
-    parser.add_argument("--fingers", nargs="+", default=["index", "all"], help="graphs to measure: a finger or all")
+    parser.add_argument(
+        "--seconds", type=float, default=20.0, help="measured recording time per graph"
+    )
+    parser.add_argument(
+        "--warmup", type=float, default=5.0, help="seconds of recording before measuring"
+    )
+    parser.add_argument(
+        "--fingers", nargs="+", default=["index", "all"], help="graphs to measure: a finger or all"
+    )
     args = parser.parse_args()
     apply_network_defaults()
     ok = True
-    print(f"recorder CPU benchmark: {args.seconds:g} s of recording per graph, ceiling {CEILING:.0%} of one core")
+    print(
+        f"recorder CPU benchmark: {args.seconds:g} s of recording per graph, ceiling "
+        f"{CEILING:.0%} of one core"
+    )
     for choice in args.fingers:
         fingers = names.FINGERS if choice == "all" else (names.check_finger(choice),)
         result = measure(fingers, args.seconds, args.warmup)
         ok &= result["share"] <= CEILING
-        print(f"  {len(fingers)} finger{'s' if len(fingers) > 1 else ' '} ({len(Graph(GraphOptions(fingers=fingers)).commands()):>2} "
-              f"processes): {result['rate']:>6,.0f} msg/s on {result['topics']} topics   recorder "
-              f"{result['share']:6.1%} of one core   ceiling {CEILING:.0%}   ratio {result['share'] / CEILING:.2f}")
+        print(
+            f"  {len(fingers)} finger{'s' if len(fingers) > 1 else ' '} "
+            f"({len(Graph(GraphOptions(fingers=fingers)).commands()):>2} processes): "
+            f"{result['rate']:>6,.0f} msg/s on {result['topics']} topics   recorder "
+            f"{result['share']:6.1%} of one core   ceiling {CEILING:.0%}   ratio "
+            f"{result['share'] / CEILING:.2f}"
+        )
     return 0 if ok else 1
 
 

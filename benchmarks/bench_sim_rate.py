@@ -17,39 +17,71 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from hems_ros.rosenv import apply_network_defaults, child_environment, use_private_domain  # noqa: E402
+from hems_ros.rosenv import (  # noqa: E402
+    apply_network_defaults,
+    child_environment,
+    use_private_domain,
+)
 
 apply_network_defaults()
 DOMAIN_LOCK = use_private_domain()
 
 from hems_ros.bag import load_bag  # noqa: E402
 
-FIGURES = re.compile(r"step: (\w+): rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), steady_state_error_mm (-?[\d.]+)")
+FIGURES = re.compile(
+    r"step: (\w+): rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), steady_state_error_mm (-?[\d.]+)"
+)
 
 
 def run(layout: str, rate: str, fingers: str, folder: Path) -> dict:
-    command = [sys.executable, "-m", "hems_ros.cli.main", "step", "--sim-time", "--rate", rate, "--fingers", fingers,
-               "--log-level", "error", "--record", str(folder)] + (["--composed"] if layout == "composed" else [])
-    done = subprocess.run(command, capture_output=True, text=True, env=child_environment(), timeout=1800)
+    command = [
+        sys.executable,
+        "-m",
+        "hems_ros.cli.main",
+        "step",
+        "--sim-time",
+        "--rate",
+        rate,
+        "--fingers",
+        fingers,
+        "--log-level",
+        "error",
+        "--record",
+        str(folder),
+    ] + (["--composed"] if layout == "composed" else [])
+    done = subprocess.run(
+        command, capture_output=True, text=True, env=child_environment(), timeout=1800
+    )
     found = FIGURES.findall(done.stdout)
     if done.returncode != 0 or not found:
         return {"error": (done.stderr.strip().splitlines() or ["no figures"])[-1]}
     clock = load_bag(folder, topics=["/clock"])["/clock"]
     sim = clock["clock.sec"] + 1e-9 * clock["clock.nanosec"]
     wall = clock.log_time_ns * 1e-9
-    return {"figures": {f: tuple(map(float, v)) for f, *v in found},
-            "rtf": float((sim[-1] - sim[0]) / (wall[-1] - wall[0]))}
+    return {
+        "figures": {f: tuple(map(float, v)) for f, *v in found},
+        "rtf": float((sim[-1] - sim[0]) / (wall[-1] - wall[0])),
+    }
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--fingers", default="index", help="fingers to step (default index)")
-    parser.add_argument("--rates", default="1,4,max", help="comma-separated --rate values (default 1,4,max)")
-    parser.add_argument("--layouts", default="composed,separate", help="composed, separate or both (default)")
-    parser.add_argument("--markdown", type=Path, default=None, help="also write the table to this file")
+    parser.add_argument(
+        "--rates", default="1,4,max", help="comma-separated --rate values (default 1,4,max)"
+    )
+    parser.add_argument(
+        "--layouts", default="composed,separate", help="composed, separate or both (default)"
+    )
+    parser.add_argument(
+        "--markdown", type=Path, default=None, help="also write the table to this file"
+    )
     args = parser.parse_args()
-    lines = ["| layout | --rate | real-time factor reached | finger | RMSE, mm | overshoot, mm | "
-             "steady-state error, mm |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        "| layout | --rate | real-time factor reached | finger | RMSE, mm | overshoot, mm | "
+        "steady-state error, mm |",
+        "|---|---|---|---|---|---|---|",
+    ]
     with tempfile.TemporaryDirectory() as tmp:
         for layout in args.layouts.split(","):
             for rate in args.rates.split(","):
@@ -59,8 +91,10 @@ def main() -> None:
                     lines.append(f"| {layout} | {rate} | - | - | {result['error']} | | |")
                     continue
                 for finger, (rmse, overshoot, ss_error) in result["figures"].items():
-                    lines.append(f"| {layout} | {rate} | {result['rtf']:.2f} | {finger} | {rmse:.3f} | "
-                                 f"{overshoot:.3f} | {ss_error:.3f} |")
+                    lines.append(
+                        f"| {layout} | {rate} | {result['rtf']:.2f} | {finger} | {rmse:.3f} | "
+                        f"{overshoot:.3f} | {ss_error:.3f} |"
+                    )
                 print(lines[-1], flush=True)
     text = "\n".join(lines) + "\n"
     print(text)

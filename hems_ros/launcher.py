@@ -2,8 +2,8 @@
 
 Each node runs as its own process (``lib/hems_ros/<executable>`` in the prefix, like
 ``ros2 run``), or all of them in one process on one thread (``--composed``:
-hems_ros/nodes/composed.py). Children die with the launcher even if it is killed (PR_SET_PDEATHSIG), and
-:meth:`Graph.stop` ends every child within ``grace_s`` (SIGINT, then SIGKILL).
+hems_ros/nodes/composed.py). Children die with the launcher even if it is killed (PR_SET_PDEATHSIG),
+and :meth:`Graph.stop` ends every child within ``grace_s`` (SIGINT, then SIGKILL).
 """
 
 from __future__ import annotations
@@ -94,9 +94,15 @@ def warm_physics_cache(env: dict[str, str]) -> None:
     Without it, after a fresh install or a physics change, every actuation unit compiles the
     kernel at the same time, which starves the whole graph of CPU for tens of seconds.
     """
-    done = subprocess.run([sys.executable, "-c",
-                           "from hems_ros.physics import ActuationUnit; ActuationUnit().step(duty=0.0)"],
-                          env=env, process_group=0)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from hems_ros.physics import ActuationUnit; ActuationUnit().step(duty=0.0)",
+        ],
+        env=env,
+        process_group=0,
+    )
     if done.returncode:
         raise RuntimeError(f"the physics kernel did not load (exit code {done.returncode})")
 
@@ -114,22 +120,38 @@ class Graph:
         specs = node_specs(self.options)
         commands = {}
         if self.options.sim_time:
-            commands["sim_clock"] = [sys.executable, "-m", "hems_ros.nodes.sim_clock", "--ros-args",
-                                     "-p", f"rate:={self.options.rate}",
-                                     "-p", "fingers:=" + ",".join(self.options.fingers),
-                                     *namespace_arguments(self.options)]
+            commands["sim_clock"] = [
+                sys.executable,
+                "-m",
+                "hems_ros.nodes.sim_clock",
+                "--ros-args",
+                "-p",
+                f"rate:={self.options.rate}",
+                "-p",
+                "fingers:=" + ",".join(self.options.fingers),
+                *namespace_arguments(self.options),
+            ]
         if self.options.composed:
-            spec_args = [f"{exe}:{node}:" + ",".join(f"{k}={v}" for k, v in params.items())
-                         for exe, node, params in specs]
-            commands["composed"] = ([sys.executable, "-m", "hems_ros.nodes.composed", *spec_args]
-                                    + common_ros_arguments(self.options)
-                                    + (["-p", "use_sim_time:=true", "-p", "lockstep:=true"]
-                                       if self.options.sim_time else [])
-                                    + list(self.options.extra_ros_args))
+            spec_args = [
+                f"{exe}:{node}:" + ",".join(f"{k}={v}" for k, v in params.items())
+                for exe, node, params in specs
+            ]
+            commands["composed"] = (
+                [sys.executable, "-m", "hems_ros.nodes.composed", *spec_args]
+                + common_ros_arguments(self.options)
+                + (
+                    ["-p", "use_sim_time:=true", "-p", "lockstep:=true"]
+                    if self.options.sim_time
+                    else []
+                )
+                + list(self.options.extra_ros_args)
+            )
         else:
             for executable, node, params in specs:
                 flags = [] if self.options.parameter_services else [NO_PARAMETER_SERVICES_FLAG]
-                commands[node] = executable_path(executable) + flags + ros_arguments(node, params, self.options)
+                commands[node] = (
+                    executable_path(executable) + flags + ros_arguments(node, params, self.options)
+                )
         return commands
 
     def start(self, node_env: dict[str, dict[str, str]] | None = None) -> None:
@@ -154,8 +176,9 @@ class Graph:
     def _spawn(self, name: str, command: list[str]) -> None:
         # a process group of its own: a Ctrl-C in the terminal reaches the launcher only, which
         # stops every node itself (stop), whatever each was doing, loading rclpy included
-        self.processes[name] = subprocess.Popen(command, env=self.environment(name), preexec_fn=die_with_parent,
-                                                process_group=0)
+        self.processes[name] = subprocess.Popen(
+            command, env=self.environment(name), preexec_fn=die_with_parent, process_group=0
+        )
 
     def exited(self) -> dict[str, int]:
         return {name: p.returncode for name, p in self.processes.items() if p.poll() is not None}
@@ -167,7 +190,11 @@ class Graph:
         exited = sorted(self.exited().items())
         if not exited:
             return message
-        return f"{message} (exited: " + ", ".join(f"{name} with code {code}" for name, code in exited) + ")"
+        return (
+            f"{message} (exited: "
+            + ", ".join(f"{name} with code {code}" for name, code in exited)
+            + ")"
+        )
 
     def stop(self, grace_s: float = 2.5) -> dict[str, int]:
         """SIGTERM every child, SIGKILL what is left after ``grace_s``; return exit codes."""

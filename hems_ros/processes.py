@@ -8,8 +8,9 @@ import time
 from collections.abc import Iterable
 
 
-def stop_processes(processes: Iterable[subprocess.Popen], grace_s: float = 2.5,
-                   signum: int = signal.SIGTERM) -> list[subprocess.Popen]:
+def stop_processes(
+    processes: Iterable[subprocess.Popen], grace_s: float = 2.5, signum: int = signal.SIGTERM
+) -> list[subprocess.Popen]:
     """Send ``signum`` to every child still running, wait for all of them together for at most
     ``grace_s``, SIGKILL the rest; return the ones that had to be killed.
 
@@ -32,7 +33,9 @@ def stop_processes(processes: Iterable[subprocess.Popen], grace_s: float = 2.5,
     return killed
 
 
-def stop_process(process: subprocess.Popen, grace_s: float = 5.0, signum: int = signal.SIGTERM) -> int:
+def stop_process(
+    process: subprocess.Popen, grace_s: float = 5.0, signum: int = signal.SIGTERM
+) -> int:
     """:func:`stop_processes` for one child; its exit code."""
     stop_processes([process], grace_s, signum)
     return process.returncode

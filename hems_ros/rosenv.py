@@ -47,7 +47,9 @@ def apply_network_defaults(env: dict[str, str] | os._Environ | None = None):
     return target
 
 
-def child_environment(extra: dict[str, str] | None = None, profiles: str = PROFILES_FILE) -> dict[str, str]:
+def child_environment(
+    extra: dict[str, str] | None = None, profiles: str = PROFILES_FILE
+) -> dict[str, str]:
     """A copy of this process's environment for a child process, with the defaults applied;
     ``profiles``: the project's Fast DDS profiles file the child takes unless the user named
     one of their own."""

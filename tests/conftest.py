@@ -64,8 +64,13 @@ def _live_descendants(root: int) -> dict[int, str]:
     while stack:
         pid = stack.pop()
         try:
-            found[pid] = (Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
-                          .strip())
+            found[pid] = (
+                Path(f"/proc/{pid}/cmdline")
+                .read_bytes()
+                .replace(b"\0", b" ")
+                .decode(errors="replace")
+                .strip()
+            )
         except OSError:
             continue
         stack.extend(children.get(pid, []))
@@ -86,5 +91,7 @@ def no_process_outlives_its_module():
         except ProcessLookupError:
             pass
     time.sleep(0.2)  # gone before the next module starts its graph
-    pytest.fail("processes left running by this module (killed now): "
-                + "; ".join(f"{pid} {command[:160]}" for pid, command in sorted(left.items())))
+    pytest.fail(
+        "processes left running by this module (killed now): "
+        + "; ".join(f"{pid} {command[:160]}" for pid, command in sorted(left.items()))
+    )

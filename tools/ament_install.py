@@ -61,7 +61,9 @@ def install(prefix: Path) -> list[Path]:
     written = []
     for name, target in sorted(executables.items()):
         module, function = target.split(":")
-        text = LAUNCHER.format(python=python, name=name, package=PACKAGE, module=module, function=function)
+        text = LAUNCHER.format(
+            python=python, name=name, package=PACKAGE, module=module, function=function
+        )
         for folder in (lib, prefix / "bin"):
             path = folder / name
             path.write_text(text)

@@ -23,7 +23,20 @@ from hems_ros.bag.selection import DEFAULT_RECORD_REGEX, TopicSelection
 from hems_ros.bag.writer import BagSummary, BagWriter, offered_qos
 
 __all__ = [
-    "DEFAULT_RECORD_REGEX", "Bag", "BagFormatError", "BagInfo", "BagSummary", "BagWarning",
-    "BagWriter", "RawMessage", "ScanReport", "TopicData", "TopicSelection", "bag_files",
-    "bag_info", "iter_messages", "load_bag", "offered_qos",
+    "DEFAULT_RECORD_REGEX",
+    "Bag",
+    "BagFormatError",
+    "BagInfo",
+    "BagSummary",
+    "BagWarning",
+    "BagWriter",
+    "RawMessage",
+    "ScanReport",
+    "TopicData",
+    "TopicSelection",
+    "bag_files",
+    "bag_info",
+    "iter_messages",
+    "load_bag",
+    "offered_qos",
 ]

@@ -23,10 +23,10 @@ _U32 = struct.Struct("<I")
 
 @dataclass(frozen=True)
 class _Slot:
-    kind: str                        # as Column.kind: scalar, string, array; "strings" for string[]
+    kind: str  # as Column.kind: scalar, string, array; "strings" for string[]
     offset: int = 0
-    width: int = 0                   # string bytes without NUL, or element count of an array
-    dtype: np.dtype = np.dtype("u1")   # of a scalar or array slot
+    width: int = 0  # string bytes without NUL, or element count of an array
+    dtype: np.dtype = np.dtype("u1")  # of a scalar or array slot
     parts: tuple[tuple[int, int], ...] = ()  # (offset, width) per string of a string array
 
 
@@ -38,7 +38,9 @@ def _align(offset: int, size: int) -> int:
     return offset + (HEADER_SIZE - offset) % size
 
 
-def _layout(types: dict[str, list[Field]], type_name: str, data: bytes) -> tuple[list[_Slot], list[tuple[int, int]]]:
+def _layout(
+    types: dict[str, list[Field]], type_name: str, data: bytes
+) -> tuple[list[_Slot], list[tuple[int, int]]]:
     """Slots of every leaf field and (offset, value) of every length prefix, for one message."""
     slots: list[_Slot] = []
     checks: list[tuple[int, int]] = []
@@ -90,7 +92,7 @@ def _layout(types: dict[str, list[Field]], type_name: str, data: bytes) -> tuple
 
 
 def _cut(block: np.ndarray, offset: int, width: int) -> np.ndarray:
-    return np.ascontiguousarray(block[:, offset:offset + width])
+    return np.ascontiguousarray(block[:, offset : offset + width])
 
 
 def _strings(block: np.ndarray, offset: int, width: int) -> np.ndarray:
@@ -99,12 +101,19 @@ def _strings(block: np.ndarray, offset: int, width: int) -> np.ndarray:
     return np.char.decode(_cut(block, offset, width).view(f"S{width}").ravel(), "utf-8")
 
 
-def _vectorised(slots: list[_Slot], block: np.ndarray, columns: tuple[Column, ...]) -> dict[str, np.ndarray]:
+def _vectorised(
+    slots: list[_Slot], block: np.ndarray, columns: tuple[Column, ...]
+) -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {}
     rows = len(block)
     for column, slot in zip(columns, slots):
         if slot.kind == "scalar":
-            out[column.name] = _cut(block, slot.offset, slot.dtype.itemsize).view(slot.dtype).ravel().astype(column.dtype)
+            out[column.name] = (
+                _cut(block, slot.offset, slot.dtype.itemsize)
+                .view(slot.dtype)
+                .ravel()
+                .astype(column.dtype)
+            )
         elif slot.kind == "string":
             out[column.name] = _strings(block, slot.offset, slot.width)
         elif slot.kind == "array":
@@ -118,8 +127,9 @@ def _vectorised(slots: list[_Slot], block: np.ndarray, columns: tuple[Column, ..
     return out
 
 
-def _per_message(decoder: Decoder, datas: list[bytes], index: np.ndarray,
-                 errors: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+def _per_message(
+    decoder: Decoder, datas: list[bytes], index: np.ndarray, errors: list[str]
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     rows, good = [], []
     for i in index:
         try:
@@ -158,7 +168,9 @@ def _finish(column: Column, values: np.ndarray) -> np.ndarray:
     return values
 
 
-def decode_columns(decoder: Decoder, datas: list[bytes]) -> tuple[dict[str, np.ndarray], np.ndarray, list[str]]:
+def decode_columns(
+    decoder: Decoder, datas: list[bytes]
+) -> tuple[dict[str, np.ndarray], np.ndarray, list[str]]:
     """Columns of ``datas`` (serialized messages of ``decoder``'s type), in order.
 
     Returns the columns, the indices of the messages they hold (messages that do not match
@@ -179,7 +191,9 @@ def decode_columns(decoder: Decoder, datas: list[bytes]) -> tuple[dict[str, np.n
         except (_Unsupported, struct.error, CdrError):
             leftover.append(index)
             continue
-        block = np.frombuffer(b"".join(datas[i] for i in index), dtype=np.uint8).reshape(len(index), int(length))
+        block = np.frombuffer(b"".join(datas[i] for i in index), dtype=np.uint8).reshape(
+            len(index), int(length)
+        )
         same = block[:, 1] == first[1]
         for offset, value in checks:
             same &= _cut(block, offset, 4).view("<u4").ravel() == value
@@ -188,12 +202,18 @@ def decode_columns(decoder: Decoder, datas: list[bytes]) -> tuple[dict[str, np.n
             index, block = index[same], block[same]
         parts.append((index, _vectorised(slots, block, decoder.columns)))
     if leftover or not parts:
-        parts.append(_per_message(decoder, datas, np.sort(np.concatenate(leftover or [np.zeros(0, np.int64)])), errors))
+        parts.append(
+            _per_message(
+                decoder, datas, np.sort(np.concatenate(leftover or [np.zeros(0, np.int64)])), errors
+            )
+        )
     if len(parts) == 1:
         index, columns = parts[0]
         return {c.name: _finish(c, columns[c.name]) for c in decoder.columns}, index, errors
     index = np.concatenate([i for i, _ in parts])
     order = np.argsort(index, kind="stable")
-    columns = {c.name: _finish(c, np.concatenate([_as_rows(p[c.name]) for _, p in parts])[order])
-               for c in decoder.columns}
+    columns = {
+        c.name: _finish(c, np.concatenate([_as_rows(p[c.name]) for _, p in parts])[order])
+        for c in decoder.columns
+    }
     return columns, index[order], errors

@@ -1,4 +1,5 @@
-"""One CSV file per topic of a bag, for spreadsheets, MATLAB and plotting tools without MCAP support.
+"""One CSV file per topic of a bag, for spreadsheets, MATLAB and plotting tools without
+MCAP support.
 
 Columns of each file, one row per message in log-time order:
 
@@ -46,7 +47,9 @@ def csv_name(topic: str) -> str:
 def _number_cells(values: np.ndarray) -> list[str]:
     if values.dtype == bool:
         return ["1" if v else "0" for v in values.tolist()]
-    return [repr(v) for v in values.tolist()]   # Python float repr: shortest string that reads back exactly
+    return [
+        repr(v) for v in values.tolist()
+    ]  # Python float repr: shortest string that reads back exactly
 
 
 def _cell(value) -> str:
@@ -81,15 +84,19 @@ def _jsonable(value):
 def topic_columns(data: TopicData) -> list[tuple[str, list[str]]]:
     """(column name, cells) of every column of ``data``'s CSV, in file order."""
     # divided, not multiplied by 1e-9: the nearest double to each exact time, so it prints short
-    columns = [("time_s", _number_cells((data.log_time_ns - data.start_ns) / 1e9)),
-               ("log_time_ns", _number_cells(data.log_time_ns))]
+    columns = [
+        ("time_s", _number_cells((data.log_time_ns - data.start_ns) / 1e9)),
+        ("log_time_ns", _number_cells(data.log_time_ns)),
+    ]
     if "header.stamp.sec" in data.fields and "header.stamp.nanosec" in data.fields:
         columns.append(("stamp_s", _number_cells(data.stamp)))
     for name, values in data.fields.items():
         if values.dtype == object:
             columns.append((name, _sequence_cells(values)))
         elif values.ndim == 2:
-            columns += [(f"{name}[{k}]", _number_cells(values[:, k])) for k in range(values.shape[1])]
+            columns += [
+                (f"{name}[{k}]", _number_cells(values[:, k])) for k in range(values.shape[1])
+            ]
         elif values.dtype.kind in "US":
             columns.append((name, [str(v) for v in values.tolist()]))
         else:
@@ -107,9 +114,13 @@ def write_topic_csv(data: TopicData, path: str | os.PathLike) -> ExportedTopic:
     return ExportedTopic(data.topic, path, len(data), len(columns))
 
 
-def export_csv(bag: str | os.PathLike | Bag, out_dir: str | os.PathLike, topics: Iterable[str] | None = None,
-               regex: str | None = None, progress: Callable[[ExportedTopic], None] | None = None
-               ) -> list[ExportedTopic]:
+def export_csv(
+    bag: str | os.PathLike | Bag,
+    out_dir: str | os.PathLike,
+    topics: Iterable[str] | None = None,
+    regex: str | None = None,
+    progress: Callable[[ExportedTopic], None] | None = None,
+) -> list[ExportedTopic]:
     """Write ``out_dir/<topic>.csv`` for every selected topic with messages (see the module doc).
 
     ``bag`` is a bag folder, an ``.mcap`` file or a :class:`Bag` already loaded; ``topics`` and

@@ -19,7 +19,14 @@ import lz4.frame
 import zstandard
 
 MAGIC = b"\x89MCAP0\r\n"
-OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06
+OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = (
+    0x01,
+    0x02,
+    0x03,
+    0x04,
+    0x05,
+    0x06,
+)
 OP_DATA_END = 0x0F
 _RECORD = struct.Struct("<BQ")
 _MESSAGE = struct.Struct("<HIQQ")
@@ -70,8 +77,10 @@ class ScanReport:
     def describe(self) -> str:
         if self.complete and not self.skipped:
             return f"{self.file.name}: complete, {self.messages} messages in {self.chunks} chunks"
-        text = (f"{self.file.name}: recovered {self.messages} messages from {self.chunks} chunks; "
-                f"stopped at byte {self.stopped_at} of {self.size}: {self.reason}")
+        text = (
+            f"{self.file.name}: recovered {self.messages} messages from {self.chunks} chunks; "
+            f"stopped at byte {self.stopped_at} of {self.size}: {self.reason}"
+        )
         if self.last_log_time_ns is not None:
             text += f" (last message logged at {self.last_log_time_ns * 1e-9:.6f} s)"
         if self.skipped:
@@ -82,7 +91,7 @@ class ScanReport:
 def _string(buf: bytes, pos: int) -> tuple[str, int]:
     (length,) = _U32.unpack_from(buf, pos)
     try:
-        return str(buf[pos + 4:pos + 4 + length], "utf-8"), pos + 4 + length
+        return str(buf[pos + 4 : pos + 4 + length], "utf-8"), pos + 4 + length
     except UnicodeDecodeError:
         raise BagFormatError(f"the string at byte {pos} is not UTF-8 (a damaged record)") from None
 
@@ -92,7 +101,7 @@ def _schema(buf: bytes, pos: int) -> Schema:
     name, pos = _string(buf, pos + 2)
     encoding, pos = _string(buf, pos)
     (length,) = _U32.unpack_from(buf, pos)
-    return Schema(schema_id, name, encoding, bytes(buf[pos + 4:pos + 4 + length]))
+    return Schema(schema_id, name, encoding, bytes(buf[pos + 4 : pos + 4 + length]))
 
 
 def _channel(buf: bytes, pos: int) -> Channel:
@@ -146,13 +155,17 @@ class McapScan:
 
     def _check_header(self) -> None:
         buf = self._buf
-        if len(buf) < len(MAGIC) or buf[:len(MAGIC)] != MAGIC:
+        if len(buf) < len(MAGIC) or buf[: len(MAGIC)] != MAGIC:
             raise BagFormatError(f"{self.path}: not an MCAP file (bad magic {bytes(buf[:8])!r})")
         if len(buf) < len(MAGIC) + RECORD_HEADER:
-            raise BagFormatError(f"{self.path}: MCAP header record missing (file is {len(buf)} bytes)")
+            raise BagFormatError(
+                f"{self.path}: MCAP header record missing (file is {len(buf)} bytes)"
+            )
         opcode, length = _RECORD.unpack_from(buf, len(MAGIC))
         if opcode != OP_HEADER or len(MAGIC) + RECORD_HEADER + length > len(buf):
-            raise BagFormatError(f"{self.path}: bad MCAP header record (opcode {opcode:#04x}, length {length})")
+            raise BagFormatError(
+                f"{self.path}: bad MCAP header record (opcode {opcode:#04x}, length {length})"
+            )
 
     def _stop(self, position: int, reason: str) -> None:
         self.report.stopped_at = position
@@ -170,7 +183,11 @@ class McapScan:
 
     def _records(self, buf: bytes, pos: int, end: int) -> Iterator[RawRecord]:
         """Messages of a record run (a chunk's content); stops quietly at an incomplete tail."""
-        unpack_record, unpack_message, wanted = _RECORD.unpack_from, _MESSAGE.unpack_from, self._wanted
+        unpack_record, unpack_message, wanted = (
+            _RECORD.unpack_from,
+            _MESSAGE.unpack_from,
+            self._wanted,
+        )
         report = self.report
         while pos + RECORD_HEADER <= end:
             opcode, length = unpack_record(buf, pos)
@@ -183,7 +200,7 @@ class McapScan:
                 report.messages += 1
                 report.last_log_time_ns = log_time
                 if wanted.get(channel_id):
-                    yield channel_id, log_time, publish_time, buf[body + MESSAGE_HEADER:nxt]
+                    yield channel_id, log_time, publish_time, buf[body + MESSAGE_HEADER : nxt]
             elif opcode in (OP_SCHEMA, OP_CHANNEL):
                 self._register(opcode, buf, body)
             pos = nxt
@@ -195,8 +212,10 @@ class McapScan:
             return
         _, _, uncompressed_size, crc = _CHUNK.unpack_from(buf, body)
         if uncompressed_size > _MAX_CHUNK_BYTES:
-            raise BagFormatError(f"chunk declares {uncompressed_size} bytes uncompressed "
-                                 f"(more than {_MAX_CHUNK_BYTES}); the size field is damaged")
+            raise BagFormatError(
+                f"chunk declares {uncompressed_size} bytes uncompressed "
+                f"(more than {_MAX_CHUNK_BYTES}); the size field is damaged"
+            )
         compression, pos = _string(buf, body + _CHUNK.size)
         if pos + 8 > size:
             self._stop(record_start, "file ends inside a chunk header")
@@ -204,13 +223,18 @@ class McapScan:
         (records_length,) = _U64.unpack_from(buf, pos)
         pos += 8
         partial = end > size
-        data = _decompress(compression, buf[pos:min(pos + records_length, size)], uncompressed_size, partial)
+        data = _decompress(
+            compression, buf[pos : min(pos + records_length, size)], uncompressed_size, partial
+        )
         if partial:
             before = self.report.messages
             yield from self._records(data, 0, len(data))
-            self._stop(record_start, f"file ends inside a chunk ({size - record_start} of "
-                       f"{end - record_start} bytes present); {self.report.messages - before} "
-                       f"complete messages recovered from it")
+            self._stop(
+                record_start,
+                f"file ends inside a chunk ({size - record_start} of "
+                f"{end - record_start} bytes present); {self.report.messages - before} "
+                f"complete messages recovered from it",
+            )
             return
         if crc and zlib.crc32(data) != crc:
             self.report.skipped.append(f"chunk at byte {record_start} fails its CRC")
@@ -223,8 +247,12 @@ class McapScan:
         pos = len(MAGIC)
         while True:
             if pos + RECORD_HEADER > size:
-                self._stop(pos, "file ends without data end record (writer did not finish)"
-                           if pos == size else "file ends inside a record header")
+                self._stop(
+                    pos,
+                    "file ends without data end record (writer did not finish)"
+                    if pos == size
+                    else "file ends inside a record header",
+                )
                 return
             opcode, length = _RECORD.unpack_from(buf, pos)
             body = pos + RECORD_HEADER
@@ -232,10 +260,18 @@ class McapScan:
             if opcode == OP_CHUNK:
                 try:
                     yield from self._chunk(buf, body, end, pos)
-                except (zstandard.ZstdError, RuntimeError, BagFormatError, struct.error,
-                        MemoryError, OverflowError) as error:
+                except (
+                    zstandard.ZstdError,
+                    RuntimeError,
+                    BagFormatError,
+                    struct.error,
+                    MemoryError,
+                    OverflowError,
+                ) as error:
                     if end > size:
-                        self._stop(pos, f"file ends inside a chunk that cannot be decompressed ({error})")
+                        self._stop(
+                            pos, f"file ends inside a chunk that cannot be decompressed ({error})"
+                        )
                         return
                     self.report.skipped.append(f"chunk at byte {pos}: {error}")
                 if end > size:

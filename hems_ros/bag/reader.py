@@ -23,8 +23,18 @@ from hems_ros.bag.mcapscan import BagFormatError, Channel, McapScan, ScanReport,
 from hems_ros.bag.selection import TopicSelection
 from hems_ros.codec import cdr, msgdefs
 
-__all__ = ["Bag", "BagFormatError", "BagInfo", "BagWarning", "RawMessage", "TopicData",
-           "bag_files", "bag_info", "iter_messages", "load_bag"]
+__all__ = [
+    "Bag",
+    "BagFormatError",
+    "BagInfo",
+    "BagWarning",
+    "RawMessage",
+    "TopicData",
+    "bag_files",
+    "bag_info",
+    "iter_messages",
+    "load_bag",
+]
 
 
 class BagWarning(UserWarning):
@@ -138,7 +148,9 @@ def bag_files(path: str | os.PathLike) -> list[Path]:
     metadata = path / "metadata.yaml"
     if metadata.is_file():
         try:
-            info = yaml.safe_load(metadata.read_text(encoding="utf-8"))["rosbag2_bagfile_information"]
+            info = yaml.safe_load(metadata.read_text(encoding="utf-8"))[
+                "rosbag2_bagfile_information"
+            ]
             files = [path / Path(p).name for p in info["relative_file_paths"]]
             if all(f.is_file() for f in files):
                 return files
@@ -168,8 +180,10 @@ class _Decoders:
         if schema is None:
             problem = f"schema id {channel.schema_id} is not in the file"
         elif channel.message_encoding != "cdr" or schema.encoding != "ros2msg":
-            problem = (f"schema {schema.name!r} has encoding {schema.encoding!r} "
-                       f"(messages {channel.message_encoding!r}); only ros2msg/cdr is read")
+            problem = (
+                f"schema {schema.name!r} has encoding {schema.encoding!r} "
+                f"(messages {channel.message_encoding!r}); only ros2msg/cdr is read"
+            )
         else:
             built = self._built.get(schema.id)
             if built is None:
@@ -188,7 +202,9 @@ class _Decoders:
         return None
 
 
-def load_bag(path: str | os.PathLike, topics: Iterable[str] | None = None, regex: str | None = None) -> Bag:
+def load_bag(
+    path: str | os.PathLike, topics: Iterable[str] | None = None, regex: str | None = None
+) -> Bag:
     """Decode a bag (folder or ``.mcap`` file) into per-topic numpy columns.
 
     ``topics`` (exact names) and ``regex`` select topics; both empty takes every topic.
@@ -223,14 +239,27 @@ def load_bag(path: str | os.PathLike, topics: Iterable[str] | None = None, regex
     for topic, (decoder, datas, log_times, publish_times) in collected.items():
         fields, index, errors = columns.decode_columns(decoder, datas)
         if errors:
-            _warn(warnings_out, f"{topic}: {len(errors)} messages could not be decoded (first: {errors[0]})")
-        data[topic] = TopicData(topic, decoder.type_name, np.array(log_times, dtype=np.int64)[index],
-                                np.array(publish_times, dtype=np.int64)[index], fields, start)
+            _warn(
+                warnings_out,
+                f"{topic}: {len(errors)} messages could not be decoded (first: {errors[0]})",
+            )
+        data[topic] = TopicData(
+            topic,
+            decoder.type_name,
+            np.array(log_times, dtype=np.int64)[index],
+            np.array(publish_times, dtype=np.int64)[index],
+            fields,
+            start,
+        )
     return Bag(Path(path), data, reports, warnings_out, start, end)
 
 
-def iter_messages(path: str | os.PathLike, topics: Iterable[str] | None = None,
-                  regex: str | None = None, reports: list[ScanReport] | None = None) -> Iterator[RawMessage]:
+def iter_messages(
+    path: str | os.PathLike,
+    topics: Iterable[str] | None = None,
+    regex: str | None = None,
+    reports: list[ScanReport] | None = None,
+) -> Iterator[RawMessage]:
     """The selected messages in file order, serialized as stored (for replay and copying).
 
     Each file's scan report is appended to ``reports`` when given.
@@ -241,8 +270,14 @@ def iter_messages(path: str | os.PathLike, topics: Iterable[str] | None = None,
         for channel_id, log_time, publish_time, data in scan.messages():
             channel = scan.channels[channel_id]
             schema = scan.schemas.get(channel.schema_id)
-            yield RawMessage(channel.topic, schema.name if schema else "", log_time, publish_time,
-                             data, channel.metadata.get("offered_qos_profiles", ""))
+            yield RawMessage(
+                channel.topic,
+                schema.name if schema else "",
+                log_time,
+                publish_time,
+                data,
+                channel.metadata.get("offered_qos_profiles", ""),
+            )
         if reports is not None:
             reports.append(scan.report)
 
@@ -263,7 +298,8 @@ def bag_info(path: str | os.PathLike) -> BagInfo:
                 channel = scan.channels[channel_id]
                 schema = scan.schemas.get(channel.schema_id)
                 entry = counts[channel_id] = topics.setdefault(
-                    channel.topic, TopicCount(schema.name if schema else "?"))
+                    channel.topic, TopicCount(schema.name if schema else "?")
+                )
             entry.count += 1
             entry.first_ns = log_time if entry.first_ns is None else min(entry.first_ns, log_time)
             entry.last_ns = log_time if entry.last_ns is None else max(entry.last_ns, log_time)

@@ -31,17 +31,28 @@ READY_MARK = "]: recording "
 FINISHED_MARK = "]: bag finished: "
 
 
-def recorder_command(output: str | os.PathLike, topics: Iterable[str] | None = None, regex: str | None = None,
-                     duration: float = 0.0, flush_period: float | None = None, chunk_size: int | None = None,
-                     compression: str | None = None, discovery_period: float | None = None) -> list[str]:
+def recorder_command(
+    output: str | os.PathLike,
+    topics: Iterable[str] | None = None,
+    regex: str | None = None,
+    duration: float = 0.0,
+    flush_period: float | None = None,
+    chunk_size: int | None = None,
+    compression: str | None = None,
+    discovery_period: float | None = None,
+) -> list[str]:
     """The command line of a recorder node with these parameters (values quoted as YAML)."""
     parameters: dict[str, object] = {"output": str(output), "duration": float(duration)}
     if topics:
         parameters["topics"] = list(topics)
     if regex:
         parameters["regex"] = regex
-    optional = {"flush_period": flush_period, "chunk_size": chunk_size, "compression": compression,
-                "discovery_period": discovery_period}
+    optional = {
+        "flush_period": flush_period,
+        "chunk_size": chunk_size,
+        "compression": compression,
+        "discovery_period": discovery_period,
+    }
     parameters.update({k: v for k, v in optional.items() if v is not None})
     command = [sys.executable, "-m", "hems_ros.nodes.recorder", "--ros-args"]
     for name, value in parameters.items():
@@ -52,19 +63,31 @@ def recorder_command(output: str | os.PathLike, topics: Iterable[str] | None = N
 class RecorderProcess:
     """A recorder node in a child process, recording into ``output`` until ``stop``."""
 
-    def __init__(self, output: str | os.PathLike, topics: Iterable[str] | None = None,
-                 regex: str | None = None, duration: float = 0.0, **options: object) -> None:
+    def __init__(
+        self,
+        output: str | os.PathLike,
+        topics: Iterable[str] | None = None,
+        regex: str | None = None,
+        duration: float = 0.0,
+        **options: object,
+    ) -> None:
         self.output = Path(output)
         self.recording: list[str] = []
         self.log: list[str] = []
         self.result: BagInfo | None = None
         self._changed = threading.Condition()
-        env = child_environment({"RCUTILS_LOGGING_BUFFERED_STREAM": "0", "PYTHONUNBUFFERED": "1"},
-                                RECORDER_PROFILES_FILE)
+        env = child_environment(
+            {"RCUTILS_LOGGING_BUFFERED_STREAM": "0", "PYTHONUNBUFFERED": "1"},
+            RECORDER_PROFILES_FILE,
+        )
         self.process = subprocess.Popen(
             recorder_command(self.output, topics, regex, duration, **options),  # type: ignore[arg-type]
-            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-            preexec_fn=die_with_parent)   # a crashed tool left its recorder recording on
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            preexec_fn=die_with_parent,
+        )  # a crashed tool left its recorder recording on
         self._reader = threading.Thread(target=self._read_output, daemon=True)
         self._reader.start()
 
@@ -86,12 +109,16 @@ class RecorderProcess:
         with self._changed:
             while not wanted <= set(self.recording):
                 if self.process.poll() is not None and not self._reader.is_alive():
-                    raise RuntimeError(f"recorder exited with code {self.process.returncode}: "
-                                       + " | ".join(self.log[-5:]))
+                    raise RuntimeError(
+                        f"recorder exited with code {self.process.returncode}: "
+                        + " | ".join(self.log[-5:])
+                    )
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
-                    raise TimeoutError(f"recorder did not subscribe to {sorted(wanted - set(self.recording))} "
-                                       f"within {timeout:.0f} s")
+                    raise TimeoutError(
+                        f"recorder did not subscribe to {sorted(wanted - set(self.recording))} "
+                        f"within {timeout:.0f} s"
+                    )
                 self._changed.wait(min(remaining, 0.2))
 
     def wait(self, timeout: float | None = None) -> BagInfo:
@@ -116,7 +143,9 @@ class RecorderProcess:
     def _finish(self) -> BagInfo:
         self._reader.join(5.0)
         if self.process.returncode not in (0, -signal.SIGTERM):
-            raise RuntimeError(f"recorder exited with code {self.process.returncode}: " + " | ".join(self.log[-5:]))
+            raise RuntimeError(
+                f"recorder exited with code {self.process.returncode}: " + " | ".join(self.log[-5:])
+            )
         self.result = bag_info(self.output)
         return self.result
 
@@ -135,8 +164,13 @@ class RecorderProcess:
             exc.add_note(f"and stopping the recorder failed: {error}")
 
 
-def record_for(output: str | os.PathLike, seconds: float, topics: Iterable[str] | None = None,
-               regex: str | None = None, **options: object) -> BagInfo:
+def record_for(
+    output: str | os.PathLike,
+    seconds: float,
+    topics: Iterable[str] | None = None,
+    regex: str | None = None,
+    **options: object,
+) -> BagInfo:
     """Record the selected topics (default: the HEMS graph) for ``seconds`` into ``output``."""
     recorder = RecorderProcess(output, topics, regex, duration=seconds, **options)
     try:

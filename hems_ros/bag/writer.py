@@ -26,7 +26,11 @@ METADATA_VERSION = 9
 PROFILE = "ros2"
 LIBRARY = "hems_ros.bag"
 DEFAULT_CHUNK_SIZE = 256 * 1024
-COMPRESSIONS = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+COMPRESSIONS = {
+    "zstd": CompressionType.ZSTD,
+    "lz4": CompressionType.LZ4,
+    "none": CompressionType.NONE,
+}
 INFINITE = {"sec": 9223372036, "nsec": 854775807}  # rosbag2's spelling of an unset duration
 
 
@@ -44,11 +48,14 @@ def _dump(data: object) -> str:
 def offered_qos(reliable: bool = True, transient_local: bool = False, depth: int = 0) -> dict:
     """One offered QoS profile as rosbag2 (metadata version 9) writes it."""
     return {
-        "history": "keep_last" if depth else "unknown", "depth": depth,
+        "history": "keep_last" if depth else "unknown",
+        "depth": depth,
         "reliability": "reliable" if reliable else "best_effort",
         "durability": "transient_local" if transient_local else "volatile",
-        "deadline": dict(INFINITE), "lifespan": dict(INFINITE),
-        "liveliness": "automatic", "liveliness_lease_duration": dict(INFINITE),
+        "deadline": dict(INFINITE),
+        "lifespan": dict(INFINITE),
+        "liveliness": "automatic",
+        "liveliness_lease_duration": dict(INFINITE),
         "avoid_ros_namespace_conventions": False,
     }
 
@@ -108,17 +115,25 @@ class BagWriter:
     a chunk is closed when it holds ``chunk_size`` bytes or when ``flush`` is called.
     """
 
-    def __init__(self, folder: str | os.PathLike, compression: str = "zstd",
-                 chunk_size: int = DEFAULT_CHUNK_SIZE) -> None:
+    def __init__(
+        self,
+        folder: str | os.PathLike,
+        compression: str = "zstd",
+        chunk_size: int = DEFAULT_CHUNK_SIZE,
+    ) -> None:
         if compression not in COMPRESSIONS:
-            raise ValueError(f"compression must be one of {', '.join(COMPRESSIONS)}, not {compression!r}")
+            raise ValueError(
+                f"compression must be one of {', '.join(COMPRESSIONS)}, not {compression!r}"
+            )
         self.folder = Path(folder)
         if self.folder.exists() and (not self.folder.is_dir() or any(self.folder.iterdir())):
             raise FileExistsError(f"{self.folder} exists and is not an empty folder")
         self.folder.mkdir(parents=True, exist_ok=True)
         self.file = self.folder / f"{self.folder.name}_0.mcap"
         self._stream = open(self.file, "xb")
-        self._mcap = Writer(self._stream, chunk_size=chunk_size, compression=COMPRESSIONS[compression])
+        self._mcap = Writer(
+            self._stream, chunk_size=chunk_size, compression=COMPRESSIONS[compression]
+        )
         self._mcap.start(profile=PROFILE, library=LIBRARY)
         self._chunk_indexes: list = vars(self._mcap)["_Writer__chunk_indices"]  # see _WrittenRecord
         self._compacted = 0
@@ -133,8 +148,13 @@ class BagWriter:
     def topics(self) -> dict[str, TopicRecord]:
         return self._topics
 
-    def add_topic(self, topic: str, msg_type: str, offered_qos_profiles: list[dict] | None = None,
-                  definition: str | None = None) -> int:
+    def add_topic(
+        self,
+        topic: str,
+        msg_type: str,
+        offered_qos_profiles: list[dict] | None = None,
+        definition: str | None = None,
+    ) -> int:
         """Register ``topic`` of ``msg_type`` (``pkg/msg/Type``); returns its channel id.
 
         The full definition comes from the installed ``.msg`` files unless given.
@@ -147,18 +167,28 @@ class BagWriter:
             self._schemas[msg_type] = self._mcap.register_schema(msg_type, "ros2msg", text.encode())
         profiles = list(offered_qos_profiles or [])
         channel_id = self._mcap.register_channel(
-            topic, "cdr", self._schemas[msg_type],
-            metadata={"offered_qos_profiles": _dump(profiles).strip() if profiles else ""})
+            topic,
+            "cdr",
+            self._schemas[msg_type],
+            metadata={"offered_qos_profiles": _dump(profiles).strip() if profiles else ""},
+        )
         record = TopicRecord(topic, msg_type, channel_id, profiles, msgdefs.type_hash(msg_type))
         self._topics[topic] = record
         self._by_channel[channel_id] = record
         return channel_id
 
-    def write(self, channel_id: int, log_time_ns: int, data: bytes, publish_time_ns: int | None = None) -> None:
+    def write(
+        self, channel_id: int, log_time_ns: int, data: bytes, publish_time_ns: int | None = None
+    ) -> None:
         """Append one serialized message (CDR bytes with encapsulation header) as is."""
         record = self._by_channel[channel_id]
-        self._mcap.add_message(channel_id, log_time_ns, data,
-                               log_time_ns if publish_time_ns is None else publish_time_ns, record.count)
+        self._mcap.add_message(
+            channel_id,
+            log_time_ns,
+            data,
+            log_time_ns if publish_time_ns is None else publish_time_ns,
+            record.count,
+        )
         record.count += 1
         if len(self._chunk_indexes) > self._compacted:
             self._compact_chunk_indexes()
@@ -192,14 +222,20 @@ class BagWriter:
         return summary
 
     def summary(self) -> BagSummary:
-        return BagSummary(self.folder, self.file, {t.topic: t.count for t in self._topics.values()},
-                          self._start_ns or 0, self._end_ns)
+        return BagSummary(
+            self.folder,
+            self.file,
+            {t.topic: t.count for t in self._topics.values()},
+            self._start_ns or 0,
+            self._end_ns,
+        )
 
     def write_metadata(self, summary: BagSummary) -> None:
         target = self.folder / "metadata.yaml"
         temporary = target.with_suffix(".yaml.tmp")
-        temporary.write_text(_dump({"rosbag2_bagfile_information": self._metadata(summary)}),
-                             encoding="utf-8")
+        temporary.write_text(
+            _dump({"rosbag2_bagfile_information": self._metadata(summary)}), encoding="utf-8"
+        )
         temporary.replace(target)
 
     def _metadata(self, summary: BagSummary) -> dict:
@@ -212,17 +248,29 @@ class BagWriter:
             "starting_time": start,
             "message_count": summary.message_count,
             "topics_with_message_count": [
-                {"topic_metadata": {
-                    "name": t.topic, "type": t.type, "serialization_format": "cdr",
-                    "offered_qos_profiles": t.offered_qos_profiles,
-                    "type_description_hash": t.type_description_hash},
-                 "message_count": t.count}
-                for t in self._topics.values()],
+                {
+                    "topic_metadata": {
+                        "name": t.topic,
+                        "type": t.type,
+                        "serialization_format": "cdr",
+                        "offered_qos_profiles": t.offered_qos_profiles,
+                        "type_description_hash": t.type_description_hash,
+                    },
+                    "message_count": t.count,
+                }
+                for t in self._topics.values()
+            ],
             "compression_format": "",
             "compression_mode": "",
             "relative_file_paths": [self.file.name],
-            "files": [{"path": self.file.name, "starting_time": start, "duration": duration,
-                       "message_count": summary.message_count}],
+            "files": [
+                {
+                    "path": self.file.name,
+                    "starting_time": start,
+                    "duration": duration,
+                    "message_count": summary.message_count,
+                }
+            ],
             "custom_data": {"recorded_by": LIBRARY, "finished_at_unix_s": f"{time.time():.3f}"},
             "ros_distro": os.environ.get("ROS_DISTRO", "kilted"),
         }
@@ -230,6 +278,10 @@ class BagWriter:
     def __enter__(self) -> BagWriter:
         return self
 
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
-                 traceback: TracebackType | None) -> None:
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
         self.finish()

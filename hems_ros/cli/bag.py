@@ -13,26 +13,44 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser("bag", help="inspect bags", description="Inspect MCAP bags.")
     verbs = parser.add_subparsers(dest="bag_verb", metavar="<command>", required=True)
     info = verbs.add_parser(
-        "info", help="message counts per topic, duration, recovery report",
-        description=("Scan a bag folder or .mcap file and print per-topic message counts and "
-                     "types, the time range, and for an unfinished or cut file how many "
-                     "messages were recovered and where reading stopped. Exit code 2 if the "
-                     "file is not a readable MCAP file."))
+        "info",
+        help="message counts per topic, duration, recovery report",
+        description=(
+            "Scan a bag folder or .mcap file and print per-topic message counts and "
+            "types, the time range, and for an unfinished or cut file how many "
+            "messages were recovered and where reading stopped. Exit code 2 if the "
+            "file is not a readable MCAP file."
+        ),
+    )
     info.add_argument("bag", help="bag folder or .mcap file")
     info.set_defaults(func=run_info)
     export = verbs.add_parser(
-        "export", help="one CSV file per topic (spreadsheets, MATLAB, plotting tools)",
-        description=("Decode a bag and write one CSV file per topic: time_s (log time since the "
-                     "start of the bag, s), log_time_ns, stamp_s (header stamp, s) and every "
-                     "field under its dotted name in the topic's SI units; booleans as 1/0, "
-                     "variable-length sequences joined by ';', nested messages as JSON. An "
-                     "unfinished or cut bag is exported as far as it can be read, and said so. "
-                     "Exit code 2 if the file is not a readable MCAP file."))
+        "export",
+        help="one CSV file per topic (spreadsheets, MATLAB, plotting tools)",
+        description=(
+            "Decode a bag and write one CSV file per topic: time_s (log time since the "
+            "start of the bag, s), log_time_ns, stamp_s (header stamp, s) and every "
+            "field under its dotted name in the topic's SI units; booleans as 1/0, "
+            "variable-length sequences joined by ';', nested messages as JSON. An "
+            "unfinished or cut bag is exported as far as it can be read, and said so. "
+            "Exit code 2 if the file is not a readable MCAP file."
+        ),
+    )
     export.add_argument("bag", help="bag folder or .mcap file")
-    export.add_argument("-o", "--output", default=None,
-                        help="folder for the CSV files (default: <bag>_csv beside the bag)")
-    export.add_argument("--topics", nargs="+", default=None, metavar="TOPIC", help="only these topics")
-    export.add_argument("--regex", default=None, help="only topics this regular expression matches in full, e.g. '/hems/index/.*'")
+    export.add_argument(
+        "-o",
+        "--output",
+        default=None,
+        help="folder for the CSV files (default: <bag>_csv beside the bag)",
+    )
+    export.add_argument(
+        "--topics", nargs="+", default=None, metavar="TOPIC", help="only these topics"
+    )
+    export.add_argument(
+        "--regex",
+        default=None,
+        help="only topics this regular expression matches in full, e.g. '/hems/index/.*'",
+    )
     export.set_defaults(func=run_export)
 
 
@@ -41,7 +59,9 @@ def format_info(info) -> str:
     lines += [f"file: {f}" for f in info.files]
     start, end = info.start_ns, info.end_ns
     if info.message_count:
-        begin = datetime.fromtimestamp(start * 1e-9, tz=timezone.utc).isoformat(timespec="milliseconds")
+        begin = datetime.fromtimestamp(start * 1e-9, tz=timezone.utc).isoformat(
+            timespec="milliseconds"
+        )
         lines.append(f"start: {begin} ({start * 1e-9:.6f} s)")
     lines.append(f"duration: {(end - start) * 1e-9:.3f} s")
     lines.append(f"messages: {info.message_count}")
@@ -49,8 +69,10 @@ def format_info(info) -> str:
     for topic, entry in sorted(info.topics.items()):
         lines.append(f"  {topic:<{width}}  {entry.count:>9}  {entry.type}")
     for report in info.reports:
-        lines.append(("status: " if report.complete and not report.skipped else "RECOVERED: ")
-                     + report.describe())
+        lines.append(
+            ("status: " if report.complete and not report.skipped else "RECOVERED: ")
+            + report.describe()
+        )
     lines += [f"warning: {w}" for w in info.warnings]
     return "\n".join(lines)
 
@@ -85,7 +107,13 @@ def run_export(args: argparse.Namespace) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", BagWarning)
             bag = load_bag(args.bag, topics=args.topics, regex=args.regex)
-    except (BagFormatError, FileNotFoundError, IsADirectoryError, PermissionError, ValueError) as error:
+    except (
+        BagFormatError,
+        FileNotFoundError,
+        IsADirectoryError,
+        PermissionError,
+        ValueError,
+    ) as error:
         print(f"hems bag export: {error}", file=sys.stderr)
         return 2
     for report in bag.reports:
@@ -96,6 +124,8 @@ def run_export(args: argparse.Namespace) -> int:
     if not bag.topics:
         print(f"hems bag export: no messages on the selected topics in {args.bag}", file=sys.stderr)
         return 1
-    written = export_csv(bag, out_dir, progress=lambda e: print(f"{e.path}  {e.rows} rows, {e.columns} columns"))
+    written = export_csv(
+        bag, out_dir, progress=lambda e: print(f"{e.path}  {e.rows} rows, {e.columns} columns")
+    )
     print(f"wrote {len(written)} CSV files to {out_dir}")
     return 0

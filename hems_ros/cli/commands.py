@@ -14,42 +14,70 @@ UNITS = {"mm": ("position", 1e-3), "m": ("position", 1.0), "N": ("force", 1.0)}
 
 
 def register(subparsers) -> None:
-    for command, text in (("enable", "allow heating: supervisor to ENABLED (needs every stream alive and every unit getting its controller's commands)"),
-                          ("disable", "stop heating: supervisor to DISABLED"),
-                          ("estop", "emergency stop: every duty to 0, latched until reset"),
-                          ("reset", "clear a latched FAULT or ESTOP (refused while a fault persists)")):
+    for command, text in (
+        (
+            "enable",
+            "allow heating: supervisor to ENABLED (needs every stream alive and every unit getting "
+            "its controller's commands)",
+        ),
+        ("disable", "stop heating: supervisor to DISABLED"),
+        ("estop", "emergency stop: every duty to 0, latched until reset"),
+        ("reset", "clear a latched FAULT or ESTOP (refused while a fault persists)"),
+    ):
         parser = subparsers.add_parser(command, help=text, description=text + ".")
-        parser.add_argument("--timeout", type=positive, default=10.0, help="seconds to wait for the supervisor")
+        parser.add_argument(
+            "--timeout", type=positive, default=10.0, help="seconds to wait for the supervisor"
+        )
         add_namespace_argument(parser)
         parser.set_defaults(func=lambda args, c=command: run_trigger(c, args))
 
     parser = subparsers.add_parser(
-        "setpoint", help="send a finger setpoint (tendon side)",
-        description="Publish hems_msgs/FingerSetpoint on <namespace>/<finger>/setpoint (/hems/index/setpoint). Values are tendon side: "
-                    "position in m (or mm with --unit mm), force in N. Checked here against the same limits "
-                    "the controller applies (tendon stroke 0-54 mm, force 0-25 N). Then waits until the "
-                    "finger's controller status shows the setpoint, sending it again meanwhile (a controller "
-                    "that had not matched this new publisher yet drops the first one); exit code 1 if no "
-                    "controller took it or its status does not show it within --timeout, or if the "
-                    "supervisor is not ENABLED (nothing heats: its state and what to do are printed), 2 for a "
-                    "bad value.")
-    parser.add_argument("finger", help="finger name, comma-separated names or 'all': " + ", ".join(names.FINGERS))
+        "setpoint",
+        help="send a finger setpoint (tendon side)",
+        description="Publish hems_msgs/FingerSetpoint on <namespace>/<finger>/setpoint "
+        "(/hems/index/setpoint). Values are tendon side: position in m (or mm with --unit mm), "
+        "force in N. Checked here against the same limits the controller applies (tendon stroke "
+        "0-54 mm, force 0-25 N). Then waits until the finger's controller status shows the "
+        "setpoint, sending it again meanwhile (a controller that had not matched this new "
+        "publisher yet drops the first one); exit code 1 if no controller took it or its status "
+        "does not show it within --timeout, or if the supervisor is not ENABLED (nothing heats: "
+        "its state and what to do are printed), 2 for a bad value.",
+    )
+    parser.add_argument(
+        "finger", help="finger name, comma-separated names or 'all': " + ", ".join(names.FINGERS)
+    )
     parser.add_argument("value", help="setpoint value in --unit")
-    parser.add_argument("--mode", choices=MODES, default=None,
-                        help="position or force (default: from --unit, position for m/mm, force for N)")
-    parser.add_argument("--unit", choices=tuple(UNITS), default=None,
-                        help="unit of VALUE: mm, m (position) or N (force); default m or N by mode")
-    parser.add_argument("--timeout", type=positive, default=5.0,
-                        help="seconds to wait for the controller to subscribe, and again for its status "
-                             "to show the setpoint (default 5)")
+    parser.add_argument(
+        "--mode",
+        choices=MODES,
+        default=None,
+        help="position or force (default: from --unit, position for m/mm, force for N)",
+    )
+    parser.add_argument(
+        "--unit",
+        choices=tuple(UNITS),
+        default=None,
+        help="unit of VALUE: mm, m (position) or N (force); default m or N by mode",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=positive,
+        default=5.0,
+        help="seconds to wait for the controller to subscribe, and again for its status "
+        "to show the setpoint (default 5)",
+    )
     add_namespace_argument(parser)
     parser.set_defaults(func=run_setpoint)
 
     parser = subparsers.add_parser(
-        "status", help="one row per finger: mode, setpoint, position, force, duty, faults",
-        description="Listen to the graph briefly and print one row per finger (tendon side: position in "
-                    "mm, force in N; duty in %) and the supervisor state.")
-    parser.add_argument("--listen", type=positive, default=1.5, help="seconds to listen (default 1.5)")
+        "status",
+        help="one row per finger: mode, setpoint, position, force, duty, faults",
+        description="Listen to the graph briefly and print one row per finger (tendon side: "
+        "position in mm, force in N; duty in %) and the supervisor state.",
+    )
+    parser.add_argument(
+        "--listen", type=positive, default=1.5, help="seconds to listen (default 1.5)"
+    )
     add_namespace_argument(parser)
     parser.set_defaults(func=run_status)
 
@@ -63,7 +91,9 @@ def run_trigger(command: str, args: argparse.Namespace) -> int:
     return 0 if ok else 1
 
 
-def parse_setpoint(finger: str, value_text: str, mode: str | None, unit: str | None) -> tuple[list[str], str, float]:
+def parse_setpoint(
+    finger: str, value_text: str, mode: str | None, unit: str | None
+) -> tuple[list[str], str, float]:
     """(fingers, mode, SI value) from the command line; ValueError with the reason."""
     fingers = list(names.parse_fingers(finger))
     if unit is not None:
@@ -102,9 +132,16 @@ def run_setpoint(args: argparse.Namespace) -> int:
         # one wait for every controller: on a graph brought up with fewer fingers, "all" would
         # otherwise wait --timeout for each missing one in turn
         missing = client.fingers_without_readers(fingers, timeout=args.timeout)
-        results = {f: client.send_setpoint(f, mode, value, timeout=0.0 if f in missing else args.timeout,
-                                           confirm_s=args.timeout)
-                   for f in fingers}
+        results = {
+            f: client.send_setpoint(
+                f,
+                mode,
+                value,
+                timeout=0.0 if f in missing else args.timeout,
+                confirm_s=args.timeout,
+            )
+            for f in fingers
+        }
         supervisor = client.supervisor_status()
     for finger, result in results.items():
         line = f"{finger}: {mode} setpoint {value:g} {unit}: {result.message}"
@@ -120,21 +157,34 @@ def _not_heating(supervisor) -> str:
     from hems_msgs.msg import SupervisorStatus
 
     if supervisor is None:
-        return "no supervisor status: nothing heats without a supervisor in ENABLED (is the graph up?)"
+        return (
+            "no supervisor status: nothing heats without a supervisor in ENABLED (is the graph up?)"
+        )
     faults = f" ({'; '.join(supervisor.faults)})" if supervisor.faults else ""
-    hint = ("hems reset, then hems enable" if supervisor.state in (SupervisorStatus.FAULT, SupervisorStatus.ESTOP)
-            else "hems enable")
-    return f"the supervisor is {supervisor.state_name}{faults}: nothing heats until it is ENABLED ({hint})"
+    hint = (
+        "hems reset, then hems enable"
+        if supervisor.state in (SupervisorStatus.FAULT, SupervisorStatus.ESTOP)
+        else "hems enable"
+    )
+    return (
+        f"the supervisor is {supervisor.state_name}{faults}: nothing heats until it is "
+        f"ENABLED ({hint})"
+    )
 
 
 def format_status(snap) -> str:
-    rows = [f"{'finger':<16} {'mode':<9} {'setpoint':>10} {'position mm':>12} {'force N':>8} {'duty %':>7}  faults"]
+    rows = [
+        f"{'finger':<16} {'mode':<9} {'setpoint':>10} {'position mm':>12} {'force N':>8} "
+        f"{'duty %':>7}  faults"
+    ]
     for finger in names.FINGERS:
         c = snap.controllers.get(finger)
         s = snap.states.get(finger)
         f = snap.forces.get(finger)
         if c is None:
-            rows.append(f"{finger:<16} {'-':<9} {'-':>10} {'-':>12} {'-':>8} {'-':>7}  no controller status")
+            rows.append(
+                f"{finger:<16} {'-':<9} {'-':>10} {'-':>12} {'-':>8} {'-':>7}  no controller status"
+            )
             continue
         unit = "mm" if c.mode == "position" else "N"
         setpoint = 1e3 * c.setpoint if c.mode == "position" else c.setpoint
@@ -150,11 +200,15 @@ def format_status(snap) -> str:
                 faults.append("controller inactive")
         if c.rejected_setpoints:
             faults.append(f"{c.rejected_setpoints} rejected ({c.last_rejection})")
-        rows.append(f"{finger:<16} {c.mode:<9} {setpoint:>7.2f} {unit:<2} {position} {force} "
-                    f"{c.duty_percent:>7.1f}  {', '.join(faults) or '-'}")
+        rows.append(
+            f"{finger:<16} {c.mode:<9} {setpoint:>7.2f} {unit:<2} {position} {force} "
+            f"{c.duty_percent:>7.1f}  {', '.join(faults) or '-'}"
+        )
     sup = snap.supervisor
-    rows.append(f"supervisor: {sup.state_name if sup else 'not running'}"
-                + (f" ({'; '.join(sup.faults)})" if sup and sup.faults else ""))
+    rows.append(
+        f"supervisor: {sup.state_name if sup else 'not running'}"
+        + (f" ({'; '.join(sup.faults)})" if sup and sup.faults else "")
+    )
     return "\n".join(rows)
 
 

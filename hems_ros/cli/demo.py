@@ -23,17 +23,28 @@ from hems_ros.launcher import Graph
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "demo", help="run the end-to-end demonstration (what `make demo` runs)",
-        description="Start the HEMS graph (16 nodes, one process each), enable it, run a scripted grasp on "
-                    "all six fingers (position approach, force hold, release), print a per-finger summary "
-                    "(tracking error, peak force, energy), write a PNG plot, shut down.")
+        "demo",
+        help="run the end-to-end demonstration (what `make demo` runs)",
+        description="Start the HEMS graph (16 nodes, one process each), enable it, run a scripted "
+        "grasp on all six fingers (position approach, force hold, release), print a per-finger "
+        "summary (tracking error, peak force, energy), write a PNG plot, shut down.",
+    )
     add_graph_arguments(parser)
     grasp.add_grasp_arguments(parser)
     parser.set_defaults(func=run, plot=Path("results/demo_grasp.png"))
-    parser.add_argument("--ready-timeout", type=positive, default=60.0,
-                        help="seconds to wait for every node to come up (default 60)")
-    parser.add_argument("--record", type=Path, default=True, metavar="DIR",
-                        help="bag folder the run is recorded into (default bags/demo_<date>_<time>)")
+    parser.add_argument(
+        "--ready-timeout",
+        type=positive,
+        default=60.0,
+        help="seconds to wait for every node to come up (default 60)",
+    )
+    parser.add_argument(
+        "--record",
+        type=Path,
+        default=True,
+        metavar="DIR",
+        help="bag folder the run is recorded into (default bags/demo_<date>_<time>)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -51,20 +62,31 @@ def run(args: argparse.Namespace) -> int:
     graph = Graph(options)
     graph.start()
     recorder = RecorderProcess(record, regex=record_regex(options.namespace))
-    print(f"demo: started {len(graph.processes)} processes, recording into {record}; waiting for every stream",
-          flush=True)
+    print(
+        f"demo: started {len(graph.processes)} processes, recording into {record}; waiting for "
+        f"every stream",
+        flush=True,
+    )
     try:
-        with GraphClient("hems_demo", sim_time=options.sim_time, namespace=options.namespace) as client:
+        with GraphClient(
+            "hems_demo", sim_time=options.sim_time, namespace=options.namespace
+        ) as client:
             try:
-                wait_until_recording(client, recorder, options.fingers, time.monotonic() + args.ready_timeout)
+                wait_until_recording(
+                    client, recorder, options.fingers, time.monotonic() + args.ready_timeout
+                )
             except (TimeoutError, RuntimeError) as error:
                 print(f"demo: {error}", file=sys.stderr)
                 return 1
             try:
-                traces, phase_starts, statuses = grasp.enabled_grasp(client, plan, options.fingers,
-                                                                     args.ready_timeout, "demo")
+                traces, phase_starts, statuses = grasp.enabled_grasp(
+                    client, plan, options.fingers, args.ready_timeout, "demo"
+                )
             except grasp.EnableRefused as error:
-                print(f"demo: could not enable the graph: {graph.with_exits(str(error))}", file=sys.stderr)
+                print(
+                    f"demo: could not enable the graph: {graph.with_exits(str(error))}",
+                    file=sys.stderr,
+                )
                 return 1
             except RuntimeError as error:
                 print(f"demo: {graph.with_exits(str(error))}", file=sys.stderr)

@@ -33,59 +33,113 @@ RUN: a bag folder recorded from the graph (input /hems/<finger>/duty, measuremen
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "diagnose", help="find where the model and measured data disagree, name the missing effect, fit it",
-        description="Replay measured runs on the physics model (the measured input drives it open loop), "
-                    "localise the residual by phase and cycle, then explain it: first a recalibration of the "
-                    "printed model's parameters within published NiTi bounds, then missing effects from a "
-                    "library of candidates, each fitted (bounded least squares) and kept only if it "
-                    "improves data it was not fitted on. Writes a report folder (report.md, figures, "
-                    "corrected.yaml, summary.json) and prints one summary line. Exit 0 whatever the "
-                    "verdict, 1 if the run failed, 2 for bad input.",
+        "diagnose",
+        help="find where the model and measured data disagree, name the missing effect, fit it",
+        description="Replay measured runs on the physics model (the measured input drives it open "
+        "loop), localise the residual by phase and cycle, then explain it: first a recalibration "
+        "of the printed model's parameters within published NiTi bounds, then missing effects from "
+        "a library of candidates, each fitted (bounded least squares) and kept only if it "
+        "improves data it was not fitted on. Writes a report folder (report.md, figures, "
+        "corrected.yaml, summary.json) and prints one summary line. Exit 0 whatever the "
+        "verdict, 1 if the run failed, 2 for bad input.",
         epilog=EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("runs", nargs="*", metavar="RUN", help="measured runs to fit on")
-    parser.add_argument("--heldout", nargs="+", default=[], metavar="RUN",
-                        help="runs to test on only (default: the tool holds out every third cycle, "
-                             "or every third row of a table). A separate run recorded with other inputs is "
-                             "the stronger test, and the only one of an effect that acts at a run's start "
-                             "(a warm wire shows in the first cycle alone)")
-    parser.add_argument("--model", default=DEFAULT_MODEL,
-                        help=f"starting model: a config/physics name or a YAML path (default {DEFAULT_MODEL}, "
-                             "the dissertation's Table 4.1 wire)")
-    parser.add_argument("--conditions", type=Path, default=None, metavar="FILE",
-                        help="YAML with the run's conditions over the model (load, ambient, drive), in the "
-                             "layout of config/physics/*.yaml; only the keys it gives change")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", dest="overrides",
-                        help="one model parameter, e.g. --set load.pretension_n=20 (repeatable)")
+    parser.add_argument(
+        "--heldout",
+        nargs="+",
+        default=[],
+        metavar="RUN",
+        help="runs to test on only (default: the tool holds out every third cycle, "
+        "or every third row of a table). A separate run recorded with other inputs is "
+        "the stronger test, and the only one of an effect that acts at a run's start "
+        "(a warm wire shows in the first cycle alone)",
+    )
+    parser.add_argument(
+        "--model",
+        default=DEFAULT_MODEL,
+        help=f"starting model: a config/physics name or a YAML path (default {DEFAULT_MODEL}, "
+        "the dissertation's Table 4.1 wire)",
+    )
+    parser.add_argument(
+        "--conditions",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="YAML with the run's conditions over the model (load, ambient, drive), in the "
+        "layout of config/physics/*.yaml; only the keys it gives change",
+    )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        dest="overrides",
+        help="one model parameter, e.g. --set load.pretension_n=20 (repeatable)",
+    )
     parser.add_argument("--columns", default=None, help="column mapping of table runs (see below)")
-    parser.add_argument("--fingers", default=None, help="fingers of a bag, comma separated (default: all found)")
-    parser.add_argument("--candidates", default=None,
-                        help="comma-separated candidates to consider (default: the whole library; "
-                             "--list-candidates shows it)")
-    parser.add_argument("--list-candidates", action="store_true", help="print the candidate library and exit")
-    parser.add_argument("--out", type=Path, default=None,
-                        help="report folder (default results/diagnosis/<first run's name>)")
-    parser.add_argument("--dt", type=positive, default=None,
-                        help="plant step of the replay, s (default 1 ms; 10 ms for thermal cycles; "
-                             "2 ms for tables of pulse tests)")
-    parser.add_argument("--quiet", action="store_true", help="no progress output, only the summary line")
+    parser.add_argument(
+        "--fingers", default=None, help="fingers of a bag, comma separated (default: all found)"
+    )
+    parser.add_argument(
+        "--candidates",
+        default=None,
+        help="comma-separated candidates to consider (default: the whole library; "
+        "--list-candidates shows it)",
+    )
+    parser.add_argument(
+        "--list-candidates", action="store_true", help="print the candidate library and exit"
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="report folder (default results/diagnosis/<first run's name>)",
+    )
+    parser.add_argument(
+        "--dt",
+        type=positive,
+        default=None,
+        help="plant step of the replay, s (default 1 ms; 10 ms for thermal cycles; "
+        "2 ms for tables of pulse tests)",
+    )
+    parser.add_argument(
+        "--quiet", action="store_true", help="no progress output, only the summary line"
+    )
     parser.set_defaults(func=run)
 
     suite = subparsers.add_parser(
-        "diagnose-suite", help="run the hidden-effect suite of hems diagnose (docs/diagnosis.md)",
-        description="Synthetic measurements with a known truth (each candidate effect hidden in turn, a "
-                    "parameter moved, two effects at once, effects in another form than their candidate, an "
-                    "effect outside the library, nothing at all), at three sensor-noise levels on two input "
-                    "profiles, each diagnosed from the starting model; plus the dissertation's own "
-                    "measurements. Writes suite.md, suite.json and the confusion matrix into --out, and "
-                    "docs/diagnosis.md with --docs. Seeded: the same seed gives the same result.")
-    suite.add_argument("--out", type=Path, default=Path("results/diagnosis-suite"), help="output folder")
-    suite.add_argument("--seed", type=non_negative_int, default=0, help="seed of the sensor noise (default 0)")
-    suite.add_argument("--quick", action="store_true", help="the reduced subset that make test runs")
-    suite.add_argument("--docs", type=Path, default=None, metavar="PATH",
-                       help="also write the generated page (e.g. docs/diagnosis.md)")
-    suite.add_argument("--no-dissertation", action="store_true",
-                       help="skip the dissertation's measurements (the synthetic suite only)")
+        "diagnose-suite",
+        help="run the hidden-effect suite of hems diagnose (docs/diagnosis.md)",
+        description="Synthetic measurements with a known truth (each candidate effect hidden in "
+        "turn, a parameter moved, two effects at once, effects in another form than their "
+        "candidate, an effect outside the library, nothing at all), at three sensor-noise levels "
+        "on two input profiles, each diagnosed from the starting model; plus the dissertation's "
+        "own measurements. Writes suite.md, suite.json and the confusion matrix into --out, and "
+        "docs/diagnosis.md with --docs. Seeded: the same seed gives the same result.",
+    )
+    suite.add_argument(
+        "--out", type=Path, default=Path("results/diagnosis-suite"), help="output folder"
+    )
+    suite.add_argument(
+        "--seed", type=non_negative_int, default=0, help="seed of the sensor noise (default 0)"
+    )
+    suite.add_argument(
+        "--quick", action="store_true", help="the reduced subset that make test runs"
+    )
+    suite.add_argument(
+        "--docs",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write the generated page (e.g. docs/diagnosis.md)",
+    )
+    suite.add_argument(
+        "--no-dissertation",
+        action="store_true",
+        help="skip the dissertation's measurements (the synthetic suite only)",
+    )
     suite.set_defaults(func=run_suite)
 
 
@@ -95,6 +149,7 @@ def _say(quiet: bool):
     def say(message: str) -> None:
         if not quiet:
             print(f"[{time.perf_counter() - start:6.1f} s] {message}", file=sys.stderr, flush=True)
+
     return say
 
 
@@ -115,7 +170,9 @@ def run(args: argparse.Namespace) -> int:
         model = inputs.model(args.model, args.conditions, args.overrides)
         chosen = inputs.candidate_names(args.candidates)
         runs = [r for path in args.runs for r in inputs.load(path, args.columns, args.fingers)]
-        heldout = [r for path in args.heldout for r in inputs.load(path, args.columns, args.fingers)]
+        heldout = [
+            r for path in args.heldout for r in inputs.load(path, args.columns, args.fingers)
+        ]
         out = args.out or Path("results", "diagnosis", inputs.stem(args.runs[0]))
         inputs.check_output(out)
         diagnosis = diagnose(runs, heldout, model, candidates=chosen, dt=args.dt, progress=say)
@@ -132,8 +189,13 @@ def run_suite(args: argparse.Namespace) -> int:
     from hems_ros.reports import diagnosis_suite as suite_report
 
     say = _say(False)
-    result = suite_report.run(args.out, seed=args.seed, quick=args.quick, dissertation=not args.no_dissertation,
-                              progress=say)
+    result = suite_report.run(
+        args.out,
+        seed=args.seed,
+        quick=args.quick,
+        dissertation=not args.no_dissertation,
+        progress=say,
+    )
     if args.docs is not None:
         figures = args.docs.parent / "figures"
         figures.mkdir(parents=True, exist_ok=True)

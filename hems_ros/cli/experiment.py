@@ -17,22 +17,32 @@ def register(subparsers) -> None:
         "experiment",
         help="run the dissertation's chapter 5/6 controller tests in simulation (tables + plots)",
         description="Chapter 5: sine 20 mm peak-to-peak at 0.125/0.25/0.5 Hz (20 s), two 20 mm "
-                    "steps (70 s) and a 5 mm staircase (70 s) with PID, PI-PD and BPID (Table 5.1 "
-                    "gains) on the straight actuator with a 40 N mass. Chapter 6: BPID on the HEMS "
-                    "index unit (2 N bias pretension): 27 mm position sine/ramp/steps/staircase and "
-                    "4-20 N force sine 0.125/0.25 Hz, steps, staircase. Plant at 1 kHz, control at "
-                    "100 Hz. Writes <chapter>.md (RMSE mm or N, IAE, MACSI %/sample, APC W, rise "
-                    "time s, overshoot as the first peak past a new level and hold excursion as the "
-                    "largest over the plateau; dissertation / ours / ratio) and PNG plots.",
+        "steps (70 s) and a 5 mm staircase (70 s) with PID, PI-PD and BPID (Table 5.1 "
+        "gains) on the straight actuator with a 40 N mass. Chapter 6: BPID on the HEMS "
+        "index unit (2 N bias pretension): 27 mm position sine/ramp/steps/staircase and "
+        "4-20 N force sine 0.125/0.25 Hz, steps, staircase. Plant at 1 kHz, control at "
+        "100 Hz. Writes <chapter>.md (RMSE mm or N, IAE, MACSI %/sample, APC W, rise "
+        "time s, overshoot as the first peak past a new level and hold excursion as the "
+        "largest over the plateau; dissertation / ours / ratio) and PNG plots.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     parser.add_argument("chapter", choices=("ch5", "ch6", "all"), help="which chapter's tests")
-    parser.add_argument("-o", "--output", type=Path, default=None,
-                        help="results folder (default results/<chapter>; with 'all', "
-                             "<output>/ch5 and <output>/ch6)")
-    parser.add_argument("--docs", type=Path, default=None, metavar="DIR",
-                        help="also write DIR/experiments.md and DIR/figures/experiments_*.png "
-                             "(needs chapter 'all')")
+    parser.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        default=None,
+        help="results folder (default results/<chapter>; with 'all', "
+        "<output>/ch5 and <output>/ch6)",
+    )
+    parser.add_argument(
+        "--docs",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="also write DIR/experiments.md and DIR/figures/experiments_*.png "
+        "(needs chapter 'all')",
+    )
     parser.set_defaults(func=run)
 
 
@@ -59,9 +69,15 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     results = {}
     if args.chapter in ("ch5", "all"):
-        print("chapter 5: 5 references x 3 controllers, 40 N mass (plant 1 kHz, control 100 Hz)", flush=True)
+        print(
+            "chapter 5: 5 references x 3 controllers, 40 N mass (plant 1 kHz, control 100 Hz)",
+            flush=True,
+        )
         runs = chapters.run_ch5(progress=lambda m: print(m, flush=True))
-        print("checking the chapter 5 claims (a miss runs its evidence: sweeps, evidence sets) ...", flush=True)
+        print(
+            "checking the chapter 5 claims (a miss runs its evidence: sweeps, evidence sets) ...",
+            flush=True,
+        )
         f5 = findings.ch5_findings(runs, load_params(chapters.CH5_PARAMS))
         results["ch5"] = (runs, f5)
     if args.chapter in ("ch6", "all"):
@@ -76,11 +92,18 @@ def run(args: argparse.Namespace) -> int:
         for f in found:
             print(f"  {'ok  ' if f.reproduced else 'MISS'} {f.claim}: {f.ours}")
         if not all(f.reproduced for f in found):
-            print(f"  why each MISS, with the runs that show it: {folder / (chapter + '.md')}, "
-                  "'Not reproduced, and why'")
+            print(
+                f"  why each MISS, with the runs that show it: {folder / (chapter + '.md')}, "
+                "'Not reproduced, and why'"
+            )
     if args.docs is not None:
-        path = report.write_docs(*results["ch5"][:1], *results["ch6"][:1], results["ch5"][1],
-                                 results["ch6"][1], args.docs)
+        path = report.write_docs(
+            *results["ch5"][:1],
+            *results["ch6"][:1],
+            results["ch5"][1],
+            results["ch6"][1],
+            args.docs,
+        )
         print(f"wrote {path}")
     print(f"done in {time.perf_counter() - start:.1f} s")
     return 0

@@ -23,34 +23,56 @@ from hems_ros.graph.setpoints import SetpointLimits, validate
 
 
 def add_grasp_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--force", type=finite, default=10.0, help="tendon force to hold, N (default 10)")
-    parser.add_argument("--approach-mm", type=finite, default=20.0, help="tendon approach position, mm (default 20)")
+    parser.add_argument(
+        "--force", type=finite, default=10.0, help="tendon force to hold, N (default 10)"
+    )
+    parser.add_argument(
+        "--approach-mm", type=finite, default=20.0, help="tendon approach position, mm (default 20)"
+    )
     parser.add_argument("--approach-s", type=non_negative, default=5.0, help="approach duration, s")
     parser.add_argument("--hold-s", type=non_negative, default=6.0, help="force hold duration, s")
     parser.add_argument("--release-s", type=non_negative, default=4.0, help="release duration, s")
-    parser.add_argument("--plot", type=Path, default=Path("results/grasp.png"), help="PNG plot path")
+    parser.add_argument(
+        "--plot", type=Path, default=Path("results/grasp.png"), help="PNG plot path"
+    )
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "grasp", help="scripted grasp (all six fingers, or --fingers): position approach, force hold, release",
-        description="On a running graph (hems up), enabled (hems enable) or enabled by this tool after it has "
-                    "joined (--enable): every finger approaches a tendon position, holds a tendon force, then "
-                    "releases; prints a per-finger summary (tracking error, peak force, energy) and writes a PNG "
-                    "plot.")
+        "grasp",
+        help="scripted grasp (all six fingers, or --fingers): position approach, force "
+        "hold, release",
+        description="On a running graph (hems up), enabled (hems enable) or enabled by this tool "
+        "after it has joined (--enable): every finger approaches a tendon position, holds a tendon "
+        "force, then releases; prints a per-finger summary (tracking error, peak force, energy) "
+        "and writes a PNG plot.",
+    )
     add_grasp_arguments(parser)
-    parser.add_argument("--enable", action="store_true",
-                        help="enable the graph once this tool has joined it, and disable it after the grasp: "
-                             "a tool joining an ENABLED separate-process graph can hold its streams up past "
-                             "the supervisor's limits on a small host (README, Safety)")
-    parser.add_argument("--enable-timeout", type=positive, default=30.0,
-                        help="with --enable: seconds to wait for the supervisor to accept enable (default 30)")
-    parser.add_argument("--fingers", default="all",
-                        help="comma-separated fingers to grasp with, as the graph was brought up with "
-                             "(hems up --fingers; default all six)")
-    parser.add_argument("--sim-time", action="store_true",
-                        help="the graph runs on /clock (hems up --sim-time): phase durations in simulated "
-                             "seconds, setpoints stamped with the graph's time")
+    parser.add_argument(
+        "--enable",
+        action="store_true",
+        help="enable the graph once this tool has joined it, and disable it after the grasp: "
+        "a tool joining an ENABLED separate-process graph can hold its streams up past "
+        "the supervisor's limits on a small host (README, Safety)",
+    )
+    parser.add_argument(
+        "--enable-timeout",
+        type=positive,
+        default=30.0,
+        help="with --enable: seconds to wait for the supervisor to accept enable (default 30)",
+    )
+    parser.add_argument(
+        "--fingers",
+        default="all",
+        help="comma-separated fingers to grasp with, as the graph was brought up with "
+        "(hems up --fingers; default all six)",
+    )
+    parser.add_argument(
+        "--sim-time",
+        action="store_true",
+        help="the graph runs on /clock (hems up --sim-time): phase durations in simulated "
+        "seconds, setpoints stamped with the graph's time",
+    )
     add_namespace_argument(parser)
     parser.set_defaults(func=run)
 
@@ -61,8 +83,13 @@ def plan_from(args: argparse.Namespace) -> GraspPlan:
     limits = SetpointLimits()
     validate("force", args.force, limits)
     validate("position", args.approach_mm * 1e-3, limits)
-    return GraspPlan(force_n=args.force, approach_m=args.approach_mm * 1e-3, approach_s=args.approach_s,
-                     hold_s=args.hold_s, release_s=args.release_s)
+    return GraspPlan(
+        force_n=args.force,
+        approach_m=args.approach_mm * 1e-3,
+        approach_s=args.approach_s,
+        hold_s=args.hold_s,
+        release_s=args.release_s,
+    )
 
 
 class GraspListener:
@@ -89,14 +116,34 @@ class GraspListener:
         self.traces = {f: FingerTrace.empty() for f in fingers}
         self.phases = {f: PhaseTracker() for f in fingers}
         self.statuses: list = []
-        self.subs = [self.node.create_subscription(JointState, names.joint_states_topic(client.namespace), self._on_joints, qos.SENSOR),
-                     self.node.create_subscription(SupervisorStatus, names.supervisor_status_topic(client.namespace),
-                                                   self._on_supervisor, qos.STATUS)]
+        self.subs = [
+            self.node.create_subscription(
+                JointState, names.joint_states_topic(client.namespace), self._on_joints, qos.SENSOR
+            ),
+            self.node.create_subscription(
+                SupervisorStatus,
+                names.supervisor_status_topic(client.namespace),
+                self._on_supervisor,
+                qos.STATUS,
+            ),
+        ]
         for finger in fingers:
-            self.subs.append(self.node.create_subscription(ActuatorState, names.sim_topic(finger, "state", client.namespace),
-                                                           lambda m, f=finger: self._on_state(f, m), qos.SENSOR))
-            self.subs.append(self.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status", client.namespace),
-                                                           lambda m, f=finger: self._on_status(f, m), qos.CONTROLLER_STATUS))
+            self.subs.append(
+                self.node.create_subscription(
+                    ActuatorState,
+                    names.sim_topic(finger, "state", client.namespace),
+                    lambda m, f=finger: self._on_state(f, m),
+                    qos.SENSOR,
+                )
+            )
+            self.subs.append(
+                self.node.create_subscription(
+                    ControllerStatus,
+                    names.topic(finger, "controller_status", client.namespace),
+                    lambda m, f=finger: self._on_status(f, m),
+                    qos.CONTROLLER_STATUS,
+                )
+            )
 
     def start(self) -> None:
         self.collecting = True
@@ -133,8 +180,13 @@ class GraspListener:
             return
         self.traces[finger].duty_t.append(self.seconds(message.header.stamp))
         self.traces[finger].duty_percent.append(message.duty_percent)
-        self.phases[finger].feed(message.mode, message.setpoint, message.active,
-                                 self.seconds(message.encoder_stamp), self.seconds(message.force_stamp))
+        self.phases[finger].feed(
+            message.mode,
+            message.setpoint,
+            message.active,
+            self.seconds(message.encoder_stamp),
+            self.seconds(message.force_stamp),
+        )
 
 
 def require_controllers(client, fingers) -> None:
@@ -143,15 +195,19 @@ def require_controllers(client, fingers) -> None:
     5 s per finger, while the fingers before it were already heating."""
     missing = client.fingers_without_readers(fingers)
     if missing:
-        raise RuntimeError(f"no finger_controller for {', '.join(missing)} (a graph brought up with "
-                           "hems up --fingers needs the same --fingers here)")
+        raise RuntimeError(
+            f"no finger_controller for {', '.join(missing)} (a graph brought up with "
+            "hems up --fingers needs the same --fingers here)"
+        )
 
 
 # the state messages come every 50 ms, a phase starts up to a control period after its setpoint
 COLLECT_AFTER_S = 0.2
 
 
-def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspListener | None = None):
+def run_grasp(
+    client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspListener | None = None
+):
     """Drive the phases on ``fingers``; return (traces, phase starts per finger, supervisor
     statuses seen). Without a ``listener`` made beforehand, one is made here."""
     require_controllers(client, fingers)
@@ -161,8 +217,11 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspLis
     listener.start()
     try:
         for phase, mode, value, duration in plan.phases():
-            print(f"grasp: {phase}: {mode} {value:g} {'m' if mode == 'position' else 'N'} for {duration:g} s",
-                  flush=True)
+            print(
+                f"grasp: {phase}: {mode} {value:g} {'m' if mode == 'position' else 'N'} for "
+                f"{duration:g} s",
+                flush=True,
+            )
             missing = [f for f in fingers if not client.send_setpoint(f, mode, value)]
             if missing:
                 raise RuntimeError(f"no finger_controller for {', '.join(missing)}")
@@ -171,7 +230,11 @@ def run_grasp(client, plan: GraspPlan, fingers=names.FINGERS, listener: GraspLis
         client.spin_graph_time(COLLECT_AFTER_S)
     finally:
         listener.close()
-    return listener.traces, {f: tracker.starts for f, tracker in listener.phases.items()}, listener.statuses
+    return (
+        listener.traces,
+        {f: tracker.starts for f, tracker in listener.phases.items()},
+        listener.statuses,
+    )
 
 
 class EnableRefused(RuntimeError):
@@ -220,8 +283,12 @@ def disable_from_new_process() -> tuple[bool, str]:
     shut down (a default context cannot be initialised again): otherwise an interrupted
     `hems grasp --enable` would leave the graph ENABLED, heating to its last setpoint."""
     try:
-        done = subprocess.run([sys.executable, "-m", "hems_ros.cli.main", "disable"], capture_output=True,
-                              text=True, timeout=30)
+        done = subprocess.run(
+            [sys.executable, "-m", "hems_ros.cli.main", "disable"],
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
     except subprocess.TimeoutExpired:
         return False, "hems disable did not finish within 30 s: run hems disable"
     answer = (done.stdout + done.stderr).strip().removeprefix("disable: ")
@@ -242,7 +309,10 @@ def report(traces, plan: GraspPlan, phase_starts: dict[str, list[float]], plot_p
     complete = [f for f in traces if len(phase_starts[f]) == len(plan.phases())]
     for finger in traces:
         if finger not in complete:
-            print(f"grasp: {finger}: its controller never ran every phase (inactive?): no summary", file=sys.stderr)
+            print(
+                f"grasp: {finger}: its controller never ran every phase (inactive?): no summary",
+                file=sys.stderr,
+            )
     rows = [summarize(f, traces[f], plan, phase_starts[f]) for f in complete]
     print(format_summary(rows, plan))
     if not complete:
@@ -266,7 +336,9 @@ def run(args: argparse.Namespace) -> int:
     with GraphClient("hems_grasp", sim_time=args.sim_time, namespace=args.namespace) as client:
         try:
             if args.enable:
-                traces, phase_starts, statuses = enabled_grasp(client, plan, fingers, args.enable_timeout, "grasp")
+                traces, phase_starts, statuses = enabled_grasp(
+                    client, plan, fingers, args.enable_timeout, "grasp"
+                )
             else:
                 traces, phase_starts, statuses = run_grasp(client, plan, fingers)
         except EnableRefused as error:
@@ -278,11 +350,17 @@ def run(args: argparse.Namespace) -> int:
         except (KeyboardInterrupt, ExternalShutdownException):
             if args.enable:
                 ok, message = disable_from_new_process()
-                print(f"grasp: stopped mid-grasp: {message}", file=sys.stdout if ok else sys.stderr, flush=True)
+                print(
+                    f"grasp: stopped mid-grasp: {message}",
+                    file=sys.stdout if ok else sys.stderr,
+                    flush=True,
+                )
             else:
-                print("grasp: stopped mid-grasp; the fingers keep their last setpoint "
-                      "(hems setpoint all 0 --unit mm releases them, hems disable stops all heating)",
-                      file=sys.stderr)
+                print(
+                    "grasp: stopped mid-grasp; the fingers keep their last setpoint "
+                    "(hems setpoint all 0 --unit mm releases them, hems disable stops all heating)",
+                    file=sys.stderr,
+                )
             raise
     rows = report(traces, plan, phase_starts, args.plot)
     problem = fault_report(statuses) or tracking_report(rows, plan, fingers)

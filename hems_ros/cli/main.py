@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
         parser = build_parser()
         from rclpy.executors import ExternalShutdownException
     except KeyboardInterrupt:
-        return 130      # Ctrl-C while the verbs and rclpy load: nothing started yet, nothing to say
+        return 130  # Ctrl-C while the verbs and rclpy load: nothing started yet, nothing to say
     args = parser.parse_args(argv)
     if args.verb is None:
         parser.print_help()
@@ -72,7 +72,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"hems {args.verb}: {error}", file=sys.stderr)
         return 1
     except ExternalShutdownException:
-        # rclpy's handler shut the context down on a signal; the verb's own cleanup ran on the way out
+        # rclpy's handler shut the context down on a signal; the verb's own cleanup ran
+        # on the way out
         if signal.SIGINT in _SIGNALS:
             print(f"hems {args.verb}: interrupted", file=sys.stderr)
             return 130

@@ -31,11 +31,17 @@ def _number(convert: Callable[[str], float], kind: str, check: Callable[[float],
     return parse
 
 
-finite = _number(float, "a number", lambda v: None if math.isfinite(v) else "must be a finite number")
+finite = _number(
+    float, "a number", lambda v: None if math.isfinite(v) else "must be a finite number"
+)
 positive = _number(float, "a number", params.positive)
 non_negative = _number(float, "a number", params.non_negative)
-positive_int = _number(int, "a whole number", lambda v: None if v > 0 else "must be a whole number > 0")
-non_negative_int = _number(int, "a whole number", lambda v: None if v >= 0 else "must be a whole number >= 0")
+positive_int = _number(
+    int, "a whole number", lambda v: None if v > 0 else "must be a whole number > 0"
+)
+non_negative_int = _number(
+    int, "a whole number", lambda v: None if v >= 0 else "must be a whole number >= 0"
+)
 
 
 def positive_or_max(text: str) -> float:
@@ -54,6 +60,10 @@ def namespace(text: str) -> str:
 
 
 def add_namespace_argument(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--namespace", type=namespace, default="/hems",
-                        help="the graph's namespace (default /hems): two hands in one ROS domain run "
-                             "as, e.g., hems up --namespace left and hems up --namespace right")
+    parser.add_argument(
+        "--namespace",
+        type=namespace,
+        default="/hems",
+        help="the graph's namespace (default /hems): two hands in one ROS domain run "
+        "as, e.g., hems up --namespace left and hems up --namespace right",
+    )

@@ -29,12 +29,21 @@ def register(subparsers) -> None:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--count", type=positive_int, default=50, help="number of probes (default 50)")
-    parser.add_argument("--rate", type=positive, default=50.0, help="probes per second (default 50 Hz)")
-    parser.add_argument("--timeout", type=positive, default=15.0,
-                        help="seconds to wait for discovery and for answers (default 15 s)")
-    parser.add_argument("--no-spawn", action="store_true",
-                        help="do not start a responder; use one already running")
+    parser.add_argument(
+        "--count", type=positive_int, default=50, help="number of probes (default 50)"
+    )
+    parser.add_argument(
+        "--rate", type=positive, default=50.0, help="probes per second (default 50 Hz)"
+    )
+    parser.add_argument(
+        "--timeout",
+        type=positive,
+        default=15.0,
+        help="seconds to wait for discovery and for answers (default 15 s)",
+    )
+    parser.add_argument(
+        "--no-spawn", action="store_true", help="do not start a responder; use one already running"
+    )
 
 
 def spawn_responder() -> subprocess.Popen:
@@ -70,8 +79,14 @@ def ping(count: int, rate: float, timeout: float) -> dict:
             return
         t_sent, duty = sent.pop(reply.sequence)
         rtts.append(time.monotonic() - t_sent)
-        if reply.counts != round(duty * COUNTS_PER_PERCENT) or abs(reply.position - duty * METRES_PER_PERCENT) > 1e-12:
-            errors.append(f"sequence {reply.sequence}: counts {reply.counts}, position {reply.position} for duty {duty}")
+        if (
+            reply.counts != round(duty * COUNTS_PER_PERCENT)
+            or abs(reply.position - duty * METRES_PER_PERCENT) > 1e-12
+        ):
+            errors.append(
+                f"sequence {reply.sequence}: counts {reply.counts}, position {reply.position} "
+                f"for duty {duty}"
+            )
         if reply.finger != "ping":
             errors.append(f"sequence {reply.sequence}: finger {reply.finger!r}")
 
@@ -84,7 +99,9 @@ def ping(count: int, rate: float, timeout: float) -> dict:
                 raise TimeoutError(f"no ping_responder discovered within {timeout:.0f} s")
             checked(rclpy.spin_once, node, timeout_sec=0.05)
         for sequence in range(count):
-            message = DutyCommand(finger="ping", duty_percent=(sequence * 7.3) % 100.0, sequence=sequence)
+            message = DutyCommand(
+                finger="ping", duty_percent=(sequence * 7.3) % 100.0, sequence=sequence
+            )
             message.header.stamp = node.get_clock().now().to_msg()
             sent[sequence] = (time.monotonic(), message.duty_percent)
             publisher.publish(message)
@@ -106,8 +123,10 @@ def report(result: dict) -> int:
     print(f"ping: {len(rtts_ms)}/{result['count']} answers over DDS")
     if rtts_ms:
         p99 = rtts_ms[min(len(rtts_ms) - 1, int(0.99 * len(rtts_ms)))]
-        print(f"round trip ms: min {rtts_ms[0]:.3f}  median {statistics.median(rtts_ms):.3f}  "
-              f"p99 {p99:.3f}  max {rtts_ms[-1]:.3f}")
+        print(
+            f"round trip ms: min {rtts_ms[0]:.3f}  median {statistics.median(rtts_ms):.3f}  "
+            f"p99 {p99:.3f}  max {rtts_ms[-1]:.3f}"
+        )
     for error in result["errors"][:10]:
         print(f"  error: {error}", file=sys.stderr)
     return 0 if not result["errors"] else 1

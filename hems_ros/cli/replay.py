@@ -28,21 +28,49 @@ def register(subparsers) -> None:
             "--clock publishes rosgraph_msgs/Clock with the bag's time so nodes with "
             "use_sim_time follow the replay (a recorded /clock topic is then not replayed). "
             "With --loop the bag restarts (and its clock jumps back) after the last message. "
-            "Ctrl-C or SIGTERM stops it and prints what was replayed so far (exit code 0)."),
+            "Ctrl-C or SIGTERM stops it and prints what was replayed so far (exit code 0)."
+        ),
     )
     parser.add_argument("bag", help="bag folder or .mcap file")
-    parser.add_argument("--rate", type=positive, default=1.0, help="speed factor (2 = twice as fast)")
+    parser.add_argument(
+        "--rate", type=positive, default=1.0, help="speed factor (2 = twice as fast)"
+    )
     parser.add_argument("--loop", action="store_true", help="replay until interrupted")
-    parser.add_argument("--topic", action="append", default=[], dest="topics", help="replay this topic (repeatable)")
-    parser.add_argument("--regex", default=None, help="replay topics fully matching this regular expression")
-    parser.add_argument("--remap", action="append", default=[], metavar="FROM:=TO",
-                        help="publish topic FROM on TO (repeatable)")
-    parser.add_argument("--clock", type=positive, nargs="?", const=100.0, default=0.0, metavar="HZ",
-                        help="publish /clock from the bag's time at HZ (default 100 Hz when given)")
-    parser.add_argument("--start-delay", type=non_negative, default=1.0,
-                        help="seconds between creating the publishers and the first message (discovery)")
-    parser.add_argument("--wait-subscribers", type=non_negative, default=0.0, metavar="SECONDS",
-                        help="before starting, wait up to SECONDS until every replayed topic has a subscriber")
+    parser.add_argument(
+        "--topic", action="append", default=[], dest="topics", help="replay this topic (repeatable)"
+    )
+    parser.add_argument(
+        "--regex", default=None, help="replay topics fully matching this regular expression"
+    )
+    parser.add_argument(
+        "--remap",
+        action="append",
+        default=[],
+        metavar="FROM:=TO",
+        help="publish topic FROM on TO (repeatable)",
+    )
+    parser.add_argument(
+        "--clock",
+        type=positive,
+        nargs="?",
+        const=100.0,
+        default=0.0,
+        metavar="HZ",
+        help="publish /clock from the bag's time at HZ (default 100 Hz when given)",
+    )
+    parser.add_argument(
+        "--start-delay",
+        type=non_negative,
+        default=1.0,
+        help="seconds between creating the publishers and the first message (discovery)",
+    )
+    parser.add_argument(
+        "--wait-subscribers",
+        type=non_negative,
+        default=0.0,
+        metavar="SECONDS",
+        help="before starting, wait up to SECONDS until every replayed topic has a subscriber",
+    )
     parser.set_defaults(func=run)
 
 
@@ -51,7 +79,7 @@ class ReplayResult:
     published: Counter = field(default_factory=Counter)
     loops: int = 0
     wall_s: float = 0.0
-    interrupted: bool = False   # stopped by SIGINT / SIGTERM before the bag (or --loop) was through
+    interrupted: bool = False  # stopped by SIGINT / SIGTERM before the bag (or --loop) was through
 
 
 def parse_remaps(items: Iterable[str]) -> dict[str, str]:
@@ -74,15 +102,27 @@ def replay_qos(offered: str, depth: int = 100):
         profiles = []
     profiles = [p for p in profiles or [] if isinstance(p, dict)]
     reliable = not profiles or all(str(p.get("reliability")) in ("reliable", "1") for p in profiles)
-    latched = bool(profiles) and all(str(p.get("durability")) in ("transient_local", "1") for p in profiles)
-    return QoSProfile(depth=depth,
-                      reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+    latched = bool(profiles) and all(
+        str(p.get("durability")) in ("transient_local", "1") for p in profiles
+    )
+    return QoSProfile(
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
+    )
 
 
-def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Iterable[str] | None = None,
-           regex: str | None = None, remap: dict[str, str] | None = None, clock_hz: float = 0.0,
-           start_delay: float = 1.0, wait_subscribers: float = 0.0) -> ReplayResult:
+def replay(
+    bag: str | Path,
+    rate: float = 1.0,
+    loop: bool = False,
+    topics: Iterable[str] | None = None,
+    regex: str | None = None,
+    remap: dict[str, str] | None = None,
+    clock_hz: float = 0.0,
+    start_delay: float = 1.0,
+    wait_subscribers: float = 0.0,
+) -> ReplayResult:
     """Republish ``bag`` on the live graph (rclpy must not be initialised by the caller)."""
     import rclpy
     from rclpy.duration import Duration
@@ -94,12 +134,18 @@ def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Itera
 
     if not (math.isfinite(rate) and rate > 0):
         raise ValueError(f"rate must be a finite number > 0, not {rate}")
-    for name, value in (("clock_hz", clock_hz), ("start_delay", start_delay), ("wait_subscribers", wait_subscribers)):
+    for name, value in (
+        ("clock_hz", clock_hz),
+        ("start_delay", start_delay),
+        ("wait_subscribers", wait_subscribers),
+    ):
         if not (math.isfinite(value) and value >= 0):
             raise ValueError(f"{name} must be a finite number >= 0, not {value}")
     remap = remap or {}
-    messages = sorted((m for m in iter_messages(bag, topics, regex) if not (clock_hz and m.topic == CLOCK_TOPIC)),
-                      key=lambda m: m.log_time_ns)
+    messages = sorted(
+        (m for m in iter_messages(bag, topics, regex) if not (clock_hz and m.topic == CLOCK_TOPIC)),
+        key=lambda m: m.log_time_ns,
+    )
     result = ReplayResult()
     if not messages:
         return result
@@ -110,13 +156,17 @@ def replay(bag: str | Path, rate: float = 1.0, loop: bool = False, topics: Itera
         for message in messages:
             if message.topic not in publishers:
                 publishers[message.topic] = node.create_publisher(
-                    message_class(message.type), remap.get(message.topic, message.topic),
-                    replay_qos(message.offered_qos_profiles))
+                    message_class(message.type),
+                    remap.get(message.topic, message.topic),
+                    replay_qos(message.offered_qos_profiles),
+                )
         clock = node.create_publisher(Clock, CLOCK_TOPIC, 10) if clock_hz > 0 else None
         time.sleep(start_delay)
         deadline = time.monotonic() + wait_subscribers
-        while (any(p.get_subscription_count() == 0 for p in publishers.values())
-               and time.monotonic() < deadline):
+        while (
+            any(p.get_subscription_count() == 0 for p in publishers.values())
+            and time.monotonic() < deadline
+        ):
             time.sleep(0.02)
         if wait_subscribers:
             time.sleep(0.2)  # matched here; the subscribers' side matches us a moment later
@@ -185,8 +235,17 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         remaps = parse_remaps(args.remap)
-        result = replay(args.bag, args.rate, args.loop, args.topics, args.regex, remaps, args.clock, args.start_delay,
-                        args.wait_subscribers)
+        result = replay(
+            args.bag,
+            args.rate,
+            args.loop,
+            args.topics,
+            args.regex,
+            remaps,
+            args.clock,
+            args.start_delay,
+            args.wait_subscribers,
+        )
     except (BagFormatError, FileNotFoundError, ValueError) as error:
         print(f"hems replay: {error}", file=sys.stderr)
         return 2
@@ -195,9 +254,14 @@ def run(args: argparse.Namespace) -> int:
         from hems_ros.bag import bag_info
 
         have = ", ".join(sorted(bag_info(args.bag).topics)) or "none"
-        print(f"hems replay: no message of {args.bag} on the selected topics; its topics: {have}", file=sys.stderr)
+        print(
+            f"hems replay: no message of {args.bag} on the selected topics; its topics: {have}",
+            file=sys.stderr,
+        )
         return 2
-    print(f"replayed {total} messages on {len(result.published)} topics in {result.wall_s:.3f} s "
-          f"({result.loops} full pass{'es' if result.loops != 1 else ''}"
-          f"{'; stopped by a signal' if result.interrupted else ''})")
+    print(
+        f"replayed {total} messages on {len(result.published)} topics in {result.wall_s:.3f} s "
+        f"({result.loops} full pass{'es' if result.loops != 1 else ''}"
+        f"{'; stopped by a signal' if result.interrupted else ''})"
+    )
     return 0

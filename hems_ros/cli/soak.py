@@ -20,31 +20,56 @@ from hems_ros.rosenv import child_environment
 
 MEMORY_EVERY_S = 10.0
 PROGRESS_EVERY_S = 60.0
-OPEN_M, CLOSED_M = (0.005, 0.010), (0.015, 0.025)     # tendon positions of a random grasp cycle
+OPEN_M, CLOSED_M = (0.005, 0.010), (0.015, 0.025)  # tendon positions of a random grasp cycle
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "soak", help="run the graph for N minutes with grasps and command-line joins; report its health",
-        description="Start the graph, record it, enable it and drive every finger through random grasp "
-                    "cycles (position setpoints between 5 and 25 mm of tendon travel) while command-line "
-                    "tools join the domain now and then (hems status, hems setpoint, hems enable). At the "
-                    "end: resident memory growth per process after the warm-up (limit 5 %), messages lost "
-                    "in the bag (gaps in sequence numbers, limit 0), control periods missed (encoder "
-                    "samples no duty command answered, limit 0.5 %) and faults (limit 0). Exit code 0 when "
-                    "every limit held, 1 otherwise.")
-    parser.add_argument("--minutes", type=positive, default=30.0, help="soak length, minutes (default 30)")
-    parser.add_argument("--warmup-minutes", type=positive, default=3.0,
-                        help="memory growth is counted from the end of this, minutes (default 3)")
-    parser.add_argument("--grasp-period-s", type=positive, default=8.0,
-                        help="one grasp cycle (close, then open) every this many seconds (default 8)")
-    parser.add_argument("--join-period-s", type=positive, default=30.0,
-                        help="a command-line tool joins every this many seconds (default 30)")
-    parser.add_argument("--seed", type=non_negative_int, default=1, help="random grasp targets (default 1)")
-    parser.add_argument("--report", type=Path, default=None, help="also write the report (Markdown) to this file")
+        "soak",
+        help="run the graph for N minutes with grasps and command-line joins; report its health",
+        description="Start the graph, record it, enable it and drive every finger through random "
+        "grasp cycles (position setpoints between 5 and 25 mm of tendon travel) while command-line "
+        "tools join the domain now and then (hems status, hems setpoint, hems enable). At the "
+        "end: resident memory growth per process after the warm-up (limit 5 %), messages lost "
+        "in the bag (gaps in sequence numbers, limit 0), control periods missed (encoder "
+        "samples no duty command answered, limit 0.5 %) and faults (limit 0). Exit code 0 when "
+        "every limit held, 1 otherwise.",
+    )
+    parser.add_argument(
+        "--minutes", type=positive, default=30.0, help="soak length, minutes (default 30)"
+    )
+    parser.add_argument(
+        "--warmup-minutes",
+        type=positive,
+        default=3.0,
+        help="memory growth is counted from the end of this, minutes (default 3)",
+    )
+    parser.add_argument(
+        "--grasp-period-s",
+        type=positive,
+        default=8.0,
+        help="one grasp cycle (close, then open) every this many seconds (default 8)",
+    )
+    parser.add_argument(
+        "--join-period-s",
+        type=positive,
+        default=30.0,
+        help="a command-line tool joins every this many seconds (default 30)",
+    )
+    parser.add_argument(
+        "--seed", type=non_negative_int, default=1, help="random grasp targets (default 1)"
+    )
+    parser.add_argument(
+        "--report", type=Path, default=None, help="also write the report (Markdown) to this file"
+    )
     add_graph_arguments(parser)
-    parser.add_argument("--record", type=Path, default=None, metavar="DIR",
-                        help="bag folder (default bags/soak_<date>_<time>)")
+    parser.add_argument(
+        "--record",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="bag folder (default bags/soak_<date>_<time>)",
+    )
     parser.set_defaults(func=run)
 
 
@@ -59,7 +84,13 @@ def _join(i: int, rng: random.Random) -> list[str]:
 
 class _Soak:
     def __init__(self, args: argparse.Namespace, graph: Graph, recorder, client, fingers) -> None:
-        self.args, self.graph, self.recorder, self.client, self.fingers = args, graph, recorder, client, fingers
+        self.args, self.graph, self.recorder, self.client, self.fingers = (
+            args,
+            graph,
+            recorder,
+            client,
+            fingers,
+        )
         self.rng = random.Random(args.seed)
         self.memory = soak.MemoryLog()
         self.faults: list[str] = []
@@ -89,13 +120,19 @@ class _Soak:
             if t >= next_grasp:
                 span = CLOSED_M if closing else OPEN_M
                 for finger in self.fingers:
-                    self.client.send_setpoint(finger, "position", self.rng.uniform(*span), confirm_s=2.0)
+                    self.client.send_setpoint(
+                        finger, "position", self.rng.uniform(*span), confirm_s=2.0
+                    )
                 self.grasps += not closing
                 closing = not closing
                 next_grasp += self.args.grasp_period_s / 2
             if joiner is None and t >= next_join:
-                joiner = subprocess.Popen(_join(self.joins, self.rng), env=child_environment(),
-                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                joiner = subprocess.Popen(
+                    _join(self.joins, self.rng),
+                    env=child_environment(),
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
+                )
                 self.joins += 1
                 next_join += self.args.join_period_s
             if joiner is not None and joiner.poll() is not None:
@@ -112,11 +149,20 @@ class _Soak:
             joiner.wait(timeout=60)
 
     def progress(self, t: float) -> None:
-        name, growth = max(((n, g) for n, (_, _, g) in self.memory.growth(60.0 * self.args.warmup_minutes).items()),
-                           key=lambda item: item[1], default=("-", 0.0))
+        name, growth = max(
+            (
+                (n, g)
+                for n, (_, _, g) in self.memory.growth(60.0 * self.args.warmup_minutes).items()
+            ),
+            key=lambda item: item[1],
+            default=("-", 0.0),
+        )
         memory = f", worst memory growth {100 * growth:+.1f} % ({name})" if name != "-" else ""
-        print(f"soak: {t / 60:.1f}/{self.args.minutes:g} min: {self.grasps} grasps, {self.joins} joins, "
-              f"{len(self.faults)} faults{memory}", flush=True)
+        print(
+            f"soak: {t / 60:.1f}/{self.args.minutes:g} min: {self.grasps} grasps, {self.joins} "
+            f"joins, {len(self.faults)} faults{memory}",
+            flush=True,
+        )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -137,18 +183,28 @@ def run(args: argparse.Namespace) -> int:
     graph = Graph(options)
     graph.start()
     recorder = RecorderProcess(folder, regex=record_regex(options.namespace))
-    print(f"hems soak: {len(graph.processes)} processes, recording into {recorder.output}, "
-          f"{args.minutes:g} min", flush=True)
+    print(
+        f"hems soak: {len(graph.processes)} processes, recording into {recorder.output}, "
+        f"{args.minutes:g} min",
+        flush=True,
+    )
     try:
         with GraphClient("hems_soak", namespace=options.namespace) as client:
             wait_until_recording(client, recorder, options.fingers, time.monotonic() + 120.0)
             ok, message = client.enable_when_ready(120.0, reset=True, retry_s=1.0)
             if not ok:
-                print(f"hems soak: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)
+                print(
+                    f"hems soak: could not enable the graph: {graph.with_exits(message)}",
+                    file=sys.stderr,
+                )
                 return 1
             run_ = _Soak(args, graph, recorder, client, options.fingers)
-            client.node.create_subscription(SupervisorStatus, names.supervisor_status_topic(options.namespace), run_.on_status,
-                                            qos.STATUS)
+            client.node.create_subscription(
+                SupervisorStatus,
+                names.supervisor_status_topic(options.namespace),
+                run_.on_status,
+                qos.STATUS,
+            )
             run_.run()
             for finger in options.fingers:
                 client.send_setpoint(finger, "position", 0.0, confirm_s=2.0)
@@ -161,9 +217,15 @@ def run(args: argparse.Namespace) -> int:
         return 1
     bag = load_bag(folder)
     result = soak.SoakResult(
-        minutes=args.minutes, grasps=run_.grasps, joins=run_.joins, faults=run_.faults,
-        memory=run_.memory.growth(60.0 * args.warmup_minutes), losses=soak.bag_losses(bag),
-        missed={finger: soak.missed_periods(bag, finger) for finger in options.fingers}, bag=str(folder))
+        minutes=args.minutes,
+        grasps=run_.grasps,
+        joins=run_.joins,
+        faults=run_.faults,
+        memory=run_.memory.growth(60.0 * args.warmup_minutes),
+        losses=soak.bag_losses(bag),
+        missed={finger: soak.missed_periods(bag, finger) for finger in options.fingers},
+        bag=str(folder),
+    )
     text = result.markdown()
     print(text)
     if args.report is not None:

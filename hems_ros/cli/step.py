@@ -28,28 +28,54 @@ SETPOINT_CONFIRM_S = 2.0
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "step", help="one recorded tendon-position step on a graph it starts (chapter 5 step run)",
-        description="Start the graph (default: index finger only), record it, enable it, step the tendon "
-                    "position 0 -> STEP -> 0 and print RMSE, overshoot and steady-state error from the bag. "
-                    "Chapter 5 rig: --physics-config ch5_straight_40n --pulley-ratio 1.")
+        "step",
+        help="one recorded tendon-position step on a graph it starts (chapter 5 step run)",
+        description="Start the graph (default: index finger only), record it, enable it, step the "
+        "tendon position 0 -> STEP -> 0 and print RMSE, overshoot and steady-state error from the "
+        "bag. Chapter 5 rig: --physics-config ch5_straight_40n --pulley-ratio 1.",
+    )
     add_graph_arguments(parser)
     parser.set_defaults(func=run, fingers="index")
-    parser.add_argument("--physics-config", default=None,
-                        help="physics parameter set of the actuation units (default: the params file's)")
-    parser.add_argument("--pulley-ratio", type=positive, default=transmission.PULLEY_RATIO,
-                        help="tendon / wire ratio the controllers convert with; must match the physics set "
-                             f"(default {transmission.PULLEY_RATIO:g}; 1 for ch5_straight_40n)")
-    parser.add_argument("--step-mm", type=positive, default=20.0, help="step height, tendon mm (default 20)")
-    parser.add_argument("--before-s", type=non_negative, default=2.0, help="seconds at 0 before the step")
+    parser.add_argument(
+        "--physics-config",
+        default=None,
+        help="physics parameter set of the actuation units (default: the params file's)",
+    )
+    parser.add_argument(
+        "--pulley-ratio",
+        type=positive,
+        default=transmission.PULLEY_RATIO,
+        help="tendon / wire ratio the controllers convert with; must match the physics set "
+        f"(default {transmission.PULLEY_RATIO:g}; 1 for ch5_straight_40n)",
+    )
+    parser.add_argument(
+        "--step-mm", type=positive, default=20.0, help="step height, tendon mm (default 20)"
+    )
+    parser.add_argument(
+        "--before-s", type=non_negative, default=2.0, help="seconds at 0 before the step"
+    )
     parser.add_argument("--step-s", type=positive, default=5.0, help="seconds at the step height")
-    parser.add_argument("--after-s", type=non_negative, default=8.0, help="seconds at 0 after the step (cooling)")
-    parser.add_argument("--cycles", type=positive_int, default=1,
-                        help="record this many steps, each with its time at 0 before and after (a run for "
-                             "hems diagnose, which needs three); the printed figures are the last step's "
-                             "(default 1)")
-    parser.add_argument("--record", type=Path, default=True, metavar="DIR",
-                        help="bag folder (default bags/step_<date>_<time>)")
-    parser.add_argument("--ready-timeout", type=positive, default=60.0, help="seconds to wait for the graph")
+    parser.add_argument(
+        "--after-s", type=non_negative, default=8.0, help="seconds at 0 after the step (cooling)"
+    )
+    parser.add_argument(
+        "--cycles",
+        type=positive_int,
+        default=1,
+        help="record this many steps, each with its time at 0 before and after (a run for "
+        "hems diagnose, which needs three); the printed figures are the last step's "
+        "(default 1)",
+    )
+    parser.add_argument(
+        "--record",
+        type=Path,
+        default=True,
+        metavar="DIR",
+        help="bag folder (default bags/step_<date>_<time>)",
+    )
+    parser.add_argument(
+        "--ready-timeout", type=positive, default=60.0, help="seconds to wait for the graph"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,7 +86,9 @@ def run(args: argparse.Namespace) -> int:
     try:
         options = graph_options(args)
         if args.physics_config:
-            load_params(args.physics_config)   # a bad name stops here, not in the unit after start-up
+            load_params(
+                args.physics_config
+            )  # a bad name stops here, not in the unit after start-up
         record = bag_folder(args.record, "step")
     except ValueError as error:
         print(f"step: {error}", file=sys.stderr)
@@ -77,19 +105,31 @@ def run(args: argparse.Namespace) -> int:
     recorder = RecorderProcess(record, regex=record_regex(options.namespace))
     finished = None
     try:
-        with GraphClient("hems_step", sim_time=options.sim_time, namespace=options.namespace) as client:
-            wait_until_recording(client, recorder, options.fingers, time.monotonic() + args.ready_timeout)
+        with GraphClient(
+            "hems_step", sim_time=options.sim_time, namespace=options.namespace
+        ) as client:
+            wait_until_recording(
+                client, recorder, options.fingers, time.monotonic() + args.ready_timeout
+            )
             ok, message = client.enable_when_ready(args.ready_timeout)
             if not ok:
-                print(f"step: could not enable the graph: {graph.with_exits(message)}", file=sys.stderr)
+                print(
+                    f"step: could not enable the graph: {graph.with_exits(message)}",
+                    file=sys.stderr,
+                )
                 return 1
             cycle = ((0.0, args.before_s), (args.step_mm * 1e-3, args.step_s), (0.0, args.after_s))
             for value, seconds in cycle * args.cycles:
                 print(f"step: position {value * 1e3:g} mm for {seconds:g} s", flush=True)
                 for finger in options.fingers:
-                    result = client.send_setpoint(finger, "position", value, confirm_s=SETPOINT_CONFIRM_S)
+                    result = client.send_setpoint(
+                        finger, "position", value, confirm_s=SETPOINT_CONFIRM_S
+                    )
                     if not result:
-                        print(f"step: {finger}: position setpoint {value:g} m: {result.message}", file=sys.stderr)
+                        print(
+                            f"step: {finger}: position setpoint {value:g} m: {result.message}",
+                            file=sys.stderr,
+                        )
                         return 1
                 client.spin_graph_time(seconds)
             state = client.snapshot(options.fingers, 0.3).supervisor
@@ -106,13 +146,18 @@ def run(args: argparse.Namespace) -> int:
     print_bag("step", finished)
     for finger in options.fingers:
         try:
-            figures = step_figures(record, finger, args.pulley_ratio, step_s=args.step_s, namespace=options.namespace)
+            figures = step_figures(
+                record, finger, args.pulley_ratio, step_s=args.step_s, namespace=options.namespace
+            )
         except ValueError as error:
             print(f"step: {error}", file=sys.stderr)
             return 1
         print(f"step: {finger}: " + ", ".join(f"{k} {v:.3f}" for k, v in figures.items()))
     if state is None or state.state_name != "ENABLED":
-        print(f"step: not a valid run: supervisor {state.state_name if state else 'silent'}"
-              f"{': ' + '; '.join(state.faults) if state and state.faults else ''}", file=sys.stderr)
+        print(
+            f"step: not a valid run: supervisor {state.state_name if state else 'silent'}"
+            f"{': ' + '; '.join(state.faults) if state and state.faults else ''}",
+            file=sys.stderr,
+        )
         return 1
     return 0

@@ -19,28 +19,60 @@ def rate_text(rate: float) -> str:
 
 
 def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--composed", action="store_true",
-                        help="run all nodes in one process (one thread, one wait set) instead of one process each")
-    parser.add_argument("--sim-time", action="store_true",
-                        help="run every node on simulated time from a /clock publisher")
-    parser.add_argument("--rate", type=positive_or_max, default=1.0,
-                        help="with --sim-time: the most simulated seconds per wall second (default 1), or max "
-                             "(as fast as the graph answers); the clock waits for every node each step, so a "
-                             "run's figures do not depend on the rate")
-    parser.add_argument("--params-file", type=Path, default=default_params_file(),
-                        help="ROS params file for every node (default config/hems.yaml)")
-    parser.add_argument("--extra-params", type=Path, action="append", metavar="FILE",
-                        help="ROS params file applied over --params-file (repeatable; later files win), e.g. "
-                             "the gains `hems tune --write-params FILE` writes")
-    parser.add_argument("--fingers", default="all",
-                        help="comma-separated fingers to bring up (default all six: " + ",".join(names.FINGERS) + ")")
-    parser.add_argument("--log-level", default="info", choices=("debug", "info", "warn", "error"),
-                        help="ROS log level of the nodes")
+    parser.add_argument(
+        "--composed",
+        action="store_true",
+        help="run all nodes in one process (one thread, one wait set) instead of one process each",
+    )
+    parser.add_argument(
+        "--sim-time",
+        action="store_true",
+        help="run every node on simulated time from a /clock publisher",
+    )
+    parser.add_argument(
+        "--rate",
+        type=positive_or_max,
+        default=1.0,
+        help="with --sim-time: the most simulated seconds per wall second (default 1), or max "
+        "(as fast as the graph answers); the clock waits for every node each step, so a "
+        "run's figures do not depend on the rate",
+    )
+    parser.add_argument(
+        "--params-file",
+        type=Path,
+        default=default_params_file(),
+        help="ROS params file for every node (default config/hems.yaml)",
+    )
+    parser.add_argument(
+        "--extra-params",
+        type=Path,
+        action="append",
+        metavar="FILE",
+        help="ROS params file applied over --params-file (repeatable; later files win), e.g. "
+        "the gains `hems tune --write-params FILE` writes",
+    )
+    parser.add_argument(
+        "--fingers",
+        default="all",
+        help="comma-separated fingers to bring up (default all six: "
+        + ",".join(names.FINGERS)
+        + ")",
+    )
+    parser.add_argument(
+        "--log-level",
+        default="info",
+        choices=("debug", "info", "warn", "error"),
+        help="ROS log level of the nodes",
+    )
     add_namespace_argument(parser)
-    parser.add_argument("--no-parameter-services", dest="parameter_services", action="store_false",
-                        help="start the separate processes without their ROS parameter services (ros2 param "
-                             "then does not reach them): a process joining the domain (hems setpoint, ros2 topic "
-                             "pub) then holds the graph up less often; the composed process keeps them")
+    parser.add_argument(
+        "--no-parameter-services",
+        dest="parameter_services",
+        action="store_false",
+        help="start the separate processes without their ROS parameter services (ros2 param "
+        "then does not reach them): a process joining the domain (hems setpoint, ros2 topic "
+        "pub) then holds the graph up less often; the composed process keeps them",
+    )
 
 
 def default_bag(prefix: str) -> Path:
@@ -48,14 +80,17 @@ def default_bag(prefix: str) -> Path:
 
 
 def bag_folder(record, prefix: str) -> Path:
-    """The folder ``--record`` asks for; ValueError if it is already used (checked before the graph starts)."""
+    """The folder ``--record`` asks for; ValueError if it is already used (checked before the
+    graph starts)."""
     folder = default_bag(prefix) if record is True else Path(record)
     if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
         raise ValueError(f"--record {folder}: exists and is not an empty folder")
     try:
         folder.parent.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise ValueError(f"--record {folder}: cannot make {error.filename}: {error.strerror}") from None
+        raise ValueError(
+            f"--record {folder}: cannot make {error.filename}: {error.strerror}"
+        ) from None
     return folder
 
 
@@ -71,8 +106,11 @@ def stop_recorder(prefix: str, recorder) -> bool:
 
 def print_bag(prefix: str, info) -> None:
     """The bag's path and its per-topic message counts (hems_ros.bag.bag_info)."""
-    print(f"{prefix}: bag {info.path}: {info.message_count} messages, "
-          f"{(info.end_ns - info.start_ns) * 1e-9:.1f} s", flush=True)
+    print(
+        f"{prefix}: bag {info.path}: {info.message_count} messages, "
+        f"{(info.end_ns - info.start_ns) * 1e-9:.1f} s",
+        flush=True,
+    )
     for topic, entry in sorted(info.topics.items()):
         print(f"  {topic:<40} {entry.count:>7}  {entry.type}")
 
@@ -80,26 +118,46 @@ def print_bag(prefix: str, info) -> None:
 def graph_options(args: argparse.Namespace) -> GraphOptions:
     fingers = names.parse_fingers(args.fingers)
     extra = tuple(args.extra_params or ())
-    for option, path in [("--params-file", args.params_file)] + [("--extra-params", p) for p in extra]:
+    for option, path in [("--params-file", args.params_file)] + [
+        ("--extra-params", p) for p in extra
+    ]:
         if not path.is_file():
             raise ValueError(f"{option} {path}: no such file")
-    return GraphOptions(params_file=args.params_file, extra_params_files=extra,
-                        composed=args.composed, sim_time=args.sim_time,
-                        rate=args.rate, fingers=fingers, log_level=args.log_level,
-                        parameter_services=args.parameter_services, namespace=args.namespace)
+    return GraphOptions(
+        params_file=args.params_file,
+        extra_params_files=extra,
+        composed=args.composed,
+        sim_time=args.sim_time,
+        rate=args.rate,
+        fingers=fingers,
+        log_level=args.log_level,
+        parameter_services=args.parameter_services,
+        namespace=args.namespace,
+    )
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "up", help="start the 16 nodes of the graph (Ctrl-C stops them all)",
-        description="Start six actuation units, three shoulder modules, six finger controllers and the "
-                    "supervisor, each in its own process (or composed in one). Ctrl-C or SIGTERM stops every "
-                    "node within 3 s. Then: hems enable; hems setpoint index 20 --unit mm; hems status.")
+        "up",
+        help="start the 16 nodes of the graph (Ctrl-C stops them all)",
+        description="Start six actuation units, three shoulder modules, six finger controllers and "
+        "the supervisor, each in its own process (or composed in one). Ctrl-C or SIGTERM stops "
+        "every node within 3 s. Then: hems enable; hems setpoint index 20 --unit mm; hems status.",
+    )
     add_graph_arguments(parser)
-    parser.add_argument("--duration", type=positive, default=None, help="stop by itself after this many seconds")
-    parser.add_argument("--record", nargs="?", type=Path, const=True, default=None, metavar="DIR",
-                        help="record every /hems topic, /diagnostics and /clock into the bag folder DIR "
-                             "(default bags/hems_<date>_<time>)")
+    parser.add_argument(
+        "--duration", type=positive, default=None, help="stop by itself after this many seconds"
+    )
+    parser.add_argument(
+        "--record",
+        nargs="?",
+        type=Path,
+        const=True,
+        default=None,
+        metavar="DIR",
+        help="record every /hems topic, /diagnostics and /clock into the bag folder DIR "
+        "(default bags/hems_<date>_<time>)",
+    )
     parser.set_defaults(func=run)
 
 
@@ -126,9 +184,12 @@ def run(args: argparse.Namespace) -> int:
 
         recorder = RecorderProcess(record, regex=record_regex(options.namespace))
         print(f"hems up: recording into {recorder.output}", flush=True)
-    print(f"hems up: {len(graph.processes)} processes "
-          f"({'composed' if options.composed else 'one per node'}"
-          f"{f', sim time x{rate_text(options.rate)}' if options.sim_time else ''}); Ctrl-C to stop", flush=True)
+    print(
+        f"hems up: {len(graph.processes)} processes "
+        f"({'composed' if options.composed else 'one per node'}"
+        f"{f', sim time x{rate_text(options.rate)}' if options.sim_time else ''}); Ctrl-C to stop",
+        flush=True,
+    )
     started = time.monotonic()
     reported: set[str] = set()
     recorded = True
@@ -148,6 +209,13 @@ def run(args: argparse.Namespace) -> int:
             recorded = stop_recorder("hems up", recorder)
         t0 = time.monotonic()
         codes = graph.stop()
-        print(f"hems up: stopped {len(codes)} processes in {time.monotonic() - t0:.2f} s"
-              + (f" (killed after the grace period: {', '.join(graph.killed)})" if graph.killed else ""), flush=True)
+        print(
+            f"hems up: stopped {len(codes)} processes in {time.monotonic() - t0:.2f} s"
+            + (
+                f" (killed after the grace period: {', '.join(graph.killed)})"
+                if graph.killed
+                else ""
+            ),
+            flush=True,
+        )
     return 0 if recorded else 1

@@ -7,7 +7,13 @@ import time
 from dataclasses import dataclass, field
 
 import rclpy
-from hems_msgs.msg import ActuatorState, ControllerStatus, FingerSetpoint, SupervisorStatus, WireForce
+from hems_msgs.msg import (
+    ActuatorState,
+    ControllerStatus,
+    FingerSetpoint,
+    SupervisorStatus,
+    WireForce,
+)
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -16,10 +22,12 @@ from std_srvs.srv import Trigger
 from hems_ros.graph import names
 from hems_ros.nodes import qos
 
-RETRY_S = 2.0   # a service call unanswered this long is sent again
+RETRY_S = 2.0  # a service call unanswered this long is sent again
 CLOCK_STALL_S = 5.0  # /clock standing still this long (wall) means the graph's clock is gone
-MATCH_ALL_S = 1.0   # a subscription that never matches (incompatible QoS) delays a setpoint this long at most
-RESEND_S = 0.3      # a setpoint the controller status does not show yet is sent again after this long
+MATCH_ALL_S = (
+    1.0  # a subscription that never matches (incompatible QoS) delays a setpoint this long at most
+)
+RESEND_S = 0.3  # a setpoint the controller status does not show yet is sent again after this long
 
 
 def checked(call, *args, **kwargs):
@@ -63,11 +71,14 @@ class Snapshot:
         """The supervisor not heard yet, or a finger whose controller reported without its
         unit's state or its wire force."""
         return self.supervisor is None or any(
-            f not in self.states or f not in self.forces for f in self.controllers)
+            f not in self.states or f not in self.forces for f in self.controllers
+        )
 
 
 class GraphClient:
-    def __init__(self, name: str = "hems_cli", sim_time: bool = False, namespace: str = names.NAMESPACE) -> None:
+    def __init__(
+        self, name: str = "hems_cli", sim_time: bool = False, namespace: str = names.NAMESPACE
+    ) -> None:
         """``sim_time``: the graph runs on /clock (``hems up --sim-time``); the client then
         stamps its setpoints with the graph's time and :meth:`spin_graph_time` counts it.
         ``namespace``: the graph's (``hems up --namespace``)."""
@@ -75,8 +86,11 @@ class GraphClient:
             rclpy.init(args=[])
         self.sim_time = sim_time
         self.namespace = namespace
-        self.node = Node(f"{name}_{int(time.time() * 1e3) % 100000}", namespace=namespace,
-                         parameter_overrides=[Parameter("use_sim_time", value=True)] if sim_time else [])
+        self.node = Node(
+            f"{name}_{int(time.time() * 1e3) % 100000}",
+            namespace=namespace,
+            parameter_overrides=[Parameter("use_sim_time", value=True)] if sim_time else [],
+        )
         self._setpoint_pubs: dict[str, object] = {}
         # Endpoints are kept for the client's life: every new endpoint is announced to all
         # sixteen nodes, which costs them CPU at the moment they should be controlling.
@@ -97,7 +111,11 @@ class GraphClient:
     def spin_for(self, seconds: float) -> None:
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline:
-            checked(rclpy.spin_once, self.node, timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())))
+            checked(
+                rclpy.spin_once,
+                self.node,
+                timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())),
+            )
 
     def spin_graph_time(self, seconds: float, stall_s: float = CLOCK_STALL_S) -> None:
         """Spin for ``seconds`` of the graph's time: wall seconds, or on sim time seconds of
@@ -115,7 +133,7 @@ class GraphClient:
                 last, moved = now, time.monotonic()
             elif time.monotonic() - moved > stall_s:
                 raise RuntimeError(f"the graph's /clock has not moved for {stall_s:g} s")
-            if now > 0:   # 0 until the first /clock message
+            if now > 0:  # 0 until the first /clock message
                 start = now if start is None else start
                 if now - start >= seconds * 1e9:
                     return
@@ -124,7 +142,9 @@ class GraphClient:
     def _service_client(self, command: str):
         client = self._service_clients.get(command)
         if client is None:
-            client = self._service_clients[command] = self.node.create_client(Trigger, names.service(command, self.namespace))
+            client = self._service_clients[command] = self.node.create_client(
+                Trigger, names.service(command, self.namespace)
+            )
         return client
 
     def call(self, command: str, timeout: float = 10.0) -> tuple[bool, str]:
@@ -144,22 +164,35 @@ class GraphClient:
         if command == "enable":
             self._service_client("estop")
         if not client.wait_for_service(timeout_sec=timeout):
-            return False, f"no supervisor answers {names.service(command, self.namespace)} (is the graph up?)"
+            return (
+                False,
+                f"no supervisor answers {names.service(command, self.namespace)} (is "
+                f"the graph up?)",
+            )
         # The middleware drops a response sent before the service has matched this client's
         # response reader (wait_for_service sees only the request side), which a new process
         # meets now and then: ask again. The four commands give the same answer when repeated.
         deadline = time.monotonic() + timeout
         while True:
             future = client.call_async(Trigger.Request())
-            checked(rclpy.spin_until_future_complete, self.node, future,
-                         timeout_sec=max(0.0, min(RETRY_S, deadline - time.monotonic())))
+            checked(
+                rclpy.spin_until_future_complete,
+                self.node,
+                future,
+                timeout_sec=max(0.0, min(RETRY_S, deadline - time.monotonic())),
+            )
             if future.result() is not None:
                 return future.result().success, future.result().message
             client.remove_pending_request(future)
             if time.monotonic() >= deadline:
-                return False, f"{names.service(command, self.namespace)} did not answer within {timeout:g} s"
+                return (
+                    False,
+                    f"{names.service(command, self.namespace)} did not answer within {timeout:g} s",
+                )
 
-    def enable_when_ready(self, timeout: float, reset: bool = False, retry_s: float = 2.0) -> tuple[bool, str]:
+    def enable_when_ready(
+        self, timeout: float, reset: bool = False, retry_s: float = 2.0
+    ) -> tuple[bool, str]:
         """Call ``enable`` until the supervisor accepts it (it refuses while streams are still
         coming up) or ``timeout`` s have passed; (success, last message).
 
@@ -170,14 +203,22 @@ class GraphClient:
         while time.monotonic() < deadline:
             if reset:
                 self.call("reset", timeout=max(1.0, min(5.0, deadline - time.monotonic())))
-            ok, message = self.call("enable", timeout=max(1.0, min(5.0, deadline - time.monotonic())))
+            ok, message = self.call(
+                "enable", timeout=max(1.0, min(5.0, deadline - time.monotonic()))
+            )
             if ok:
                 break
             self.spin_for(retry_s)
         return ok, message
 
-    def send_setpoint(self, finger: str, mode: str, value: float, timeout: float = 5.0,
-                      confirm_s: float | None = None) -> SetpointResult:
+    def send_setpoint(
+        self,
+        finger: str,
+        mode: str,
+        value: float,
+        timeout: float = 5.0,
+        confirm_s: float | None = None,
+    ) -> SetpointResult:
         """Publish one setpoint once the finger's controller is subscribed (``timeout`` s).
 
         It also waits, up to MATCH_ALL_S more, until every other subscription this process
@@ -192,12 +233,15 @@ class GraphClient:
         controller on its old setpoint."""
         topic = names.topic(finger, "setpoint", self.namespace)
         if confirm_s is not None:
-            self._watch_status(finger)   # discovered while the setpoint writer is being matched
+            self._watch_status(finger)  # discovered while the setpoint writer is being matched
         publisher = self._setpoint_publisher(finger)
         if self.fingers_without_readers([finger], 1, timeout):
             return SetpointResult(False, None, f"no finger_controller subscribed to {topic}")
         until = time.monotonic() + MATCH_ALL_S
-        while publisher.get_subscription_count() < self.node.count_subscribers(topic) and time.monotonic() < until:
+        while (
+            publisher.get_subscription_count() < self.node.count_subscribers(topic)
+            and time.monotonic() < until
+        ):
             checked(rclpy.spin_once, self.node, timeout_sec=0.02)
         before = self._statuses.get(finger)
         self._publish_setpoint(publisher, mode, value)
@@ -210,25 +254,34 @@ class GraphClient:
             checked(rclpy.spin_once, self.node, timeout_sec=0.01)
             status = self._statuses.get(finger)
             if status is not None:
-                if status.mode == mode and math.isclose(status.setpoint, value, rel_tol=1e-9, abs_tol=1e-12):
+                if status.mode == mode and math.isclose(
+                    status.setpoint, value, rel_tol=1e-9, abs_tol=1e-12
+                ):
                     return SetpointResult(True, True, "in force (controller status)")
                 if rejected is None:
                     rejected = status.rejected_setpoints
                 elif status.rejected_setpoints > rejected:
-                    return SetpointResult(True, False, f"rejected by the controller: {status.last_rejection}")
+                    return SetpointResult(
+                        True, False, f"rejected by the controller: {status.last_rejection}"
+                    )
             if time.monotonic() >= resend:
                 self._publish_setpoint(publisher, mode, value)
                 resend = time.monotonic() + RESEND_S
         status = self._statuses.get(finger)
-        seen = ("no controller status received" if status is None else
-                f"the controller status shows {status.mode} {status.setpoint:g}")
+        seen = (
+            "no controller status received"
+            if status is None
+            else f"the controller status shows {status.mode} {status.setpoint:g}"
+        )
         return SetpointResult(True, False, f"sent, but not in force after {confirm_s:g} s ({seen})")
 
     def supervisor_status(self, timeout: float = 2.0) -> SupervisorStatus | None:
         """The supervisor's latest status (transient local: the last one comes at once to a
         new reader), or None when none comes within ``timeout`` s."""
         got: list = []
-        sub = self.node.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.namespace), got.append, qos.STATUS)
+        sub = self.node.create_subscription(
+            SupervisorStatus, names.supervisor_status_topic(self.namespace), got.append, qos.STATUS
+        )
         deadline = time.monotonic() + timeout
         while not got and time.monotonic() < deadline:
             checked(rclpy.spin_once, self.node, timeout_sec=0.02)
@@ -238,7 +291,9 @@ class GraphClient:
     def _setpoint_publisher(self, finger: str):
         publisher = self._setpoint_pubs.get(finger)
         if publisher is None:
-            publisher = self.node.create_publisher(FingerSetpoint, names.topic(finger, "setpoint", self.namespace), qos.COMMAND)
+            publisher = self.node.create_publisher(
+                FingerSetpoint, names.topic(finger, "setpoint", self.namespace), qos.COMMAND
+            )
             self._setpoint_pubs[finger] = publisher
         return publisher
 
@@ -263,27 +318,53 @@ class GraphClient:
     def _watch_status(self, finger: str) -> None:
         if finger not in self._status_subs:
             self._status_subs[finger] = self.node.create_subscription(
-                ControllerStatus, names.topic(finger, "controller_status", self.namespace),
-                lambda m, f=finger: self._statuses.__setitem__(f, m), qos.CONTROLLER_STATUS)
+                ControllerStatus,
+                names.topic(finger, "controller_status", self.namespace),
+                lambda m, f=finger: self._statuses.__setitem__(f, m),
+                qos.CONTROLLER_STATUS,
+            )
 
-    def snapshot(self, fingers=names.FINGERS, seconds: float = 0.5, supervisor_wait_s: float = 5.0) -> Snapshot:
+    def snapshot(
+        self, fingers=names.FINGERS, seconds: float = 0.5, supervisor_wait_s: float = 5.0
+    ) -> Snapshot:
         """Listen for ``seconds``, and up to ``supervisor_wait_s`` longer while the snapshot is
         :meth:`Snapshot.incomplete`: DDS discovery between a new process and the graph now and
         then waits for a periodic announcement, seconds later, and `hems status` reported a
         running supervisor as not running, or a finger's position and force as missing."""
         snap = Snapshot()
-        subs = [self.node.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.namespace),
-                                              lambda m: setattr(snap, "supervisor", m), qos.STATUS)]
+        subs = [
+            self.node.create_subscription(
+                SupervisorStatus,
+                names.supervisor_status_topic(self.namespace),
+                lambda m: setattr(snap, "supervisor", m),
+                qos.STATUS,
+            )
+        ]
         for finger in fingers:
-            subs.append(self.node.create_subscription(
-                ControllerStatus, names.topic(finger, "controller_status", self.namespace),
-                lambda m, f=finger: snap.controllers.__setitem__(f, m), qos.CONTROLLER_STATUS))
-            subs.append(self.node.create_subscription(
-                ActuatorState, names.sim_topic(finger, "state", self.namespace), lambda m, f=finger: snap.states.__setitem__(f, m),
-                qos.SENSOR))
-            subs.append(self.node.create_subscription(
-                WireForce, names.topic(finger, "wire_force", self.namespace), lambda m, f=finger: snap.forces.__setitem__(f, m),
-                qos.SENSOR))
+            subs.append(
+                self.node.create_subscription(
+                    ControllerStatus,
+                    names.topic(finger, "controller_status", self.namespace),
+                    lambda m, f=finger: snap.controllers.__setitem__(f, m),
+                    qos.CONTROLLER_STATUS,
+                )
+            )
+            subs.append(
+                self.node.create_subscription(
+                    ActuatorState,
+                    names.sim_topic(finger, "state", self.namespace),
+                    lambda m, f=finger: snap.states.__setitem__(f, m),
+                    qos.SENSOR,
+                )
+            )
+            subs.append(
+                self.node.create_subscription(
+                    WireForce,
+                    names.topic(finger, "wire_force", self.namespace),
+                    lambda m, f=finger: snap.forces.__setitem__(f, m),
+                    qos.SENSOR,
+                )
+            )
         self.spin_for(seconds)
         deadline = time.monotonic() + supervisor_wait_s
         while snap.incomplete() and time.monotonic() < deadline:

@@ -12,7 +12,9 @@ def graph_topics(fingers, namespace: str = names.NAMESPACE) -> list[str]:
     their publisher is reliable but not latched, so a recorder joining late misses one)."""
     topics = [names.supervisor_status_topic(namespace)]
     for finger in fingers:
-        topics += [names.topic(finger, s, namespace) for s in ("encoder", "wire_force", "duty", "setpoint")]
+        topics += [
+            names.topic(finger, s, namespace) for s in ("encoder", "wire_force", "duty", "setpoint")
+        ]
     return topics
 
 
@@ -26,9 +28,13 @@ def wait_until_recording(client, recorder, fingers, deadline: float) -> None:
     for finger in fingers:
         while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
             pass
-    recorder.wait_for_topics(graph_topics(fingers, client.namespace), timeout=max(1.0, deadline - time.monotonic()))
+    recorder.wait_for_topics(
+        graph_topics(fingers, client.namespace), timeout=max(1.0, deadline - time.monotonic())
+    )
     # two readers per setpoint writer: the controller's and the recorder's
     unmatched = client.fingers_without_readers(fingers, 2, max(1.0, deadline - time.monotonic()))
     if unmatched:
-        raise TimeoutError("the recorder's setpoint readers did not match this tool's writers in time: "
-                           + ", ".join(names.topic(f, "setpoint", client.namespace) for f in unmatched))
+        raise TimeoutError(
+            "the recorder's setpoint readers did not match this tool's writers in time: "
+            + ", ".join(names.topic(f, "setpoint", client.namespace) for f in unmatched)
+        )

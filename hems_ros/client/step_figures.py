@@ -17,8 +17,10 @@ def step_span(values: np.ndarray) -> tuple[int, int]:
     values = np.asarray(values, dtype=float)
     raised = np.flatnonzero(values != 0.0)
     if raised.size == 0 or raised[-1] == values.size - 1:
-        raise ValueError(f"{values.size} setpoint messages ({', '.join(f'{v:g}' for v in values)} m) "
-                         "hold no step up and back to 0")
+        raise ValueError(
+            f"{values.size} setpoint messages ({', '.join(f'{v:g}' for v in values)} m) "
+            "hold no step up and back to 0"
+        )
     last = raised[-1]
     first = last
     while first > 0 and values[first - 1] == values[last]:
@@ -26,7 +28,9 @@ def step_span(values: np.ndarray) -> tuple[int, int]:
     return int(first), int(last + 1)
 
 
-def _taken_at(bag, finger: str, value: float, sent_s: float, namespace: str = names.NAMESPACE) -> float:
+def _taken_at(
+    bag, finger: str, value: float, sent_s: float, namespace: str = names.NAMESPACE
+) -> float:
     """When the finger's controller took the setpoint ``value`` sent at ``sent_s``: the stamp
     of its first accepted /commands record of that value from then on (the graph's clock, so on
     sim time the sample it acted from), or ``sent_s`` for a bag without the records."""
@@ -35,19 +39,28 @@ def _taken_at(bag, finger: str, value: float, sent_s: float, namespace: str = na
     if records is None or len(records) == 0:
         return sent_s
     stamp = records.stamp
-    taken = np.flatnonzero(records["accepted"] & (records["value"] == value) & (stamp >= sent_s - 1e-3))
+    taken = np.flatnonzero(
+        records["accepted"] & (records["value"] == value) & (stamp >= sent_s - 1e-3)
+    )
     return float(stamp[taken[0]]) if taken.size else sent_s
 
 
-def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.0,
-                 step_s: float | None = None, namespace: str = names.NAMESPACE) -> dict[str, float]:
+def step_figures(
+    bag_path: Path,
+    finger: str,
+    ratio: float,
+    settle_s: float = 1.0,
+    step_s: float | None = None,
+    namespace: str = names.NAMESPACE,
+) -> dict[str, float]:
     """RMSE (whole step), overshoot (first peak, :func:`hems_ros.control.metrics.overshoot`) and
     steady-state error (mean over its last ``settle_s``), tendon mm.
 
     The step runs from the moment the controller took its setpoint (:func:`_taken_at`) for
     ``step_s`` (default: until the controller took the next one): a tool that sends the setpoints
     late, or a clock that ran on meanwhile, then changes neither the start nor the length the
-    figures cover. ValueError when the bag does not hold the step's setpoints (:func:`step_span`)."""
+    figures cover. ValueError when the bag does not hold the step's setpoints
+    (:func:`step_span`)."""
     from hems_ros.bag import load_bag
     from hems_ros.control import metrics
 
@@ -69,6 +82,10 @@ def step_figures(bag_path: Path, finger: str, ratio: float, settle_s: float = 1.
     height = 1e3 * values[rise]
     during = (t >= start) & (t < end)
     settled = (t >= end - settle_s) & (t < end)
-    return {"rmse_mm": metrics.rmse(y[during], np.full(int(during.sum()), height)),
-            "overshoot_mm": metrics.overshoot(y[during], metrics.StepSegment(0, int(during.sum()), 0.0, height)),
-            "steady_state_error_mm": float(np.mean(height - y[settled]))}
+    return {
+        "rmse_mm": metrics.rmse(y[during], np.full(int(during.sum()), height)),
+        "overshoot_mm": metrics.overshoot(
+            y[during], metrics.StepSegment(0, int(during.sum()), 0.0, height)
+        ),
+        "steady_state_error_mm": float(np.mean(height - y[settled])),
+    }

@@ -24,12 +24,19 @@ HEADER_SIZE = 4
 CDR_LE_HEADER = b"\x00\x01\x00\x00"
 LITTLE_ENDIAN_KINDS = (0x01, 0x03)  # CDR_LE, PL_CDR_LE
 SCALARS = {  # name: (struct code, size, numpy dtype)
-    "bool": ("?", 1, np.bool_), "byte": ("B", 1, np.uint8), "char": ("B", 1, np.uint8),
-    "int8": ("b", 1, np.int8), "uint8": ("B", 1, np.uint8),
-    "int16": ("h", 2, np.int16), "uint16": ("H", 2, np.uint16),
-    "int32": ("i", 4, np.int32), "uint32": ("I", 4, np.uint32),
-    "int64": ("q", 8, np.int64), "uint64": ("Q", 8, np.uint64),
-    "float32": ("f", 4, np.float32), "float64": ("d", 8, np.float64),
+    "bool": ("?", 1, np.bool_),
+    "byte": ("B", 1, np.uint8),
+    "char": ("B", 1, np.uint8),
+    "int8": ("b", 1, np.int8),
+    "uint8": ("B", 1, np.uint8),
+    "int16": ("h", 2, np.int16),
+    "uint16": ("H", 2, np.uint16),
+    "int32": ("i", 4, np.int32),
+    "uint32": ("I", 4, np.uint32),
+    "int64": ("q", 8, np.int64),
+    "uint64": ("Q", 8, np.uint64),
+    "float32": ("f", 4, np.float32),
+    "float64": ("d", 8, np.float64),
 }
 
 
@@ -43,7 +50,7 @@ class Column:
 
     name: str
     dtype: Any  # numpy dtype for scalars, ``object`` for strings and sequences
-    kind: str      # "scalar", "string", "array" (numpy per message) or "list"
+    kind: str  # "scalar", "string", "array" (numpy per message) or "list"
 
 
 @dataclass(frozen=True)
@@ -64,8 +71,8 @@ class _Emitter:
         self.columns: list[Column] = []
         self.values: list[str] = []
         self.variables = 0
-        self.modulus = 8     # o - HEADER_SIZE is known modulo this...
-        self.phase = 0       # ...to equal this
+        self.modulus = 8  # o - HEADER_SIZE is known modulo this...
+        self.phase = 0  # ...to equal this
         self.pending_fmt = ""
         self.pending_vars: list[str] = []
         self.pending_size = 0
@@ -81,7 +88,9 @@ class _Emitter:
     def flush(self) -> None:
         if self.pending_vars:
             targets = ", ".join(self.pending_vars) + ("," if len(self.pending_vars) == 1 else "")
-            self.lines.append(f"{targets} = unpack_from('<{self.pending_fmt}', b, o); o += {self.pending_size}")
+            self.lines.append(
+                f"{targets} = unpack_from('<{self.pending_fmt}', b, o); o += {self.pending_size}"
+            )
         elif self.pending_size:
             self.lines.append(f"o += {self.pending_size}")
         self.pending_fmt, self.pending_vars, self.pending_size = "", [], 0
@@ -143,7 +152,9 @@ class _Emitter:
             self.lines.append(f"if {count}: o += ({HEADER_SIZE} - o) % {size}")
         target = self.var()
         dtype_name = self.helper(f"dt_{primitive}", np.dtype(dtype))
-        self.lines.append(f"{target} = frombuffer(b, {dtype_name}, {count}, o).copy(); o += {count} * {size}")
+        self.lines.append(
+            f"{target} = frombuffer(b, {dtype_name}, {count}, o).copy(); o += {count} * {size}"
+        )
         if isinstance(count, int):
             self.advance(count * size)
         else:
@@ -162,7 +173,10 @@ class _Emitter:
             if field.type == "string":
                 self.column(Column(name, object, "string"), self.string())
             elif field.type in PRIMITIVES:
-                self.column(Column(name, np.dtype(SCALARS[field.type][2]), "scalar"), self.scalar(field.type))
+                self.column(
+                    Column(name, np.dtype(SCALARS[field.type][2]), "scalar"),
+                    self.scalar(field.type),
+                )
             else:
                 for sub in self.types[field.type]:
                     self.field(sub, f"{name}.")
@@ -176,8 +190,11 @@ class _Emitter:
     def element_list(self, type_name: str, count: str | int) -> str:
         reader = f"read_{type_name.replace('/', '_')}"
         if reader not in self.helpers:
-            self.helpers[reader] = (_read_string if type_name == "string"
-                                    else _element_reader(type_name, self.types, self.helpers))
+            self.helpers[reader] = (
+                _read_string
+                if type_name == "string"
+                else _element_reader(type_name, self.types, self.helpers)
+            )
         self.flush()
         target = self.var()
         self.lines.append(f"{target} = []")
@@ -198,7 +215,7 @@ class _Emitter:
 def _read_string(b: bytes, o: int) -> tuple[str, int]:
     o += (HEADER_SIZE - o) % 4
     (length,) = struct.unpack_from("<I", b, o)
-    return str(b[o + 4:o + 3 + length], "utf-8"), o + 4 + length
+    return str(b[o + 4 : o + 3 + length], "utf-8"), o + 4 + length
 
 
 def _compile(name: str, emitter: _Emitter, body_result: str, signature: str) -> Callable:
@@ -211,7 +228,9 @@ def _compile(name: str, emitter: _Emitter, body_result: str, signature: str) -> 
     return namespace[name]  # type: ignore[return-value]
 
 
-def _element_reader(type_name: str, types: dict[str, list[Field]], helpers: dict[str, object]) -> Callable:
+def _element_reader(
+    type_name: str, types: dict[str, list[Field]], helpers: dict[str, object]
+) -> Callable:
     emitter = _Emitter(types, helpers)
     emitter.modulus = 1
     emitter.message(type_name)
@@ -228,7 +247,9 @@ def build_decoder(type_name: str, types: dict[str, list[Field]]) -> Decoder:
 
     def decode(data: bytes) -> tuple:
         if len(data) < HEADER_SIZE or data[1] not in LITTLE_ENDIAN_KINDS:
-            raise CdrError(f"{type_name}: not little-endian CDR (encapsulation {bytes(data[:4]).hex()})")
+            raise CdrError(
+                f"{type_name}: not little-endian CDR (encapsulation {bytes(data[:4]).hex()})"
+            )
         try:
             return body(data)
         except (struct.error, ValueError, UnicodeDecodeError) as error:
@@ -247,7 +268,9 @@ class _EncodeEmitter(_Emitter):
 
     def field(self, field: Field, prefix: str) -> None:
         if field.array is not None:
-            raise DefinitionError(f"field {prefix}{field.name}: the encoder writes no arrays or sequences")
+            raise DefinitionError(
+                f"field {prefix}{field.name}: the encoder writes no arrays or sequences"
+            )
         super().field(field, prefix)
 
     def flush(self) -> None:
@@ -264,7 +287,10 @@ class _EncodeEmitter(_Emitter):
         self.align(4)
         self.flush()
         target = self.var()
-        self.lines.append(f"t = {target}.encode('utf-8'); out += pack('<I', len(t) + 1); out += t; out += b'\\x00'")
+        self.lines.append(
+            f"t = {target}.encode('utf-8'); out += pack('<I', len(t) + 1); out += t; "
+            f"out += b'\\x00'"
+        )
         self.unknown_phase()
         return target
 

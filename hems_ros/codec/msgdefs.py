@@ -19,14 +19,30 @@ from functools import lru_cache
 from pathlib import Path
 
 SEPARATOR = "=" * 80
-PRIMITIVES = frozenset({
-    "bool", "byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32",
-    "int64", "uint64", "float32", "float64", "string", "wstring",
-})
+PRIMITIVES = frozenset(
+    {
+        "bool",
+        "byte",
+        "char",
+        "int8",
+        "uint8",
+        "int16",
+        "uint16",
+        "int32",
+        "uint32",
+        "int64",
+        "uint64",
+        "float32",
+        "float64",
+        "string",
+        "wstring",
+    }
+)
 UNBOUNDED = -1
 _FIELD = re.compile(
     r"^(?P<type>[A-Za-z][\w/]*)(?:<=(?P<strbound>\d+))?"
-    r"(?:\[(?P<array>(?:<=)?\d*)\])?\s+(?P<name>[A-Za-z]\w*)(?P<rest>.*)$")
+    r"(?:\[(?P<array>(?:<=)?\d*)\])?\s+(?P<name>[A-Za-z]\w*)(?P<rest>.*)$"
+)
 _SECTION = re.compile(r"^={80}\n(?:MSG|IDL): (\S+)\n", re.MULTILINE)
 
 
@@ -37,8 +53,8 @@ class DefinitionError(ValueError):
 @dataclass(frozen=True)
 class Field:
     name: str
-    type: str            # a primitive name or a full name ``pkg/msg/Type``
-    array: int | None    # None: scalar; UNBOUNDED: sequence; n >= 0: fixed array of n
+    type: str  # a primitive name or a full name ``pkg/msg/Type``
+    array: int | None  # None: scalar; UNBOUNDED: sequence; n >= 0: fixed array of n
     bounded: bool = False  # ``T[<=n]``: a sequence with an upper bound (CDR like UNBOUNDED)
 
     @property
@@ -111,7 +127,8 @@ def msg_text(type_name: str) -> str:
     if path is None:
         raise DefinitionError(
             f"no installed definition of {full_name(type_name)} under "
-            + ", ".join(str(p / 'share') for p in share_prefixes()))
+            + ", ".join(str(p / 'share') for p in share_prefixes())
+        )
     return path.read_text(encoding="utf-8").rstrip("\n")
 
 
@@ -157,9 +174,13 @@ def parse_full_definition(type_name: str, text: str) -> dict[str, list[Field]]:
     for index, match in enumerate(matches):
         end = matches[index + 1].start() if index + 1 < len(matches) else len(text)
         name = full_name(match[1])
-        types[name] = parse_msg(text[match.end():end], name.split("/")[0])
-    missing = {f.type for fields in types.values() for f in fields
-               if f.type not in PRIMITIVES and f.type not in types}
+        types[name] = parse_msg(text[match.end() : end], name.split("/")[0])
+    missing = {
+        f.type
+        for fields in types.values()
+        for f in fields
+        if f.type not in PRIMITIVES and f.type not in types
+    }
     if missing:
         raise DefinitionError(f"definition of {root} lacks {', '.join(sorted(missing))}")
     return types

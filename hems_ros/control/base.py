@@ -100,7 +100,7 @@ class Controller:
 
     strategy = ""
     gains_type: type[Any] = object
-    gains: Any          # the gains_type instance
+    gains: Any  # the gains_type instance
     _bias: float
     fault: str | None
 
@@ -165,7 +165,9 @@ class Controller:
         """
         check_mode(mode)
         if gains is not None and not isinstance(gains, self.gains_type):
-            raise TypeError(f"{self.strategy} needs {self.gains_type.__name__}, got {type(gains).__name__}")
+            raise TypeError(
+                f"{self.strategy} needs {self.gains_type.__name__}, got {type(gains).__name__}"
+            )
         y = float(measurement)
         if not math.isfinite(y):
             self._trip(f"measurement is {y} at switch to {mode} mode")

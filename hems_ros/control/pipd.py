@@ -34,9 +34,7 @@ def pi_coefficients(kp: float, ki: float, ts: float) -> tuple[float, float, floa
     return 1.0, -1.0, kp + ki * ts, -kp
 
 
-def pd_coefficients(
-    kp: float, kd: float, n: float, ts: float
-) -> tuple[float, float, float, float]:
+def pd_coefficients(kp: float, kd: float, n: float, ts: float) -> tuple[float, float, float, float]:
     """(a0, a1, b0, b1) of the PD part with filtered derivative, eq 5.19."""
     nts = n * ts
     return 1.0 + nts, -1.0, kp * (1.0 + nts) + kd * n, -(kp + kd * n)

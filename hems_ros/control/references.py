@@ -145,49 +145,88 @@ def _protocols() -> dict[str, Protocol]:
     rows = [
         *(
             Protocol(
-                f"ch5_sine_{f}", 5, "position", "all", f"sine 20 mm p-p at {f} Hz, 20 s",
+                f"ch5_sine_{f}",
+                5,
+                "position",
+                "all",
+                f"sine 20 mm p-p at {f} Hz, 20 s",
                 partial(sine, f, CH5_STROKE),
             )
             for f in (0.125, 0.25, 0.5)
         ),
         Protocol(
-            "ch5_step", 5, "position", "all", "two 20 mm steps 5 s wide, 30 s apart",
+            "ch5_step",
+            5,
+            "position",
+            "all",
+            "two 20 mm steps 5 s wide, 30 s apart",
             lambda ts: step_pair(CH5_STROKE, ts),
         ),
         Protocol(
-            "ch5_staircase", 5, "position", "all", "0 -> 20 mm in 5 mm steps and back",
+            "ch5_staircase",
+            5,
+            "position",
+            "all",
+            "0 -> 20 mm in 5 mm steps and back",
             lambda ts: staircase(CH5_STROKE / 4, ts),
         ),
         Protocol(
-            "ch6_position_sine_0.125", 6, "position", "ascending", "sine 27 mm p-p at 0.125 Hz",
+            "ch6_position_sine_0.125",
+            6,
+            "position",
+            "ascending",
+            "sine 27 mm p-p at 0.125 Hz",
             lambda ts: sine(0.125, CH6_STROKE, ts),
         ),
         Protocol(
-            "ch6_position_ramp", 6, "position", "ascending", "ramp to 27 mm at 1 mm/s and back",
+            "ch6_position_ramp",
+            6,
+            "position",
+            "ascending",
+            "ramp to 27 mm at 1 mm/s and back",
             lambda ts: ramp(CH6_STROKE, CH6_RAMP_RATE, ts),
         ),
         Protocol(
-            "ch6_position_step", 6, "position", "stationary",
+            "ch6_position_step",
+            6,
+            "position",
+            "stationary",
             "two 27 mm steps 5 s long, 30 s apart",
             lambda ts: step_pair(CH6_STROKE, ts),
         ),
         Protocol(
-            "ch6_position_staircase", 6, "position", "stationary", "4 x 6.75 mm up and down",
+            "ch6_position_staircase",
+            6,
+            "position",
+            "stationary",
+            "4 x 6.75 mm up and down",
             lambda ts: staircase(CH6_STROKE / 4, ts),
         ),
         *(
             Protocol(
-                f"ch6_force_sine_{f}", 6, "force", "ascending", f"sine 2-20 N at {f} Hz",
+                f"ch6_force_sine_{f}",
+                6,
+                "force",
+                "ascending",
+                f"sine 2-20 N at {f} Hz",
                 partial(sine, f, force_span, base=CH6_FORCE_REST),
             )
             for f in (0.125, 0.25)
         ),
         Protocol(
-            "ch6_force_step", 6, "force", "stationary", "two 2 -> 20 N steps 5 s long, 30 s apart",
+            "ch6_force_step",
+            6,
+            "force",
+            "stationary",
+            "two 2 -> 20 N steps 5 s long, 30 s apart",
             lambda ts: step_pair(force_span, ts, base=CH6_FORCE_REST),
         ),
         Protocol(
-            "ch6_force_staircase", 6, "force", "stationary", "2 -> 20 N in 4 steps and back",
+            "ch6_force_staircase",
+            6,
+            "force",
+            "stationary",
+            "2 -> 20 N in 4 steps and back",
             lambda ts: staircase(force_span / 4, ts, base=CH6_FORCE_REST),
         ),
     ]

@@ -34,12 +34,15 @@ DEFAULT_FORCE_RESOLUTION_N = 0.01
 
 
 def measured_topics(fingers: Iterable[str]) -> list[str]:
-    """Every topic the loader requests for ``fingers``: the hardware's streams, no simulation truth."""
+    """Every topic the loader requests for ``fingers``: the hardware's streams, no
+    simulation truth."""
     return [names.topic(finger, stream) for finger in fingers for stream in STREAMS]
 
 
 def _stamp_ns(data: TopicData, prefix: str = "header.stamp") -> np.ndarray:
-    return data[f"{prefix}.sec"].astype(np.int64) * 1_000_000_000 + data[f"{prefix}.nanosec"].astype(np.int64)
+    return data[f"{prefix}.sec"].astype(np.int64) * 1_000_000_000 + data[
+        f"{prefix}.nanosec"
+    ].astype(np.int64)
 
 
 def _read(path: Path, fingers: tuple[str, ...]) -> Bag:
@@ -49,7 +52,9 @@ def _read(path: Path, fingers: tuple[str, ...]) -> Bag:
         raise DiagnosisInputError(f"{path}: not a readable bag ({error})") from None
 
 
-def load_bag_runs(path: str | os.PathLike, fingers: Iterable[str] | None = None) -> list[TimeSeriesRun]:
+def load_bag_runs(
+    path: str | os.PathLike, fingers: Iterable[str] | None = None
+) -> list[TimeSeriesRun]:
     """One driven run (drive ``duty``) per finger of the bag at ``path`` (module docstring).
 
     ``fingers`` restricts the fingers (default: every finger with duty and encoder messages).
@@ -66,26 +71,39 @@ def load_bag_runs(path: str | os.PathLike, fingers: Iterable[str] | None = None)
     for finger in requested or ():
         missing = [names.topic(finger, s) for s in REQUIRED if names.topic(finger, s) not in bag]
         if missing:
-            raise DiagnosisInputError(f"{path}: no {' or '.join(missing)} messages in the bag (fingers with "
-                                      f"duty and encoder messages: {', '.join(present) or 'none'})")
+            raise DiagnosisInputError(
+                f"{path}: no {' or '.join(missing)} messages in the bag (fingers with "
+                f"duty and encoder messages: {', '.join(present) or 'none'})"
+            )
     if not present:
-        raise DiagnosisInputError(f"{path}: no finger has duty and encoder messages in the bag "
-                                  f"(read: {', '.join(sorted(bag.topics)) or 'nothing'})")
-    notes = [f"bag cut or unfinished, loaded as far as it goes: {r.describe()}"
-             for r in bag.reports if not r.complete or r.skipped]
+        raise DiagnosisInputError(
+            f"{path}: no finger has duty and encoder messages in the bag "
+            f"(read: {', '.join(sorted(bag.topics)) or 'nothing'})"
+        )
+    notes = [
+        f"bag cut or unfinished, loaded as far as it goes: {r.describe()}"
+        for r in bag.reports
+        if not r.complete or r.skipped
+    ]
     notes += bag.warnings
     label = path.stem if path.is_file() else path.name
     return [_finger_run(bag, path, label, finger, tuple(notes)) for finger in requested or present]
 
 
-def _finger_run(bag: Bag, path: Path, label: str, finger: str, bag_notes: tuple[str, ...]) -> TimeSeriesRun:
+def _finger_run(
+    bag: Bag, path: Path, label: str, finger: str, bag_notes: tuple[str, ...]
+) -> TimeSeriesRun:
     notes = list(bag_notes)
     encoder = bag[names.topic(finger, "encoder")]
     stamps, first = np.unique(_stamp_ns(encoder), return_index=True)
     if stamps.size < len(encoder):
-        notes.append(f"{len(encoder) - stamps.size} encoder samples repeat a stamp: the first of each kept")
+        notes.append(
+            f"{len(encoder) - stamps.size} encoder samples repeat a stamp: the first of each kept"
+        )
     if stamps.size < 2:
-        raise DiagnosisInputError(f"{path}: {stamps.size} encoder sample(s) of {finger}: too few to compare")
+        raise DiagnosisInputError(
+            f"{path}: {stamps.size} encoder sample(s) of {finger}: too few to compare"
+        )
     period_ns = int(np.median(np.diff(stamps)))
     duty = bag[names.topic(finger, "duty")]
     drive, duty_notes = _applied_duty(duty, stamps, period_ns)
@@ -107,14 +125,23 @@ def _finger_run(bag: Bag, path: Path, label: str, finger: str, bag_notes: tuple[
     source = f"{path}:{finger}"
     require_span(source, time, "driven")
     return TimeSeriesRun(
-        name=f"{label}:{finger}", source=source, kind="driven", time=time, drive="duty",
-        drive_values=drive[keep], outputs={"position": position - position[0], **outputs_extra},
-        resolution=resolution, setpoints=_setpoints(bag, finger, encoder, stamps[0]), notes=tuple(notes),
-        drive_steps=None if steps is None else ((steps[0] - stamps[0]) * 1e-9, steps[1]))
+        name=f"{label}:{finger}",
+        source=source,
+        kind="driven",
+        time=time,
+        drive="duty",
+        drive_values=drive[keep],
+        outputs={"position": position - position[0], **outputs_extra},
+        resolution=resolution,
+        setpoints=_setpoints(bag, finger, encoder, stamps[0]),
+        notes=tuple(notes),
+        drive_steps=None if steps is None else ((steps[0] - stamps[0]) * 1e-9, steps[1]),
+    )
 
 
-def _duty_steps(duty: TopicData, encoder_lag_ns: np.ndarray, stamps: np.ndarray,
-                period_ns: int) -> tuple[tuple[np.ndarray, np.ndarray] | None, list[str]]:
+def _duty_steps(
+    duty: TopicData, encoder_lag_ns: np.ndarray, stamps: np.ndarray, period_ns: int
+) -> tuple[tuple[np.ndarray, np.ndarray] | None, list[str]]:
     """The duty as the unit applies it, as a step function (stamp-clock ns, duty %).
 
     A command that reaches the unit before the sample after the one it answers applies from
@@ -126,15 +153,21 @@ def _duty_steps(duty: TopicData, encoder_lag_ns: np.ndarray, stamps: np.ndarray,
     """
     low, lag, high = np.percentile(encoder_lag_ns, [5, 50, 95])
     if high - low > 5 * period_ns:
-        return None, ["log times do not follow the stamps (a graph on /clock?): duty commands applied "
-                      "from the samples they answer"]
+        return None, [
+            "log times do not follow the stamps (a graph on /clock?): duty commands applied "
+            "from the samples they answer"
+        ]
     arrival = duty.log_time_ns - int(lag)
     answered = _stamp_ns(duty, "measurement_stamp")
     order = np.argsort(arrival, kind="stable")
     arrival, answered, values = arrival[order], answered[order], duty["duty_percent"][order]
     index = np.clip(np.searchsorted(stamps, answered - period_ns // 2), 0, stamps.size - 1)
     matched = np.abs(stamps[index] - answered) <= period_ns // 2
-    following = np.where(index + 1 < stamps.size, stamps[np.minimum(index + 1, stamps.size - 1)], np.iinfo(np.int64).max)
+    following = np.where(
+        index + 1 < stamps.size,
+        stamps[np.minimum(index + 1, stamps.size - 1)],
+        np.iinfo(np.int64).max,
+    )
     on_time = matched & (arrival < following)
     start = np.where(on_time, stamps[index], arrival)
     timeout = WATCHDOG_PERIODS * period_ns
@@ -148,58 +181,83 @@ def _duty_steps(duty: TopicData, encoder_lag_ns: np.ndarray, stamps: np.ndarray,
     times, levels = np.array(times, dtype=np.int64), np.array(levels, dtype=float)
     sort = np.argsort(times, kind="stable")
     late = int(np.count_nonzero(matched & ~on_time))
-    notes = [f"{late} duty commands reached the unit after the next sample (recorder log times): applied "
-             "from their arrival, as the unit applies them"] if late else []
+    notes = (
+        [
+            f"{late} duty commands reached the unit after the next sample (recorder log times): "
+            f"applied from their arrival, as the unit applies them"
+        ]
+        if late
+        else []
+    )
     return (times[sort], levels[sort]), notes
 
 
-def _applied_duty(duty: TopicData, stamps: np.ndarray, period_ns: int) -> tuple[np.ndarray, list[str]]:
+def _applied_duty(
+    duty: TopicData, stamps: np.ndarray, period_ns: int
+) -> tuple[np.ndarray, list[str]]:
     """The duty the unit applies over the interval starting at each encoder sample."""
     answered = _stamp_ns(duty, "measurement_stamp")
-    order = np.argsort(answered, kind="stable")     # two answers to one sample: the later one wins
+    order = np.argsort(answered, kind="stable")  # two answers to one sample: the later one wins
     answered, values = answered[order], duty["duty_percent"][order]
     # a command answers its sample exactly; half a period covers a clock that rounds stamps
     latest = np.searchsorted(answered, stamps + period_ns // 2, side="right") - 1
     drive = np.where(latest >= 0, values[np.maximum(latest, 0)], 0.0)
     # the watchdog trips when the last command is more than three periods old: the whole
     # interval after a sample three periods (or more) after it is at 0
-    silent = (latest >= 0) & (stamps - answered[np.maximum(latest, 0)] > (WATCHDOG_PERIODS - 0.5) * period_ns)
+    silent = (latest >= 0) & (
+        stamps - answered[np.maximum(latest, 0)] > (WATCHDOG_PERIODS - 0.5) * period_ns
+    )
     drive[silent] = 0.0
     notes = []
     nearest = np.clip(np.searchsorted(stamps, answered), 1, stamps.size - 1)
     offset = np.minimum(np.abs(answered - stamps[nearest - 1]), np.abs(answered - stamps[nearest]))
     near, far = (offset > 0) & (offset <= period_ns // 2), offset > period_ns // 2
     if np.any(near):
-        notes.append(f"{int(np.count_nonzero(near))} duty commands answer no encoder stamp exactly: "
-                     f"applied from the nearest sample within half a period")
+        notes.append(
+            f"{int(np.count_nonzero(near))} duty commands answer no encoder stamp exactly: "
+            f"applied from the nearest sample within half a period"
+        )
     if np.any(far):
-        notes.append(f"{int(np.count_nonzero(far))} duty commands answer no encoder sample of the bag "
-                     f"(before the first, after the last or in a gap)")
+        notes.append(
+            f"{int(np.count_nonzero(far))} duty commands answer no encoder sample of the bag "
+            f"(before the first, after the last or in a gap)"
+        )
     if np.any(silent):
-        notes.append(f"watchdog: {int(np.count_nonzero(silent))} samples more than {WATCHDOG_PERIODS} "
-                     f"periods after the last duty command, at 0 %")
+        notes.append(
+            f"watchdog: {int(np.count_nonzero(silent))} samples more than {WATCHDOG_PERIODS} "
+            f"periods after the last duty command, at 0 %"
+        )
     return drive, notes
 
 
-def _force_on_encoder(path: Path, force: TopicData,
-                      stamps: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def _force_on_encoder(
+    path: Path, force: TopicData, stamps: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Wire force at each encoder sample (NaN-free where ``keep``) and the samples kept."""
     force_stamps, first = np.unique(_stamp_ns(force), return_index=True)
     values = np.zeros(stamps.size)
-    _, at_encoder, at_force = np.intersect1d(stamps, force_stamps, assume_unique=True, return_indices=True)
+    _, at_encoder, at_force = np.intersect1d(
+        stamps, force_stamps, assume_unique=True, return_indices=True
+    )
     values[at_encoder] = force["force"][first][at_force]
     keep = np.zeros(stamps.size, dtype=bool)
     keep[at_encoder] = True
     notes = []
     if not keep.all():
-        notes.append(f"{stamps.size - at_encoder.size} encoder samples without a wire force at their stamp "
-                     f"dropped")
+        notes.append(
+            f"{stamps.size - at_encoder.size} encoder samples without a wire force at their stamp "
+            f"dropped"
+        )
     if force_stamps.size > at_force.size:
-        notes.append(f"{force_stamps.size - at_force.size} wire forces without an encoder sample at their "
-                     f"stamp dropped")
+        notes.append(
+            f"{force_stamps.size - at_force.size} wire forces without an encoder sample at their "
+            f"stamp dropped"
+        )
     if not keep.any():
-        raise DiagnosisInputError(f"{path}: {force.topic} and the encoder share no stamp: the wire force "
-                                  f"cannot be put on the encoder's time base")
+        raise DiagnosisInputError(
+            f"{path}: {force.topic} and the encoder share no stamp: the wire force "
+            f"cannot be put on the encoder's time base"
+        )
     return values, keep, notes
 
 
@@ -210,7 +268,9 @@ def _force_step(force: np.ndarray) -> float:
     return round(float(steps.min()), 9) if steps.size else DEFAULT_FORCE_RESOLUTION_N
 
 
-def _setpoints(bag: Bag, finger: str, encoder: TopicData, t0_ns: int) -> tuple[tuple[float, str, float], ...]:
+def _setpoints(
+    bag: Bag, finger: str, encoder: TopicData, t0_ns: int
+) -> tuple[tuple[float, str, float], ...]:
     """(time on the run's base, mode, value): the header stamp, else the log time moved onto
     the unit's clock by the median lag between the encoder's stamps and its log times."""
     topic = names.topic(finger, "setpoint")
@@ -220,5 +280,7 @@ def _setpoints(bag: Bag, finger: str, encoder: TopicData, t0_ns: int) -> tuple[t
     stamped = _stamp_ns(setpoint)
     lag = int(np.median(encoder.log_time_ns - _stamp_ns(encoder)))
     at = np.where(stamped > 0, stamped, setpoint.log_time_ns - lag)
-    return tuple((float((t - t0_ns) * 1e-9), str(mode), float(value))
-                 for t, mode, value in zip(at, setpoint["mode"], setpoint["value"]))
+    return tuple(
+        (float((t - t0_ns) * 1e-9), str(mode), float(value))
+        for t, mode, value in zip(at, setpoint["mode"], setpoint["value"])
+    )

@@ -47,7 +47,9 @@ class Barrier:
                     self._live -= 1
                     self._flush()
 
-        threads = [threading.Thread(target=work, args=(i, job), daemon=True) for i, job in enumerate(jobs)]
+        threads = [
+            threading.Thread(target=work, args=(i, job), daemon=True) for i, job in enumerate(jobs)
+        ]
         for thread in threads:
             thread.start()
         for thread in threads:

@@ -21,7 +21,13 @@ from typing import Callable, Mapping
 
 from hems_ros.physics.params import UnitParams
 
-HEATING, TRANSFORMATION, HOLD, COOLING, REST = "heating", "transformation", "hold", "cooling", "rest"
+HEATING, TRANSFORMATION, HOLD, COOLING, REST = (
+    "heating",
+    "transformation",
+    "hold",
+    "cooling",
+    "rest",
+)
 PHASES = (HEATING, TRANSFORMATION, HOLD, COOLING, REST)
 
 
@@ -57,11 +63,11 @@ class Candidate:
     """A recalibration or a missing effect: parameters, switches and where it shows."""
 
     name: str
-    kind: str                                   # "recalibration" or "effect"
+    kind: str  # "recalibration" or "effect"
     title: str
     parameters: tuple[Parameter, ...]
     phases: tuple[str, ...]
-    source: str                                 # where the bounds come from
+    source: str  # where the bounds come from
     switches: Mapping[str, object] = field(default_factory=dict)
     # (starting model, drive kinds of the data, measured channels) -> applicable?
     applies: Callable[[UnitParams, frozenset, frozenset], bool] = lambda p, d, c: True
@@ -82,13 +88,16 @@ class Candidate:
     def off_values(self, base: UnitParams) -> list[float]:
         """Where each parameter leaves the candidate without effect: its neutral value, or the
         starting model's."""
-        return [float(base.get(par.key)) if par.neutral is None else par.neutral for par in self.parameters]
+        return [
+            float(base.get(par.key)) if par.neutral is None else par.neutral
+            for par in self.parameters
+        ]
 
 
 def _bound(base: UnitParams, par: Parameter) -> tuple[float, float]:
     lower, upper = par.lower, par.upper
     if par.key == "load.damping_n_s_per_m":
-        lower = float(base.load.damping_n_s_per_m)   # missing damping adds to what the model has
+        lower = float(base.load.damping_n_s_per_m)  # missing damping adds to what the model has
     if par.key == "load.pretension_n":
         lower, upper = max(0.0, base.load.pretension_n + lower), base.load.pretension_n + upper
     if par.key == "start.temperature_offset_c":
@@ -119,117 +128,198 @@ def _all(*tests):
 _SRC_TEMPERATURES = (
     "Table 4.1 (As0 88, Af0 98, Ms0 72, Mf0 62 degC, a Flexinol HT wire rated for about "
     "90 degC); NiTi actuator wires are made with transformation temperatures from about "
-    "60 to 110 degC, so the band may move within 60-110 (heating) and 45-95 degC (cooling)")
+    "60 to 110 degC, so the band may move within 60-110 (heating) and 45-95 degC (cooling)"
+)
 _SRC_SLOPES = (
     "stress slopes of NiTi are roughly 5-15 MPa/degC: Table 4.1 gives 6.89, Brinson's widely "
     "used set C_M 8 and C_A 13.8 (J. Intell. Mater. Syst. Struct. 4, 1993), and the "
     "Clausius-Clapeyron relation with Table 4.1's latent heat and transformation strain "
-    "rho dH / (T eps_L) about 11 MPa/degC at 90 degC")
+    "rho dH / (T eps_L) about 11 MPa/degC at 90 degC"
+)
 _SRC_STRAIN = (
     "Table 4.1 gives 3.8 %; NiTi recovers up to about 8 % in one cycle, and actuator wires "
-    "are run at 3-5 % for a long life; bounds 2-6 %")
+    "are run at 3-5 % for a long life; bounds 2-6 %"
+)
 _SRC_CONVECTION = (
     "free convection of a thin horizontal cylinder (Churchill-Chu, appendix 4.4: "
     "h(22 degC) = 42.51 W/m2K for this wire at 90 degC); over wire temperatures of "
-    "40-150 degC and room air the correlation stays within about 30-60 W/m2K")
+    "40-150 degC and room air the correlation stays within about 30-60 W/m2K"
+)
 _SRC_AMBIENT = "a laboratory at 10-40 degC"
 
 RECALIBRATIONS: tuple[Candidate, ...] = (
     Candidate(
-        "heating_temperatures", "recalibration", "austenite transformation temperatures As0, Af0",
+        "heating_temperatures",
+        "recalibration",
+        "austenite transformation temperatures As0, Af0",
         (Parameter("kinetics.as0_c", "As0", "degC", 1.0, 60.0, 110.0, follow=("kinetics.af0_c",)),),
-        (HEATING, TRANSFORMATION), _SRC_TEMPERATURES),
+        (HEATING, TRANSFORMATION),
+        _SRC_TEMPERATURES,
+    ),
     Candidate(
-        "cooling_temperatures", "recalibration", "martensite transformation temperatures Ms0, Mf0",
+        "cooling_temperatures",
+        "recalibration",
+        "martensite transformation temperatures Ms0, Mf0",
         (Parameter("kinetics.ms0_c", "Ms0", "degC", 1.0, 45.0, 95.0, follow=("kinetics.mf0_c",)),),
-        (COOLING,), _SRC_TEMPERATURES),
+        (COOLING,),
+        _SRC_TEMPERATURES,
+    ),
     Candidate(
-        "stress_slopes", "recalibration", "stress slopes C_A, C_M of the transformation temperatures",
-        (Parameter("kinetics.ca_pa_per_c", "C_A", "MPa/degC", 1e6, 5e6, 15e6),
-         Parameter("kinetics.cm_pa_per_c", "C_M", "MPa/degC", 1e6, 5e6, 15e6)),
-        (TRANSFORMATION, COOLING), _SRC_SLOPES),
+        "stress_slopes",
+        "recalibration",
+        "stress slopes C_A, C_M of the transformation temperatures",
+        (
+            Parameter("kinetics.ca_pa_per_c", "C_A", "MPa/degC", 1e6, 5e6, 15e6),
+            Parameter("kinetics.cm_pa_per_c", "C_M", "MPa/degC", 1e6, 5e6, 15e6),
+        ),
+        (TRANSFORMATION, COOLING),
+        _SRC_SLOPES,
+    ),
     Candidate(
-        "transformation_strain", "recalibration", "maximum recoverable strain eps_L",
+        "transformation_strain",
+        "recalibration",
+        "maximum recoverable strain eps_L",
         (Parameter("constitutive.max_recoverable_strain", "eps_L", "%", 1e-2, 0.02, 0.06),),
-        (TRANSFORMATION, HOLD), _SRC_STRAIN),
+        (TRANSFORMATION, HOLD),
+        _SRC_STRAIN,
+    ),
     Candidate(
-        "convection", "recalibration", "free-convection coefficient h0 of the bare wire",
+        "convection",
+        "recalibration",
+        "free-convection coefficient h0 of the bare wire",
         (Parameter("thermal.h0_w_m2_c", "h0", "W/m2K", 1.0, 30.0, 60.0),),
-        (HEATING, COOLING), _SRC_CONVECTION, applies=_all(_off("sheath.enabled"), _electric)),
+        (HEATING, COOLING),
+        _SRC_CONVECTION,
+        applies=_all(_off("sheath.enabled"), _electric),
+    ),
     Candidate(
-        "ambient", "recalibration", "ambient temperature",
+        "ambient",
+        "recalibration",
+        "ambient temperature",
         (Parameter("ambient_temperature_c", "T_amb", "degC", 1.0, 10.0, 40.0),),
-        (HEATING, COOLING, REST), _SRC_AMBIENT, applies=_electric),
+        (HEATING, COOLING, REST),
+        _SRC_AMBIENT,
+        applies=_electric,
+    ),
 )
 
 EFFECTS: tuple[Candidate, ...] = (
     Candidate(
-        "sheath_heat_sink", "effect", "Bowden sheath as a heat sink (heat capacity, wire-sheath contact)",
-        (Parameter("sheath.heat_capacity_j_per_k", "C_s", "J/K", 1.0, 0.2, 30.0, log=True),
-         Parameter("sheath.gap_resistance_k_per_w", "R_gap", "K/W", 1.0, 0.05, 10.0, log=True)),
+        "sheath_heat_sink",
+        "effect",
+        "Bowden sheath as a heat sink (heat capacity, wire-sheath contact)",
+        (
+            Parameter("sheath.heat_capacity_j_per_k", "C_s", "J/K", 1.0, 0.2, 30.0, log=True),
+            Parameter("sheath.gap_resistance_k_per_w", "R_gap", "K/W", 1.0, 0.05, 10.0, log=True),
+        ),
         (HEATING, TRANSFORMATION, COOLING),
         "chapter 3 sheath facts and Table 3.1 (PTFE + steel helix about 17 J/K; wire-to-air "
         "7.89 K/W sheathed against 14.2 K/W bare)",
-        switches={"sheath.enabled": True, "sheath.helix_heat_capacity_j_per_k": 0.0,
-                  "sheath.liner_helix_resistance_k_per_w": 0.0},
-        applies=_all(_off("sheath.enabled"), _electric)),
+        switches={
+            "sheath.enabled": True,
+            "sheath.helix_heat_capacity_j_per_k": 0.0,
+            "sheath.liner_helix_resistance_k_per_w": 0.0,
+        },
+        applies=_all(_off("sheath.enabled"), _electric),
+    ),
     Candidate(
-        "capstan_friction", "effect", "capstan friction of the wire over the sheath's bends",
-        (Parameter("capstan.bend_angle_rad", "Theta", "deg", math.pi / 180, 0.0, 4 * math.pi, neutral=0.0),),
+        "capstan_friction",
+        "effect",
+        "capstan friction of the wire over the sheath's bends",
+        (
+            Parameter(
+                "capstan.bend_angle_rad",
+                "Theta",
+                "deg",
+                math.pi / 180,
+                0.0,
+                4 * math.pi,
+                neutral=0.0,
+            ),
+        ),
         (TRANSFORMATION, HOLD, COOLING),
         "eq. 3.1, F_out/F_in = exp(-mu Theta) with mu = 0.04 (PTFE): 0.88 predicted, 0.84 measured "
         "over pi; bends up to two full turns",
-        switches={"capstan.enabled": True}, applies=_all(_off("capstan.enabled"), _electric)),
+        switches={"capstan.enabled": True},
+        applies=_all(_off("capstan.enabled"), _electric),
+    ),
     Candidate(
-        "tendon_friction", "effect", "Coulomb friction of the tendon in the glove",
+        "tendon_friction",
+        "effect",
+        "Coulomb friction of the tendon in the glove",
         (Parameter("glove_friction.force_n", "F_c", "N", 1.0, 0.0, 10.0, neutral=0.0),),
         (TRANSFORMATION, HOLD, COOLING),
         "chapter 6 force-displacement hysteresis (tendon-glove and bench friction); up to 10 N",
-        switches={"glove_friction.enabled": True}, applies=_all(_off("glove_friction.enabled"), _electric)),
+        switches={"glove_friction.enabled": True},
+        applies=_all(_off("glove_friction.enabled"), _electric),
+    ),
     Candidate(
-        "load_damping", "effect", "viscous damping of the load beyond the model's",
+        "load_damping",
+        "effect",
+        "viscous damping of the load beyond the model's",
         (Parameter("load.damping_n_s_per_m", "b", "N s/m", 1.0, 0.0, 3000.0),),
         (TRANSFORMATION, COOLING),
         "eq. 4.33's b (65 N s/m in Table 4.1) identified on the dissertation's rig; a glove or a "
         "bench adds its own, up to about 3000 N s/m (a 30 mm/s stroke then meets 90 N)",
-        applies=_electric),
+        applies=_electric,
+    ),
     Candidate(
-        "warm_start", "effect", "wire and sheath warmer than the room at the start",
+        "warm_start",
+        "effect",
+        "wire and sheath warmer than the room at the start",
         (Parameter("start.temperature_offset_c", "dT_start", "degC", 1.0, 0.0, 80.0),),
         (HEATING,),
         "a rig still warm from earlier pulses; the wire must start as martensite, below As0",
-        applies=_all(lambda p, d, c: p.start.temperature_offset_c == 0, _electric)),
+        applies=_all(lambda p, d, c: p.start.temperature_offset_c == 0, _electric),
+    ),
     Candidate(
-        "preload_error", "effect", "bias-spring pretension other than the model's",
+        "preload_error",
+        "effect",
+        "bias-spring pretension other than the model's",
         (Parameter("load.pretension_n", "F_0", "N", 1.0, -10.0, 10.0),),
         (REST, HEATING, TRANSFORMATION, HOLD),
         "the pretension is set by hand on the rig; +-10 N of the model's",
-        applies=_electric),
+        applies=_electric,
+    ),
     Candidate(
-        "spring_stiffening", "effect", "bias spring that stiffens with stroke (cubic term)",
+        "spring_stiffening",
+        "effect",
+        "bias spring that stiffens with stroke (cubic term)",
         (Parameter("load.cubic_stiffness_n_per_m3", "k3", "N/m3", 1.0, 0.0, 5e6),),
         (TRANSFORMATION, HOLD),
         "the chapter 6 glove and spring are nonlinear; up to 40 N extra at 20 mm of load travel",
-        applies=_electric),
+        applies=_electric,
+    ),
     Candidate(
-        "supply_sag", "effect", "drive supply sagging under load (source resistance)",
+        "supply_sag",
+        "effect",
+        "drive supply sagging under load (source resistance)",
         (Parameter("drive.source_resistance_ohm", "R_s", "ohm", 1.0, 0.0, 5.0),),
         (HEATING, TRANSFORMATION, HOLD),
         "the 20 V supply and MOSFET channel; up to 5 ohm (the current then stays below 2.3 A)",
-        applies=lambda p, drives, c: drives == frozenset({"duty"})),
+        applies=lambda p, drives, c: drives == frozenset({"duty"}),
+    ),
     Candidate(
-        "encoder_gain", "effect", "displacement sensor scale error",
+        "encoder_gain",
+        "effect",
+        "displacement sensor scale error",
         (Parameter("encoder.gain", "g_x", "", 1.0, 0.8, 1.25),),
         (TRANSFORMATION, HOLD, COOLING),
         "a miscalibrated encoder scale or pulley lever; +-20 %",
-        applies=_needs_channel("position")),
+        applies=_needs_channel("position"),
+    ),
     Candidate(
-        "force_sensor_drift", "effect", "force sensor offset and drift",
-        (Parameter("force_sensor.offset_n", "F_off", "N", 1.0, -5.0, 5.0),
-         Parameter("force_sensor.drift_n_per_s", "dF/dt", "mN/s", 1e-3, -0.05, 0.05)),
+        "force_sensor_drift",
+        "effect",
+        "force sensor offset and drift",
+        (
+            Parameter("force_sensor.offset_n", "F_off", "N", 1.0, -5.0, 5.0),
+            Parameter("force_sensor.drift_n_per_s", "dF/dt", "mN/s", 1e-3, -0.05, 0.05),
+        ),
         (REST, HEATING, TRANSFORMATION, HOLD, COOLING),
         "strain-gauge load cells drift with temperature and time; +-5 N, +-50 mN/s",
-        applies=_needs_channel("wire_force")),
+        applies=_needs_channel("wire_force"),
+    ),
 )
 
 ALL: tuple[Candidate, ...] = RECALIBRATIONS + EFFECTS
@@ -240,8 +330,9 @@ BY_NAME: dict[str, Candidate] = {c.name: c for c in ALL}
 SENSOR_KEYS = ("encoder.gain", "force_sensor.offset_n", "force_sensor.drift_n_per_s")
 
 
-def applicable(base: UnitParams, drives: frozenset, channels: frozenset,
-               names: list[str] | None = None) -> list[Candidate]:
+def applicable(
+    base: UnitParams, drives: frozenset, channels: frozenset, names: list[str] | None = None
+) -> list[Candidate]:
     """Candidates that make sense for this starting model and data, in library order."""
     unknown = sorted(set(names or ()) - set(BY_NAME))
     if unknown:
@@ -255,8 +346,13 @@ def describe_library() -> str:
     base = UnitParams()
     lines = []
     for c in ALL:
-        bounds = ", ".join(f"{p.symbol} {p.display(lo):.4g}..{p.display(hi):.4g} {p.unit}".rstrip()
-                           for p, (lo, hi) in zip(c.parameters, c.bounds(base)))
-        lines += [f"{c.name} ({c.kind}): {c.title}", f"    {bounds}; changes {', '.join(c.phases)}",
-                  f"    bounds: {c.source}"]
+        bounds = ", ".join(
+            f"{p.symbol} {p.display(lo):.4g}..{p.display(hi):.4g} {p.unit}".rstrip()
+            for p, (lo, hi) in zip(c.parameters, c.bounds(base))
+        )
+        lines += [
+            f"{c.name} ({c.kind}): {c.title}",
+            f"    {bounds}; changes {', '.join(c.phases)}",
+            f"    bounds: {c.source}",
+        ]
     return "\n".join(lines)

@@ -13,9 +13,9 @@ the kind of run:
 Conventions of the columns: displacement increases when the wire contracts (the encoder's
 sign); strain is the wire's strain, elongation positive. Both become changes from the run's
 lead-in at rest (the mean of the rows before the drive first comes on, at most a second; the
-first row of a thermal cycle). Rows are numbered as in the file (the header's line is row 1 when nothing precedes it),
-so an error's row is the line an editor shows. A table whose delimiter is not the comma may
-use decimal commas (``1,5``).
+first row of a thermal cycle). Rows are numbered as in the file (the header's line is row 1 when
+nothing precedes it), so an error's row is the line an editor shows. A table whose delimiter is not
+the comma may use decimal commas (``1,5``).
 """
 
 from __future__ import annotations
@@ -29,7 +29,13 @@ from pathlib import Path
 import numpy as np
 
 from hems_ros.diagnosis import units
-from hems_ros.diagnosis.runs import FIGURE_UNITS, DiagnosisInputError, FeatureRun, FeatureTest, TimeSeriesRun
+from hems_ros.diagnosis.runs import (
+    FIGURE_UNITS,
+    DiagnosisInputError,
+    FeatureRun,
+    FeatureTest,
+    TimeSeriesRun,
+)
 
 # the HEMS wire, 0.508 mm diameter (hems_ros.physics.params.WireGeometry; not imported: the
 # physics package compiles its kernels on import)
@@ -43,13 +49,30 @@ LEAD_IN_OFF = {"duty": 0.5, "current": 0.05, "voltage": 0.1}
 
 DRIVE_QUANTITIES = ("duty", "current", "voltage")
 #: time series quantity -> TimeSeriesRun output name
-OUTPUTS = {"displacement": "position", "strain": "strain", "wire_force": "wire_force",
-           "load_force": "load_force", "temperature": "temperature"}
+OUTPUTS = {
+    "displacement": "position",
+    "strain": "strain",
+    "wire_force": "wire_force",
+    "load_force": "load_force",
+    "temperature": "temperature",
+}
 #: feature table quantity -> FeatureTest condition name
-CONDITIONS = {"pulse_length": "pulse_s", "current": "current_a", "energy": "energy_j",
-              "cooled_displacement": "cooled_m", "protocol": "protocol", "controller": "controller"}
-FEATURE_QUANTITIES = ("pulse_length", "energy", "cooled_displacement", "protocol", "controller",
-                      *FIGURE_UNITS)
+CONDITIONS = {
+    "pulse_length": "pulse_s",
+    "current": "current_a",
+    "energy": "energy_j",
+    "cooled_displacement": "cooled_m",
+    "protocol": "protocol",
+    "controller": "controller",
+}
+FEATURE_QUANTITIES = (
+    "pulse_length",
+    "energy",
+    "cooled_displacement",
+    "protocol",
+    "controller",
+    *FIGURE_UNITS,
+)
 LOAD_QUANTITIES = ("stress", "load_force", "wire_force")
 
 Columns = dict[str, tuple[str, str | None]]
@@ -59,19 +82,29 @@ def parse_columns(spec: str) -> Columns:
     """``quantity=column[:unit],...`` -> {canonical quantity: (column, canonical unit)}."""
     mapping: Columns = {}
     if not spec or not spec.strip():
-        raise DiagnosisInputError("no columns given: expected quantity=column[:unit],... "
-                                  "(e.g. time=t:s,current=I:A,displacement=x:mm)")
+        raise DiagnosisInputError(
+            "no columns given: expected quantity=column[:unit],... "
+            "(e.g. time=t:s,current=I:A,displacement=x:mm)"
+        )
     for item in spec.split(","):
         quantity, equals, target = (part.strip() for part in item.strip().partition("="))
         column, _, unit = target.rpartition(":") if ":" in target else (target, "", "")
         column, unit = column.strip(), unit.strip()
-        if not equals or not quantity or not column or (column.startswith("#") and not _index_ok(column)):
-            raise DiagnosisInputError(f"malformed column mapping {item.strip()!r}: expected "
-                                      f"quantity=column[:unit] (column: a header name or #<1-based index>)")
+        if (
+            not equals
+            or not quantity
+            or not column
+            or (column.startswith("#") and not _index_ok(column))
+        ):
+            raise DiagnosisInputError(
+                f"malformed column mapping {item.strip()!r}: expected "
+                f"quantity=column[:unit] (column: a header name or #<1-based index>)"
+            )
         name = units.canonical(quantity)
         if name in mapping:
-            raise DiagnosisInputError(f"{name} is mapped twice in the columns "
-                                      f"({mapping[name][0]!r} and {column!r})")
+            raise DiagnosisInputError(
+                f"{name} is mapped twice in the columns " f"({mapping[name][0]!r} and {column!r})"
+            )
         mapping[name] = (column, units.check_unit(name, unit))
     return mapping
 
@@ -84,7 +117,7 @@ def _index_ok(column: str) -> bool:
 class _Table:
     path: Path
     header: list[str]
-    rows: list[tuple[int, list[str]]]    # (row number in the file, fields)
+    rows: list[tuple[int, list[str]]]  # (row number in the file, fields)
     decimal_comma: bool
 
     def where(self, row: int, index: int) -> str:
@@ -113,8 +146,11 @@ def _read(path: Path) -> _Table:
         raise DiagnosisInputError(f"{path}: not a UTF-8 text table") from None
     except OSError as error:
         raise DiagnosisInputError(f"{path}: cannot read it ({error.strerror or error})") from None
-    lines = [(n, line) for n, line in enumerate(text.splitlines(), 1)
-             if line.strip() and not line.lstrip().startswith("#")]
+    lines = [
+        (n, line)
+        for n, line in enumerate(text.splitlines(), 1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     if not lines:
         raise DiagnosisInputError(f"{path}: empty (no header row)")
     header_line = lines[0][1]
@@ -125,8 +161,9 @@ def _read(path: Path) -> _Table:
     for number, line in lines[1:]:
         fields = _trim(_split(line, delimiter), len(header))
         if len(fields) != len(header):
-            raise DiagnosisInputError(f"{path}: row {number} has {len(fields)} fields, "
-                                      f"the header has {len(header)}")
+            raise DiagnosisInputError(
+                f"{path}: row {number} has {len(fields)} fields, " f"the header has {len(header)}"
+            )
         rows.append((number, fields))
     if not rows:
         raise DiagnosisInputError(f"{path}: no data rows below the header")
@@ -137,15 +174,21 @@ def _column_index(table: _Table, quantity: str, column: str) -> int:
     if column.startswith("#"):
         index = int(column[1:]) - 1
         if index >= len(table.header):
-            raise DiagnosisInputError(f"{table.path}: column {column} (for {quantity}) is beyond the "
-                                      f"header's {len(table.header)} columns ({', '.join(table.header)})")
+            raise DiagnosisInputError(
+                f"{table.path}: column {column} (for {quantity}) is beyond the "
+                f"header's {len(table.header)} columns ({', '.join(table.header)})"
+            )
         return index
     if column not in table.header:
-        raise DiagnosisInputError(f"{table.path}: column {column!r} (for {quantity}) is not in the header "
-                                  f"(columns: {', '.join(table.header)})")
+        raise DiagnosisInputError(
+            f"{table.path}: column {column!r} (for {quantity}) is not in the header "
+            f"(columns: {', '.join(table.header)})"
+        )
     if table.header.count(column) > 1:
-        raise DiagnosisInputError(f"{table.path}: column {column!r} (for {quantity}) appears twice in the "
-                                  f"header; give it by index (#<n>)")
+        raise DiagnosisInputError(
+            f"{table.path}: column {column!r} (for {quantity}) appears twice in the "
+            f"header; give it by index (#<n>)"
+        )
     return table.header.index(column)
 
 
@@ -154,7 +197,9 @@ def _texts(table: _Table, quantity: str, column: str) -> list[str]:
     return [fields[index] for _, fields in table.rows]
 
 
-def _numbers(table: _Table, quantity: str, column: str, unit: str | None, blanks: bool = False) -> np.ndarray:
+def _numbers(
+    table: _Table, quantity: str, column: str, unit: str | None, blanks: bool = False
+) -> np.ndarray:
     """A numeric column in SI; every value must be a finite number (``blanks``: an empty cell
     is a figure the table does not give, NaN)."""
     index = _column_index(table, quantity, column)
@@ -171,8 +216,9 @@ def _numbers(table: _Table, quantity: str, column: str, unit: str | None, blanks
         except ValueError:
             values[k] = math.nan
         if not math.isfinite(values[k]):
-            raise DiagnosisInputError(f"{table.where(number, index)}: {fields[index]!r} "
-                                      f"is not a finite number")
+            raise DiagnosisInputError(
+                f"{table.where(number, index)}: {fields[index]!r} " f"is not a finite number"
+            )
     values = units.to_si(quantity, unit, values)
     _check_range(table, quantity, index, values[np.isfinite(values)])
     return values
@@ -189,27 +235,34 @@ def _check_range(table: _Table, quantity: str, index: int, values: np.ndarray) -
         return
     if bad.size:
         first = int(bad[0])
-        raise DiagnosisInputError(f"{table.where(table.rows[first][0], index)}: "
-                                  f"{problem.format(values[first])}")
+        raise DiagnosisInputError(
+            f"{table.where(table.rows[first][0], index)}: " f"{problem.format(values[first])}"
+        )
 
 
 def _restrict(columns: Columns, allowed: tuple[str, ...], kind: str, path: Path) -> None:
     extra = [q for q in columns if q not in allowed]
     if extra:
-        raise DiagnosisInputError(f"{path}: {', '.join(extra)} cannot be mapped in {kind} "
-                                  f"(it takes {', '.join(allowed)})")
+        raise DiagnosisInputError(
+            f"{path}: {', '.join(extra)} cannot be mapped in {kind} "
+            f"(it takes {', '.join(allowed)})"
+        )
 
 
 def require_span(source: str, time: np.ndarray, kind: str) -> None:
     """A time series too short to say anything is an error: under 20 samples, or a driven run
     under 1 s (shared with the bag loader)."""
     if time.size < MIN_SAMPLES:
-        raise DiagnosisInputError(f"{source}: {time.size} samples are too few to compare "
-                                  f"(a time series needs at least {MIN_SAMPLES})")
+        raise DiagnosisInputError(
+            f"{source}: {time.size} samples are too few to compare "
+            f"(a time series needs at least {MIN_SAMPLES})"
+        )
     duration = float(time[-1] - time[0])
     if kind == "driven" and duration < MIN_DRIVEN_S:
-        raise DiagnosisInputError(f"{source}: the run lasts {duration:g} s, too short to compare "
-                                  f"(a driven run needs at least {MIN_DRIVEN_S:g} s)")
+        raise DiagnosisInputError(
+            f"{source}: the run lasts {duration:g} s, too short to compare "
+            f"(a driven run needs at least {MIN_DRIVEN_S:g} s)"
+        )
 
 
 def _check_time(table: _Table, time: np.ndarray, index_text: str) -> None:
@@ -217,13 +270,19 @@ def _check_time(table: _Table, time: np.ndarray, index_text: str) -> None:
     bad = np.flatnonzero(steps <= 0.0)
     if bad.size:
         k = int(bad[0]) + 1
-        raise DiagnosisInputError(f"{table.path}: row {table.rows[k][0]}: time {time[k]:g} s is not after "
-                                  f"row {table.rows[k - 1][0]}'s {time[k - 1]:g} s "
-                                  f"({index_text} must increase strictly)")
+        raise DiagnosisInputError(
+            f"{table.path}: row {table.rows[k][0]}: time {time[k]:g} s is not after "
+            f"row {table.rows[k - 1][0]}'s {time[k - 1]:g} s "
+            f"({index_text} must increase strictly)"
+        )
 
 
-def load_table(path, columns: str | Mapping[str, tuple[str, str | None]], name: str | None = None,
-               cross_section_m2: float = DEFAULT_CROSS_SECTION_M2) -> TimeSeriesRun | FeatureRun:
+def load_table(
+    path,
+    columns: str | Mapping[str, tuple[str, str | None]],
+    name: str | None = None,
+    cross_section_m2: float = DEFAULT_CROSS_SECTION_M2,
+) -> TimeSeriesRun | FeatureRun:
     """Read a measured table and convert it to SI and the runs' conventions (module docstring).
 
     ``columns`` is a ``--columns`` string or what :func:`parse_columns` returns;
@@ -240,18 +299,24 @@ def load_table(path, columns: str | Mapping[str, tuple[str, str | None]], name: 
         return _features(table, columns, name)
     drives = [q for q in DRIVE_QUANTITIES if q in columns]
     if len(drives) > 1:
-        raise DiagnosisInputError(f"{path}: more than one input mapped ({', '.join(drives)}): "
-                                  f"a driven run has exactly one of {', '.join(DRIVE_QUANTITIES)}")
+        raise DiagnosisInputError(
+            f"{path}: more than one input mapped ({', '.join(drives)}): "
+            f"a driven run has exactly one of {', '.join(DRIVE_QUANTITIES)}"
+        )
     if drives:
         return _driven(table, columns, name, drives[0])
     if "temperature" in columns:
         return _thermal_cycle(table, columns, name, cross_section_m2)
-    raise DiagnosisInputError(f"{path}: no input column mapped: map one of {', '.join(DRIVE_QUANTITIES)} "
-                              f"(a driven run) or temperature alone (a thermal cycle), or feature columns "
-                              f"({', '.join(FEATURE_QUANTITIES)})")
+    raise DiagnosisInputError(
+        f"{path}: no input column mapped: map one of {', '.join(DRIVE_QUANTITIES)} "
+        f"(a driven run) or temperature alone (a thermal cycle), or feature columns "
+        f"({', '.join(FEATURE_QUANTITIES)})"
+    )
 
 
-def _outputs(table: _Table, columns: Columns, quantities: tuple[str, ...], rest: int = 1) -> dict[str, np.ndarray]:
+def _outputs(
+    table: _Table, columns: Columns, quantities: tuple[str, ...], rest: int = 1
+) -> dict[str, np.ndarray]:
     """The mapped outputs; displacement and strain as changes from their mean over the first
     ``rest`` rows (the run's lead-in at rest): one noisy first reading would shift the whole run."""
     outputs = {}
@@ -274,46 +339,70 @@ def _lead_in(time: np.ndarray, drive: np.ndarray, drive_name: str) -> int:
 def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSeriesRun:
     _restrict(columns, ("time", drive, *OUTPUTS), "a driven run", table.path)
     if "time" not in columns:
-        raise DiagnosisInputError(f"{table.path}: no time column mapped: "
-                                  f"add time=<column>[:unit] to --columns")
+        raise DiagnosisInputError(
+            f"{table.path}: no time column mapped: " f"add time=<column>[:unit] to --columns"
+        )
     if not any(q in columns for q in OUTPUTS):
-        raise DiagnosisInputError(f"{table.path}: no output column mapped: add one of {', '.join(OUTPUTS)} "
-                                  f"to --columns")
+        raise DiagnosisInputError(
+            f"{table.path}: no output column mapped: add one of {', '.join(OUTPUTS)} "
+            f"to --columns"
+        )
     time = _numbers(table, "time", *columns["time"])
     _check_time(table, time, "time")
     time = time - time[0]
     require_span(str(table.path), time, "driven")
     values = _numbers(table, drive, *columns[drive])
     outputs = _outputs(table, columns, tuple(OUTPUTS), rest=_lead_in(time, values, drive))
-    return TimeSeriesRun(name=name, source=str(table.path), kind="driven", time=time, drive=drive,
-                         drive_values=values, outputs=outputs)
+    return TimeSeriesRun(
+        name=name,
+        source=str(table.path),
+        kind="driven",
+        time=time,
+        drive=drive,
+        drive_values=values,
+        outputs=outputs,
+    )
 
 
-def _thermal_cycle(table: _Table, columns: Columns, name: str, cross_section_m2: float) -> TimeSeriesRun:
+def _thermal_cycle(
+    table: _Table, columns: Columns, name: str, cross_section_m2: float
+) -> TimeSeriesRun:
     path = table.path
-    _restrict(columns, ("time", "temperature", "strain", "displacement", *LOAD_QUANTITIES),
-              "a thermal cycle", path)
+    _restrict(
+        columns,
+        ("time", "temperature", "strain", "displacement", *LOAD_QUANTITIES),
+        "a thermal cycle",
+        path,
+    )
     outputs = _outputs(table, columns, ("strain", "displacement"))
     if not outputs:
-        raise DiagnosisInputError(f"{path}: no output column mapped: a thermal cycle needs "
-                                  f"strain=<column>[:unit] or displacement=<column>[:unit] in --columns")
+        raise DiagnosisInputError(
+            f"{path}: no output column mapped: a thermal cycle needs "
+            f"strain=<column>[:unit] or displacement=<column>[:unit] in --columns"
+        )
     loads = [q for q in LOAD_QUANTITIES if q in columns]
     if len(loads) != 1:
-        raise DiagnosisInputError(f"{path}: a thermal cycle needs exactly one load column "
-                                  f"(stress=<column>[:unit] or load_force=<column>[:unit]); mapped: "
-                                  f"{', '.join(loads) or 'none'}")
+        raise DiagnosisInputError(
+            f"{path}: a thermal cycle needs exactly one load column "
+            f"(stress=<column>[:unit] or load_force=<column>[:unit]); mapped: "
+            f"{', '.join(loads) or 'none'}"
+        )
     notes = []
     load = _numbers(table, loads[0], *columns[loads[0]])
     if loads[0] != "stress":
         load = load / cross_section_m2
-        notes.append(f"stress from the {loads[0]} column over a wire cross-section of "
-                     f"{cross_section_m2:.4g} m2")
+        notes.append(
+            f"stress from the {loads[0]} column over a wire cross-section of "
+            f"{cross_section_m2:.4g} m2"
+        )
     stress = float(np.mean(load))
     spread = float(np.max(np.abs(load - stress)))
     if spread > STRESS_TOLERANCE * abs(stress):
-        raise DiagnosisInputError(f"{path}: the stress varies by {spread:.4g} Pa around its mean "
-                                  f"{stress:.4g} Pa, more than {STRESS_TOLERANCE:.0%}: a thermal cycle "
-                                  f"is at constant stress")
+        raise DiagnosisInputError(
+            f"{path}: the stress varies by {spread:.4g} Pa around its mean "
+            f"{stress:.4g} Pa, more than {STRESS_TOLERANCE:.0%}: a thermal cycle "
+            f"is at constant stress"
+        )
     temperature = _numbers(table, "temperature", *columns["temperature"])
     if "time" in columns:
         time = _numbers(table, "time", *columns["time"])
@@ -325,8 +414,17 @@ def _thermal_cycle(table: _Table, columns: Columns, name: str, cross_section_m2:
         notes.append("no time column: time is the cumulative temperature change at 1 degC per s")
     time = time - time[0]
     require_span(str(path), time, "thermal_cycle")
-    return TimeSeriesRun(name=name, source=str(path), kind="thermal_cycle", time=time, drive="temperature",
-                         drive_values=temperature, outputs=outputs, stress_pa=stress, notes=tuple(notes))
+    return TimeSeriesRun(
+        name=name,
+        source=str(path),
+        kind="thermal_cycle",
+        time=time,
+        drive="temperature",
+        drive_values=temperature,
+        outputs=outputs,
+        stress_pa=stress,
+        notes=tuple(notes),
+    )
 
 
 def _features(table: _Table, columns: Columns, name: str) -> FeatureRun:
@@ -334,25 +432,43 @@ def _features(table: _Table, columns: Columns, name: str) -> FeatureRun:
     _restrict(columns, (*FEATURE_QUANTITIES, "current", "name"), "a feature table", path)
     figures = [q for q in FIGURE_UNITS if q in columns]
     if not figures:
-        raise DiagnosisInputError(f"{path}: no figure column mapped: a feature table needs one of "
-                                  f"{', '.join(FIGURE_UNITS)}")
+        raise DiagnosisInputError(
+            f"{path}: no figure column mapped: a feature table needs one of "
+            f"{', '.join(FIGURE_UNITS)}"
+        )
     if "pulse_length" not in columns and "protocol" not in columns:
-        raise DiagnosisInputError(f"{path}: a feature table needs what each test did: map pulse_length "
-                                  f"(a current pulse) or protocol (a closed-loop run)")
+        raise DiagnosisInputError(
+            f"{path}: a feature table needs what each test did: map pulse_length "
+            f"(a current pulse) or protocol (a closed-loop run)"
+        )
     if len(table.rows) < MIN_TESTS:
-        raise DiagnosisInputError(f"{path}: only {len(table.rows)} test row, too few to compare "
-                                  f"(a feature table needs at least {MIN_TESTS})")
-    values = {q: (_texts(table, q, c) if q in units.STRING_QUANTITIES else
-                  _numbers(table, q, c, u, blanks=q in FIGURE_UNITS))
-              for q, (c, u) in columns.items()}
+        raise DiagnosisInputError(
+            f"{path}: only {len(table.rows)} test row, too few to compare "
+            f"(a feature table needs at least {MIN_TESTS})"
+        )
+    values = {
+        q: (
+            _texts(table, q, c)
+            if q in units.STRING_QUANTITIES
+            else _numbers(table, q, c, u, blanks=q in FIGURE_UNITS)
+        )
+        for q, (c, u) in columns.items()
+    }
     tests = []
     for k, (number, _) in enumerate(table.rows):
         conditions = {CONDITIONS[q]: _item(values[q][k]) for q in CONDITIONS if q in values}
         given = {q: float(values[q][k]) for q in figures if math.isfinite(values[q][k])}
         if not given:
-            raise DiagnosisInputError(f"{path}, row {number}: no figure given (every figure cell is empty)")
-        tests.append(FeatureTest(name=(values["name"][k] if "name" in values else "") or f"row {number}",
-                                 conditions=conditions, figures=given))
+            raise DiagnosisInputError(
+                f"{path}, row {number}: no figure given (every figure cell is empty)"
+            )
+        tests.append(
+            FeatureTest(
+                name=(values["name"][k] if "name" in values else "") or f"row {number}",
+                conditions=conditions,
+                figures=given,
+            )
+        )
     return FeatureRun(name=name, source=str(path), tests=tuple(tests))
 
 

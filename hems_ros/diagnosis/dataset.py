@@ -21,8 +21,13 @@ from hems_ros.diagnosis.runs import OUTPUT_UNITS, DiagnosisInputError, TimeSerie
 from hems_ros.physics.params import UnitParams
 
 #: Least noise floor each channel is credited with (SI): what no replay can promise to match.
-NOISE_FLOOR = {"position": 0.5e-6, "strain": 0.5e-6, "wire_force": 2e-3, "load_force": 2e-3,
-               "temperature": 0.02}
+NOISE_FLOOR = {
+    "position": 0.5e-6,
+    "strain": 0.5e-6,
+    "wire_force": 2e-3,
+    "load_force": 2e-3,
+    "temperature": 0.02,
+}
 #: Outputs in the order the gap is reported by (the first one measured is the headline).
 PRIMARY_ORDER = ("position", "strain", "wire_force", "load_force", "temperature")
 
@@ -54,8 +59,8 @@ class Split:
 class Prediction:
     """One parameter set's outputs on every run, and its weighted residuals."""
 
-    outputs: list[dict[str, np.ndarray]]        # per run: output -> (n_samples,)
-    train: np.ndarray                           # weighted residuals on the training samples
+    outputs: list[dict[str, np.ndarray]]  # per run: output -> (n_samples,)
+    train: np.ndarray  # weighted residuals on the training samples
     heldout: np.ndarray
 
 
@@ -72,7 +77,6 @@ class TimeSeriesData:
     @property
     def channels(self) -> list[str]:
         return [c for c in PRIMARY_ORDER if any(c in r.outputs for r in self.runs)]
-
 
     @property
     def drives(self) -> frozenset:
@@ -92,16 +96,25 @@ class TimeSeriesData:
         out = []
         for i in range(len(sets)):
             outputs = [{name: sim[name][i] for name in sim} for sim in per_run]
-            out.append(Prediction(outputs, self._weighted(outputs, self.split.train),
-                                  self._weighted(outputs, self.split.heldout)))
+            out.append(
+                Prediction(
+                    outputs,
+                    self._weighted(outputs, self.split.train),
+                    self._weighted(outputs, self.split.heldout),
+                )
+            )
         return out
 
-    def _weighted(self, outputs: list[dict[str, np.ndarray]], masks: list[np.ndarray]) -> np.ndarray:
+    def _weighted(
+        self, outputs: list[dict[str, np.ndarray]], masks: list[np.ndarray]
+    ) -> np.ndarray:
         parts = []
         for run, sim, mask in zip(self.runs, outputs, masks):
             for name in self.channels:
                 if name in run.outputs:
-                    parts.append((sim[name][mask] - run.outputs[name][mask]) / self.sigma.get(name, 1.0))
+                    parts.append(
+                        (sim[name][mask] - run.outputs[name][mask]) / self.sigma.get(name, 1.0)
+                    )
         return np.concatenate(parts) if parts else np.zeros(0)
 
     def calibrate_noise(self, start: Prediction) -> None:
@@ -110,16 +123,25 @@ class TimeSeriesData:
             floors = []
             for run, sim in zip(self.runs, start.outputs):
                 if name in run.outputs:
-                    floors.append(noise_floor(run.outputs[name] - sim[name], run.resolution.get(name, 0.0), name))
+                    floors.append(
+                        noise_floor(
+                            run.outputs[name] - sim[name], run.resolution.get(name, 0.0), name
+                        )
+                    )
             self.sigma[name] = float(np.median(floors))
 
     def headline(self, start: Prediction) -> str:
         """The output the starting model misses most on held-out data, in noise-floor units."""
+
         def cost(name: str) -> float:
-            r = [(sim[name][m] - run.outputs[name][m]) / self.sigma.get(name, 1.0)
-                 for run, sim, m in zip(self.runs, start.outputs, self.split.heldout) if name in run.outputs]
+            r = [
+                (sim[name][m] - run.outputs[name][m]) / self.sigma.get(name, 1.0)
+                for run, sim, m in zip(self.runs, start.outputs, self.split.heldout)
+                if name in run.outputs
+            ]
             r = np.concatenate(r) if r else np.zeros(0)
             return float(np.mean(r**2)) if r.size else 0.0
+
         return max(self.channels, key=cost)
 
     def rmse(self, prediction: Prediction, name: str, which: str) -> float:
@@ -137,13 +159,17 @@ class TimeSeriesData:
         return unit[1], unit[2]
 
 
-def prepare(runs: list[TimeSeriesRun], heldout: list[TimeSeriesRun], dt: float | None = None) -> TimeSeriesData:
+def prepare(
+    runs: list[TimeSeriesRun], heldout: list[TimeSeriesRun], dt: float | None = None
+) -> TimeSeriesData:
     """Plans, phases and the split: the ``heldout`` runs, or every third cycle of each run."""
     everything = list(runs) + list(heldout)
     plans = [plan(r, dt) for r in everything]
     segments = [phase_mod.segment(r) for r in everything]
     if heldout:
-        train = [np.ones(r.n_samples, bool) for r in runs] + [np.zeros(r.n_samples, bool) for r in heldout]
+        train = [np.ones(r.n_samples, bool) for r in runs] + [
+            np.zeros(r.n_samples, bool) for r in heldout
+        ]
         test = [~m for m in train]
         names = ", ".join(r.name for r in heldout)
         description = f"held-out runs: {names} (fitted on {', '.join(r.name for r in runs)})"
@@ -154,12 +180,15 @@ def prepare(runs: list[TimeSeriesRun], heldout: list[TimeSeriesRun], dt: float |
             mask = np.isin(seg.cycle, chosen)
             train.append(~mask)
             test.append(mask)
-            parts.append(f"{run.name}: cycles {', '.join(str(c + 1) for c in chosen) or 'none'} "
-                         f"of {seg.n_cycles}")
+            parts.append(
+                f"{run.name}: cycles {', '.join(str(c + 1) for c in chosen) or 'none'} "
+                f"of {seg.n_cycles}"
+            )
         if not any(m.any() for m in test):
             counts = ", ".join(f"{r.name} {s.n_cycles}" for r, s in zip(runs, segments))
             raise DiagnosisInputError(
-                f"too short to hold data out: {counts} cycle(s); a run needs at least {phase_mod.MIN_CYCLES} "
-                "actuation cycles, or give --heldout RUN")
+                f"too short to hold data out: {counts} cycle(s); a run needs at least "
+                f"{phase_mod.MIN_CYCLES} actuation cycles, or give --heldout RUN"
+            )
         description = "held-out cycles (every third, from the second): " + "; ".join(parts)
     return TimeSeriesData(everything, plans, segments, Split(train, test, description))

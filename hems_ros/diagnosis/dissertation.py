@@ -28,50 +28,74 @@ COOLING_RATIO = (0.6, 0.8)
 class Study:
     key: str
     title: str
-    table: str                 # file in config/measurements
+    table: str  # file in config/measurements
     columns: str
     model: str
-    conditions: str | None     # file in config/measurements
+    conditions: str | None  # file in config/measurements
     question: str
-    sheath_check: bool = False  # weigh the corrected wire and sheath against the chapter 3 sheath facts
+    sheath_check: bool = (
+        False  # weigh the corrected wire and sheath against the chapter 3 sheath facts
+    )
 
     @property
     def command(self) -> str:
-        parts = [f"hems diagnose config/measurements/{self.table}", f"--columns {self.columns}",
-                 f"--model {self.model}"]
+        parts = [
+            f"hems diagnose config/measurements/{self.table}",
+            f"--columns {self.columns}",
+            f"--model {self.model}",
+        ]
         if self.conditions:
             parts.append(f"--conditions config/measurements/{self.conditions}")
         return " ".join(parts)
 
 
-_PULSES = ("name=name,pulse_length=pulse_s:s,current=current_a:A,energy=energy_j:J,"
-           "peak_displacement=peak_displacement_mm:mm,peak_force=peak_force_n:N,cooling_time=cooling_time_s:s")
+_PULSES = (
+    "name=name,pulse_length=pulse_s:s,current=current_a:A,energy=energy_j:J,"
+    "peak_displacement=peak_displacement_mm:mm,peak_force=peak_force_n:N,cooling_time=cooling_time_s:s"
+)
 _LOOPS = "name=name,protocol=protocol,controller=controller,{figures}"
 
 STUDIES = (
-    Study("tables_3_2_3_3", "Tables 3.2 and 3.3: the single actuator's pulse sweep, from the bare Table 4.1 wire",
-          "table32_33.csv", _PULSES, "table41", "ch3_rig.yaml",
-          "The calibrated sets the project runs move C_M = C_A to 33.5 MPa/degC, far outside the 5-15 MPa/degC "
-          "of NiTi, so that the 50 N preload lets a 1.6 s pulse transform; docs/validation.md's onset analysis "
-          "points instead at lower transformation temperatures or at pulses that began on a warm wire. Here "
-          "the bare Table 4.1 wire on the chapter 3 rig meets the six rows with every candidate within "
-          "its published bounds.", sheath_check=True),
-    Study("chapter_5", "Chapter 5: the BPID and PID steps and staircase on the 40 N rig",
-          "ch5_bpid_pid.csv",
-          _LOOPS.format(figures="overshoot=overshoot_mm:mm,rise_time=rise_time_s:s,ss_error=ss_error_mm:mm,"
-                                "rmse=rmse_mm:mm,mean_power=apc_w:W"),
-          "ch5_straight_40n", None,
-          "docs/experiments.md does not reproduce the measured absence of overshoot (BPID 1.12 mm on the step, "
-          "1.54 mm on the staircase against none measured) and finds the model's step rising three times "
-          "faster than the dissertation's; by hand, about four times Table 4.1's load damping removed most of "
-          "the overshoot."),
-    Study("table_6_1", "Table 6.1: BPID position control of the HEMS index finger",
-          "table61_position.csv",
-          _LOOPS.format(figures="rmse=rmse_mm:mm,mean_power=apc_w:W,rise_time=rise_time_s:s"),
-          "ch6_hems_index", None,
-          "docs/experiments.md misses Table 6.1's position RMSE by 5-55 times on the sine, ramp and step: the "
-          "model's wire starts to move later than the dissertation's (a dead time at full duty), which a "
-          "start from a warm wire shortens but does not remove."),
+    Study(
+        "tables_3_2_3_3",
+        "Tables 3.2 and 3.3: the single actuator's pulse sweep, from the bare Table 4.1 wire",
+        "table32_33.csv",
+        _PULSES,
+        "table41",
+        "ch3_rig.yaml",
+        "The calibrated sets the project runs move C_M = C_A to 33.5 MPa/degC, far outside the "
+        "5-15 MPa/degC of NiTi, so that the 50 N preload lets a 1.6 s pulse transform; "
+        "docs/validation.md's onset analysis points instead at lower transformation temperatures "
+        "or at pulses that began on a warm wire. Here the bare Table 4.1 wire on the chapter 3 rig "
+        "meets the six rows with every candidate within its published bounds.",
+        sheath_check=True,
+    ),
+    Study(
+        "chapter_5",
+        "Chapter 5: the BPID and PID steps and staircase on the 40 N rig",
+        "ch5_bpid_pid.csv",
+        _LOOPS.format(
+            figures="overshoot=overshoot_mm:mm,rise_time=rise_time_s:s,ss_error=ss_error_mm:mm,"
+            "rmse=rmse_mm:mm,mean_power=apc_w:W"
+        ),
+        "ch5_straight_40n",
+        None,
+        "docs/experiments.md does not reproduce the measured absence of overshoot (BPID 1.12 mm on "
+        "the step, 1.54 mm on the staircase against none measured) and finds the model's step "
+        "rising three times faster than the dissertation's; by hand, about four times Table 4.1's "
+        "load damping removed most of the overshoot.",
+    ),
+    Study(
+        "table_6_1",
+        "Table 6.1: BPID position control of the HEMS index finger",
+        "table61_position.csv",
+        _LOOPS.format(figures="rmse=rmse_mm:mm,mean_power=apc_w:W,rise_time=rise_time_s:s"),
+        "ch6_hems_index",
+        None,
+        "docs/experiments.md misses Table 6.1's position RMSE by 5-55 times on the sine, ramp and "
+        "step: the model's wire starts to move later than the dissertation's (a dead time at full "
+        "duty), which a start from a warm wire shortens but does not remove.",
+    ),
 )
 
 
@@ -95,10 +119,14 @@ class SheathCheck:
     def within(self) -> bool:
         """The corrected model meets both accepted ranges: it could replace the calibrated set."""
         c = self.corrected
-        return (DISPLACEMENT_RATIO[0] <= c.displacement_ratio <= DISPLACEMENT_RATIO[1]
-                and COOLING_RATIO[0] <= c.cooling_ratio <= COOLING_RATIO[1])
+        return (
+            DISPLACEMENT_RATIO[0] <= c.displacement_ratio <= DISPLACEMENT_RATIO[1]
+            and COOLING_RATIO[0] <= c.cooling_ratio <= COOLING_RATIO[1]
+        )
 
 
 def sheath_check(d: Diagnosis) -> SheathCheck:
     wire = d.corrected.replace({"start.temperature_offset_c": 0.0})
-    return SheathCheck(validation.sheath_facts(wire), validation.sheath_facts(load_params("sheathed_calibrated")))
+    return SheathCheck(
+        validation.sheath_facts(wire), validation.sheath_facts(load_params("sheathed_calibrated"))
+    )

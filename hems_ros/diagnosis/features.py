@@ -23,11 +23,24 @@ from hems_ros.physics.batch import simulate
 from hems_ros.physics.params import UnitParams
 
 RELATIVE = 0.05
-ABSOLUTE = {"peak_displacement": 0.2e-3, "peak_force": 0.5, "cooling_time": 0.2, "overshoot": 0.05e-3,
-            "rise_time": 0.05, "ss_error": 0.01e-3, "rmse": 0.02e-3, "mean_power": 0.5}
+ABSOLUTE = {
+    "peak_displacement": 0.2e-3,
+    "peak_force": 0.5,
+    "cooling_time": 0.2,
+    "overshoot": 0.05e-3,
+    "rise_time": 0.05,
+    "ss_error": 0.01e-3,
+    "rmse": 0.02e-3,
+    "mean_power": 0.5,
+}
 PULSE_FIGURES = ("peak_displacement", "peak_force", "cooling_time")
-LOOP_FIGURES = {"rmse": ("rmse", 1e-3), "overshoot": ("overshoot", 1e-3), "ss_error": ("ss_error", 1e-3),
-                "rise_time": ("rise_time_s", 1.0), "mean_power": ("apc_w", 1.0)}
+LOOP_FIGURES = {
+    "rmse": ("rmse", 1e-3),
+    "overshoot": ("overshoot", 1e-3),
+    "ss_error": ("ss_error", 1e-3),
+    "rise_time": ("rise_time_s", 1.0),
+    "mean_power": ("apc_w", 1.0),
+}
 DEFAULT_CURRENT_A = 4.0
 COOLING_WINDOW_S = 15.0
 PULSE_DT = 2e-3
@@ -51,25 +64,34 @@ class FeatureData:
     def channels(self) -> list[str]:
         return [f for f in FIGURE_UNITS if any(f in t.figures for _, t in self.tests)]
 
-
     @property
     def drives(self) -> frozenset:
         """Current pulses and closed loops on the PWM stage (duty)."""
-        return frozenset(("current" if "pulse_s" in t.conditions else "duty") for _, t in self.tests)
+        return frozenset(
+            ("current" if "pulse_s" in t.conditions else "duty") for _, t in self.tests
+        )
 
     @property
     def measured(self) -> frozenset:
         """What the figures are read from: the displacement sensor, the force sensor."""
-        return frozenset(("wire_force" if name == "peak_force" else "position")
-                         for name in self.channels if name not in ("cooling_time", "rise_time", "mean_power"))
+        return frozenset(
+            ("wire_force" if name == "peak_force" else "position")
+            for name in self.channels
+            if name not in ("cooling_time", "rise_time", "mean_power")
+        )
 
     def predict(self, sets: list[UnitParams]) -> list[Prediction]:
         figures = self._figures(sets)
         out = []
         for i in range(len(sets)):
             outputs = [figures[i][j] for j in range(len(self.tests))]
-            out.append(Prediction(outputs, self._weighted(outputs, self.split.train[0]),
-                                  self._weighted(outputs, self.split.heldout[0])))
+            out.append(
+                Prediction(
+                    outputs,
+                    self._weighted(outputs, self.split.train[0]),
+                    self._weighted(outputs, self.split.heldout[0]),
+                )
+            )
         return out
 
     def _weighted(self, outputs: list[dict[str, float]], mask: np.ndarray) -> np.ndarray:
@@ -88,18 +110,24 @@ class FeatureData:
         out: list[list[dict[str, float]]] = [[{} for _ in self.tests] for _ in sets]
         pulses = [j for j, (_, t) in enumerate(self.tests) if "pulse_s" in t.conditions]
         if pulses:
-            for (i, j), fig in zip([(i, j) for i in range(len(sets)) for j in pulses],
-                                   _pulse_figures(sets, [self.tests[j][1] for j in pulses], self.dt)):
+            for (i, j), fig in zip(
+                [(i, j) for i in range(len(sets)) for j in pulses],
+                _pulse_figures(sets, [self.tests[j][1] for j in pulses], self.dt),
+            ):
                 out[i][j] = fig
         loops: dict[tuple[str, str], list[int]] = {}
         for j, (_, t) in enumerate(self.tests):
             if "protocol" in t.conditions:
-                loops.setdefault((str(t.conditions["protocol"]), str(t.conditions.get("controller", "bpid"))),
-                                 []).append(j)
+                loops.setdefault(
+                    (str(t.conditions["protocol"]), str(t.conditions.get("controller", "bpid"))), []
+                ).append(j)
         for (protocol, strategy), rows in loops.items():
             for i, figs in enumerate(_loop_figures(protocol, strategy, sets)):
                 for j in rows:
-                    out[i][j] = {name: figs.get(key, math.nan) * scale for name, (key, scale) in LOOP_FIGURES.items()}
+                    out[i][j] = {
+                        name: figs.get(key, math.nan) * scale
+                        for name, (key, scale) in LOOP_FIGURES.items()
+                    }
         return out
 
     def headline(self, start: Prediction) -> str:
@@ -107,16 +135,24 @@ class FeatureData:
         mask = self.split.heldout[0] if self.split.heldout[0].any() else self.split.train[0]
 
         def cost(name: str) -> float:
-            r = [(start.outputs[j].get(name, math.nan) - t.figures[name]) / uncertainty(name, t.figures[name])
-                 for j, ((_, t), take) in enumerate(zip(self.tests, mask)) if take and name in t.figures]
+            r = [
+                (start.outputs[j].get(name, math.nan) - t.figures[name])
+                / uncertainty(name, t.figures[name])
+                for j, ((_, t), take) in enumerate(zip(self.tests, mask))
+                if take and name in t.figures
+            ]
             r = [x if math.isfinite(x) else 1e3 for x in r]
             return float(np.mean(np.square(r))) if r else 0.0
+
         return max(self.channels, key=cost)
 
     def rmse(self, prediction: Prediction, name: str, which: str) -> float:
         mask = (self.split.train if which == "train" else self.split.heldout)[0]
-        errs = [prediction.outputs[j].get(name, math.nan) - t.figures[name]
-                for j, ((_, t), take) in enumerate(zip(self.tests, mask)) if take and name in t.figures]
+        errs = [
+            prediction.outputs[j].get(name, math.nan) - t.figures[name]
+            for j, ((_, t), take) in enumerate(zip(self.tests, mask))
+            if take and name in t.figures
+        ]
         return metrics.rms(errs)
 
 
@@ -134,25 +170,40 @@ def _loop_figures(protocol: str, strategy: str, sets: list[UnitParams]) -> list[
     return out
 
 
-def _pulse_figures(sets: list[UnitParams], tests: list[FeatureTest], dt: float) -> list[dict[str, float]]:
+def _pulse_figures(
+    sets: list[UnitParams], tests: list[FeatureTest], dt: float
+) -> list[dict[str, float]]:
     """Peak displacement, peak force and cooling time of every (set, test) pair, set-major."""
     longest = max(float(t.conditions["pulse_s"]) for t in tests)
     n = int(round((longest + COOLING_WINDOW_S) / dt))
     drives = np.zeros((len(tests), n))
     for j, t in enumerate(tests):
-        drives[j, : int(round(float(t.conditions["pulse_s"]) / dt))] = float(t.conditions.get("current_a",
-                                                                                              DEFAULT_CURRENT_A))
+        drives[j, : int(round(float(t.conditions["pulse_s"]) / dt))] = float(
+            t.conditions.get("current_a", DEFAULT_CURRENT_A)
+        )
     rows = [s for s in sets for _ in tests]
-    res = simulate(rows, dt, current=np.tile(drives, (len(sets), 1)), channels=["slider_position_m", "wire_force_n"])
+    res = simulate(
+        rows,
+        dt,
+        current=np.tile(drives, (len(sets), 1)),
+        channels=["slider_position_m", "wire_force_n"],
+    )
     out = []
     for i, p in enumerate(rows):
         test = tests[i % len(tests)]
         x = res.slider_position_m[i] * p.encoder.gain
-        force = res.wire_force_n[i] + p.force_sensor.offset_n + p.force_sensor.drift_n_per_s * res.time
+        force = (
+            res.wire_force_n[i] + p.force_sensor.offset_n + p.force_sensor.drift_n_per_s * res.time
+        )
         end = int(round(float(test.conditions["pulse_s"]) / dt)) - 1
         cooled = float(test.conditions.get("cooled_m", 0.005 * p.wire.length_m))
-        out.append({"peak_displacement": float(x.max()), "peak_force": float(force.max()),
-                    "cooling_time": _cooling_time(x, end, dt, cooled)})
+        out.append(
+            {
+                "peak_displacement": float(x.max()),
+                "peak_force": float(force.max()),
+                "cooling_time": _cooling_time(x, end, dt, cooled),
+            }
+        )
     return out
 
 
@@ -170,15 +221,22 @@ def prepare(runs: list[FeatureRun], heldout: list[FeatureRun], dt: float = PULSE
     tests = [(run, t) for run in list(runs) + list(heldout) for t in run.tests]
     for run, t in tests:
         if "pulse_s" not in t.conditions and "protocol" not in t.conditions:
-            raise DiagnosisInputError(f"{run.name}, {t.name}: a test needs its conditions: a pulse length "
-                                      "(pulse_length=<column>) or a protocol (protocol=<column>)")
+            raise DiagnosisInputError(
+                f"{run.name}, {t.name}: a test needs its conditions: a pulse length "
+                "(pulse_length=<column>) or a protocol (protocol=<column>)"
+            )
     if heldout:
         test_mask = np.array([run in heldout for run, _ in tests])
         description = f"held-out tables: {', '.join(r.name for r in heldout)}"
     else:
         if len(tests) < MIN_ROWS:
-            raise DiagnosisInputError(f"{len(tests)} test row(s): at least {MIN_ROWS} are needed to hold one out")
+            raise DiagnosisInputError(
+                f"{len(tests)} test row(s): at least {MIN_ROWS} are needed to hold one out"
+            )
         test_mask = np.isin(np.arange(len(tests)), np.arange(1, len(tests), 3))
         description = "held-out rows (every third, from the second): " + ", ".join(
-            t.name for (_, t), m in zip(tests, test_mask) if m)
-    return FeatureData(list(runs) + list(heldout), tests, Split([~test_mask], [test_mask], description), dt)
+            t.name for (_, t), m in zip(tests, test_mask) if m
+        )
+    return FeatureData(
+        list(runs) + list(heldout), tests, Split([~test_mask], [test_mask], description), dt
+    )

@@ -43,12 +43,16 @@ class Coordinate:
 
     def value(self, u: float) -> float:
         if self.parameter.log:
-            return math.exp(math.log(self.lower) + u * (math.log(self.upper) - math.log(self.lower)))
+            return math.exp(
+                math.log(self.lower) + u * (math.log(self.upper) - math.log(self.lower))
+            )
         return self.lower + u * (self.upper - self.lower)
 
     def unit(self, value: float) -> float:
         if self.parameter.log:
-            return (math.log(value) - math.log(self.lower)) / (math.log(self.upper) - math.log(self.lower))
+            return (math.log(value) - math.log(self.lower)) / (
+                math.log(self.upper) - math.log(self.lower)
+            )
         return (value - self.lower) / (self.upper - self.lower)
 
 
@@ -58,8 +62,11 @@ class Space:
     def __init__(self, base: UnitParams, structure: Structure) -> None:
         self.base = base
         self.structure = structure
-        self.coords = [Coordinate(c, par, lo, hi)
-                       for c in structure for par, (lo, hi) in zip(c.parameters, c.bounds(base))]
+        self.coords = [
+            Coordinate(c, par, lo, hi)
+            for c in structure
+            for par, (lo, hi) in zip(c.parameters, c.bounds(base))
+        ]
 
     @property
     def size(self) -> int:
@@ -83,10 +90,15 @@ class Space:
         return model
 
     def off(self) -> np.ndarray:
-        """Each coordinate where it leaves its candidate without effect (clipped into the bounds)."""
+        """Each coordinate where it leaves its candidate without effect (clipped into
+        the bounds)."""
         values = [v for cand in self.structure for v in cand.off_values(self.base)]
-        return np.array([np.clip(c.unit(v) if not (c.parameter.log and v <= 0) else 0.0, 0.0, 1.0)
-                         for c, v in zip(self.coords, values)])
+        return np.array(
+            [
+                np.clip(c.unit(v) if not (c.parameter.log and v <= 0) else 0.0, 0.0, 1.0)
+                for c, v in zip(self.coords, values)
+            ]
+        )
 
 
 @dataclass
@@ -96,10 +108,10 @@ class Fit:
     structure: Structure
     values: np.ndarray
     params: UnitParams
-    train: float            # mean squared weighted residual on the training data
-    heldout: float          # the same on the held-out data
+    train: float  # mean squared weighted residual on the training data
+    heldout: float  # the same on the held-out data
     n_train: int
-    pinned: list[str]       # parameters that ended on a bound other than "absent"
+    pinned: list[str]  # parameters that ended on a bound other than "absent"
     evaluations: int = 0
 
     @property
@@ -109,7 +121,9 @@ class Fit:
     @property
     def bic(self) -> float:
         """Bayesian information criterion on the training data (Gaussian residuals)."""
-        return self.n_train * math.log(max(self.train, 1e-300)) + self.n_parameters * math.log(self.n_train)
+        return self.n_train * math.log(max(self.train, 1e-300)) + self.n_parameters * math.log(
+            self.n_train
+        )
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -144,8 +158,11 @@ class Evaluator:
             else:
                 p = next(predictions)
                 # a set that cannot run the data (a thermal cycle's start above its As0) is no fit
-                out.append((p.train, p.heldout) if np.isfinite(p.train).all() and np.isfinite(p.heldout).all()
-                           else None)
+                out.append(
+                    (p.train, p.heldout)
+                    if np.isfinite(p.train).all() and np.isfinite(p.heldout).all()
+                    else None
+                )
         return out
 
 
@@ -155,6 +172,7 @@ def _cost(r: np.ndarray) -> float:
 
 def _job(space: Space, u0: np.ndarray, n_train: int, n_heldout: int, max_evaluations: int):
     """A least-squares fit of one structure from ``u0``, evaluating through the barrier."""
+
     def run(barrier: Barrier):
         cache: dict[bytes, tuple[np.ndarray, np.ndarray, float]] = {}
 
@@ -168,16 +186,32 @@ def _job(space: Space, u0: np.ndarray, n_train: int, n_heldout: int, max_evaluat
                     steps.append(v)
                 results = barrier([space.params(v) for v in steps])
                 rows = [np.full(n_train, PENALTY) if r is None else r[0] for r in results]
-                jac = np.stack([(rows[j + 1] - rows[0]) / (steps[j + 1][j] - u[j]) for j in range(space.size)],
-                               axis=1)
-                held = _cost(np.full(n_heldout, PENALTY)) if results[0] is None else _cost(results[0][1])
+                jac = np.stack(
+                    [(rows[j + 1] - rows[0]) / (steps[j + 1][j] - u[j]) for j in range(space.size)],
+                    axis=1,
+                )
+                held = (
+                    _cost(np.full(n_heldout, PENALTY))
+                    if results[0] is None
+                    else _cost(results[0][1])
+                )
                 cache[key] = (rows[0], jac, held)
             return cache[key]
 
-        res = least_squares(lambda u: evaluate(u)[0], u0, jac=lambda u: evaluate(u)[1], bounds=(0.0, 1.0),
-                            method="trf", x_scale=1.0, max_nfev=max_evaluations, ftol=1e-6, xtol=1e-6)
+        res = least_squares(
+            lambda u: evaluate(u)[0],
+            u0,
+            jac=lambda u: evaluate(u)[1],
+            bounds=(0.0, 1.0),
+            method="trf",
+            x_scale=1.0,
+            max_nfev=max_evaluations,
+            ftol=1e-6,
+            xtol=1e-6,
+        )
         r, _, held = evaluate(res.x)
         return res.x, _cost(r), held, len(cache)
+
     return run
 
 
@@ -186,9 +220,15 @@ def screen_points(k: int, n: int) -> np.ndarray:
     return qmc.Halton(d=k, scramble=False).random(n + 1)[1:]
 
 
-def fit_structures(data, base: UnitParams, structures: Sequence[Structure], warm: dict[str, float],
-                   progress: Callable[[str], None] | None = None, starts: int = STARTS,
-                   max_evaluations: int = MAX_EVALUATIONS) -> list[Fit]:
+def fit_structures(
+    data,
+    base: UnitParams,
+    structures: Sequence[Structure],
+    warm: dict[str, float],
+    progress: Callable[[str], None] | None = None,
+    starts: int = STARTS,
+    max_evaluations: int = MAX_EVALUATIONS,
+) -> list[Fit]:
     """Fit every structure on ``data``; the result keeps each structure's best start.
 
     ``warm``: normalised values of parameters already fitted (by key), the starting point
@@ -217,8 +257,18 @@ def fit_structures(data, base: UnitParams, structures: Sequence[Structure], warm
     fits = []
     for i, space in enumerate(spaces):
         u, train, held, n_eval = best[i]
-        fits.append(Fit(space.structure, space.values(u), space.params(u) or base, train, held, n_train,
-                        _pinned(space, u), n_eval))
+        fits.append(
+            Fit(
+                space.structure,
+                space.values(u),
+                space.params(u) or base,
+                train,
+                held,
+                n_train,
+                _pinned(space, u),
+                n_eval,
+            )
+        )
     return fits
 
 
@@ -227,7 +277,9 @@ def _sizes(data, base: UnitParams) -> tuple[int, int]:
     return p.train.size, p.heldout.size
 
 
-def _screen(spaces: list[Space], warm: dict[str, float], evaluator: Evaluator, starts: int) -> list[list[np.ndarray]]:
+def _screen(
+    spaces: list[Space], warm: dict[str, float], evaluator: Evaluator, starts: int
+) -> list[list[np.ndarray]]:
     """Start points of each structure: its screen's best, the known coordinates warm."""
     batch, owner, points = [], [], []
     for i, space in enumerate(spaces):
@@ -245,7 +297,9 @@ def _screen(spaces: list[Space], warm: dict[str, float], evaluator: Evaluator, s
     scored: dict[int, list] = {}
     for i, u, r in zip(owner, points, results):
         scored.setdefault(i, []).append((math.inf if r is None else _cost(r[0]), u))
-    return [[u for _, u in sorted(scored[i], key=lambda x: x[0])[:starts]] for i in range(len(spaces))]
+    return [
+        [u for _, u in sorted(scored[i], key=lambda x: x[0])[:starts]] for i in range(len(spaces))
+    ]
 
 
 def _pinned(space: Space, u: np.ndarray) -> list[str]:
@@ -255,6 +309,8 @@ def _pinned(space: Space, u: np.ndarray) -> list[str]:
     for c, x, o in zip(space.coords, u, off):
         for bound, name in ((0.0, "lower"), (1.0, "upper")):
             if abs(x - bound) <= AT_BOUND and abs(o - bound) > AT_BOUND:
-                out.append(f"{c.candidate.name}: {c.parameter.symbol} at its {name} bound "
-                           f"{c.parameter.display(c.value(bound)):.4g} {c.parameter.unit}".rstrip())
+                out.append(
+                    f"{c.candidate.name}: {c.parameter.symbol} at its {name} bound "
+                    f"{c.parameter.display(c.value(bound)):.4g} {c.parameter.unit}".rstrip()
+                )
     return out

@@ -18,7 +18,8 @@ from hems_ros.physics.yamlload import load_yaml
 
 
 def model(name: str, conditions: Path | None = None, overrides: list[str] = ()) -> UnitParams:
-    """The starting model: a named set or YAML file, the run's conditions, ``KEY=VALUE`` overrides."""
+    """The starting model: a named set or YAML file, the run's conditions,
+    ``KEY=VALUE`` overrides."""
     try:
         params = load_params(name)
     except FileNotFoundError:
@@ -31,7 +32,9 @@ def model(name: str, conditions: Path | None = None, overrides: list[str] = ()) 
     for item in overrides:
         key, sep, text = item.partition("=")
         if not sep or not key:
-            raise DiagnosisInputError(f"--set {item!r}: expected KEY=VALUE, e.g. load.pretension_n=20")
+            raise DiagnosisInputError(
+                f"--set {item!r}: expected KEY=VALUE, e.g. load.pretension_n=20"
+            )
         changes[key.strip()] = _value(text)
     try:
         return params.replace(changes) if changes else params
@@ -54,7 +57,9 @@ def _with_conditions(params: UnitParams, path: Path) -> UnitParams:
     except OSError as error:
         raise DiagnosisInputError(f"--conditions {path}: {error.strerror or error}") from None
     except yaml.YAMLError as error:
-        raise DiagnosisInputError(f"--conditions {path}: not valid YAML ({str(error).splitlines()[0]})") from None
+        raise DiagnosisInputError(
+            f"--conditions {path}: not valid YAML ({str(error).splitlines()[0]})"
+        ) from None
     if not isinstance(data, dict):
         raise DiagnosisInputError(f"--conditions {path}: expected a mapping of parameter groups")
     merged = params.to_dict()
@@ -75,13 +80,17 @@ def candidate_names(text: str | None) -> list[str] | None:
     names = [n.strip() for n in text.split(",") if n.strip()]
     unknown = [n for n in names if n not in candidates.BY_NAME]
     if unknown or not names:
-        raise DiagnosisInputError(f"--candidates: unknown {', '.join(unknown) or '(none given)'} "
-                                  f"(known: {', '.join(candidates.BY_NAME)})")
+        raise DiagnosisInputError(
+            f"--candidates: unknown {', '.join(unknown) or '(none given)'} "
+            f"(known: {', '.join(candidates.BY_NAME)})"
+        )
     return names
 
 
 def is_bag(path: Path) -> bool:
-    return path.suffix == ".mcap" or (path.is_dir() and (any(path.glob("*.mcap")) or (path / "metadata.yaml").exists()))
+    return path.suffix == ".mcap" or (
+        path.is_dir() and (any(path.glob("*.mcap")) or (path / "metadata.yaml").exists())
+    )
 
 
 def load(text: str, columns: str | None, fingers: str | None) -> list[Run]:
@@ -95,8 +104,10 @@ def load(text: str, columns: str | None, fingers: str | None) -> list[Run]:
     if path.is_dir():
         raise DiagnosisInputError(f"{text}: a folder that is not a bag (no .mcap file in it)")
     if not columns:
-        raise DiagnosisInputError(f"{text}: a table needs --columns quantity=column[:unit],... "
-                                  "(e.g. time=t:s,current=I:A,displacement=x:mm)")
+        raise DiagnosisInputError(
+            f"{text}: a table needs --columns quantity=column[:unit],... "
+            "(e.g. time=t:s,current=I:A,displacement=x:mm)"
+        )
     return [csvload.load_table(path, columns)]
 
 
@@ -107,7 +118,9 @@ def stem(text: str) -> str:
 
 def check_output(out: Path) -> None:
     """Refuse a report folder that would overwrite something other than a report."""
-    if out.exists() and (not out.is_dir() or (any(out.iterdir()) and not (out / "summary.json").is_file())):
+    if out.exists() and (
+        not out.is_dir() or (any(out.iterdir()) and not (out / "summary.json").is_file())
+    ):
         raise DiagnosisInputError(f"--out {out}: exists and is not a diagnosis report folder")
     parent = out.resolve().parent
     while not parent.exists():

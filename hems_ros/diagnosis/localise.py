@@ -28,9 +28,9 @@ class Row:
     group: str
     channel: str
     samples: int
-    rms: float            # display unit
+    rms: float  # display unit
     unit: str
-    cost: float           # mean squared weighted residual (1 = noise floor)
+    cost: float  # mean squared weighted residual (1 = noise floor)
 
 
 def display(data, name: str) -> tuple[str, float]:
@@ -42,6 +42,7 @@ def _weights(data, name: str, value: float | None = None) -> float:
     if isinstance(data, TimeSeriesData):
         return data.sigma[name]
     from hems_ros.diagnosis.features import uncertainty
+
     return uncertainty(name, value)
 
 
@@ -53,12 +54,23 @@ def table(data, prediction: Prediction) -> list[Row]:
     for name in data.channels:
         unit, scale = display(data, name)
         for index, phase in enumerate(PHASES):
-            res = [sim[name][seg.phase == index] - run.outputs[name][seg.phase == index]
-                   for run, sim, seg in zip(data.runs, prediction.outputs, data.segments) if name in run.outputs]
+            res = [
+                sim[name][seg.phase == index] - run.outputs[name][seg.phase == index]
+                for run, sim, seg in zip(data.runs, prediction.outputs, data.segments)
+                if name in run.outputs
+            ]
             r = np.concatenate(res) if res else np.zeros(0)
             if r.size:
-                rows.append(Row(phase, name, int(r.size), metrics.rms(r) * scale, unit,
-                                float(np.mean((r / data.sigma[name]) ** 2))))
+                rows.append(
+                    Row(
+                        phase,
+                        name,
+                        int(r.size),
+                        metrics.rms(r) * scale,
+                        unit,
+                        float(np.mean((r / data.sigma[name]) ** 2)),
+                    )
+                )
     return rows
 
 
@@ -66,20 +78,32 @@ def _figure_table(data, prediction: Prediction) -> list[Row]:
     rows = []
     for name in data.channels:
         unit, scale = display(data, name)
-        r = np.array([prediction.outputs[j].get(name, np.nan) - t.figures[name]
-                      for j, (_, t) in enumerate(data.tests) if name in t.figures])
-        w = np.array([_weights(data, name, t.figures[name]) for _, t in data.tests if name in t.figures])
+        r = np.array(
+            [
+                prediction.outputs[j].get(name, np.nan) - t.figures[name]
+                for j, (_, t) in enumerate(data.tests)
+                if name in t.figures
+            ]
+        )
+        w = np.array(
+            [_weights(data, name, t.figures[name]) for _, t in data.tests if name in t.figures]
+        )
         r = np.where(np.isfinite(r), r, 1e3 * w)
-        rows.append(Row(name, name, int(r.size), metrics.rms(r) * scale, unit,
-                        float(np.mean((r / w) ** 2))))
+        rows.append(
+            Row(name, name, int(r.size), metrics.rms(r) * scale, unit, float(np.mean((r / w) ** 2)))
+        )
     return rows
 
 
-def cycles(data: TimeSeriesData, prediction: Prediction, name: str) -> list[tuple[str, int, float, bool]]:
+def cycles(
+    data: TimeSeriesData, prediction: Prediction, name: str
+) -> list[tuple[str, int, float, bool]]:
     """(run, cycle number from 1, residual RMS in display units, held out?) of ``name``."""
     unit, scale = display(data, name)
     out = []
-    for run, sim, seg, test in zip(data.runs, prediction.outputs, data.segments, data.split.heldout):
+    for run, sim, seg, test in zip(
+        data.runs, prediction.outputs, data.segments, data.split.heldout
+    ):
         if name not in run.outputs:
             continue
         for c in range(seg.n_cycles):
@@ -97,10 +121,16 @@ def unexplained(data, prediction: Prediction, force: bool = False) -> list[str]:
     by_group: dict[str, list[Row]] = {}
     for row in table(data, prediction):
         by_group.setdefault(row.group, []).append(row)
-    excess = {g: sum(r.samples * max(r.cost - 1.0, 0.0) for r in rows) for g, rows in by_group.items()}
+    excess = {
+        g: sum(r.samples * max(r.cost - 1.0, 0.0) for r in rows) for g, rows in by_group.items()
+    }
     worst_cost = {g: max(r.cost for r in rows) for g, rows in by_group.items()}
     total = sum(excess.values())
-    named = [g for g in by_group if worst_cost[g] > UNEXPLAINED and total > 0 and excess[g] >= SHARE * total]
+    named = [
+        g
+        for g in by_group
+        if worst_cost[g] > UNEXPLAINED and total > 0 and excess[g] >= SHARE * total
+    ]
     if not named and force and total > 0:
         named = [max(excess, key=excess.get)]
     return named

@@ -56,8 +56,13 @@ class Segmentation:
 
 def motion(run: TimeSeriesRun) -> np.ndarray:
     """The run's measure of contraction: position, else minus the strain, else the force."""
-    for name, sign in (("position", 1.0), ("strain", -1.0), ("wire_force", 1.0), ("load_force", 1.0),
-                       ("temperature", 1.0)):
+    for name, sign in (
+        ("position", 1.0),
+        ("strain", -1.0),
+        ("wire_force", 1.0),
+        ("load_force", 1.0),
+        ("temperature", 1.0),
+    ):
         if name in run.outputs:
             return sign * run.outputs[name]
     raise ValueError(f"{run.name}: no output to segment")
@@ -109,13 +114,15 @@ def _merge_blips(starts: list[int], near_rest: np.ndarray) -> list[int]:
     bounds = starts + [near_rest.size]
     kept = []
     for k in range(len(starts)):
-        if kept and near_rest[bounds[k - 1]:bounds[k]].all():
-            continue        # the previous cycle was a blip: it runs on into this one
+        if kept and near_rest[bounds[k - 1] : bounds[k]].all():
+            continue  # the previous cycle was a blip: it runs on into this one
         kept.append(starts[k])
     return kept
 
 
-def _cycle_starts(t: np.ndarray, on: np.ndarray, near_rest: np.ndarray, min_off_s: float) -> list[int]:
+def _cycle_starts(
+    t: np.ndarray, on: np.ndarray, near_rest: np.ndarray, min_off_s: float
+) -> list[int]:
     """Samples where the drive comes on after at least ``min_off_s`` off with the wire near rest."""
     starts, off_since = [], None
     for k in range(t.size):

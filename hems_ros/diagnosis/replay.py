@@ -43,13 +43,23 @@ def thermal_cycle_rig(params: UnitParams, stress_pa: float) -> UnitParams:
     """A bare wire under a dead weight that holds ``stress_pa`` (the lab's constant stress)."""
     mass = stress_pa * params.wire.cross_section_m2 / _GRAVITY
     if not mass > 0:
-        raise DiagnosisInputError(f"thermal cycle: stress {stress_pa:g} Pa must be > 0 (a wire under load)")
-    return params.replace({
-        "load.kind": "hanging_mass", "load.mass_kg": mass, "load.pretension_n": 0.0,
-        "load.stiffness_n_per_m": 0.0, "load.cubic_stiffness_n_per_m3": 0.0, "load.pulley_ratio": 1.0,
-        "load.gravity_m_s2": _GRAVITY, "sheath.enabled": False, "capstan.enabled": False,
-        "glove_friction.enabled": False,
-    })
+        raise DiagnosisInputError(
+            f"thermal cycle: stress {stress_pa:g} Pa must be > 0 (a wire under load)"
+        )
+    return params.replace(
+        {
+            "load.kind": "hanging_mass",
+            "load.mass_kg": mass,
+            "load.pretension_n": 0.0,
+            "load.stiffness_n_per_m": 0.0,
+            "load.cubic_stiffness_n_per_m3": 0.0,
+            "load.pulley_ratio": 1.0,
+            "load.gravity_m_s2": _GRAVITY,
+            "sheath.enabled": False,
+            "capstan.enabled": False,
+            "glove_friction.enabled": False,
+        }
+    )
 
 
 @dataclass(frozen=True)
@@ -58,10 +68,10 @@ class ReplayPlan:
 
     run: TimeSeriesRun
     dt: float
-    drive: str                  # keyword of batch.simulate
-    values: np.ndarray          # per plant step
+    drive: str  # keyword of batch.simulate
+    values: np.ndarray  # per plant step
     record_every: int
-    records: np.ndarray         # record index of samples 1..n-1 (sample 0 is the initial state)
+    records: np.ndarray  # record index of samples 1..n-1 (sample 0 is the initial state)
 
     @property
     def thermal(self) -> bool:
@@ -77,11 +87,15 @@ def plan(run: TimeSeriesRun, dt: float | None = None) -> ReplayPlan:
         raise DiagnosisInputError(f"{run.name}: a run needs more than one sample")
     step = _grid_step(run.time, min(step, float(gaps.min())))
     if step < MIN_STEP * (1.0 - 1e-6):
-        raise DiagnosisInputError(f"{run.name}: samples {gaps.min() * 1e3:.3g} ms apart; "
-                                  "the replay needs them at least 0.1 ms apart")
+        raise DiagnosisInputError(
+            f"{run.name}: samples {gaps.min() * 1e3:.3g} ms apart; "
+            "the replay needs them at least 0.1 ms apart"
+        )
     index = np.rint(run.time / step).astype(np.int64)
     if np.any(np.diff(index) <= 0):
-        raise DiagnosisInputError(f"{run.name}: sample instants do not fall on distinct {step * 1e3:g} ms steps")
+        raise DiagnosisInputError(
+            f"{run.name}: sample instants do not fall on distinct {step * 1e3:g} ms steps"
+        )
     every = int(np.gcd.reduce(index[1:]))
     if thermal:
         ends = (np.arange(index[-1]) + 1) * step
@@ -125,8 +139,11 @@ def cannot_start(params: UnitParams, run: TimeSeriesRun) -> str | None:
     """Why ``params`` cannot replay ``run`` from a martensite wire, or None."""
     first = start_temperature(run)
     if first is not None and first >= params.kinetics.as0_c:
-        return (f"{run.name}: the thermal cycle starts at {first:g} degC, at or above As0 = "
-                f"{params.kinetics.as0_c:g} degC of the model; it must start cold, with the wire martensite")
+        return (
+            f"{run.name}: the thermal cycle starts at {first:g} degC, at or above As0 = "
+            f"{params.kinetics.as0_c:g} degC of the model; it must start cold, with the "
+            f"wire martensite"
+        )
     return None
 
 
@@ -149,15 +166,23 @@ def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
     physics = list(unique)
     wanted = sorted({_KERNEL_CHANNELS[name] for name in run.outputs})
     start = start_temperature(run)
-    res = simulate(physics, p.dt, record_every=p.record_every, channels=wanted, start_temperature_c=start,
-                   **{p.drive: p.values})
+    res = simulate(
+        physics,
+        p.dt,
+        record_every=p.record_every,
+        channels=wanted,
+        start_temperature_c=start,
+        **{p.drive: p.values},
+    )
     initial = _initial_outputs(physics, start)
     live = np.array([k in unique for k in keys])
     rows = np.array([unique[k] for k in keys if k in unique])
     chosen = [s for s, ok in zip(sets, live) if ok]
     for name in run.outputs:
         channel = _KERNEL_CHANNELS[name]
-        series = np.concatenate([initial[channel][:, None], res[channel][:, p.records]], axis=1)[rows]
+        series = np.concatenate([initial[channel][:, None], res[channel][:, p.records]], axis=1)[
+            rows
+        ]
         out[name][live] = _sensor(name, series, chosen, run.time)
     return out
 
@@ -187,4 +212,3 @@ def _sensor(name: str, truth: np.ndarray, sets: list[UnitParams], time: np.ndarr
         # the sensor reads within 0..range (sensors.force_reading); a slack wire reads 0
         return np.clip(truth + offset + drift * time[None, :], 0.0, top)
     return truth
-

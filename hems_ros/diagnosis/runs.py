@@ -61,17 +61,17 @@ class TimeSeriesRun:
     """One measured run: an input and the outputs at the same sample instants."""
 
     name: str
-    source: str                          # file path, or "<bag folder>:<finger>"
-    kind: str                            # "driven" or "thermal_cycle"
-    time: np.ndarray                     # s since the first sample (time[0] == 0), increasing
-    drive: str                           # one of DRIVES
-    drive_values: np.ndarray             # at each sample instant, held until the next one
-    outputs: dict[str, np.ndarray]       # OUTPUT_UNITS name -> values at the sample instants
+    source: str  # file path, or "<bag folder>:<finger>"
+    kind: str  # "driven" or "thermal_cycle"
+    time: np.ndarray  # s since the first sample (time[0] == 0), increasing
+    drive: str  # one of DRIVES
+    drive_values: np.ndarray  # at each sample instant, held until the next one
+    outputs: dict[str, np.ndarray]  # OUTPUT_UNITS name -> values at the sample instants
     resolution: dict[str, float] = field(default_factory=dict)  # known quantisation step per output
-    stress_pa: float | None = None       # thermal cycles: the constant wire stress
+    stress_pa: float | None = None  # thermal cycles: the constant wire stress
     # a bag's setpoints, for the phase labels only: (time s, mode, value)
     setpoints: tuple[tuple[float, str, float], ...] = ()
-    notes: tuple[str, ...] = ()          # what the loader adjusted or dropped, for the report
+    notes: tuple[str, ...] = ()  # what the loader adjusted or dropped, for the report
     # the input as a step function (times s, values) where it also changes between samples (a
     # bag's late duty commands, the unit's watchdog); None: it changes only at the samples
     drive_steps: tuple[np.ndarray, np.ndarray] | None = None

@@ -62,7 +62,7 @@ class Step:
 
     ranked: list[Fit]
     chosen: Fit | None
-    rivals: list[Fit]          # effects as good as the chosen one on held-out data
+    rivals: list[Fit]  # effects as good as the chosen one on held-out data
 
 
 @dataclass
@@ -98,10 +98,13 @@ def _better(new: Fit, current: Fit, start: Fit) -> bool:
     """``new`` explains a fair share of what ``current`` leaves (training data, where most of
     the data are), and that carries over to the held-out data beyond the noise and is a
     material part of the starting model's gap."""
-    return (current.heldout - new.heldout >= MIN_GAIN
-            and excess(current.heldout) - excess(new.heldout) >= MATERIAL * excess(start.heldout)
-            and current.train - new.train >= MIN_SHARE * max(current.train - 1.0, 0.0)
-            and new.bic < current.bic and not new.pinned)
+    return (
+        current.heldout - new.heldout >= MIN_GAIN
+        and excess(current.heldout) - excess(new.heldout) >= MATERIAL * excess(start.heldout)
+        and current.train - new.train >= MIN_SHARE * max(current.train - 1.0, 0.0)
+        and new.bic < current.bic
+        and not new.pinned
+    )
 
 
 def _warm(space_fit: Fit, base: UnitParams) -> dict[str, float]:
@@ -111,12 +114,23 @@ def _warm(space_fit: Fit, base: UnitParams) -> dict[str, float]:
 
 def _start_fit(data, base: UnitParams) -> Fit:
     p = data.predict([base])[0]
-    return Fit((), np.zeros(0), base, float(np.mean(p.train**2)), float(np.mean(p.heldout**2)),
-               p.train.size, [])
+    return Fit(
+        (),
+        np.zeros(0),
+        base,
+        float(np.mean(p.train**2)),
+        float(np.mean(p.heldout**2)),
+        p.train.size,
+        [],
+    )
 
 
-def run_search(data, base: UnitParams, candidates: list[Candidate],
-               progress: Callable[[str], None] | None = None) -> Search:
+def run_search(
+    data,
+    base: UnitParams,
+    candidates: list[Candidate],
+    progress: Callable[[str], None] | None = None,
+) -> Search:
     """Forward selection then backward elimination over ``candidates`` (see module doc)."""
     say = progress or (lambda message: None)
     start = _start_fit(data, base)
@@ -126,10 +140,17 @@ def run_search(data, base: UnitParams, candidates: list[Candidate],
         remaining = [c for c in candidates if c not in current.structure]
         if not remaining:
             break
-        say(f"step {len(steps) + 1}: {len(remaining)} candidate(s) on top of "
-            f"{', '.join(current.names) or 'the starting model'}")
-        fits = fit_structures(data, base, [current.structure + (c,) for c in remaining], _warm(current, base),
-                              progress=say)
+        say(
+            f"step {len(steps) + 1}: {len(remaining)} candidate(s) on top of "
+            f"{', '.join(current.names) or 'the starting model'}"
+        )
+        fits = fit_structures(
+            data,
+            base,
+            [current.structure + (c,) for c in remaining],
+            _warm(current, base),
+            progress=say,
+        )
         ranked = sorted(fits, key=lambda f: f.bic)
         findings += [p for f in ranked for p in f.pinned if p not in findings]
         eligible = [f for f in ranked if _better(f, current, start)]
@@ -140,10 +161,18 @@ def run_search(data, base: UnitParams, candidates: list[Candidate],
         tied = [f for f in eligible if f.train <= best.train * (1.0 + TIE)]
         recal = [f for f in tied if f.structure[-1].kind == "recalibration"]
         chosen = recal[0] if recal else best
-        rivals = [f for f in tied if f is not chosen and f.structure[-1].kind == "effect"
-                  and chosen.structure[-1].kind == "effect"]
+        rivals = [
+            f
+            for f in tied
+            if f is not chosen
+            and f.structure[-1].kind == "effect"
+            and chosen.structure[-1].kind == "effect"
+        ]
         steps.append(Step(ranked, chosen, rivals))
-        say(f"  accepted {chosen.structure[-1].name}: held-out cost {current.heldout:.3g} -> {chosen.heldout:.3g}")
+        say(
+            f"  accepted {chosen.structure[-1].name}: held-out cost {current.heldout:.3g} "
+            f"-> {chosen.heldout:.3g}"
+        )
         current = chosen
     current, dropped = _eliminate(data, base, current, start, say)
     return Search(start, steps, current, dropped, _verdict(start, current, steps), findings)
@@ -159,7 +188,10 @@ def _eliminate(data, base: UnitParams, current: Fit, start: Fit, say) -> tuple[F
         if _better(current, best, start):
             break
         gone = next(c.name for c in current.structure if c not in best.structure)
-        say(f"  dropped {gone}: held-out cost {current.heldout:.3g} -> {best.heldout:.3g} without it")
+        say(
+            f"  dropped {gone}: held-out cost {current.heldout:.3g} "
+            f"-> {best.heldout:.3g} without it"
+        )
         dropped.append(gone)
         current = best
     return current, dropped
@@ -173,6 +205,8 @@ def _verdict(start: Fit, final: Fit, steps: list[Step]) -> str:
     if not any(c.kind == "effect" for c in final.structure):
         return "recalibrated"
     named = {c.name for c in final.structure}
-    if any(s.rivals and s.chosen is not None and s.chosen.structure[-1].name in named for s in steps):
+    if any(
+        s.rivals and s.chosen is not None and s.chosen.structure[-1].name in named for s in steps
+    ):
         return "ambiguous"
     return "named"

@@ -50,7 +50,14 @@ _UNIT_ALIASES = {
     "strain": {"fraction": "1"},
     "length": {"µm": "um", "μm": "um"},  # micro sign and Greek mu
 }
-_LENGTHS = ("displacement", "peak_displacement", "overshoot", "ss_error", "rmse", "cooled_displacement")
+_LENGTHS = (
+    "displacement",
+    "peak_displacement",
+    "overshoot",
+    "ss_error",
+    "rmse",
+    "cooled_displacement",
+)
 
 
 def quantity_names() -> tuple[str, ...]:
@@ -62,8 +69,10 @@ def canonical(quantity: str) -> str:
     """The canonical name of ``quantity`` (aliases resolved); DiagnosisInputError if unknown."""
     name = QUANTITY_ALIASES.get(quantity, quantity)
     if name not in UNITS and name not in STRING_QUANTITIES:
-        raise DiagnosisInputError(f"unknown quantity {quantity!r} (known: {', '.join(quantity_names())}; "
-                                  f"aliases: {', '.join(f'{a}={q}' for a, q in QUANTITY_ALIASES.items())})")
+        raise DiagnosisInputError(
+            f"unknown quantity {quantity!r} (known: {', '.join(quantity_names())}; "
+            f"aliases: {', '.join(f'{a}={q}' for a, q in QUANTITY_ALIASES.items())})"
+        )
     return name
 
 
@@ -85,15 +94,20 @@ def check_unit(quantity: str, unit: str | None) -> str | None:
     family = "length" if name in _LENGTHS else name
     spelled = _UNIT_ALIASES.get(family, {}).get(unit, unit)
     if spelled not in UNITS[name]:
-        raise DiagnosisInputError(f"unknown unit {unit!r} for {name} (known: {', '.join(UNITS[name])})")
+        raise DiagnosisInputError(
+            f"unknown unit {unit!r} for {name} (known: {', '.join(UNITS[name])})"
+        )
     return spelled
 
 
 def to_si(quantity: str, unit: str | None, values):
-    """``values`` (a number or an array) in ``unit`` converted to the default unit of ``quantity``."""
+    """``values`` (a number or an array) in ``unit`` converted to the default unit of
+    ``quantity``."""
     spelled = check_unit(quantity, unit)
     if spelled is None:
-        raise DiagnosisInputError(f"{canonical(quantity)} is a text column: it has no numeric values")
+        raise DiagnosisInputError(
+            f"{canonical(quantity)} is a text column: it has no numeric values"
+        )
     scale, offset = UNITS[canonical(quantity)][spelled]
     converted = np.asarray(values, dtype=float) * scale + offset
     return float(converted) if converted.ndim == 0 else converted

@@ -30,11 +30,15 @@ class Gap:
     train_after: float
     heldout_before: float
     heldout_after: float
-    noise: float = math.nan      # the output's noise floor (time series), same unit
+    noise: float = math.nan  # the output's noise floor (time series), same unit
 
     @property
     def change(self) -> float:
-        return (self.heldout_after / self.heldout_before - 1.0) if self.heldout_before > 0 else math.nan
+        return (
+            (self.heldout_after / self.heldout_before - 1.0)
+            if self.heldout_before > 0
+            else math.nan
+        )
 
     def beyond_noise(self, rmse: float) -> float:
         """The part of an RMSE the noise floor does not account for: sqrt(RMSE^2 - noise^2)."""
@@ -46,14 +50,14 @@ class Diagnosis:
     model_name: str
     start: UnitParams
     corrected: UnitParams
-    data: object                     # dataset.TimeSeriesData or features.FeatureData
+    data: object  # dataset.TimeSeriesData or features.FeatureData
     search: Search
     candidates: list[library.Candidate]
     gap: Gap
     phases_before: list[localise.Row]
     phases_after: list[localise.Row]
     unexplained: list[str]
-    predictions: dict = field(default_factory=dict)   # "start" / "corrected" -> Prediction
+    predictions: dict = field(default_factory=dict)  # "start" / "corrected" -> Prediction
 
     @property
     def verdict(self) -> str:
@@ -61,8 +65,10 @@ class Diagnosis:
 
     def named(self) -> list[dict]:
         fit = self.search.final
-        return [{"effect": c.name, "title": c.title, "parameters": _parameters(fit, c)}
-                for c in self.search.effects]
+        return [
+            {"effect": c.name, "title": c.title, "parameters": _parameters(fit, c)}
+            for c in self.search.effects
+        ]
 
     def recalibrated(self) -> dict[str, dict]:
         fit = self.search.final
@@ -75,19 +81,27 @@ class Diagnosis:
     def summary_line(self) -> str:
         head = self.verdict
         if self.verdict in ("named", "ambiguous"):
-            head += ": " + ", ".join(f"{n['effect']} ({'; '.join(_short(p) for p in n['parameters'].values())})"
-                                     for n in self.named())
+            head += ": " + ", ".join(
+                f"{n['effect']} ({'; '.join(_short(p) for p in n['parameters'].values())})"
+                for n in self.named()
+            )
         elif self.verdict == "recalibrated":
             head += ": " + ", ".join(_short(p) for p in self.recalibrated().values())
         elif self.verdict == "unexplained":
             where = ", ".join(self.unexplained) or "every phase"
             kept = self.search.final.structure
-            head += (f": the residual in {where} stays after " + ", ".join(c.name for c in kept)
-                     + ", which remove(s) part of it" if kept else
-                     f": residual in {where} not removed by any candidate")
+            head += (
+                f": the residual in {where} stays after "
+                + ", ".join(c.name for c in kept)
+                + ", which remove(s) part of it"
+                if kept
+                else f": residual in {where} not removed by any candidate"
+            )
         g = self.gap
-        return (f"{head}; held-out {g.metric} RMSE {g.heldout_before:.3g} {g.unit} -> {g.heldout_after:.3g} {g.unit} "
-                f"({g.change * 100:+.0f} %)")
+        return (
+            f"{head}; held-out {g.metric} RMSE {g.heldout_before:.3g} {g.unit} "
+            f"-> {g.heldout_after:.3g} {g.unit} ({g.change * 100:+.0f} %)"
+        )
 
 
 def _parameters(fit, candidate: library.Candidate) -> dict[str, dict]:
@@ -96,8 +110,12 @@ def _parameters(fit, candidate: library.Candidate) -> dict[str, dict]:
         for par in cand.parameters:
             if cand is candidate:
                 value = float(fit.values[i])
-                out[par.key] = {"symbol": par.symbol, "value": par.display(value), "unit": par.unit,
-                                "si_value": value}
+                out[par.key] = {
+                    "symbol": par.symbol,
+                    "value": par.display(value),
+                    "unit": par.unit,
+                    "si_value": value,
+                }
             i += 1
     return out
 
@@ -115,16 +133,32 @@ def prepare(runs: list[Run], heldout: list[Run], dt: float | None = None):
         return dataset.prepare(list(runs), list(heldout), dt)
     if all(isinstance(r, FeatureRun) for r in everything):
         return features.prepare(list(runs), list(heldout), dt or features.PULSE_DT)
-    raise DiagnosisInputError("all runs must be of one kind: time series (bags, driven runs, thermal cycles) "
-                              "or tables of test figures")
+    raise DiagnosisInputError(
+        "all runs must be of one kind: time series (bags, driven runs, thermal cycles) "
+        "or tables of test figures"
+    )
 
 
-def diagnose(runs: list[Run], heldout: list[Run], model: UnitParams, *, candidates: list[str] | None = None,
-             dt: float | None = None, progress: Callable[[str], None] | None = None) -> Diagnosis:
+def diagnose(
+    runs: list[Run],
+    heldout: list[Run],
+    model: UnitParams,
+    *,
+    candidates: list[str] | None = None,
+    dt: float | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> Diagnosis:
     """Replay, localise, explain (recalibration, then missing effects) and measure the gap."""
     say = progress or (lambda message: None)
-    reasons = [r for r in (replay.cannot_start(model, run) for run in list(runs) + list(heldout)
-                           if isinstance(run, TimeSeriesRun)) if r]
+    reasons = [
+        r
+        for r in (
+            replay.cannot_start(model, run)
+            for run in list(runs) + list(heldout)
+            if isinstance(run, TimeSeriesRun)
+        )
+        if r
+    ]
     if reasons:
         raise DiagnosisInputError(reasons[0])
     data = prepare(runs, heldout, dt)
@@ -133,8 +167,13 @@ def diagnose(runs: list[Run], heldout: list[Run], model: UnitParams, *, candidat
     if isinstance(data, dataset.TimeSeriesData):
         data.calibrate_noise(start_prediction)
         start_prediction = data.predict([model])[0]
-        say("noise floor: " + ", ".join(f"{c} {data.sigma[c] * data.display(c)[1]:.3g} {data.display(c)[0]}"
-                                        for c in data.channels))
+        say(
+            "noise floor: "
+            + ", ".join(
+                f"{c} {data.sigma[c] * data.display(c)[1]:.3g} {data.display(c)[0]}"
+                for c in data.channels
+            )
+        )
     pool = library.applicable(model, data.drives, data.measured, candidates)
     say(f"candidates: {', '.join(c.name for c in pool)}")
     search = run_search(data, model, pool, progress=say)
@@ -142,16 +181,32 @@ def diagnose(runs: list[Run], heldout: list[Run], model: UnitParams, *, candidat
     final_prediction = data.predict([corrected])[0]
     headline = data.headline(start_prediction)
     unit, scale = localise.display(data, headline)
-    gap = Gap(headline, unit,
-              data.rmse(start_prediction, headline, "train") * scale,
-              data.rmse(final_prediction, headline, "train") * scale,
-              data.rmse(start_prediction, headline, "heldout") * scale,
-              data.rmse(final_prediction, headline, "heldout") * scale,
-              data.sigma[headline] * scale if isinstance(data, dataset.TimeSeriesData) else math.nan)
+    gap = Gap(
+        headline,
+        unit,
+        data.rmse(start_prediction, headline, "train") * scale,
+        data.rmse(final_prediction, headline, "train") * scale,
+        data.rmse(start_prediction, headline, "heldout") * scale,
+        data.rmse(final_prediction, headline, "heldout") * scale,
+        data.sigma[headline] * scale if isinstance(data, dataset.TimeSeriesData) else math.nan,
+    )
     before, after = localise.table(data, start_prediction), localise.table(data, final_prediction)
-    unexplained = localise.unexplained(data, final_prediction, force=search.verdict == "unexplained")
-    return Diagnosis(model.name, model, corrected, data, search, pool, gap, before, after, unexplained,
-                     {"start": start_prediction, "corrected": final_prediction})
+    unexplained = localise.unexplained(
+        data, final_prediction, force=search.verdict == "unexplained"
+    )
+    return Diagnosis(
+        model.name,
+        model,
+        corrected,
+        data,
+        search,
+        pool,
+        gap,
+        before,
+        after,
+        unexplained,
+        {"start": start_prediction, "corrected": final_prediction},
+    )
 
 
 def _describe(data) -> str:

@@ -18,7 +18,14 @@ import dataclasses
 from typing import Callable, Mapping
 
 from hems_ros.control import FORCE_MODE_BPID
-from hems_ros.control.references import CH6_FORCE_PEAK, PROTOCOLS, Protocol, sine, staircase, step_pair
+from hems_ros.control.references import (
+    CH6_FORCE_PEAK,
+    PROTOCOLS,
+    Protocol,
+    sine,
+    staircase,
+    step_pair,
+)
 from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH5_STRATEGIES, CH6_FORCE, CH6_POSITION
 from hems_ros.experiments.lockstep import LockstepRun, run_protocol
 from hems_ros.physics.params import UnitParams, load_params
@@ -39,24 +46,39 @@ def force_protocol(name: str, rest: float) -> Protocol:
     proto = PROTOCOLS[name]
     if "sine" in name:
         f = float(name.rsplit("_", 1)[1])
-        make, what = (lambda ts: sine(f, span, ts, base=rest)), f"sine {rest:g}-{CH6_FORCE_PEAK:g} N at {f} Hz"
+        make, what = (
+            (lambda ts: sine(f, span, ts, base=rest)),
+            f"sine {rest:g}-{CH6_FORCE_PEAK:g} N at {f} Hz",
+        )
     elif name.endswith("step"):
-        make, what = (lambda ts: step_pair(span, ts, base=rest)), f"two {rest:g} -> {CH6_FORCE_PEAK:g} N steps"
+        make, what = (
+            (lambda ts: step_pair(span, ts, base=rest)),
+            f"two {rest:g} -> {CH6_FORCE_PEAK:g} N steps",
+        )
     else:
-        make, what = (lambda ts: staircase(span / 4, ts, base=rest)), f"{rest:g} -> {CH6_FORCE_PEAK:g} N in 4 steps and back"
+        make, what = (
+            (lambda ts: staircase(span / 4, ts, base=rest)),
+            f"{rest:g} -> {CH6_FORCE_PEAK:g} N in 4 steps and back",
+        )
     return dataclasses.replace(proto, make=make, description=what)
 
 
 def _report(progress: Progress, run: LockstepRun, unit: str) -> None:
     if progress is not None:
         m = run.metrics
-        progress(f"  {run.protocol:<24} {run.strategy:<5} RMSE {m['rmse']:7.3f} {unit}  "
-                 f"MACSI {m['macsi']:6.2f} %  APC {m['apc_w']:5.1f} W"
-                 + (f"  FAULT: {run.fault}" if run.fault else ""))
+        progress(
+            f"  {run.protocol:<24} {run.strategy:<5} RMSE {m['rmse']:7.3f} {unit}  "
+            f"MACSI {m['macsi']:6.2f} %  APC {m['apc_w']:5.1f} W"
+            + (f"  FAULT: {run.fault}" if run.fault else "")
+        )
 
 
-def run_ch5(gains: Mapping[str, object] | None = None, params: UnitParams | str = CH5_PARAMS,
-            progress: Progress = None, **kwargs) -> dict[tuple[str, str], LockstepRun]:
+def run_ch5(
+    gains: Mapping[str, object] | None = None,
+    params: UnitParams | str = CH5_PARAMS,
+    progress: Progress = None,
+    **kwargs,
+) -> dict[tuple[str, str], LockstepRun]:
     """All chapter 5 runs by (protocol, strategy); ``gains`` overrides Table 5.1 per strategy."""
     prm = params if isinstance(params, UnitParams) else load_params(params)
     runs = {}
@@ -68,8 +90,13 @@ def run_ch5(gains: Mapping[str, object] | None = None, params: UnitParams | str 
     return runs
 
 
-def run_ch6(gains=None, params: UnitParams | str = CH6_PARAMS, progress: Progress = None,
-            force_gains=FORCE_MODE_BPID, **kwargs) -> dict[str, LockstepRun]:
+def run_ch6(
+    gains=None,
+    params: UnitParams | str = CH6_PARAMS,
+    progress: Progress = None,
+    force_gains=FORCE_MODE_BPID,
+    **kwargs,
+) -> dict[str, LockstepRun]:
     """All chapter 6 runs (BPID) by protocol name.
 
     Position references run with ``gains`` (default Table 5.1), force references with

@@ -104,7 +104,8 @@ def coast_after_cutoff(params: UnitParams, target_m: float, dt: float = 1e-3) ->
 
 
 def bilinear_activity(run: LockstepRun, kb: float | None = None, tol: float = 0.01) -> float:
-    """Fraction of samples where BPID's duty is unsaturated and its eq 5.36 factor is off 1 by > ``tol``."""
+    """Fraction of samples where BPID's duty is unsaturated and its eq 5.36 factor is off
+    1 by > ``tol``."""
     gains = TABLE_5_1["bpid"]
     kb = gains.kb if kb is None else kb
     scale = gains.scale_for(run.mode)
@@ -136,7 +137,9 @@ def table_4_1_stress_slope(params: UnitParams) -> dict[str, float]:
     transformation that a smaller C lets the mass's swing drive is the one damping inside
     the model's wire."""
     default = Kinetics()
-    table = params.replace({"kinetics.cm_pa_per_c": default.cm_pa_per_c, "kinetics.ca_pa_per_c": default.ca_pa_per_c})
+    table = params.replace(
+        {"kinetics.cm_pa_per_c": default.cm_pa_per_c, "kinetics.ca_pa_per_c": default.ca_pa_per_c}
+    )
     return {p: run_protocol(p, "bpid", table).metrics["overshoot"] for p in STEP_PROTOCOLS}
 
 
@@ -144,8 +147,10 @@ def pulse_gain() -> dict[str, float]:
     """Displacement per joule of pulse of the calibrated rig between the Table 3.2 1.6 and
     2.2 s rows (mm/J), and its displacement after the 1.0 s pulse (mm)."""
     short, a, b = validation.sweep(pulses=(1.0, 1.6, 2.2))
-    return {"mm_per_j": (b.max_displacement_m - a.max_displacement_m) * 1e3 / (b.energy_j - a.energy_j),
-            "x_1.0_mm": short.max_displacement_m * 1e3}
+    return {
+        "mm_per_j": (b.max_displacement_m - a.max_displacement_m) * 1e3 / (b.energy_j - a.energy_j),
+        "x_1.0_mm": short.max_displacement_m * 1e3,
+    }
 
 
 def wire_mass_mode(params: UnitParams) -> dict[str, float]:
@@ -156,13 +161,18 @@ def wire_mass_mode(params: UnitParams) -> dict[str, float]:
     """
     k = params.wire.cross_section_m2 * params.constitutive.e_martensite_pa / params.wire.length_m
     m, b = params.load.mass_kg, params.load.damping_n_s_per_m
-    return {"frequency_hz": math.sqrt(k / m) / (2 * math.pi), "damping_ratio": b / (2 * math.sqrt(k * m))}
+    return {
+        "frequency_hz": math.sqrt(k / m) / (2 * math.pi),
+        "damping_ratio": b / (2 * math.sqrt(k * m)),
+    }
 
 
 COLD_WIRE_PARAMS = "table41"
 
 
-def cold_start_floor(protocol: str, params: UnitParams | str = COLD_WIRE_PARAMS) -> dict[str, float]:
+def cold_start_floor(
+    protocol: str, params: UnitParams | str = COLD_WIRE_PARAMS
+) -> dict[str, float]:
     """Least RMSE (mm) any wire with ``params``' transformation band can reach on the ascending
     parts of ``protocol`` when it is cold as the reference starts to rise.
 
@@ -179,21 +189,32 @@ def cold_start_floor(protocol: str, params: UnitParams | str = COLD_WIRE_PARAMS)
     prm = params if isinstance(params, UnitParams) else load_params(params)
     proto = PROTOCOLS[protocol]
     if proto.segment != "ascending":
-        raise ValueError(f"{protocol}: the cold-start floor bounds ascending-part RMSE, "
-                         f"not {proto.segment!r} segments")
+        raise ValueError(
+            f"{protocol}: the cold-start floor bounds ascending-part RMSE, "
+            f"not {proto.segment!r} segments"
+        )
     t, r = proto.generate(DEFAULT_TS)
     start = t[np.flatnonzero(r > r[0])[0] - 1]
     power = prm.drive.supply_voltage_v * prm.drive.current_limit_a
-    temp = prm.ambient_temperature_c + power * np.clip(t - start, 0.0, None) / prm.wire_heat_capacity_j_per_k
+    temp = (
+        prm.ambient_temperature_c
+        + power * np.clip(t - start, 0.0, None) / prm.wire_heat_capacity_j_per_k
+    )
     k = prm.kinetics
     inv_width = 1.0 / (k.af0_c - k.as0_c)
-    austenite = 1.0 - np.fromiter((heating_branch(float(x), k.as0_c, inv_width)[0] for x in temp), float, temp.size)
+    austenite = 1.0 - np.fromiter(
+        (heating_branch(float(x), k.as0_c, inv_width)[0] for x in temp), float, temp.size
+    )
     y = r[0] + prm.constitutive.max_recoverable_strain * prm.wire.length_m * austenite
     behind = np.clip(r - y, 0.0, None)
     floor = metrics.rmse(behind * 1e3, np.zeros_like(behind), metrics.ascending_mask(r))
     caught = np.flatnonzero((t > start) & (y >= r))
-    return {"rmse_mm": floor, "ratio": floor / CH6_TABLES["position"][2][protocol]["rmse"],
-            "catch_up_s": float(t[caught[0]] - start) if caught.size else math.nan, "power_w": power}
+    return {
+        "rmse_mm": floor,
+        "ratio": floor / CH6_TABLES["position"][2][protocol]["rmse"],
+        "catch_up_s": float(t[caught[0]] - start) if caught.size else math.nan,
+        "power_w": power,
+    }
 
 
 WARM_START_C = (40.0, 50.0, 60.0, 70.0)
@@ -202,15 +223,21 @@ WARM_START_C = (40.0, 50.0, 60.0, 70.0)
 (docs/validation.md), the warmest start that reading allows."""
 
 
-def warm_start_ratios(protocols, temperatures=WARM_START_C,
-                      params: UnitParams | str = CH6_PARAMS) -> dict[float, dict[str, float]]:
+def warm_start_ratios(
+    protocols, temperatures=WARM_START_C, params: UnitParams | str = CH6_PARAMS
+) -> dict[float, dict[str, float]]:
     """RMSE / Table 6.1 of chapter 6 position ``protocols`` (BPID, Table 5.1) with wire and
     sheath starting at each of ``temperatures`` (degC, fully martensite) instead of cold: what
     a rig still warm from earlier work would have done with the model's wire."""
     table = CH6_TABLES["position"][2]
-    return {temp: {p: run_protocol(p, "bpid", params, start_temperature_c=temp).metrics["rmse"] / table[p]["rmse"]
-                   for p in protocols}
-            for temp in temperatures}
+    return {
+        temp: {
+            p: run_protocol(p, "bpid", params, start_temperature_c=temp).metrics["rmse"]
+            / table[p]["rmse"]
+            for p in protocols
+        }
+        for temp in temperatures
+    }
 
 
 def _force_steps(gains, noise: bool) -> list[dict[str, float]]:
@@ -220,11 +247,14 @@ def _force_steps(gains, noise: bool) -> list[dict[str, float]]:
     if not noise:
         prm = prm.replace({"force_sensor.noise_std_n": 0.0})
     rest = rest_wire_tension(prm)
-    return [run_protocol(force_protocol(name, rest), "bpid", prm, gains).metrics for name in FORCE_STEPS]
+    return [
+        run_protocol(force_protocol(name, rest), "bpid", prm, gains).metrics for name in FORCE_STEPS
+    ]
 
 
 def force_noise_free(gains=FORCE_MODE_BPID) -> dict[str, float]:
-    """Overshoot (first peak, N) of the chapter 6 force step and staircase with a noise-free sensor."""
+    """Overshoot (first peak, N) of the chapter 6 force step and staircase with a
+    noise-free sensor."""
     return {name: m["overshoot"] for name, m in zip(FORCE_STEPS, _force_steps(gains, noise=False))}
 
 
@@ -241,11 +271,13 @@ def force_gain_sweep(sets=FORCE_GAIN_SWEEP) -> dict[tuple[float, float], dict[st
     for kp, ki in sets:
         gains = replace(FORCE_MODE_BPID, kp=kp, ki=ki)
         noisy, quiet = _force_steps(gains, noise=True), _force_steps(gains, noise=False)
-        out[(kp, ki)] = {"noisy": max(m["overshoot"] for m in noisy),
-                         "quiet": max(m["overshoot"] for m in quiet),
-                         "quiet_by": {name: m["overshoot"] for name, m in zip(FORCE_STEPS, quiet)},
-                         "ss_error": max(m["ss_error"] for m in noisy),
-                         "rmse_step": noisy[0]["rmse"]}
+        out[(kp, ki)] = {
+            "noisy": max(m["overshoot"] for m in noisy),
+            "quiet": max(m["overshoot"] for m in quiet),
+            "quiet_by": {name: m["overshoot"] for name, m in zip(FORCE_STEPS, quiet)},
+            "ss_error": max(m["ss_error"] for m in noisy),
+            "rmse_step": noisy[0]["rmse"],
+        }
     return out
 
 
@@ -255,15 +287,19 @@ FILTER_SWEEP_RAD_S = (2.0, 5.0, 10.0, 50.0, 100.0)
 def filter_sweep(params: UnitParams, n_values=FILTER_SWEEP_RAD_S) -> dict[str, float]:
     """Smallest BPID overshoot (mm) on the step and the staircase over derivative filters
     ``n_values`` (rad/s; the runs use DEFAULT_N_FILTER otherwise), Table 5.1 gains."""
-    return {p: min(run_protocol(p, "bpid", params, n_filter=n).metrics["overshoot"] for n in n_values)
-            for p in STEP_PROTOCOLS}
+    return {
+        p: min(run_protocol(p, "bpid", params, n_filter=n).metrics["overshoot"] for n in n_values)
+        for p in STEP_PROTOCOLS
+    }
 
 
-GAIN_GRID_KP = (0.05, 0.1, 0.2, 0.4, 0.8)    # %/um; Table 5.1: 0.8
-GAIN_GRID_KD = (0.02, 0.05, 0.1, 0.2, 0.5)    # % s/um; Table 5.1: 0.05
+GAIN_GRID_KP = (0.05, 0.1, 0.2, 0.4, 0.8)  # %/um; Table 5.1: 0.8
+GAIN_GRID_KD = (0.02, 0.05, 0.1, 0.2, 0.5)  # % s/um; Table 5.1: 0.05
 
 
-def gain_grid(params: UnitParams, kp_values=GAIN_GRID_KP, kd_values=GAIN_GRID_KD) -> dict[str, dict]:
+def gain_grid(
+    params: UnitParams, kp_values=GAIN_GRID_KP, kd_values=GAIN_GRID_KD
+) -> dict[str, dict]:
     """BPID step and staircase over a grid of Kp x Kd (Ki 0, Kb 1 as Table 5.1).
 
     For each protocol: ``least`` the set with the least overshoot, ``holding`` the one with the
@@ -275,7 +311,9 @@ def gain_grid(params: UnitParams, kp_values=GAIN_GRID_KP, kd_values=GAIN_GRID_KD
     for kp in kp_values:
         for kd in kd_values:
             gains = replace(table, kp=kp, kd=kd)
-            figs[kp, kd] = {p: run_protocol(p, "bpid", params, gains).metrics for p in STEP_PROTOCOLS}
+            figs[kp, kd] = {
+                p: run_protocol(p, "bpid", params, gains).metrics for p in STEP_PROTOCOLS
+            }
     holding = [g for g, f in figs.items() if all(m["ss_error"] <= 0.05 for m in f.values())]
 
     def best(p, sets):
@@ -290,8 +328,9 @@ def gain_grid(params: UnitParams, kp_values=GAIN_GRID_KP, kd_values=GAIN_GRID_KD
 SPREAD_SHIFT_C = 1e-6
 
 
-def perturbation_spread(ch5: dict, params: UnitParams, protocols=STEP_PROTOCOLS,
-                        metrics=("rmse", "macsi")) -> dict[str, float]:
+def perturbation_spread(
+    ch5: dict, params: UnitParams, protocols=STEP_PROTOCOLS, metrics=("rmse", "macsi")
+) -> dict[str, float]:
     """Largest relative change of each of ``metrics`` over ``protocols`` and the three
     controllers (Table 5.1 gains) when the ambient temperature moves by SPREAD_SHIFT_C.
 
@@ -299,7 +338,9 @@ def perturbation_spread(ch5: dict, params: UnitParams, protocols=STEP_PROTOCOLS,
     turn the difference into other switching decisions, and the hysteresis keeps their
     consequences: this is the spread a cell of the tables carries from run to run.
     """
-    shifted = params.replace({"ambient_temperature_c": params.ambient_temperature_c + SPREAD_SHIFT_C})
+    shifted = params.replace(
+        {"ambient_temperature_c": params.ambient_temperature_c + SPREAD_SHIFT_C}
+    )
     spread = dict.fromkeys(metrics, 0.0)
     for p in protocols:
         for s in ("pid", "pipd", "bpid"):
@@ -312,7 +353,9 @@ def perturbation_spread(ch5: dict, params: UnitParams, protocols=STEP_PROTOCOLS,
 REPEAT_SHIFT_C = 0.1
 
 
-def repeated_ratios(ch5: dict, params: UnitParams, metric: str, cells) -> dict[tuple[str, str], tuple]:
+def repeated_ratios(
+    ch5: dict, params: UnitParams, metric: str, cells
+) -> dict[tuple[str, str], tuple]:
     """Ours / dissertation for ``metric`` of each (protocol, strategy) in ``cells`` with the
     ambient REPEAT_SHIFT_C lower, as run, and higher: three repetitions as a lab's drift between
     runs would make them (the dissertation averaged three); the last entry is their mean."""
@@ -321,8 +364,15 @@ def repeated_ratios(ch5: dict, params: UnitParams, metric: str, cells) -> dict[t
     for p, s in cells:
         values = []
         for shift in (-REPEAT_SHIFT_C, 0.0, REPEAT_SHIFT_C):
-            run = ch5[p, s] if shift == 0.0 else run_protocol(
-                p, s, params.replace({"ambient_temperature_c": params.ambient_temperature_c + shift}))
+            run = (
+                ch5[p, s]
+                if shift == 0.0
+                else run_protocol(
+                    p,
+                    s,
+                    params.replace({"ambient_temperature_c": params.ambient_temperature_c + shift}),
+                )
+            )
             values.append(run.metrics[metric] * factor / table[p, s])
         out[p, s] = (*values, sum(values) / len(values))
     return out
@@ -331,5 +381,8 @@ def repeated_ratios(ch5: dict, params: UnitParams, metric: str, cells) -> dict[t
 def ratios(ch5: dict, metric: str, protocols=FACTOR_2_PROTOCOLS) -> dict[tuple[str, str], float]:
     """Ours / dissertation for ``metric`` (a CH5_TABLES key) per (protocol, strategy)."""
     _, _, table, factor = CH5_TABLES[metric]
-    return {(p, s): ch5[p, s].metrics[metric] * factor / table[p, s]
-            for (p, s) in table if p in protocols}
+    return {
+        (p, s): ch5[p, s].metrics[metric] * factor / table[p, s]
+        for (p, s) in table
+        if p in protocols
+    }

@@ -98,8 +98,11 @@ def simulate_loop(
     s = kernel.initial_state(prm, start_temperature_c)
     out = np.zeros(kernel.N_O)
     enc, fs = prm.encoder, prm.force_sensor
-    # One draw per plant step, in order: the reading at sample k (after step k*sub) uses draw k*sub - 1.
-    noise = sensors.noise_generator(fs.seed).standard_normal(n * sub)[sub - 1 :: sub] * fs.noise_std_n
+    # One draw per plant step, in order: the reading at sample k (after step k*sub) uses
+    # draw k*sub - 1.
+    noise = (
+        sensors.noise_generator(fs.seed).standard_normal(n * sub)[sub - 1 :: sub] * fs.noise_std_n
+    )
 
     meas = np.empty(n)
     duty = np.empty(n)
@@ -114,8 +117,15 @@ def simulate_loop(
         if mode == "position":
             y = sensors.encoder_counts(x, enc.resolution_m, enc.gain) * enc.resolution_m
         else:
-            y = sensors.force_reading(force_now, noise_now, fs.range_max_n, fs.resolution_n, fs.offset_n,
-                                      fs.drift_n_per_s, k * sub * dt)[0]
+            y = sensors.force_reading(
+                force_now,
+                noise_now,
+                fs.range_max_n,
+                fs.resolution_n,
+                fs.offset_n,
+                fs.drift_n_per_s,
+                k * sub * dt,
+            )[0]
         u = controller.update(ref[k], y)
         meas[k], duty[k], pos[k], force[k] = y, u, x, force_now
         if controller.fault is not None:
@@ -155,14 +165,16 @@ def settled_mask(t, r, y, rest: float, settle: float = 1.0, arrive: float = 0.9)
 
 
 def rmse_mask(t, r, y, segment: str, rest: float | None = None):
-    """Samples the RMSE covers: ``segment`` "all", "ascending" or "stationary" (:func:`settled_mask`)."""
+    """Samples the RMSE covers: ``segment`` "all", "ascending" or "stationary"
+    (:func:`settled_mask`)."""
     if segment == "stationary":
         return settled_mask(t, r, y, r[0] if rest is None else rest)
     return metrics.segment_mask(segment, t, r)
 
 
-def figures(t, r, y, u, mode: str, segment: str = "all", rest: float | None = None,
-            y_true=None) -> dict[str, float]:
+def figures(
+    t, r, y, u, mode: str, segment: str = "all", rest: float | None = None, y_true=None
+) -> dict[str, float]:
     """Figures of merit of one run in the dissertation's units (mm or N, %, W, s).
 
     ``rmse`` over the protocol's ``segment`` (chapter 5: all; chapter 6: ascending parts,
@@ -186,11 +198,15 @@ def figures(t, r, y, u, mode: str, segment: str = "all", rest: float | None = No
     }
     segs = metrics.step_segments(r_u)
     rising = [g for g in segs if g.after > g.before]
-    out["rise_time_s"] = float(np.mean([metrics.rise_time(t, y_u, g) for g in rising])) if rising else math.nan
+    out["rise_time_s"] = (
+        float(np.mean([metrics.rise_time(t, y_u, g) for g in rising])) if rising else math.nan
+    )
     y_os = y_u if y_true is None else np.asarray(y_true) * unit
     out["overshoot"] = max((metrics.overshoot(y_os, g) for g in segs), default=math.nan)
     out["excursion"] = max((metrics.hold_excursion(y_os, g) for g in segs), default=math.nan)
-    out["ss_error"] = max((metrics.steady_state_error(t, r_u, y_u, g) for g in rising), default=math.nan)
+    out["ss_error"] = max(
+        (metrics.steady_state_error(t, r_u, y_u, g) for g in rising), default=math.nan
+    )
     return out
 
 
@@ -215,13 +231,24 @@ def run_protocol(
     proto = PROTOCOLS[protocol] if isinstance(protocol, str) else protocol
     prm = _params(params)
     t, r = proto.generate(ts)
-    y, u, pos, force, power, fault = simulate_loop(r, strategy, proto.mode, prm, gains, ts, dt, n_filter,
-                                                   start_temperature_c)
+    y, u, pos, force, power, fault = simulate_loop(
+        r, strategy, proto.mode, prm, gains, ts, dt, n_filter, start_temperature_c
+    )
     t, r = t[: y.size], r[: y.size]
     run = LockstepRun(
-        protocol=proto.name, strategy=strategy, mode=proto.mode, params_name=prm.name,
-        time=t, reference=r, measurement=y, duty=u, position_m=pos, wire_force_n=force,
-        power_w=power, segment=proto.segment, fault=fault,
+        protocol=proto.name,
+        strategy=strategy,
+        mode=proto.mode,
+        params_name=prm.name,
+        time=t,
+        reference=r,
+        measurement=y,
+        duty=u,
+        position_m=pos,
+        wire_force_n=force,
+        power_w=power,
+        segment=proto.segment,
+        fault=fault,
     )
     truth = pos if proto.mode == "position" else force
     run.metrics = figures(t, r, y, u, proto.mode, proto.segment, rest=float(r[0]), y_true=truth)

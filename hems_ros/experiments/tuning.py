@@ -44,8 +44,13 @@ def _gains(x: np.ndarray, with_ki: bool) -> BPIDGains:
     return BPIDGains(kp=float(kp), ki=ki, kd=float(kd), kb=float(kb))
 
 
-def tune_bpid(protocol: str = "ch5_step", macsi_weight: float = 0.1, with_ki: bool = False,
-              max_evaluations: int = 120, progress: Callable[[int, BPIDGains, float], None] | None = None):
+def tune_bpid(
+    protocol: str = "ch5_step",
+    macsi_weight: float = 0.1,
+    with_ki: bool = False,
+    max_evaluations: int = 120,
+    progress: Callable[[int, BPIDGains, float], None] | None = None,
+):
     """(tuned gains, cost of Table 5.1, tuned cost) on ``protocol`` with its chapter's rig."""
     params = load_params(rig(protocol)[0])
     start = TABLE_5_1["bpid"]
@@ -67,19 +72,31 @@ def tune_bpid(protocol: str = "ch5_step", macsi_weight: float = 0.1, with_ki: bo
     # Simplex edges of a factor 3 per gain: the cost is piecewise flat (chattering loops), so
     # scipy's default 5 % edges would stall at the start.
     simplex = np.vstack([x0, x0 + np.log(3.0) * np.eye(x0.size)])
-    result = minimize(cost, x0, method="Nelder-Mead",
-                      options={"maxfev": max_evaluations, "xatol": 1e-2, "fatol": 1e-3,
-                               "initial_simplex": simplex})
+    result = minimize(
+        cost,
+        x0,
+        method="Nelder-Mead",
+        options={
+            "maxfev": max_evaluations,
+            "xatol": 1e-2,
+            "fatol": 1e-3,
+            "initial_simplex": simplex,
+        },
+    )
     tuned = _gains(result.x, with_ki)
     return tuned, cost_of(start), cost_of(tuned)
 
 
-def compare(tuned: BPIDGains, protocol: str = "ch5_step") -> list[tuple[str, dict[str, float], dict[str, float]]]:
+def compare(
+    tuned: BPIDGains, protocol: str = "ch5_step"
+) -> list[tuple[str, dict[str, float], dict[str, float]]]:
     """(reference, Table 5.1 metrics, tuned metrics) on every reference of ``protocol``'s rig."""
     name, references = rig(protocol)
     params = load_params(name)
-    return [(p, run_protocol(p, "bpid", params).metrics, run_protocol(p, "bpid", params, tuned).metrics)
-            for p in references]
+    return [
+        (p, run_protocol(p, "bpid", params).metrics, run_protocol(p, "bpid", params, tuned).metrics)
+        for p in references
+    ]
 
 
 def params_file_text(gains: BPIDGains, note: str) -> str:

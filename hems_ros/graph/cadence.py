@@ -45,7 +45,9 @@ def tick_delay(finger: str, period_s: float, now_s: float) -> float:
     period apart, so their chains do not all compete for the cores at one instant.
     """
     modules = list(names.MODULES)
-    return grid_delay(modules.index(names.MODULE_OF[finger]) * period_s / len(modules), period_s, now_s)
+    return grid_delay(
+        modules.index(names.MODULE_OF[finger]) * period_s / len(modules), period_s, now_s
+    )
 
 
 # Where the supervisor's check sits on the clock's grid (see supervisor_check_delay): 1.2 ms

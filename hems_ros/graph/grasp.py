@@ -31,9 +31,11 @@ class GraspPlan:
 
     def phases(self) -> list[tuple[str, str, float, float]]:
         """(name, mode, value, duration s) in order."""
-        return [("approach", "position", self.approach_m, self.approach_s),
-                ("hold", "force", self.force_n, self.hold_s),
-                ("release", "position", 0.0, self.release_s)]
+        return [
+            ("approach", "position", self.approach_m, self.approach_s),
+            ("hold", "force", self.force_n, self.hold_s),
+            ("release", "position", 0.0, self.release_s),
+        ]
 
 
 @dataclass
@@ -43,8 +45,8 @@ class FingerTrace:
     t: list[float]
     position_m: list[float]
     force_n: list[float]
-    energy_t: list[float]      # stamps of the unit's state messages, s
-    energy_j: list[float]      # the unit's Joule heat since it started, at those messages
+    energy_t: list[float]  # stamps of the unit's state messages, s
+    energy_j: list[float]  # the unit's Joule heat since it started, at those messages
     duty_t: list[float]
     duty_percent: list[float]
 
@@ -56,12 +58,12 @@ class FingerTrace:
 @dataclass(frozen=True)
 class FingerSummary:
     finger: str
-    position_rmse_mm: float      # over the last settle window of the approach
-    force_rmse_n: float          # over the last settle window of the hold
+    position_rmse_mm: float  # over the last settle window of the approach
+    force_rmse_n: float  # over the last settle window of the hold
     peak_force_n: float
     energy_j: float
-    approach_rmse_mm: float      # over the whole approach, rise included
-    hold_rmse_n: float           # over the whole hold, force build-up included
+    approach_rmse_mm: float  # over the whole approach, rise included
+    hold_rmse_n: float  # over the whole hold, force build-up included
 
 
 def change_over(t, y, start: float, end: float) -> float:
@@ -86,7 +88,9 @@ class PhaseTracker:
         self.starts: list[float] = []
         self._phase: tuple[str, float] | None = None
 
-    def feed(self, mode: str, setpoint: float, active: bool, encoder_stamp_s: float, force_stamp_s: float) -> None:
+    def feed(
+        self, mode: str, setpoint: float, active: bool, encoder_stamp_s: float, force_stamp_s: float
+    ) -> None:
         """One status: a new (mode, setpoint) while active starts a phase at the stamp of the
         reading that step used; steps before the first non-zero setpoint are not the grasp."""
         phase = (mode, float(setpoint))
@@ -97,13 +101,16 @@ class PhaseTracker:
 
 
 def phase_windows(plan: GraspPlan, phase_starts: list[float]) -> list[tuple[float, float]]:
-    """(start, end) of each phase: to the next phase's start (the last lasts its planned duration)."""
+    """(start, end) of each phase: to the next phase's start (the last lasts its
+    planned duration)."""
     durations = [p[3] for p in plan.phases()]
     ends = phase_starts[1:] + [phase_starts[-1] + durations[len(phase_starts) - 1]]
     return list(zip(phase_starts, ends))
 
 
-def summarize(finger: str, trace: FingerTrace, plan: GraspPlan, phase_starts: list[float]) -> FingerSummary:
+def summarize(
+    finger: str, trace: FingerTrace, plan: GraspPlan, phase_starts: list[float]
+) -> FingerSummary:
     """``phase_starts``: stamps (s) of the samples that began the approach, hold and release
     (:class:`PhaseTracker`)."""
     t = np.asarray(trace.t)
@@ -118,8 +125,15 @@ def summarize(finger: str, trace: FingerTrace, plan: GraspPlan, phase_starts: li
     # the 100 Hz duty changes
     energy = change_over(trace.energy_t, trace.energy_j, a0, windows[-1][1])
     peak = float(np.nanmax(f)) if len(f) else float("nan")
-    return FingerSummary(finger, 1e3 * pos, force, peak, energy, 1e3 * _window_rmse(t, x, plan.approach_m, a0, a1),
-                         _window_rmse(t, f, plan.force_n, h0, h1))
+    return FingerSummary(
+        finger,
+        1e3 * pos,
+        force,
+        peak,
+        energy,
+        1e3 * _window_rmse(t, x, plan.approach_m, a0, a1),
+        _window_rmse(t, f, plan.force_n, h0, h1),
+    )
 
 
 FOLLOW_FRACTION = 0.1
@@ -134,9 +148,15 @@ def tracking_report(rows: list[FingerSummary], plan: GraspPlan, fingers) -> str 
     say) faults nothing, and its finger just stays where it was.
     """
     summarized = {r.finger for r in rows}
-    bad = [f"{f} has no summary (its controller did not run every phase)" for f in fingers if f not in summarized]
+    bad = [
+        f"{f} has no summary (its controller did not run every phase)"
+        for f in fingers
+        if f not in summarized
+    ]
     for r in rows:
-        if not r.position_rmse_mm <= FOLLOW_FRACTION * 1e3 * plan.approach_m:   # NaN counts as not followed
+        if (
+            not r.position_rmse_mm <= FOLLOW_FRACTION * 1e3 * plan.approach_m
+        ):  # NaN counts as not followed
             bad.append(f"{r.finger} approach error {r.position_rmse_mm:.2f} mm")
         elif not r.force_rmse_n <= FOLLOW_FRACTION * plan.force_n:
             bad.append(f"{r.finger} hold error {r.force_rmse_n:.2f} N")
@@ -144,13 +164,19 @@ def tracking_report(rows: list[FingerSummary], plan: GraspPlan, fingers) -> str 
 
 
 def format_summary(rows: list[FingerSummary], plan: GraspPlan) -> str:
-    lines = [f"grasp: approach {1e3 * plan.approach_m:g} mm, hold {plan.force_n:g} N, release "
-             f"(tracking errors are RMS over the whole phase and over its last {plan.settle_window_s:g} s)",
-             f"{'finger':<16} {'approach mm':>11} {'pos err mm':>10} {'hold N':>7} {'force err N':>11} "
-             f"{'peak N':>7} {'energy J':>9}"]
+    lines = [
+        f"grasp: approach {1e3 * plan.approach_m:g} mm, hold {plan.force_n:g} N, release "
+        f"(tracking errors are RMS over the whole phase and over its last "
+        f"{plan.settle_window_s:g} s)",
+        f"{'finger':<16} {'approach mm':>11} {'pos err mm':>10} {'hold N':>7} {'force err N':>11} "
+        f"{'peak N':>7} {'energy J':>9}",
+    ]
     for r in rows:
-        lines.append(f"{r.finger:<16} {r.approach_rmse_mm:>11.3f} {r.position_rmse_mm:>10.3f} {r.hold_rmse_n:>7.3f} "
-                     f"{r.force_rmse_n:>11.3f} {r.peak_force_n:>7.2f} {r.energy_j:>9.1f}")
+        lines.append(
+            f"{r.finger:<16} {r.approach_rmse_mm:>11.3f} {r.position_rmse_mm:>10.3f} "
+            f"{r.hold_rmse_n:>7.3f} {r.force_rmse_n:>11.3f} {r.peak_force_n:>7.2f} "
+            f"{r.energy_j:>9.1f}"
+        )
     return "\n".join(lines)
 
 

@@ -23,9 +23,9 @@ EPS_S = 1e-6
 
 @dataclass
 class FingerState:
-    encoder_s: float = -1.0     # stamp of the latest encoder sample
-    force_s: float = -1.0       # stamp of the latest force reading
-    answered_s: float = -1.0    # measurement stamp of the latest duty command
+    encoder_s: float = -1.0  # stamp of the latest encoder sample
+    force_s: float = -1.0  # stamp of the latest force reading
+    answered_s: float = -1.0  # measurement stamp of the latest duty command
     joined: bool = False
 
 
@@ -34,7 +34,7 @@ class LockstepClock:
     fingers: tuple[str, ...]
     start_s: float = 1.0
     step_s: float = 0.01
-    rate: float = 1.0           # simulated s per wall s at most; 0: no cap
+    rate: float = 1.0  # simulated s per wall s at most; 0: no cap
     stall_s: float = 5.0
     supervisor_lag_s: float = 0.2
     now_s: float = field(init=False)
@@ -77,14 +77,19 @@ class LockstepClock:
 
     # the clock ---------------------------------------------------------------
     def _finger_done(self, state: FingerState) -> bool:
-        return (self.now_s - self.step_s + EPS_S < state.encoder_s <= self.now_s + EPS_S
-                and abs(state.answered_s - state.encoder_s) < EPS_S
-                and abs(state.force_s - state.encoder_s) < EPS_S)
+        return (
+            self.now_s - self.step_s + EPS_S < state.encoder_s <= self.now_s + EPS_S
+            and abs(state.answered_s - state.encoder_s) < EPS_S
+            and abs(state.force_s - state.encoder_s) < EPS_S
+        )
 
     def waiting_for(self) -> list[str]:
         """What the current step still waits for (empty: it may advance)."""
         waiting = [f for f, s in self.state.items() if s.joined and not self._finger_done(s)]
-        if self.supervisor_s is not None and self.supervisor_s < self.now_s - self.supervisor_lag_s - EPS_S:
+        if (
+            self.supervisor_s is not None
+            and self.supervisor_s < self.now_s - self.supervisor_lag_s - EPS_S
+        ):
             waiting.append("supervisor")
         return waiting
 

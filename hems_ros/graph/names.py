@@ -26,7 +26,8 @@ def check_finger(finger: str) -> str:
 
 
 def parse_fingers(text: str) -> tuple[str, ...]:
-    """A comma-separated finger list of the command line, or "all" (every finger, in FINGERS order)."""
+    """A comma-separated finger list of the command line, or "all" (every finger, in
+    FINGERS order)."""
     if text.strip() == "all":
         return FINGERS
     return tuple(check_finger(f.strip()) for f in text.split(","))
@@ -34,7 +35,9 @@ def parse_fingers(text: str) -> tuple[str, ...]:
 
 def check_module(module: str) -> str:
     if module not in MODULES:
-        raise ValueError(f"unknown shoulder module {module!r}: expected one of {', '.join(MODULES)}")
+        raise ValueError(
+            f"unknown shoulder module {module!r}: expected one of {', '.join(MODULES)}"
+        )
     return module
 
 
@@ -43,9 +46,13 @@ def check_namespace(text: str) -> str:
     absolute; each token a ROS name token (letters, digits, underscores, not starting with a
     digit)."""
     tokens = [t for t in text.strip().split("/") if t]
-    if not tokens or any(not t.replace("_", "a").isalnum() or not t.isascii() or t[0].isdigit() for t in tokens):
-        raise ValueError(f"namespace {text!r}: expected tokens of letters, digits and underscores, "
-                         "not starting with a digit, e.g. left or /lab/left")
+    if not tokens or any(
+        not t.replace("_", "a").isalnum() or not t.isascii() or t[0].isdigit() for t in tokens
+    ):
+        raise ValueError(
+            f"namespace {text!r}: expected tokens of letters, digits and underscores, "
+            "not starting with a digit, e.g. left or /lab/left"
+        )
     return "/" + "/".join(tokens)
 
 

@@ -43,8 +43,10 @@ def validate(mode: str, value: float, limits: SetpointLimits) -> Setpoint:
         raise SetpointError(f"{mode} setpoint {value!r} is not a finite number")
     if mode == "position" and not 0.0 <= value <= limits.max_position_m:
         raise SetpointError(
-            f"position setpoint {value:g} m outside the tendon stroke 0-{limits.max_position_m:g} m")
+            f"position setpoint {value:g} m outside the tendon stroke 0-{limits.max_position_m:g} m"
+        )
     if mode == "force" and not 0.0 <= value <= limits.max_force_n:
         raise SetpointError(
-            f"force setpoint {value:g} N outside the tendon force range 0-{limits.max_force_n:g} N")
+            f"force setpoint {value:g} N outside the tendon force range 0-{limits.max_force_n:g} N"
+        )
     return Setpoint(mode, float(value))

@@ -51,7 +51,7 @@ class MemoryLog:
             if len(after) < 2:
                 continue
             start = after[0]
-            end = int(np.median(after[-max(1, len(after) // 4):]))
+            end = int(np.median(after[-max(1, len(after) // 4) :]))
             out[name] = (start, end, (end - start) / start)
         return out
 
@@ -83,10 +83,12 @@ def missed_periods(bag, finger: str) -> tuple[int, int]:
     encoder, duty = names.topic(finger, "encoder"), names.topic(finger, "duty")
     if encoder not in bag or duty not in bag or len(bag[duty]) == 0:
         return 0, 0
-    samples = (bag[encoder]["header.stamp.sec"].astype(np.int64) * 1_000_000_000
-               + bag[encoder]["header.stamp.nanosec"].astype(np.int64))
-    answered = (bag[duty]["measurement_stamp.sec"].astype(np.int64) * 1_000_000_000
-                + bag[duty]["measurement_stamp.nanosec"].astype(np.int64))
+    samples = bag[encoder]["header.stamp.sec"].astype(np.int64) * 1_000_000_000 + bag[encoder][
+        "header.stamp.nanosec"
+    ].astype(np.int64)
+    answered = bag[duty]["measurement_stamp.sec"].astype(np.int64) * 1_000_000_000 + bag[duty][
+        "measurement_stamp.nanosec"
+    ].astype(np.int64)
     within = samples[(samples >= answered.min()) & (samples <= answered.max())]
     return int(np.sum(~np.isin(within, answered))), len(within)
 
@@ -127,28 +129,41 @@ class SoakResult:
         if self.lost:
             out.append(f"{self.lost} messages lost in the bag")
         if self.missed_fraction >= MAX_MISSED_PERIODS:
-            out.append(f"{100 * self.missed_fraction:.2f} % control periods missed "
-                       f"(limit {100 * MAX_MISSED_PERIODS:g} %)")
+            out.append(
+                f"{100 * self.missed_fraction:.2f} % control periods missed "
+                f"(limit {100 * MAX_MISSED_PERIODS:g} %)"
+            )
         name, growth = self.worst_growth
         if growth >= MAX_MEMORY_GROWTH:
-            out.append(f"{name} resident memory grew {100 * growth:.1f} % (limit {100 * MAX_MEMORY_GROWTH:g} %)")
+            out.append(
+                f"{name} resident memory grew {100 * growth:.1f} % (limit "
+                f"{100 * MAX_MEMORY_GROWTH:g} %)"
+            )
         return out
 
     def markdown(self) -> str:
         missed = sum(m for m, _ in self.missed.values())
         total = sum(n for _, n in self.missed.values())
-        lines = [f"Soak of {self.minutes:g} min: {self.grasps} grasp cycles, {self.joins} command-line joins, "
-                 f"bag `{self.bag}`.", "",
-                 "| measure | value | limit |", "|---|---|---|",
-                 f"| faults | {len(self.faults)} | 0 |",
-                 f"| messages lost in the bag (sequence gaps) | {self.lost} | 0 |",
-                 f"| control periods missed | {missed} of {total} ({100 * self.missed_fraction:.3f} %) | "
-                 f"< {100 * MAX_MISSED_PERIODS:g} % |",
-                 f"| worst resident-memory growth after warm-up | {100 * self.worst_growth[1]:+.1f} % "
-                 f"({self.worst_growth[0]}) | < {100 * MAX_MEMORY_GROWTH:g} % |", "",
-                 "| process | RSS after warm-up, MiB | RSS at the end, MiB | growth |", "|---|---|---|---|"]
+        lines = [
+            f"Soak of {self.minutes:g} min: {self.grasps} grasp cycles, {self.joins} command-line "
+            f"joins, bag `{self.bag}`.",
+            "",
+            "| measure | value | limit |",
+            "|---|---|---|",
+            f"| faults | {len(self.faults)} | 0 |",
+            f"| messages lost in the bag (sequence gaps) | {self.lost} | 0 |",
+            f"| control periods missed | {missed} of {total} ({100 * self.missed_fraction:.3f} %) "
+            f"| < {100 * MAX_MISSED_PERIODS:g} % |",
+            f"| worst resident-memory growth after warm-up | {100 * self.worst_growth[1]:+.1f} % "
+            f"({self.worst_growth[0]}) | < {100 * MAX_MEMORY_GROWTH:g} % |",
+            "",
+            "| process | RSS after warm-up, MiB | RSS at the end, MiB | growth |",
+            "|---|---|---|---|",
+        ]
         for name, (start, end, growth) in sorted(self.memory.items()):
-            lines.append(f"| {name} | {start / 2**20:.1f} | {end / 2**20:.1f} | {100 * growth:+.1f} % |")
+            lines.append(
+                f"| {name} | {start / 2**20:.1f} | {end / 2**20:.1f} | {100 * growth:+.1f} % |"
+            )
         lossy = {t: n for t, n in self.losses.items() if n}
         if lossy:
             lines += ["", "| topic | messages lost |", "|---|---|"]

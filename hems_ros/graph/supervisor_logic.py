@@ -6,11 +6,11 @@ Heating is allowed only in ENABLED, so every other state means zero duty.
 
 Monitors (per finger, on the receive times of the streams, in the node's clock): wire force
 at or above ``max_wire_force_n``, tendon travel beyond ``max_tendon_position_m`` and a wire
-temperature estimated at or above ``max_wire_temperature_c`` fault in any state; while ENABLED, an encoder or wire-force stream without a new reading for longer
-than ``lost_s`` (a lost stream), a controller heartbeat silent for longer than
-``heartbeat_timeout_s``, and the actuation unit's duty-watchdog flag held for
-``watchdog_hold_s`` fault too. Outside ENABLED nothing heats, so a silent stream (a node
-starting or restarting) only blocks ``enable`` and ``reset`` until it is back.
+temperature estimated at or above ``max_wire_temperature_c`` fault in any state; while ENABLED, an
+encoder or wire-force stream without a new reading for longer than ``lost_s`` (a lost stream), a
+controller heartbeat silent for longer than ``heartbeat_timeout_s``, and the actuation unit's
+duty-watchdog flag held for ``watchdog_hold_s`` fault too. Outside ENABLED nothing heats, so a
+silent stream (a node starting or restarting) only blocks ``enable`` and ``reset`` until it is back.
 
 A sensor gap longer than ``stale_s`` but shorter than ``lost_s`` is counted, not latched
 (:meth:`SupervisorLogic.gaps`): a host that is busy for a moment (a command-line tool
@@ -103,8 +103,17 @@ class MonitorLimits:
         return self.stale_s if stream in ("encoder", "wire_force") else self.heartbeat_timeout_s
 
     def __post_init__(self) -> None:
-        for name in ("stale_s", "lost_s", "max_wire_force_n", "max_tendon_position_m", "max_wire_temperature_c",
-                     "max_wire_speed_m_s", "heartbeat_timeout_s", "watchdog_hold_s", "enable_grace_s"):
+        for name in (
+            "stale_s",
+            "lost_s",
+            "max_wire_force_n",
+            "max_tendon_position_m",
+            "max_wire_temperature_c",
+            "max_wire_speed_m_s",
+            "heartbeat_timeout_s",
+            "watchdog_hold_s",
+            "enable_grace_s",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} = {value!r}: must be a finite value > 0")
@@ -144,8 +153,12 @@ class SupervisorLogic:
     # observations -------------------------------------------------------------
     def saw(self, stream: str, finger: str, now: float) -> None:
         seen = self._last_seen.get((stream, finger))
-        if (stream in ("encoder", "wire_force") and self.state == State.ENABLED and seen is not None
-                and now - seen > self.limits.stale_s):
+        if (
+            stream in ("encoder", "wire_force")
+            and self.state == State.ENABLED
+            and seen is not None
+            and now - seen > self.limits.stale_s
+        ):
             gap = self._gaps.setdefault((finger, stream), [0, 0.0])
             gap[0] += 1
             gap[1] = max(gap[1], now - max(seen, self._enabled_at))
@@ -156,8 +169,14 @@ class SupervisorLogic:
         before (a new one goes to :meth:`encoder` or :meth:`wire_force`): while ENABLED, a
         reading unchanged for longer than ``lost_s`` faults the stream."""
         seen = self._last_seen.get((stream, finger))
-        if self.state == State.ENABLED and seen is not None and now - max(seen, self._enabled_at) > self.limits.lost_s:
-            self._fault(finger, stream, f"{stream} lost ({1e3 * (now - seen):.0f} ms without a new reading)")
+        if (
+            self.state == State.ENABLED
+            and seen is not None
+            and now - max(seen, self._enabled_at) > self.limits.lost_s
+        ):
+            self._fault(
+                finger, stream, f"{stream} lost ({1e3 * (now - seen):.0f} ms without a new reading)"
+            )
 
     def gaps(self) -> dict[tuple[str, str], tuple[int, float]]:
         """Sensor gaps longer than ``stale_s`` (and shorter than ``lost_s``) while ENABLED, by
@@ -169,7 +188,11 @@ class SupervisorLogic:
         if not math.isfinite(force_n):
             self._fault(finger, "wire_force", f"wire_force reading {force_n} (a failed sensor)")
         elif force_n >= self.limits.max_wire_force_n:
-            self._fault(finger, "over-force", f"wire over-force {force_n:.1f} N (limit {self.limits.max_wire_force_n:g} N)")
+            self._fault(
+                finger,
+                "over-force",
+                f"wire over-force {force_n:.1f} N (limit {self.limits.max_wire_force_n:g} N)",
+            )
 
     def controller_fault(self, finger: str, fault: str) -> None:
         """A controller that reports a fault (a non-finite input) sends 0 % until it is reset:
@@ -181,10 +204,16 @@ class SupervisorLogic:
         """A controller's wire-temperature estimate: at or above ``max_wire_temperature_c`` it
         faults in any state (a NaN estimate, none yet, says nothing)."""
         if celsius >= self.limits.max_wire_temperature_c:
-            self._fault(finger, "over-temperature", f"wire over-temperature {celsius:.0f} degC estimated "
-                                                    f"(limit {self.limits.max_wire_temperature_c:g} degC)")
+            self._fault(
+                finger,
+                "over-temperature",
+                f"wire over-temperature {celsius:.0f} degC estimated "
+                f"(limit {self.limits.max_wire_temperature_c:g} degC)",
+            )
 
-    def encoder(self, finger: str, wire_position_m: float, now: float, stamp_s: float | None = None) -> None:
+    def encoder(
+        self, finger: str, wire_position_m: float, now: float, stamp_s: float | None = None
+    ) -> None:
         """A new encoder reading, received at ``now``; ``stamp_s`` its sample's stamp (the unit's
         clock), which judges how fast the reading moved without the host's timing."""
         self.saw("encoder", finger, now)
@@ -193,19 +222,29 @@ class SupervisorLogic:
             return
         travel = tendon_position(wire_position_m)
         if travel > self.limits.max_tendon_position_m:
-            self._fault(finger, "over-travel", f"tendon over-travel {1e3 * travel:.1f} mm "
-                                f"(limit {1e3 * self.limits.max_tendon_position_m:g} mm)")
+            self._fault(
+                finger,
+                "over-travel",
+                f"tendon over-travel {1e3 * travel:.1f} mm "
+                f"(limit {1e3 * self.limits.max_tendon_position_m:g} mm)",
+            )
         last = self._readings.get(finger)
         if stamp_s is not None:
             self._readings[finger] = (stamp_s, wire_position_m)
         if last is not None and stamp_s is not None and stamp_s > last[0]:
             speed = abs(wire_position_m - last[1]) / (stamp_s - last[0])
             if speed > self.limits.max_wire_speed_m_s:
-                self._fault(finger, "encoder jump", f"encoder jump {1e3 * (wire_position_m - last[1]):+.1f} mm in "
-                                                    f"{1e3 * (stamp_s - last[0]):.0f} ms (faster than "
-                                                    f"{1e3 * self.limits.max_wire_speed_m_s:g} mm/s)")
+                self._fault(
+                    finger,
+                    "encoder jump",
+                    f"encoder jump {1e3 * (wire_position_m - last[1]):+.1f} mm in "
+                    f"{1e3 * (stamp_s - last[0]):.0f} ms (faster than "
+                    f"{1e3 * self.limits.max_wire_speed_m_s:g} mm/s)",
+                )
 
-    def _held(self, finger: str, condition: str, holding: bool, now: float, start: float | None = None) -> float:
+    def _held(
+        self, finger: str, condition: str, holding: bool, now: float, start: float | None = None
+    ) -> float:
         """How long ``condition`` has held for ``finger`` by the report received at ``now``
         (0 when this report ends it); ``start``: when it began, if not at this report."""
         key = (finger, condition)
@@ -226,11 +265,17 @@ class SupervisorLogic:
         ``enable`` and ``reset`` are refused while the flag has been up for ``watchdog_hold_s``, or
         since the unit started: a single late command does not hold them up either.
         """
-        held = self._held(finger, "watchdog", tripped, now, None if finger in self._duty_seen else -math.inf)
+        held = self._held(
+            finger, "watchdog", tripped, now, None if finger in self._duty_seen else -math.inf
+        )
         if not tripped:
             self._duty_seen.add(finger)
         elif self.state == State.ENABLED and held >= self.limits.watchdog_hold_s:
-            self._fault(finger, "watchdog", f"duty watchdog tripped for {1e3 * held:.0f} ms: no duty commands")
+            self._fault(
+                finger,
+                "watchdog",
+                f"duty watchdog tripped for {1e3 * held:.0f} ms: no duty commands",
+            )
 
     def sees_enabled(self, finger: str, component: str, enabled: bool, now: float) -> None:
         """A report of ``component`` ("unit" or "controller") of ``finger``, received at ``now``:
@@ -240,7 +285,11 @@ class SupervisorLogic:
         held = self._held(finger, condition, not enabled and self.state == State.ENABLED, now)
         if held >= self.limits.enable_grace_s:
             consequence = "it does not heat" if component == "unit" else "it sends 0 % duty"
-            self._fault(finger, condition, f"{component} has not taken ENABLED for {1e3 * held:.0f} ms: {consequence}")
+            self._fault(
+                finger,
+                condition,
+                f"{component} has not taken ENABLED for {1e3 * held:.0f} ms: {consequence}",
+            )
 
     def check_streams(self, now: float) -> None:
         """While ENABLED, fault every controller heartbeat silent for longer than its timeout,
@@ -258,11 +307,22 @@ class SupervisorLogic:
             return
         for finger in self.fingers:
             seen = self._last_seen.get(("heartbeat", finger))
-            if seen is not None and now - max(seen, self._enabled_at) > self.limits.heartbeat_timeout_s:
-                self._fault(finger, "heartbeat", f"heartbeat stale ({1e3 * (now - seen):.0f} ms without a message)")
+            if (
+                seen is not None
+                and now - max(seen, self._enabled_at) > self.limits.heartbeat_timeout_s
+            ):
+                self._fault(
+                    finger,
+                    "heartbeat",
+                    f"heartbeat stale ({1e3 * (now - seen):.0f} ms without a message)",
+                )
             seen = self._last_seen.get(("unit state", finger))
             if seen is not None and now - max(seen, self._enabled_at) > self.limits.lost_s:
-                self._fault(finger, "unit state", f"unit state lost ({1e3 * (now - seen):.0f} ms without a report)")
+                self._fault(
+                    finger,
+                    "unit state",
+                    f"unit state lost ({1e3 * (now - seen):.0f} ms without a report)",
+                )
 
     def missing_streams(self, now: float) -> list[str]:
         """Streams never seen or currently stale: the reasons enabling is refused."""
@@ -275,7 +335,9 @@ class SupervisorLogic:
                 elif now - seen > self.limits.timeout(stream):
                     missing.append(f"{finger}: {stream} stale")
             if now - self._since.get((finger, "watchdog"), math.inf) >= self.limits.watchdog_hold_s:
-                missing.append(f"{finger}: no duty commands reach the unit (its watchdog is tripped)")
+                missing.append(
+                    f"{finger}: no duty commands reach the unit (its watchdog is tripped)"
+                )
         return missing
 
     # commands -----------------------------------------------------------------
@@ -305,7 +367,7 @@ class SupervisorLogic:
             if missing:
                 return False, "reset refused, faults persist: " + "; ".join(missing)
             self.faults.clear()
-            self._readings.clear()    # a reading from before the repair is no reference for speed
+            self._readings.clear()  # a reading from before the repair is no reference for speed
             self.state = State.IDLE
             return True, "reset: IDLE (call enable to heat again)"
         raise ValueError(f"unknown supervisor command {command!r}")

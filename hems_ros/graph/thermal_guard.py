@@ -28,9 +28,13 @@ MAX_CORRECTION_K = 30.0
 class ThermalGuard:
     """Wire-temperature estimate and heating cut-off of one unit (module docstring)."""
 
-    def __init__(self, params: UnitParams, cut_c: float, resume_c: float, period_s: float, dt: float = 1e-3):
+    def __init__(
+        self, params: UnitParams, cut_c: float, resume_c: float, period_s: float, dt: float = 1e-3
+    ):
         if not resume_c < cut_c:
-            raise ValueError(f"resume at {resume_c:g} degC must be below the cut-off {cut_c:g} degC")
+            raise ValueError(
+                f"resume at {resume_c:g} degC must be below the cut-off {cut_c:g} degC"
+            )
         self.model = ActuationUnit(params.replace({"force_sensor.noise_std_n": 0.0}), dt=dt)
         self.steps = max(1, int(round(period_s / dt)))
         self.cut_c, self.resume_c = cut_c, resume_c
@@ -57,8 +61,11 @@ class ThermalGuard:
         el = p.electrical
         xi = state["martensite_fraction"]
         length = p.wire.length_m - state["slider_position_m"]
-        slope = (xi * el.drho_dt_martensite_ohm_m_per_c + (1.0 - xi) * el.drho_dt_austenite_ohm_m_per_c) \
-            * length / p.wire.cross_section_m2
+        slope = (
+            (xi * el.drho_dt_martensite_ohm_m_per_c + (1.0 - xi) * el.drho_dt_austenite_ohm_m_per_c)
+            * length
+            / p.wire.cross_section_m2
+        )
         if not slope > 0.0:
             return 0.0
         model_ohm = self.model.electrical()[0]

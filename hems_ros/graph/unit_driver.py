@@ -53,6 +53,7 @@ class Sample(NamedTuple):
     """An encoder sample and the wire tension at the same instant (ActuationUnit.readings), and
     what the drive board measured over the period that ended: the applied duty, the wire's
     current and voltage while on (NaN at 0 %)."""
+
     time_s: float
     encoder_counts: int
     encoder_position_m: float
@@ -63,9 +64,16 @@ class Sample(NamedTuple):
 
 
 class UnitDriver:
-    def __init__(self, unit: ActuationUnit, start_time_s: float, sample_period_s: float = 0.01,
-                 watchdog_timeout_s: float = 0.03, permission_timeout_s: float = 0.5,
-                 require_permission: bool = True, latency_window_s: float = 60.0) -> None:
+    def __init__(
+        self,
+        unit: ActuationUnit,
+        start_time_s: float,
+        sample_period_s: float = 0.01,
+        watchdog_timeout_s: float = 0.03,
+        permission_timeout_s: float = 0.5,
+        require_permission: bool = True,
+        latency_window_s: float = 60.0,
+    ) -> None:
         self.unit = unit
         self.start_time_s = start_time_s
         self.sample_period_s = sample_period_s
@@ -86,7 +94,9 @@ class UnitDriver:
         # commands of the last latency_window_s, so the statistics describe the graph now,
         # not its start-up (discovery stalls of seconds would otherwise stay in them)
         self.latency_window_s = latency_window_s
-        self.latencies_s: deque[float] = deque(maxlen=max(1, round(latency_window_s / sample_period_s)))
+        self.latencies_s: deque[float] = deque(
+            maxlen=max(1, round(latency_window_s / sample_period_s))
+        )
         self.late_commands = 0
         self._samples_taken = 0
         # the latest sample: its clock time, the unit's step count then, and a snapshot of the
@@ -94,7 +104,9 @@ class UnitDriver:
         # (on wall-clock time the node advances from tick to tick, sample to sample, and takes
         # commands while the unit is still at the sample: no snapshot and no restore)
         self._sample_time_s: float | None = None
-        self.answered_sample_s: float | None = None     # the sample the latest answering command answered
+        self.answered_sample_s: float | None = (
+            None  # the sample the latest answering command answered
+        )
         self._sample_steps = 0
         self._sample_snapshot: tuple | None = None
 
@@ -108,7 +120,9 @@ class UnitDriver:
         """Clock time the physics has been integrated to."""
         return self.start_time_s + self.unit.time
 
-    def command(self, duty_percent: float, now_s: float, measurement_stamp_s: float | None = None) -> None:
+    def command(
+        self, duty_percent: float, now_s: float, measurement_stamp_s: float | None = None
+    ) -> None:
         """Accept a duty command; ValueError (and 0 duty) for a non-finite or out-of-range one.
 
         Call :meth:`advance` up to ``now_s`` first (needless when :meth:`will_rewind`) and again
@@ -117,13 +131,15 @@ class UnitDriver:
         """
         if not _valid_duty(duty_percent):
             self.reject()
-            raise ValueError(f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %")
+            raise ValueError(
+                f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %"
+            )
         effective_s = now_s
         if self._answers_latest_sample(measurement_stamp_s):
-            assert self._sample_time_s is not None      # _answers_latest_sample checked it
+            assert self._sample_time_s is not None  # _answers_latest_sample checked it
             effective_s = self._sample_time_s
             self.answered_sample_s = self._sample_time_s
-            if self.unit.steps != self._sample_steps:   # moved on: the snapshot was taken on leaving
+            if self.unit.steps != self._sample_steps:  # moved on: the snapshot was taken on leaving
                 assert self._sample_snapshot is not None
                 self.unit.restore(self._sample_snapshot)
         elif measurement_stamp_s is not None and measurement_stamp_s > 0:
@@ -147,20 +163,28 @@ class UnitDriver:
         self.rejected_commands += 1
         self.commanded_duty = 0.0
 
-    def will_rewind(self, duty_percent: float, measurement_stamp_s: float | None, now_s: float) -> bool:
+    def will_rewind(
+        self, duty_percent: float, measurement_stamp_s: float | None, now_s: float
+    ) -> bool:
         """This command, given at ``now_s``, takes effect from the latest sample: it is valid,
         answers that sample, and the next one does not fall due by ``now_s`` (1 us to spare for
         the rounding of epoch times). Integrating up to ``now_s`` before it is then wasted."""
-        return (_valid_duty(duty_percent) and self._answers_latest_sample(measurement_stamp_s)
-                and now_s < self._next_sample_due_s() - 1e-6)
+        return (
+            _valid_duty(duty_percent)
+            and self._answers_latest_sample(measurement_stamp_s)
+            and now_s < self._next_sample_due_s() - 1e-6
+        )
 
     def _next_sample_due_s(self) -> float:
         """Clock time of the next encoder sample (a nanosecond early against float rounding)."""
         return self.start_time_s + (self._samples_taken + 1) * self.sample_period_s - 1e-9
 
     def _answers_latest_sample(self, measurement_stamp_s: float | None) -> bool:
-        return (measurement_stamp_s is not None and self._sample_time_s is not None
-                and abs(measurement_stamp_s - self._sample_time_s) < 0.5 * self.unit.dt)
+        return (
+            measurement_stamp_s is not None
+            and self._sample_time_s is not None
+            and abs(measurement_stamp_s - self._sample_time_s) < 0.5 * self.unit.dt
+        )
 
     def permit_heating(self, allowed: bool, now_s: float) -> None:
         """Supervisor's word: heating allowed (ENABLED) or not; refreshed by every status."""
@@ -177,9 +201,12 @@ class UnitDriver:
         permission (the supervisor faults a unit that has not taken its ENABLED)."""
         if not self.require_permission:
             return True
-        return (self.permission_s is not None and self.permitted_since_s is not None
-                and self.permitted_since_s <= now_s + 1e-9
-                and now_s - self.permission_s <= self.permission_timeout_s)
+        return (
+            self.permission_s is not None
+            and self.permitted_since_s is not None
+            and self.permitted_since_s <= now_s + 1e-9
+            and now_s - self.permission_s <= self.permission_timeout_s
+        )
 
     def heating_allowed(self, now_s: float) -> bool:
         """Permitted, and the supervisor alive (a transient loss suspends the heating only)."""
@@ -187,8 +214,9 @@ class UnitDriver:
 
     def gate(self, now_s: float) -> float:
         """The duty the PWM stage applies at ``now_s`` after the safety gates."""
-        self.watchdog_tripped = (self.last_command_s is None
-                                 or now_s - self.last_command_s > self.watchdog_timeout_s)
+        self.watchdog_tripped = (
+            self.last_command_s is None or now_s - self.last_command_s > self.watchdog_timeout_s
+        )
         if self.watchdog_tripped or not self.heating_allowed(now_s):
             return 0.0
         return self.commanded_duty
@@ -220,7 +248,11 @@ class UnitDriver:
                 run = 0
                 self._samples_taken += 1
                 samples.append(Sample(self.time_s, *unit.readings(), *self._board(run_duty)))
-                self._sample_time_s, self._sample_steps, self._sample_snapshot = self.time_s, unit.steps, None
+                self._sample_time_s, self._sample_steps, self._sample_snapshot = (
+                    self.time_s,
+                    unit.steps,
+                    None,
+                )
                 sample_k = self._next_sample_step()
         if run:
             self._integrate(run_duty, run, sample_k, last, limit)
@@ -229,7 +261,8 @@ class UnitDriver:
         return samples
 
     def _board(self, duty: float) -> tuple[float, float, float]:
-        """(duty %, on-current A, on-voltage V) of the last step, as the drive board measures them."""
+        """(duty %, on-current A, on-voltage V) of the last step, as the drive board
+        measures them."""
         if duty <= 0.0:
             return 0.0, math.nan, math.nan
         resistance, mean_current = self.unit.electrical()
@@ -248,8 +281,11 @@ class UnitDriver:
         """``steps`` steps at ``duty`` in an advance that may go to step ``last`` and to the clock
         time ``limit``; leaving the latest sample without reaching the next one (due at step
         ``sample_k``), keep a snapshot of it for a rewind."""
-        if (self._sample_snapshot is None and self.unit.steps == self._sample_steps
-                and (sample_k > last or _step_end(self.start_time_s, sample_k, self.unit.dt) > limit)):
+        if (
+            self._sample_snapshot is None
+            and self.unit.steps == self._sample_steps
+            and (sample_k > last or _step_end(self.start_time_s, sample_k, self.unit.dt) > limit)
+        ):
             self._sample_snapshot = self.unit.snapshot()
         self.unit.advance(duty=duty, steps=steps)
 

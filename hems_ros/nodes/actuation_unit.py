@@ -2,15 +2,23 @@
 glove load, slider encoder (hems_ros.physics, integrated at 1 kHz of simulated time).
 
 Subscribes
-  /hems/<finger>/duty            hems_msgs/DutyCommand    reliable (on wall-clock time taken at the ticks, see below)
-  /hems/supervisor/status        hems_msgs/SupervisorStatus  transient local (heating only while ENABLED)
+  /hems/<finger>/duty            hems_msgs/DutyCommand    reliable (on wall-clock time taken at the
+                                                          ticks, see below)
+  /hems/supervisor/status        hems_msgs/SupervisorStatus  transient local (heating only
+                                                             while ENABLED)
 Publishes
-  /hems/<finger>/encoder         hems_msgs/EncoderReading  best effort, every encoder_period_s (wire side, m)
-  /hems/<finger>/drive           hems_msgs/DriveReading    best effort, with each encoder sample (what the drive board
-                                                           measures: applied duty, on-current and on-voltage)
-  /hems/sim/<finger>/wire_tension hems_msgs/WireForce      best effort, same rate (simulation link to the shoulder module)
-  /hems/sim/<finger>/state       hems_msgs/ActuatorState   best effort, every state_period_s (simulation truth)
-  /diagnostics                   diagnostic_msgs/DiagnosticArray  1 Hz (latency, missed periods, watchdog)
+  /hems/<finger>/encoder         hems_msgs/EncoderReading  best effort, every encoder_period_s
+                                                           (wire side, m)
+  /hems/<finger>/drive           hems_msgs/DriveReading    best effort, with each encoder sample
+                                                           (what the drive board
+                                                           measures: applied duty, on-current
+                                                           and on-voltage)
+  /hems/sim/<finger>/wire_tension hems_msgs/WireForce      best effort, same rate (simulation link
+                                                           to the shoulder module)
+  /hems/sim/<finger>/state       hems_msgs/ActuatorState   best effort, every state_period_s
+                                                           (simulation truth)
+  /diagnostics                   diagnostic_msgs/DiagnosticArray  1 Hz (latency, missed
+                                                                  periods, watchdog)
 
 Duty watchdog: no duty command for three control periods sets the duty to 0 and flags it.
 
@@ -34,7 +42,14 @@ from __future__ import annotations
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from hems_msgs.msg import ActuatorState, DriveReading, DutyCommand, EncoderReading, SupervisorStatus, WireForce
+from hems_msgs.msg import (
+    ActuatorState,
+    DriveReading,
+    DutyCommand,
+    EncoderReading,
+    SupervisorStatus,
+    WireForce,
+)
 
 from hems_ros.graph import names
 from hems_ros.graph.cadence import Cadence, tick_delay
@@ -50,33 +65,92 @@ from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.physics import ActuationUnit, load_params
 
 LOCKSTEP_WAIT_S, LOCKSTEP_POLL_S = 0.05, 0.0002
-ENCODER, TENSION, STATE, DRIVE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState, DriveReading))
+ENCODER, TENSION, STATE, DRIVE = (
+    codec(t) for t in (EncoderReading, WireForce, ActuatorState, DriveReading)
+)
 #: Encoder faults a test can inject at run time (``ros2 param set ... sensor_fault stuck_encoder``).
 SENSOR_FAULTS = ("", "stuck_encoder", "encoder_jump", "nan_encoder")
 JUMP_M = 5e-3
 
 PARAMETERS = [
-    Spec("finger", "index", "finger this unit drives: " + ", ".join(names.FINGERS), one_of(*names.FINGERS), True),
-    Spec("physics_config", "ch6_hems_index",
-         "physics parameter set: a name in config/physics/ or a YAML path", None, True),
+    Spec(
+        "finger",
+        "index",
+        "finger this unit drives: " + ", ".join(names.FINGERS),
+        one_of(*names.FINGERS),
+        True,
+    ),
+    Spec(
+        "physics_config",
+        "ch6_hems_index",
+        "physics parameter set: a name in config/physics/ or a YAML path",
+        None,
+        True,
+    ),
     Spec("physics_dt_s", 0.001, "physics integration step, s (1 kHz default)", PERIOD_LIMIT, True),
-    Spec("tick_period_s", 0.01, "period of the integration and encoder-publishing timer, s "
-         "(duty commands are taken at the ticks, at their reception times)", PERIOD_LIMIT, True),
-    Spec("encoder_period_s", 0.01, "encoder and wire-tension publishing period, s (100 Hz)", PERIOD_LIMIT, True),
-    Spec("state_period_s", 0.05, "simulation-truth state publishing period, s (20 Hz; on the tick, so in whole "
-         "tick periods)", PERIOD_LIMIT, True),
-    Spec("control_period_s", 0.01, "controller period Ts, s; the watchdog trips after three", PERIOD_LIMIT, True),
+    Spec(
+        "tick_period_s",
+        0.01,
+        "period of the integration and encoder-publishing timer, s "
+        "(duty commands are taken at the ticks, at their reception times)",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "encoder_period_s",
+        0.01,
+        "encoder and wire-tension publishing period, s (100 Hz)",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "state_period_s",
+        0.05,
+        "simulation-truth state publishing period, s (20 Hz; on the tick, so in whole "
+        "tick periods)",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "control_period_s",
+        0.01,
+        "controller period Ts, s; the watchdog trips after three",
+        PERIOD_LIMIT,
+        True,
+    ),
     Spec("require_supervisor", True, "heat only while the supervisor reports ENABLED", None, True),
-    Spec("supervisor_timeout_s", 0.5, "supervisor status older than this withdraws heating permission, s",
-         PERIOD_LIMIT, True),
-    Spec("latency_window_s", 60.0, "the latency figures in /diagnostics cover the duty commands of the last "
-         "this many seconds", WINDOW_LIMIT, True),
-    Spec("lockstep", False, "on sim time from the lockstep clock (hems up --sim-time): take the controller's answer "
-         "to the latest sample before each step, waiting for it up to 50 ms of wall time, since the clock moved "
-         "on only after it was sent", None, True),
-    Spec("sensor_fault", "", "encoder fault injected from now on, for fault tests: '' (none), stuck_encoder "
-         "(fresh samples, frozen reading), encoder_jump (+5 mm), nan_encoder (NaN position); settable while "
-         "running", one_of(*SENSOR_FAULTS)),
+    Spec(
+        "supervisor_timeout_s",
+        0.5,
+        "supervisor status older than this withdraws heating permission, s",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "latency_window_s",
+        60.0,
+        "the latency figures in /diagnostics cover the duty commands of the last "
+        "this many seconds",
+        WINDOW_LIMIT,
+        True,
+    ),
+    Spec(
+        "lockstep",
+        False,
+        "on sim time from the lockstep clock (hems up --sim-time): take the controller's answer "
+        "to the latest sample before each step, waiting for it up to 50 ms of wall time, since the "
+        "clock moved on only after it was sent",
+        None,
+        True,
+    ),
+    Spec(
+        "sensor_fault",
+        "",
+        "encoder fault injected from now on, for fault tests: '' (none), stuck_encoder "
+        "(fresh samples, frozen reading), encoder_jump (+5 mm), nan_encoder (NaN position); "
+        "settable while running",
+        one_of(*SENSOR_FAULTS),
+    ),
 ]
 
 
@@ -91,40 +165,67 @@ class ActuationUnitNode(LeanNode):
         try:
             physics = load_params(p["physics_config"])
         except (OSError, ValueError) as error:
-            raise ValueError(f"parameter 'physics_config' = {p['physics_config']!r}: {error}") from None
+            raise ValueError(
+                f"parameter 'physics_config' = {p['physics_config']!r}: {error}"
+            ) from None
         # the shoulder module measures this unit's wire tension with its own noisy sensor; the
         # model's sensor reading is not published here, and noiseless it costs no draws
         physics = physics.replace({"force_sensor.noise_std_n": 0.0})
         self.wall_clock = not self.get_parameter("use_sim_time").value
-        tick = create_grid_timer(self, p["tick_period_s"],
-                                 lambda now: tick_delay(self.finger, p["tick_period_s"], now), self.on_tick)
+        tick = create_grid_timer(
+            self,
+            p["tick_period_s"],
+            lambda now: tick_delay(self.finger, p["tick_period_s"], now),
+            self.on_tick,
+        )
         # The physics starts one period before the first tick, so encoder samples fall due on
         # the ticks and go out at once; a grid shifted from the timer's held each sample back
         # for up to a period, and the duties answering it often came after the next one.
         start_s = seconds(self) + tick.time_until_next_call() * 1e-9 - p["tick_period_s"]
         self.driver = UnitDriver(
-            ActuationUnit(physics, dt=p["physics_dt_s"]), start_time_s=start_s,
-            sample_period_s=p["encoder_period_s"], watchdog_timeout_s=3 * p["control_period_s"],
-            permission_timeout_s=p["supervisor_timeout_s"], require_permission=p["require_supervisor"],
-            latency_window_s=p["latency_window_s"])
+            ActuationUnit(physics, dt=p["physics_dt_s"]),
+            start_time_s=start_s,
+            sample_period_s=p["encoder_period_s"],
+            watchdog_timeout_s=3 * p["control_period_s"],
+            permission_timeout_s=p["supervisor_timeout_s"],
+            require_permission=p["require_supervisor"],
+            latency_window_s=p["latency_window_s"],
+        )
         self.resolution = physics.encoder.resolution_m
         self.sequence = 0
         self.state_sequence = 0
-        self.encoder_pub = self.create_publisher(EncoderReading, names.topic(self.finger, "encoder", self.graph_ns), qos.SENSOR)
-        self.drive_pub = self.create_publisher(DriveReading, names.topic(self.finger, "drive", self.graph_ns), qos.SENSOR)
+        self.encoder_pub = self.create_publisher(
+            EncoderReading, names.topic(self.finger, "encoder", self.graph_ns), qos.SENSOR
+        )
+        self.drive_pub = self.create_publisher(
+            DriveReading, names.topic(self.finger, "drive", self.graph_ns), qos.SENSOR
+        )
         self.frozen: tuple[int, float] | None = None
-        self.tension_pub = self.create_publisher(WireForce, names.sim_topic(self.finger, "wire_tension", self.graph_ns), qos.SENSOR)
-        self.state_pub = self.create_publisher(ActuatorState, names.sim_topic(self.finger, "state", self.graph_ns), qos.SENSOR)
+        self.tension_pub = self.create_publisher(
+            WireForce, names.sim_topic(self.finger, "wire_tension", self.graph_ns), qos.SENSOR
+        )
+        self.state_pub = self.create_publisher(
+            ActuatorState, names.sim_topic(self.finger, "state", self.graph_ns), qos.SENSOR
+        )
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
-        self.duty_sub = self.subscribe_serialized(DutyCommand, names.topic(self.finger, "duty", self.graph_ns), self.on_duty,
-                                                  qos.COMMAND, on_unreadable=self.on_unreadable_duty)
+        self.duty_sub = self.subscribe_serialized(
+            DutyCommand,
+            names.topic(self.finger, "duty", self.graph_ns),
+            self.on_duty,
+            qos.COMMAND,
+            on_unreadable=self.on_unreadable_duty,
+        )
         # lockstep: answers are taken at the steps, each as if received at its sample
         self.lockstep = p["lockstep"] and not self.wall_clock
         self.answering = True
         if self.wall_clock or self.lockstep:
             self.poll(self.duty_sub)
-        supervisor = self.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.graph_ns), self.on_supervisor,
-                                              qos.STATUS)
+        supervisor = self.create_subscription(
+            SupervisorStatus,
+            names.supervisor_status_topic(self.graph_ns),
+            self.on_supervisor,
+            qos.STATUS,
+        )
         # a stopped or killed supervisor stops the heating within its lease, not its status timeout
         self.supervisor_watch: LivelinessWatch | None = LivelinessWatch(supervisor)
         self.state_cadence = Cadence(p["state_period_s"], p["tick_period_s"])
@@ -217,16 +318,48 @@ class ActuationUnitNode(LeanNode):
             self.sequence += 1
             sec, nanosec = stamp(sample.time_s)
             counts, position = self.encoder_reading(sample)
-            self.encoder_pub.publish(ENCODER.encode(ENCODER.fields(
-                header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
-                counts=counts, position=position, resolution=self.resolution, sequence=self.sequence)))
-            self.drive_pub.publish(DRIVE.encode(DRIVE.fields(
-                header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
-                duty_percent=sample.duty_percent, on_current=sample.on_current_a, on_voltage=sample.on_voltage_v,
-                sequence=self.sequence)))
-            self.tension_pub.publish(TENSION.encode(TENSION.fields(
-                header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
-                force=sample.wire_force_n, saturated=False, over_force=False, sequence=self.sequence)))
+            self.encoder_pub.publish(
+                ENCODER.encode(
+                    ENCODER.fields(
+                        header_stamp_sec=sec,
+                        header_stamp_nanosec=nanosec,
+                        header_frame_id="",
+                        finger=self.finger,
+                        counts=counts,
+                        position=position,
+                        resolution=self.resolution,
+                        sequence=self.sequence,
+                    )
+                )
+            )
+            self.drive_pub.publish(
+                DRIVE.encode(
+                    DRIVE.fields(
+                        header_stamp_sec=sec,
+                        header_stamp_nanosec=nanosec,
+                        header_frame_id="",
+                        finger=self.finger,
+                        duty_percent=sample.duty_percent,
+                        on_current=sample.on_current_a,
+                        on_voltage=sample.on_voltage_v,
+                        sequence=self.sequence,
+                    )
+                )
+            )
+            self.tension_pub.publish(
+                TENSION.encode(
+                    TENSION.fields(
+                        header_stamp_sec=sec,
+                        header_stamp_nanosec=nanosec,
+                        header_frame_id="",
+                        finger=self.finger,
+                        force=sample.wire_force_n,
+                        saturated=False,
+                        over_force=False,
+                        sequence=self.sequence,
+                    )
+                )
+            )
 
     def encoder_reading(self, sample) -> tuple[int, float]:
         """(counts, position m) the encoder reports, with the injected fault if one is set."""
@@ -251,16 +384,34 @@ class ActuationUnitNode(LeanNode):
         self.state_sequence += 1
         at = max(self.driver.time_s, seconds(self))
         sec, nanosec = stamp(at)
-        self.state_pub.publish(STATE.encode(STATE.fields(
-            header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="",
-            finger=self.finger, duty_percent=self.driver.applied_duty,
-            watchdog_tripped=self.driver.watchdog_tripped, heating_allowed=self.driver.permitted(at),
-            wire_temperature_c=r.wire_temperature_c,
-            martensite_fraction=r.martensite_fraction, resistance=r.resistance_ohm, current=r.current_a,
-            electrical_power=r.electrical_power_w, electrical_energy=r.energy_joule_j, stress=r.stress_pa,
-            strain=r.strain, sheath_temperature_c=r.sheath_temperature_c, slider_position=r.slider_position_m,
-            slider_velocity=r.slider_velocity_m_s, tendon_position=r.tendon_position_m,
-            tendon_force=r.tendon_force_n, wire_force=r.wire_force_n, sequence=self.state_sequence)))
+        self.state_pub.publish(
+            STATE.encode(
+                STATE.fields(
+                    header_stamp_sec=sec,
+                    header_stamp_nanosec=nanosec,
+                    header_frame_id="",
+                    finger=self.finger,
+                    duty_percent=self.driver.applied_duty,
+                    watchdog_tripped=self.driver.watchdog_tripped,
+                    heating_allowed=self.driver.permitted(at),
+                    wire_temperature_c=r.wire_temperature_c,
+                    martensite_fraction=r.martensite_fraction,
+                    resistance=r.resistance_ohm,
+                    current=r.current_a,
+                    electrical_power=r.electrical_power_w,
+                    electrical_energy=r.energy_joule_j,
+                    stress=r.stress_pa,
+                    strain=r.strain,
+                    sheath_temperature_c=r.sheath_temperature_c,
+                    slider_position=r.slider_position_m,
+                    slider_velocity=r.slider_velocity_m_s,
+                    tendon_position=r.tendon_position_m,
+                    tendon_force=r.tendon_force_n,
+                    wire_force=r.wire_force_n,
+                    sequence=self.state_sequence,
+                )
+            )
+        )
 
     def peers_in_this_process(self, executables: set[str]) -> None:
         """Node kinds running in this process (composed). A supervisor here cannot stop while
@@ -279,19 +430,32 @@ class ActuationUnitNode(LeanNode):
     def publish_diagnostics(self) -> None:
         d = self.driver
         p50, p99, worst = d.latency_percentiles()
-        values = {"applied_duty_percent": d.applied_duty, "watchdog_tripped": d.watchdog_tripped,
-                  "duty_commands": d.commands, "rejected_commands": d.rejected_commands,
-                  "missed_control_periods": d.missed_periods, "late_commands": d.late_commands,
-                  "supervisor_liveliness": self.supervisor_watch.state if self.supervisor_watch else "not watched",
-                  "supervisor_liveliness_losses": self.supervisor_watch.losses if self.supervisor_watch else 0,
-                  "latency_p50_s": p50, "latency_p99_s": p99,
-                  "latency_max_s": worst, "latency_window_s": d.latency_window_s,
-                  "simulated_time_s": d.unit.time}
+        values = {
+            "applied_duty_percent": d.applied_duty,
+            "watchdog_tripped": d.watchdog_tripped,
+            "duty_commands": d.commands,
+            "rejected_commands": d.rejected_commands,
+            "missed_control_periods": d.missed_periods,
+            "late_commands": d.late_commands,
+            "supervisor_liveliness": self.supervisor_watch.state
+            if self.supervisor_watch
+            else "not watched",
+            "supervisor_liveliness_losses": self.supervisor_watch.losses
+            if self.supervisor_watch
+            else 0,
+            "latency_p50_s": p50,
+            "latency_p99_s": p99,
+            "latency_max_s": worst,
+            "latency_window_s": d.latency_window_s,
+            "simulated_time_s": d.unit.time,
+        }
         status = DiagnosticStatus(
             level=DiagnosticStatus.WARN if d.watchdog_tripped else DiagnosticStatus.OK,
-            name=f"hems/actuation_unit/{self.finger}", hardware_id=f"actuation_unit_{self.finger}",
+            name=f"hems/actuation_unit/{self.finger}",
+            hardware_id=f"actuation_unit_{self.finger}",
             message="duty watchdog tripped: duty 0" if d.watchdog_tripped else "running",
-            values=[KeyValue(key=k, value=str(v)) for k, v in values.items()])
+            values=[KeyValue(key=k, value=str(v)) for k, v in values.items()],
+        )
         array = DiagnosticArray(status=[status])
         array.header.stamp = stamp_now(self)
         self.diagnostics_pub.publish(array)

@@ -5,21 +5,26 @@ Setpoints are tendon side (what moves the finger); the encoder and force reading
 side (what the hardware measures); the controller converts through the pulley ratio.
 
 Subscribes
-  /hems/<finger>/setpoint    hems_msgs/FingerSetpoint   reliable   (mode position [m] | force [N], tendon side)
+  /hems/<finger>/setpoint    hems_msgs/FingerSetpoint   reliable   (mode position [m] | force [N],
+                                                                   tendon side)
   /hems/<finger>/encoder     hems_msgs/EncoderReading   best effort (position-mode feedback)
   /hems/<finger>/wire_force  hems_msgs/WireForce        best effort (force-mode feedback)
-  /hems/<finger>/drive       hems_msgs/DriveReading     best effort (the drive board's readings: the wire
+  /hems/<finger>/drive       hems_msgs/DriveReading     best effort (the drive board's
+                                                        readings: the wire
                              temperature estimate of hems_ros.graph.thermal_guard)
-  /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only while ENABLED;
+  /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only
+                             while ENABLED;
                              read at every status_every-th step; the units stop heating on a
                              state change themselves)
 Publishes
   /hems/<finger>/duty              hems_msgs/DutyCommand      reliable, one per feedback sample
-  /hems/<finger>/commands          hems_msgs/CommandRecord    reliable, transient local: every setpoint received
-  /hems/<finger>/controller_status hems_msgs/ControllerStatus best effort, with every status_every-th duty
-                                   and at once when mode, setpoint, activity or fault change (heartbeat;
-                                   carries the latest encoder and force readings), and every
-                                   idle_status_period_s while no feedback arrives
+  /hems/<finger>/commands          hems_msgs/CommandRecord    reliable, transient local: every
+                                                              setpoint received
+  /hems/<finger>/controller_status hems_msgs/ControllerStatus best effort, with every
+  status_every-th duty
+                                   and at once when mode, setpoint, activity or fault change
+                                   (heartbeat; carries the latest encoder and force readings), and
+                                   every idle_status_period_s while no feedback arrives
 
 Gains per mode: ``gains.*`` in position mode (default Table 5.1) and ``force_gains.*`` in
 force mode (default for BPID the chapter 6 force set, hems_ros.control.FORCE_MODE_BPID;
@@ -69,30 +74,91 @@ DUTY, STATUS = codec(DutyCommand), codec(ControllerStatus)
 NO_STAMP = (0, 0)
 
 PARAMETERS = [
-    Spec("finger", "index", "finger this controller drives: " + ", ".join(names.FINGERS), one_of(*names.FINGERS),
-         True),
+    Spec(
+        "finger",
+        "index",
+        "finger this controller drives: " + ", ".join(names.FINGERS),
+        one_of(*names.FINGERS),
+        True,
+    ),
     Spec("strategy", "bpid", "control law: bpid | pid | pipd", one_of(*STRATEGIES), True),
-    Spec("mode", "position", "initial mode: position | force (setpoints may switch it)", one_of(*MODES), True),
+    Spec(
+        "mode",
+        "position",
+        "initial mode: position | force (setpoints may switch it)",
+        one_of(*MODES),
+        True,
+    ),
     Spec("ts", DEFAULT_TS, "control period Ts, s", PERIOD_LIMIT, True),
     Spec("n_filter", DEFAULT_N_FILTER, "derivative filter pole N, rad/s", positive, True),
-    Spec("pulley_ratio", transmission.PULLEY_RATIO, "tendon / wire displacement ratio of the slider pulley",
-         positive, True),
-    Spec("max_position_m", SetpointLimits.max_position_m, "largest accepted tendon position setpoint, m",
-         positive, True),
-    Spec("max_force_n", SetpointLimits.max_force_n, "largest accepted tendon force setpoint, N", positive, True),
-    Spec("idle_status_period_s", 0.1, "status period while no feedback arrives, s (otherwise one per duty)",
-         PERIOD_LIMIT, True),
-    Spec("status_every", 2, "publish the status with every n-th duty (and whenever mode, setpoint, activity or "
-         "fault change): 50 Hz keeps the supervisor's 50 ms stream checks fed at half the messages", positive, True),
-    Spec("feedback_lag_s", 0.1, "0 % duty while the other mode's readings (force in position mode, encoder in "
-         "force mode) are older than this against the feedback's, on the unit's stamps, s: without them "
-         "over-force and over-travel cannot be seen", PERIOD_LIMIT, True),
-    Spec("physics_config", "ch6_hems_index", "physics parameter set of the unit (a config/physics name or a "
-         "YAML path): the model the wire temperature is estimated with", None, True),
-    Spec("cut_temperature_c", 150.0, "estimated wire temperature at which the duty is held at 0, degC "
-         "(from the drive board's readings, hems_ros.graph.thermal_guard)", positive, True),
-    Spec("resume_temperature_c", 140.0, "estimated wire temperature below which heating may resume, degC",
-         positive, True),
+    Spec(
+        "pulley_ratio",
+        transmission.PULLEY_RATIO,
+        "tendon / wire displacement ratio of the slider pulley",
+        positive,
+        True,
+    ),
+    Spec(
+        "max_position_m",
+        SetpointLimits.max_position_m,
+        "largest accepted tendon position setpoint, m",
+        positive,
+        True,
+    ),
+    Spec(
+        "max_force_n",
+        SetpointLimits.max_force_n,
+        "largest accepted tendon force setpoint, N",
+        positive,
+        True,
+    ),
+    Spec(
+        "idle_status_period_s",
+        0.1,
+        "status period while no feedback arrives, s (otherwise one per duty)",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "status_every",
+        2,
+        "publish the status with every n-th duty (and whenever mode, setpoint, activity or "
+        "fault change): 50 Hz keeps the supervisor's 50 ms stream checks fed at half the messages",
+        positive,
+        True,
+    ),
+    Spec(
+        "feedback_lag_s",
+        0.1,
+        "0 % duty while the other mode's readings (force in position mode, encoder in "
+        "force mode) are older than this against the feedback's, on the unit's stamps, s: without "
+        "them over-force and over-travel cannot be seen",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "physics_config",
+        "ch6_hems_index",
+        "physics parameter set of the unit (a config/physics name or a "
+        "YAML path): the model the wire temperature is estimated with",
+        None,
+        True,
+    ),
+    Spec(
+        "cut_temperature_c",
+        150.0,
+        "estimated wire temperature at which the duty is held at 0, degC "
+        "(from the drive board's readings, hems_ros.graph.thermal_guard)",
+        positive,
+        True,
+    ),
+    Spec(
+        "resume_temperature_c",
+        140.0,
+        "estimated wire temperature below which heating may resume, degC",
+        positive,
+        True,
+    ),
 ]
 
 
@@ -116,12 +182,13 @@ class FingerControllerNode(LeanNode):
         self.finger = p["finger"]
         self.ratio = p["pulley_ratio"]
         self.limits = SetpointLimits(p["max_position_m"], p["max_force_n"])
-        self.controller = make_controller(p["strategy"], p["mode"], self.mode_gains[p["mode"]],
-                                          ts=p["ts"], n_filter=p["n_filter"])
+        self.controller = make_controller(
+            p["strategy"], p["mode"], self.mode_gains[p["mode"]], ts=p["ts"], n_filter=p["n_filter"]
+        )
         self.setpoint = Setpoint(p["mode"], 0.0)
         self.enabled = False
         self.wire_position: float | None = None
-        self.encoder_stamp = NO_STAMP   # (sec, nanosec) of the latest reading
+        self.encoder_stamp = NO_STAMP  # (sec, nanosec) of the latest reading
         self.force_stamp = NO_STAMP
         self.wire_force: float | None = None
         self.duty = 0.0
@@ -133,30 +200,63 @@ class FingerControllerNode(LeanNode):
         self.feedback_lag_ns = int(round(p["feedback_lag_s"] * 1e9))
         try:
             physics = load_params(p["physics_config"])
-            self.guard = ThermalGuard(physics, p["cut_temperature_c"], p["resume_temperature_c"], p["ts"])
+            self.guard = ThermalGuard(
+                physics, p["cut_temperature_c"], p["resume_temperature_c"], p["ts"]
+            )
         except (OSError, ValueError) as error:
-            raise ValueError(f"parameters 'physics_config', 'cut_temperature_c', 'resume_temperature_c': "
-                             f"{error}") from None
+            raise ValueError(
+                f"parameters 'physics_config', 'cut_temperature_c', 'resume_temperature_c': "
+                f"{error}"
+            ) from None
         self._steps_since_status = 0
         self._reported: tuple | None = None
-        self.duty_pub = self.create_publisher(DutyCommand, names.topic(self.finger, "duty", self.graph_ns), qos.COMMAND)
-        self.status_pub = self.create_publisher(ControllerStatus, names.topic(self.finger, "controller_status", self.graph_ns),
-                                                qos.CONTROLLER_STATUS)
-        self.commands_pub = self.create_publisher(CommandRecord, names.topic(self.finger, "commands", self.graph_ns), qos.COMMAND_LOG)
+        self.duty_pub = self.create_publisher(
+            DutyCommand, names.topic(self.finger, "duty", self.graph_ns), qos.COMMAND
+        )
+        self.status_pub = self.create_publisher(
+            ControllerStatus,
+            names.topic(self.finger, "controller_status", self.graph_ns),
+            qos.CONTROLLER_STATUS,
+        )
+        self.commands_pub = self.create_publisher(
+            CommandRecord, names.topic(self.finger, "commands", self.graph_ns), qos.COMMAND_LOG
+        )
         self.commands = 0
-        self.create_subscription(FingerSetpoint, names.topic(self.finger, "setpoint", self.graph_ns), self.on_setpoint, qos.COMMAND)
+        self.create_subscription(
+            FingerSetpoint,
+            names.topic(self.finger, "setpoint", self.graph_ns),
+            self.on_setpoint,
+            qos.COMMAND,
+        )
         self.feedback = {
-            "position": self.subscribe_serialized(EncoderReading, names.topic(self.finger, "encoder", self.graph_ns),
-                                                  self.on_encoder, qos.SENSOR),
-            "force": self.subscribe_serialized(WireForce, names.topic(self.finger, "wire_force", self.graph_ns), self.on_force,
-                                               qos.WIRE_FORCE)}
+            "position": self.subscribe_serialized(
+                EncoderReading,
+                names.topic(self.finger, "encoder", self.graph_ns),
+                self.on_encoder,
+                qos.SENSOR,
+            ),
+            "force": self.subscribe_serialized(
+                WireForce,
+                names.topic(self.finger, "wire_force", self.graph_ns),
+                self.on_force,
+                qos.WIRE_FORCE,
+            ),
+        }
         # a stopped or killed shoulder module stops a position loop within the lease
         self.force_watch: LivelinessWatch | None = LivelinessWatch(self.feedback["force"])
-        self.supervisor_sub = self.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.graph_ns),
-                                                       self.on_supervisor, qos.STATUS)
+        self.supervisor_sub = self.create_subscription(
+            SupervisorStatus,
+            names.supervisor_status_topic(self.graph_ns),
+            self.on_supervisor,
+            qos.STATUS,
+        )
         # taken at each control step, before the duty is computed (one reading per sample)
-        self.drive_sub = self.subscribe_serialized(DriveReading, names.topic(self.finger, "drive", self.graph_ns), self.on_drive,
-                                                   qos.SENSOR)
+        self.drive_sub = self.subscribe_serialized(
+            DriveReading,
+            names.topic(self.finger, "drive", self.graph_ns),
+            self.on_drive,
+            qos.SENSOR,
+        )
         self.poll(self.drive_sub)
         self._poll_other_feedback()
         # restarted by every control step, so it fires only while no feedback comes: a
@@ -167,10 +267,20 @@ class FingerControllerNode(LeanNode):
         """The ``gains.*`` (position) or ``force_gains.*`` parameters, defaults from the core."""
         default = mode_gains(strategy, mode)
         prefix = "gains" if mode == "position" else "force_gains"
-        values = declare(self, [Spec(f"{prefix}.{f.name}", float(getattr(default, f.name)),
-                                     f"{strategy} {mode}-mode gain {f.name} (default hems_ros.control.mode_gains; "
-                                     f"errors scaled per the gains' {mode}_scale)", non_negative, True)
-                                for f in fields(default)])
+        values = declare(
+            self,
+            [
+                Spec(
+                    f"{prefix}.{f.name}",
+                    float(getattr(default, f.name)),
+                    f"{strategy} {mode}-mode gain {f.name} (default hems_ros.control.mode_gains; "
+                    f"errors scaled per the gains' {mode}_scale)",
+                    non_negative,
+                    True,
+                )
+                for f in fields(default)
+            ],
+        )
         return type(default)(**{name.split(".", 1)[1]: value for name, value in values.items()})
 
     def _other_feedback(self):
@@ -193,8 +303,10 @@ class FingerControllerNode(LeanNode):
         except SetpointError as error:
             self.rejected += 1
             self.last_rejection = str(error)
-            self.get_logger().error(f"{self.finger}: setpoint rejected: {error}; keeping "
-                                    f"{self.setpoint.mode} {self.setpoint.value:g}")
+            self.get_logger().error(
+                f"{self.finger}: setpoint rejected: {error}; keeping "
+                f"{self.setpoint.mode} {self.setpoint.value:g}"
+            )
             self.record(message, False, str(error))
             self.publish_status()
             return
@@ -202,8 +314,11 @@ class FingerControllerNode(LeanNode):
         if setpoint.mode != self.controller.mode:
             self.drain(self._other_feedback())
             measurement = self._wire_measurement(setpoint.mode)
-            self.controller.set_mode(setpoint.mode, 0.0 if measurement is None else measurement,
-                                     self.mode_gains[setpoint.mode])
+            self.controller.set_mode(
+                setpoint.mode,
+                0.0 if measurement is None else measurement,
+                self.mode_gains[setpoint.mode],
+            )
             if measurement is None:
                 self.controller.reset()  # nothing measured yet in that mode: nothing to carry over
         self.setpoint = setpoint
@@ -213,8 +328,14 @@ class FingerControllerNode(LeanNode):
     def record(self, message: FingerSetpoint, accepted: bool, detail: str) -> None:
         """The setpoint as received, on /hems/<finger>/commands (hems_msgs/CommandRecord)."""
         self.commands += 1
-        record = CommandRecord(node=self.get_name(), command=str(message.mode), value=float(message.value),
-                               accepted=accepted, detail=detail, sequence=self.commands)
+        record = CommandRecord(
+            node=self.get_name(),
+            command=str(message.mode),
+            value=float(message.value),
+            accepted=accepted,
+            detail=detail,
+            sequence=self.commands,
+        )
         record.header.stamp = stamp_now(self)
         self.commands_pub.publish(record)
 
@@ -271,15 +392,27 @@ class FingerControllerNode(LeanNode):
             self.drain(self.supervisor_sub)
         self.drain(self.drive_sub)
         if self.enabled and self._other_fresh(measurement_stamp) and not self.guard.limited:
-            self.duty = self.controller.update(self._wire_reference(), self._wire_measurement(self.setpoint.mode))
+            self.duty = self.controller.update(
+                self._wire_reference(), self._wire_measurement(self.setpoint.mode)
+            )
         else:
             self.duty = 0.0
         self.sequence += 1
         sec, nanosec = stamp_ns(now_ns(self))
-        self.duty_pub.publish(DUTY.encode(DUTY.fields(
-            header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="", finger=self.finger,
-            duty_percent=self.duty, measurement_stamp_sec=measurement_stamp[0],
-            measurement_stamp_nanosec=measurement_stamp[1], sequence=self.sequence)))
+        self.duty_pub.publish(
+            DUTY.encode(
+                DUTY.fields(
+                    header_stamp_sec=sec,
+                    header_stamp_nanosec=nanosec,
+                    header_frame_id="",
+                    finger=self.finger,
+                    duty_percent=self.duty,
+                    measurement_stamp_sec=measurement_stamp[0],
+                    measurement_stamp_nanosec=measurement_stamp[1],
+                    sequence=self.sequence,
+                )
+            )
+        )
         self.idle_timer.reset()
         if status_due or self._status_key() != self._reported:
             self.publish_status()
@@ -293,16 +426,26 @@ class FingerControllerNode(LeanNode):
             return False
         reading = self.wire_force if self.setpoint.mode == "position" else self.wire_position
         if reading is None or not math.isfinite(reading):
-            return False    # a failed sensor says nothing about over-force or over-travel
-        if self.setpoint.mode == "position" and self.force_watch is not None and not self.force_watch.alive():
-            return False    # its module stopped: the readings it sent last are going stale
+            return False  # a failed sensor says nothing about over-force or over-travel
+        if (
+            self.setpoint.mode == "position"
+            and self.force_watch is not None
+            and not self.force_watch.alive()
+        ):
+            return False  # its module stopped: the readings it sent last are going stale
         if lag_ns(measurement_stamp, other) > self.feedback_lag_ns:
-            self.drain(self._other_feedback())   # polled at the statuses: take what came meanwhile
+            self.drain(self._other_feedback())  # polled at the statuses: take what came meanwhile
             other = self.force_stamp if self.setpoint.mode == "position" else self.encoder_stamp
         return lag_ns(measurement_stamp, other) <= self.feedback_lag_ns
 
     def _status_key(self) -> tuple:
-        return self.setpoint.mode, self.setpoint.value, self.enabled, self.controller.fault, self.guard.limited
+        return (
+            self.setpoint.mode,
+            self.setpoint.value,
+            self.enabled,
+            self.controller.fault,
+            self.guard.limited,
+        )
 
     def publish_status(self) -> None:
         self.drain(self._other_feedback())
@@ -317,17 +460,35 @@ class FingerControllerNode(LeanNode):
         self._steps_since_status = 0
         self._reported = self._status_key()
         sec, nanosec = stamp_ns(now_ns(self))
-        self.status_pub.publish(STATUS.encode(STATUS.fields(
-            header_stamp_sec=sec, header_stamp_nanosec=nanosec, header_frame_id="",
-            finger=self.finger, strategy=self.controller.strategy, mode=self.setpoint.mode, active=self.enabled,
-            setpoint=self.setpoint.value, measurement=tendon, error=self.setpoint.value - tendon,
-            duty_percent=self.duty, fault=self.controller.fault or "",
-            encoder_stamp_sec=self.encoder_stamp[0], encoder_stamp_nanosec=self.encoder_stamp[1],
-            wire_position=nan_if_none(self.wire_position),
-            force_stamp_sec=self.force_stamp[0], force_stamp_nanosec=self.force_stamp[1],
-            wire_force=nan_if_none(self.wire_force), rejected_setpoints=self.rejected,
-            last_rejection=self.last_rejection, wire_temperature_c=self.guard.estimate_c,
-            thermal_limited=self.guard.limited, sequence=self.status_sequence)))
+        self.status_pub.publish(
+            STATUS.encode(
+                STATUS.fields(
+                    header_stamp_sec=sec,
+                    header_stamp_nanosec=nanosec,
+                    header_frame_id="",
+                    finger=self.finger,
+                    strategy=self.controller.strategy,
+                    mode=self.setpoint.mode,
+                    active=self.enabled,
+                    setpoint=self.setpoint.value,
+                    measurement=tendon,
+                    error=self.setpoint.value - tendon,
+                    duty_percent=self.duty,
+                    fault=self.controller.fault or "",
+                    encoder_stamp_sec=self.encoder_stamp[0],
+                    encoder_stamp_nanosec=self.encoder_stamp[1],
+                    wire_position=nan_if_none(self.wire_position),
+                    force_stamp_sec=self.force_stamp[0],
+                    force_stamp_nanosec=self.force_stamp[1],
+                    wire_force=nan_if_none(self.wire_force),
+                    rejected_setpoints=self.rejected,
+                    last_rejection=self.last_rejection,
+                    wire_temperature_c=self.guard.estimate_c,
+                    thermal_limited=self.guard.limited,
+                    sequence=self.status_sequence,
+                )
+            )
+        )
 
 
 def main() -> int:

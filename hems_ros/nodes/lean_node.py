@@ -34,7 +34,9 @@ class LeanNode(Node):
             self.polled = frozenset(subscriptions)
             lean_spin.polled_changed()
 
-    def drain(self, subscription, with_reception_time: bool = False, at: float | None = None) -> None:
+    def drain(
+        self, subscription, with_reception_time: bool = False, at: float | None = None
+    ) -> None:
         """Run ``subscription``'s callback on every message queued for it, oldest first.
 
         ``with_reception_time``: the callback also gets the time the middleware received the
@@ -42,7 +44,9 @@ class LeanNode(Node):
         its own convenience, says nothing about when it came. ``at``: the callback gets this
         time instead (a lockstep clock says when a message counts as received)."""
         with subscription.handle:
-            while (taken := subscription.handle.take_message(subscription.msg_type, subscription.raw)) is not None:
+            while (
+                taken := subscription.handle.take_message(subscription.msg_type, subscription.raw)
+            ) is not None:
                 if at is not None:
                     subscription.callback(taken[0], at)
                 elif with_reception_time:
@@ -52,12 +56,18 @@ class LeanNode(Node):
 
     def create_publisher(self, *args, event_callbacks=None, **kwargs):
         return super().create_publisher(
-            *args, event_callbacks=event_callbacks or PublisherEventCallbacks(use_default_callbacks=False), **kwargs)
+            *args,
+            event_callbacks=event_callbacks or PublisherEventCallbacks(use_default_callbacks=False),
+            **kwargs,
+        )
 
     def create_subscription(self, *args, event_callbacks=None, **kwargs):
         return super().create_subscription(
-            *args, event_callbacks=event_callbacks or SubscriptionEventCallbacks(use_default_callbacks=False),
-            **kwargs)
+            *args,
+            event_callbacks=event_callbacks
+            or SubscriptionEventCallbacks(use_default_callbacks=False),
+            **kwargs,
+        )
 
     def subscribe_serialized(self, msg_type, topic: str, callback, qos_profile, on_unreadable=None):
         """Subscribe to ``topic`` taking serialized messages (hems_ros.nodes.wire): ``callback``

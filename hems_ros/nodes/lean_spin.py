@@ -22,13 +22,13 @@ from contextlib import ExitStack
 from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 
-WAIT_TIMEOUT_NS = 50_000_000   # how often the context is checked without work (Ctrl-C latency)
+WAIT_TIMEOUT_NS = 50_000_000  # how often the context is checked without work (Ctrl-C latency)
 # How often the parameter and type-description services are served: checking the seven of a
 # node costs about 150 us after a 10 ms sleep (23 us warm), and at 20 ms that was a few per
 # cent of the separate graph's CPU; a `ros2 param` answer within 0.1 s goes unnoticed.
 INTROSPECTION_POLL_S = 0.1
 INTROSPECTION_PACKAGES = ("rcl_interfaces", "type_description_interfaces")
-_polled_changes = 0            # bumped whenever a node changes the subscriptions it drains itself
+_polled_changes = 0  # bumped whenever a node changes the subscriptions it drains itself
 
 
 def polled_changed() -> None:
@@ -42,13 +42,18 @@ def can_spin(node) -> bool:
     """True if :func:`spin` handles every entity of ``node``."""
     from rclpy.subscription import Subscription
 
-    return (not (list(node.clients) or list(node.guards) or list(node.waitables))
-            and all(s._callback_type is Subscription.CallbackType.MessageOnly for s in node.subscriptions)
-            and all(not inspect.signature(t.callback).parameters for t in node.timers))
+    return (
+        not (list(node.clients) or list(node.guards) or list(node.waitables))
+        and all(
+            s._callback_type is Subscription.CallbackType.MessageOnly for s in node.subscriptions
+        )
+        and all(not inspect.signature(t.callback).parameters for t in node.timers)
+    )
 
 
 def spin(node) -> None:
-    """Spin ``node`` until its context shuts down (then ExternalShutdownException, as rclpy.spin)."""
+    """Spin ``node`` until its context shuts down (then ExternalShutdownException, as
+    rclpy.spin)."""
     spin_nodes([node])
 
 
@@ -62,7 +67,9 @@ def spin_nodes(nodes) -> None:
     """
     for node in nodes:
         if not can_spin(node):
-            raise ValueError(f"node {node.get_name()} has clients, guard conditions or waitables: use rclpy.spin")
+            raise ValueError(
+                f"node {node.get_name()} has clients, guard conditions or waitables: use rclpy.spin"
+            )
     timers = [t for node in nodes for t in node.timers]
     services = [s for node in nodes for s in node.services]
     current: dict[str, tuple] = {}
@@ -70,8 +77,16 @@ def spin_nodes(nodes) -> None:
     def entities() -> tuple:
         if current.get("changes") != _polled_changes:
             current["changes"] = _polled_changes
-            current["entities"] = ([s for node in nodes for s in node.subscriptions
-                                    if s not in getattr(node, "polled", ())], timers, services)
+            current["entities"] = (
+                [
+                    s
+                    for node in nodes
+                    for s in node.subscriptions
+                    if s not in getattr(node, "polled", ())
+                ],
+                timers,
+                services,
+            )
         return current["entities"]
 
     loop(nodes[0].context, entities)
@@ -115,7 +130,12 @@ def loop(context, entities, on_ready=None, keep_going=None, pause_s: float = 0.0
                     # 0.55 cores), so they are served every INTROSPECTION_POLL_S instead,
                     # which `ros2 param` does not notice.
                     introspection = [s for s in services if _is_introspection(s)]
-                    waiting = _WaitSet(context, subscriptions, timers, [s for s in services if s not in introspection])
+                    waiting = _WaitSet(
+                        context,
+                        subscriptions,
+                        timers,
+                        [s for s in services if s not in introspection],
+                    )
                 waiting.wait(WAIT_TIMEOUT_NS)
                 if not handle.ok():
                     break
@@ -159,8 +179,14 @@ class _WaitSet:
     """
 
     def __init__(self, context, subscriptions, timers, services) -> None:
-        self.wait_set = _rclpy.WaitSet(len(subscriptions), 0, len(timers), 0, len(services), 0, context.handle)
-        self.handles = ([s.handle for s in subscriptions], [t.handle for t in timers], [s.handle for s in services])
+        self.wait_set = _rclpy.WaitSet(
+            len(subscriptions), 0, len(timers), 0, len(services), 0, context.handle
+        )
+        self.handles = (
+            [s.handle for s in subscriptions],
+            [t.handle for t in timers],
+            [s.handle for s in services],
+        )
         self.subscriptions = {s.handle.pointer: s for s in subscriptions}
         self.timers = {t.handle.pointer: t for t in timers}
         self.services = {s.handle.pointer: s for s in services}

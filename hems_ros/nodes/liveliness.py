@@ -20,10 +20,11 @@ class LivelinessWatch:
     def __init__(self, subscription) -> None:
         with subscription.handle:
             self._event = _rclpy.EventHandle(
-                subscription.handle, QoSSubscriptionEventType.RCL_SUBSCRIPTION_LIVELINESS_CHANGED)
+                subscription.handle, QoSSubscriptionEventType.RCL_SUBSCRIPTION_LIVELINESS_CHANGED
+            )
         self._alive = True
         self.established = False  # a matched writer has been reported alive
-        self.losses = 0           # alive -> lost transitions seen
+        self.losses = 0  # alive -> lost transitions seen
 
     def alive(self) -> bool:
         """Not lost (see the class documentation)."""

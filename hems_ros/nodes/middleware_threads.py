@@ -5,8 +5,8 @@ default policy, usually preempts the sender on its core, which then finishes its
 work after the listener with cold caches: a scheduler trace of the separate-process graph
 counted about 1,600 such preemptions a second (docs/design.md). A SCHED_BATCH thread
 does not preempt on wake-up: it runs once the sender sleeps (the trace's senders ran on for
-about 0.2-0.7 ms on average) or at once on an idle core. The nodes' main threads keep the default policy, so a
-node woken for its data still preempts whatever runs. Five alternating 20 s runs of the
+about 0.2-0.7 ms on average) or at once on an idle core. The nodes' main threads keep the default
+policy, so a node woken for its data still preempts whatever runs. Five alternating 20 s runs of the
 separate graph: 1.15-1.25 against 1.22-1.32 cores, each run lower. Node processes started
 by :func:`hems_ros.nodes.runner.run_node` do this; the composed process does not (its nodes
 share one participant and reach each other without a listener thread).
@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 
-THREAD_PREFIXES = ("dds.shm.", "dds.udp.", "dds.ev.")   # Fast DDS names its threads so
+THREAD_PREFIXES = ("dds.shm.", "dds.udp.", "dds.ev.")  # Fast DDS names its threads so
 
 
 def defer_middleware_threads() -> None:

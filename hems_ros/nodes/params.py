@@ -27,7 +27,12 @@ class Spec:
 
 
 def positive(value: Any) -> str | None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or value <= 0
+    ):
         return "must be a finite number > 0"
     return None
 
@@ -35,11 +40,13 @@ def positive(value: Any) -> str | None:
 def within(low: float, high: float, unit: str = "s") -> Callable[[Any], str | None]:
     """A number from ``low`` to ``high``: a period or window the node turns into timers, clock
     stamps or buffer sizes, which a value of 1e308 (or 1e-300) would overflow."""
+
     def check(value: Any) -> str | None:
         problem = positive(value)
         if problem is None and not low <= value <= high:
             problem = f"must be from {low:g} to {high:g} {unit}".rstrip()
         return problem
+
     return check
 
 
@@ -50,7 +57,12 @@ WINDOW_LIMIT = within(1e-6, 86400.0)
 
 
 def non_negative(value: Any) -> str | None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or value < 0
+    ):
         return "must be a finite number >= 0"
     return None
 
@@ -58,6 +70,7 @@ def non_negative(value: Any) -> str | None:
 def one_of(*choices: str) -> Callable[[Any], str | None]:
     def check(value: Any) -> str | None:
         return None if value in choices else f"must be one of {', '.join(choices)}"
+
     return check
 
 
@@ -71,8 +84,11 @@ def declare(node: Node, specs: list[Spec]) -> dict[str, Any]:
             values[spec.name] = node.declare_parameter(spec.name, spec.default, descriptor).value
         except InvalidParameterTypeException as error:
             # `-p physics_dt_s:=1` is an integer to ROS; say so instead of a traceback
-            hint = (" (write a decimal point for a floating-point value, e.g. 1.0)"
-                    if isinstance(spec.default, float) else "")
+            hint = (
+                " (write a decimal point for a floating-point value, e.g. 1.0)"
+                if isinstance(spec.default, float)
+                else ""
+            )
             raise ValueError(f"parameter '{spec.name}': wrong type: {error}{hint}") from None
         error = _error(spec, values[spec.name])
         if error:

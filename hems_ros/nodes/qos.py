@@ -2,24 +2,43 @@
 local; the controller status (heartbeat) as the sensor streams."""
 
 from rclpy.duration import Duration
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import (
+    DurabilityPolicy,
+    HistoryPolicy,
+    LivelinessPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+)
 
-SENSOR = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT)
-COMMAND = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
+SENSOR = QoSProfile(
+    depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
+)
+COMMAND = QoSProfile(
+    depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE
+)
 # The supervisor's writer asserts its liveliness from the middleware's own threads, so a
 # stopped or killed supervisor is seen by the units within the lease (they stop heating), while
 # a supervisor whose Python is merely busy (a garbage collection, a burst of callbacks) stays
 # alive. A reader with the default (infinite) lease, such as `ros2 topic echo`, still matches.
 SUPERVISOR_LEASE_S = 0.03
-STATUS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                    durability=DurabilityPolicy.TRANSIENT_LOCAL, liveliness=LivelinessPolicy.AUTOMATIC,
-                    liveliness_lease_duration=Duration(seconds=SUPERVISOR_LEASE_S))
+STATUS = QoSProfile(
+    depth=1,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    liveliness=LivelinessPolicy.AUTOMATIC,
+    liveliness_lease_duration=Duration(seconds=SUPERVISOR_LEASE_S),
+)
 # The shoulder modules' force readings: the controllers watch their writers' liveliness as the
 # units watch the supervisor's (a position loop must not heat blind to over-force).
 WIRE_FORCE_LEASE_S = 0.03
-WIRE_FORCE = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT,
-                        liveliness=LivelinessPolicy.AUTOMATIC,
-                        liveliness_lease_duration=Duration(seconds=WIRE_FORCE_LEASE_S))
+WIRE_FORCE = QoSProfile(
+    depth=10,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.BEST_EFFORT,
+    liveliness=LivelinessPolicy.AUTOMATIC,
+    liveliness_lease_duration=Duration(seconds=WIRE_FORCE_LEASE_S),
+)
 # Writer and every reader of /hems/<finger>/controller_status take this (a reliable reader does
 # not match the best-effort writer). Best effort: each status supersedes the last within 20 ms,
 # and a reliable reader held every later status back behind a lost one until the writer's next
@@ -28,8 +47,12 @@ WIRE_FORCE = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=R
 CONTROLLER_STATUS = SENSOR
 # What a node was commanded (hems_msgs/CommandRecord): every record reaches a recorder that has
 # matched the node, and one that joins later still gets the last hundred.
-COMMAND_LOG = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+COMMAND_LOG = QoSProfile(
+    depth=100,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
 # /hems/joint_states is for tools outside the graph (RViz, plotting scripts), whose readers are
 # reliable by default and do not match a best-effort writer; a reliable writer serves both.
 JOINT_STATES = COMMAND

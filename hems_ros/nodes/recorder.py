@@ -51,7 +51,7 @@ from hems_ros.bag.selection import DEFAULT_RECORD_REGEX
 from hems_ros.nodes import lean_spin
 
 READY_PREFIX = "recording "
-BATCH_S = 0.02          # recorder loop: pause after each round, so that rounds find batches
+BATCH_S = 0.02  # recorder loop: pause after each round, so that rounds find batches
 FINISHED_PREFIX = "bag finished: "
 
 
@@ -63,32 +63,50 @@ def message_class(type_name: str) -> type:
 
 def waiting_qos(depth: int) -> QoSProfile:
     """QoS for a topic that has no publisher yet: that of command writers (qos.COMMAND)."""
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.VOLATILE)
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.VOLATILE,
+    )
 
 
 def subscription_qos(publishers: list, depth: int) -> tuple[QoSProfile, list[dict]]:
     """A QoS that matches every publisher, and their offered profiles for the bag."""
-    reliable = bool(publishers) and all(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE for p in publishers)
+    reliable = bool(publishers) and all(
+        p.qos_profile.reliability == ReliabilityPolicy.RELIABLE for p in publishers
+    )
     latched = bool(publishers) and all(
-        p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in publishers)
+        p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in publishers
+    )
     qos = QoSProfile(
-        history=HistoryPolicy.KEEP_LAST, depth=depth,
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
         reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
-    offered = [offered_qos(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE,
-                           p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL,
-                           p.qos_profile.depth) for p in publishers]
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
+    )
+    offered = [
+        offered_qos(
+            p.qos_profile.reliability == ReliabilityPolicy.RELIABLE,
+            p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL,
+            p.qos_profile.depth,
+        )
+        for p in publishers
+    ]
     return qos, offered
 
 
 class Recorder(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__("recorder", namespace="/hems", enable_rosout=False, **node_kwargs)
-        output = self.declare_parameter("output", "").value or datetime.now().strftime("hems_%Y%m%d_%H%M%S")
+        output = self.declare_parameter("output", "").value or datetime.now().strftime(
+            "hems_%Y%m%d_%H%M%S"
+        )
         topics = self.declare_parameter("topics", Parameter.Type.STRING_ARRAY).value or []
         regex = self.declare_parameter("regex", "").value
-        self._selection = TopicSelection.of(topics, regex or (None if topics else DEFAULT_RECORD_REGEX))
+        self._selection = TopicSelection.of(
+            topics, regex or (None if topics else DEFAULT_RECORD_REGEX)
+        )
         discovery = self._positive("discovery_period", 0.2)
         flush = self._positive("flush_period", 0.5)
         chunk_size = int(self.declare_parameter("chunk_size", 262144).value)
@@ -99,9 +117,11 @@ class Recorder(Node):
             raise ValueError("chunk_size and queue_depth must be positive, duration >= 0")
         self._writer = BagWriter(output, compression=compression, chunk_size=chunk_size)
         self._recorded: dict[str, object] = {}
-        self._channels: dict[object, tuple[int | None, type]] = {}   # subscription -> (channel, class)
+        self._channels: dict[
+            object, tuple[int | None, type]
+        ] = {}  # subscription -> (channel, class)
         self._types: dict[str, str] = {}
-        self._waiting: set[str] = set()    # subscribed before the topic had a publisher
+        self._waiting: set[str] = set()  # subscribed before the topic had a publisher
         self._skipped: set[str] = set()
         self._deadline = time.monotonic() + duration if duration > 0 else None
         self.get_logger().info(f"bag {self._writer.folder}: recording {self._selection.describe()}")
@@ -164,9 +184,11 @@ class Recorder(Node):
         subscription = self.create_subscription(cls, topic, on_message, qos, raw=True)
         self._recorded[topic] = subscription
         self._channels[subscription] = (channel, cls)
-        self.get_logger().info(f"{READY_PREFIX}{topic} [{self._types[topic]}] "
-                               f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}"
-                               f"{', before any publisher' if channel is None else ''}")
+        self.get_logger().info(
+            f"{READY_PREFIX}{topic} [{self._types[topic]}] "
+            f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}"
+            f"{', before any publisher' if channel is None else ''}"
+        )
 
     def _channel(self, subscription) -> int:
         """The bag channel of ``subscription``, opened now if its topic had no publisher before."""
@@ -176,7 +198,11 @@ class Recorder(Node):
             publishers = self.get_publishers_info_by_topic(topic)
             # A message can come before the graph cache lists its writer; it came to a reliable
             # reader, so from a reliable writer, taken as volatile (what command writers are).
-            offered = subscription_qos(publishers, self._depth)[1] if publishers else [offered_qos(True, False, 0)]
+            offered = (
+                subscription_qos(publishers, self._depth)[1]
+                if publishers
+                else [offered_qos(True, False, 0)]
+            )
             channel = self._writer.add_topic(topic, self._types[topic], offered)
             self._channels[subscription] = (channel, cls)
         return channel
@@ -193,7 +219,8 @@ class Recorder(Node):
         channel, cls = self._channel(subscription), self._channels[subscription][1]
         qos = subscription_qos(publishers, self._depth)[0]
         if qos.reliability != ReliabilityPolicy.RELIABLE or (
-                qos.durability == DurabilityPolicy.TRANSIENT_LOCAL and not seen):
+            qos.durability == DurabilityPolicy.TRANSIENT_LOCAL and not seen
+        ):
             del self._channels[subscription]
             self.destroy_subscription(subscription)
             self._listen(topic, cls, channel, qos)
@@ -214,7 +241,7 @@ class Recorder(Node):
             if channel is None:
                 channel = self._channel(subscription)
             data, info = taken
-            received = info["received_timestamp"] or time.time_ns()   # 0: the middleware gave none
+            received = info["received_timestamp"] or time.time_ns()  # 0: the middleware gave none
             write(channel, received, data, info["source_timestamp"] or received)
         return self._depth
 
@@ -223,8 +250,10 @@ class Recorder(Node):
             return
         summary = self._writer.finish()
         counts = ", ".join(f"{t} {n}" for t, n in sorted(summary.counts.items()))
-        self.get_logger().info(f"{FINISHED_PREFIX}{summary.folder} ({summary.message_count} messages"
-                               f"{': ' + counts if counts else ''})")
+        self.get_logger().info(
+            f"{FINISHED_PREFIX}{summary.folder} ({summary.message_count} messages"
+            f"{': ' + counts if counts else ''})"
+        )
 
     def destroy_node(self) -> None:
         self.finish()
@@ -242,8 +271,13 @@ def spin_until_expired(node: Recorder) -> None:
     """
     from rclpy.executors import ExternalShutdownException
 
-    lean_spin.loop(node.context, lambda: (list(node.subscriptions), list(node.timers), list(node.services)),
-                   on_ready=node.drain, keep_going=lambda: not node.expired, pause_s=BATCH_S)
+    lean_spin.loop(
+        node.context,
+        lambda: (list(node.subscriptions), list(node.timers), list(node.services)),
+        on_ready=node.drain,
+        keep_going=lambda: not node.expired,
+        pause_s=BATCH_S,
+    )
     if not node.expired:
         raise ExternalShutdownException()
 
@@ -252,6 +286,7 @@ def main(argv: list[str] | None = None) -> int:
     from hems_ros.nodes.runner import run_node
 
     return run_node(Recorder, argv, spin=spin_until_expired, config_errors=(ValueError, OSError))
+
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -19,9 +19,12 @@ from hems_ros.rosenv import apply_network_defaults
 NO_PARAMETER_SERVICES_FLAG = "--no-parameter-services"
 
 
-def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
-             spin: Callable[[object], None] | None = None,
-             config_errors: tuple[type[Exception], ...] = (ValueError,)) -> int:
+def run_node(
+    make_node: Callable[[], object],
+    argv: list[str] | None = None,
+    spin: Callable[[object], None] | None = None,
+    config_errors: tuple[type[Exception], ...] = (ValueError,),
+) -> int:
     """Initialise rclpy, spin the node until Ctrl-C or SIGTERM, shut down cleanly.
 
     ``-h``/``--help`` before ``--ros-args`` prints the node's documentation and exits.
@@ -32,11 +35,13 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
     with code 2. ``spin(node)`` replaces ``rclpy.spin`` for nodes that drive their own executor.
     """
     args = sys.argv if argv is None else argv
-    user_args = args[1:args.index("--ros-args")] if "--ros-args" in args else args[1:]
+    user_args = args[1 : args.index("--ros-args")] if "--ros-args" in args else args[1:]
     if "-h" in user_args or "--help" in user_args:
         print(node_help(make_node, args[0]))
         return 0
-    node_kwargs = {"start_parameter_services": False} if NO_PARAMETER_SERVICES_FLAG in user_args else {}
+    node_kwargs = (
+        {"start_parameter_services": False} if NO_PARAMETER_SERVICES_FLAG in user_args else {}
+    )
     apply_network_defaults()
     import rclpy
     from rclpy.executors import ExternalShutdownException
@@ -63,7 +68,10 @@ def run_node(make_node: Callable[[], object], argv: list[str] | None = None,
             raise
         # a take interrupted by the shutdown signal: the node was stopping anyway
     except config_errors as error:
-        print(f"{getattr(make_node, '__name__', 'node')}: invalid configuration: {error}", file=sys.stderr)
+        print(
+            f"{getattr(make_node, '__name__', 'node')}: invalid configuration: {error}",
+            file=sys.stderr,
+        )
         return 2
     finally:
         if node is not None:
@@ -93,10 +101,14 @@ def node_help(make_node: Callable[[], object], program: str) -> str:
     specs = getattr(module, "PARAMETERS", ())
     if specs:
         doc += "\n\nParameters (-p <name>:=<value>; units in the name or the text):\n" + "\n".join(
-            f"  {spec.name} (default {spec.default!r}{', read-only' if spec.read_only else ''}): {spec.description}"
-            for spec in specs)
+            f"  {spec.name} (default {spec.default!r}{', read-only' if spec.read_only else ''}): "
+            f"{spec.description}"
+            for spec in specs
+        )
     name = os.path.basename(program)
-    return (f"usage: {name} [{NO_PARAMETER_SERVICES_FLAG}] [--ros-args -p <parameter>:=<value> ... | "
-            f"--params-file <file>]\n\n{doc}\n\n{NO_PARAMETER_SERVICES_FLAG}: no parameter services (ros2 param "
-            "does not reach the node; it then costs a process joining the domain less).\n"
-            "Stops cleanly on Ctrl-C (SIGINT) or SIGTERM.")
+    return (
+        f"usage: {name} [{NO_PARAMETER_SERVICES_FLAG}] [--ros-args -p <parameter>:=<value> ... | "
+        f"--params-file <file>]\n\n{doc}\n\n{NO_PARAMETER_SERVICES_FLAG}: no parameter services "
+        f"(ros2 param does not reach the node; it then costs a process joining the domain less).\n"
+        "Stops cleanly on Ctrl-C (SIGINT) or SIGTERM."
+    )

@@ -1,8 +1,10 @@
 """One HEMS shoulder module: the fixed anchor of two actuators with their two wire-force
 sensors (range 0-50 N, resolution, seeded noise, saturation; dissertation chapter 6).
 
-Subscribes  /hems/sim/<finger>/wire_tension  hems_msgs/WireForce  best effort (physical tension, simulation link)
-Publishes   /hems/<finger>/wire_force        hems_msgs/WireForce  best effort, one reading per tension sample (100 Hz)
+Subscribes  /hems/sim/<finger>/wire_tension  hems_msgs/WireForce  best effort (physical tension,
+                                                                  simulation link)
+Publishes   /hems/<finger>/wire_force        hems_msgs/WireForce  best effort, one reading per
+                                                                  tension sample (100 Hz)
 
 Each reading carries ``saturated`` (clipped at 0 or the range) and ``over_force``
 (reading at or above ``over_force_n``). Both topics carry serialized messages
@@ -29,17 +31,48 @@ NOISE_BURST = 50.0
 
 
 PARAMETERS = [
-    Spec("module", "index_middle", "shoulder module: " + ", ".join(names.MODULES), one_of(*names.MODULES), True),
-    Spec("range_max_n", _SENSOR.range_max_n, "force sensor range, N (readings clip at 0 and here)", positive, True),
+    Spec(
+        "module",
+        "index_middle",
+        "shoulder module: " + ", ".join(names.MODULES),
+        one_of(*names.MODULES),
+        True,
+    ),
+    Spec(
+        "range_max_n",
+        _SENSOR.range_max_n,
+        "force sensor range, N (readings clip at 0 and here)",
+        positive,
+        True,
+    ),
     Spec("resolution_n", _SENSOR.resolution_n, "force sensor resolution, N", positive, True),
-    Spec("noise_std_n", _SENSOR.noise_std_n, "force sensor noise standard deviation, N", non_negative, True),
-    Spec("seed", _SENSOR.seed, "seed of the noise generator (each sensor adds its index)", None, True),
+    Spec(
+        "noise_std_n",
+        _SENSOR.noise_std_n,
+        "force sensor noise standard deviation, N",
+        non_negative,
+        True,
+    ),
+    Spec(
+        "seed", _SENSOR.seed, "seed of the noise generator (each sensor adds its index)", None, True
+    ),
     Spec("over_force_n", 50.0, "over-force flag threshold, N (wire side)", positive, True),
-    Spec("sensor_fault", "", "force-sensor fault injected from now on, for fault tests: '' (none), stuck_force "
-         "(fresh samples, frozen reading), force_saturation (reads its range), force_noise_burst (noise x50), "
-         "nan_force; settable while running", one_of(*SENSOR_FAULTS)),
-    Spec("fault_finger", "", "the finger whose sensor sensor_fault hits ('' both of the module's)",
-         lambda v: None if v in ("", *names.FINGERS) else f"must be '' or one of {', '.join(names.FINGERS)}"),
+    Spec(
+        "sensor_fault",
+        "",
+        "force-sensor fault injected from now on, for fault tests: '' (none), stuck_force "
+        "(fresh samples, frozen reading), force_saturation (reads its range), force_noise_burst "
+        "(noise x50), nan_force; settable while running",
+        one_of(*SENSOR_FAULTS),
+    ),
+    Spec(
+        "fault_finger",
+        "",
+        "the finger whose sensor sensor_fault hits ('' both of the module's)",
+        lambda v: None
+        if v in ("", *names.FINGERS)
+        else f"must be '' or one of {', '.join(names.FINGERS)}",
+    ),
 ]
 
 
@@ -56,11 +89,17 @@ class ShoulderModuleNode(LeanNode):
         self.rngs = {}
         self.frozen: dict[str, tuple[float, bool]] = {}
         for index, finger in enumerate(names.MODULES[p["module"]]):
-            self.publishers_[finger] = self.create_publisher(WireForce, names.topic(finger, "wire_force", self.graph_ns), qos.WIRE_FORCE)
+            self.publishers_[finger] = self.create_publisher(
+                WireForce, names.topic(finger, "wire_force", self.graph_ns), qos.WIRE_FORCE
+            )
             self.sequences[finger] = 0
             self.rngs[finger] = sensors.noise_generator(p["seed"] + index)
-            self.subscribe_serialized(WireForce, names.sim_topic(finger, "wire_tension", self.graph_ns),
-                                      lambda tension, f=finger: self.on_tension(f, tension), qos.SENSOR)
+            self.subscribe_serialized(
+                WireForce,
+                names.sim_topic(finger, "wire_tension", self.graph_ns),
+                lambda tension, f=finger: self.on_tension(f, tension),
+                qos.SENSOR,
+            )
 
     def fault(self, finger: str) -> str:
         """The fault injected into ``finger``'s sensor ('' none)."""
@@ -70,9 +109,14 @@ class ShoulderModuleNode(LeanNode):
     def on_tension(self, finger: str, tension) -> None:
         p = self.params
         fault = self.fault(finger)
-        noise = self.rngs[finger].standard_normal() * p["noise_std_n"] * (NOISE_BURST if fault == "force_noise_burst"
-                                                                           else 1.0)
-        force, saturated = sensors.force_reading(tension.force, noise, p["range_max_n"], p["resolution_n"])
+        noise = (
+            self.rngs[finger].standard_normal()
+            * p["noise_std_n"]
+            * (NOISE_BURST if fault == "force_noise_burst" else 1.0)
+        )
+        force, saturated = sensors.force_reading(
+            tension.force, noise, p["range_max_n"], p["resolution_n"]
+        )
         if fault != "stuck_force":
             self.frozen.pop(finger, None)
         if fault == "stuck_force":
@@ -82,9 +126,17 @@ class ShoulderModuleNode(LeanNode):
         elif fault == "nan_force":
             force = float("nan")
         self.sequences[finger] += 1
-        self.publishers_[finger].publish(WIRE_FORCE.encode(tension._replace(
-            finger=finger, force=force, saturated=saturated, over_force=force >= p["over_force_n"],
-            sequence=self.sequences[finger])))
+        self.publishers_[finger].publish(
+            WIRE_FORCE.encode(
+                tension._replace(
+                    finger=finger,
+                    force=force,
+                    saturated=saturated,
+                    over_force=force >= p["over_force_n"],
+                    sequence=self.sequences[finger],
+                )
+            )
+        )
 
 
 def main() -> int:

@@ -37,17 +37,52 @@ def _fingers(value) -> str | None:
 
 
 PARAMETERS = [
-    Spec("rate", 1.0, "simulated seconds per wall second; with lockstep the most, and 0 runs as fast as the "
-         "graph answers", non_negative, True),
-    Spec("lockstep", True, "advance only when every finger's unit, shoulder module and controller have answered "
-         "the current step", None, True),
-    Spec("fingers", ",".join(names.FINGERS), "comma-separated fingers the lockstep waits for", _fingers, True),
-    Spec("step_s", 0.01, "lockstep: simulated time per step, s (the encoder period)", PERIOD_LIMIT, True),
-    Spec("stall_s", 5.0, "lockstep: a finger that has not answered for this long (wall clock, s) is left out "
-         "until it answers again (a stopped controller; a busy host only slows the clock down)", PERIOD_LIMIT,
-         True),
-    Spec("period_s", 0.004, "wall-clock publishing period, s (without lockstep; with it, how often the pace "
-         "is checked)", PERIOD_LIMIT, True),
+    Spec(
+        "rate",
+        1.0,
+        "simulated seconds per wall second; with lockstep the most, and 0 runs as fast as the "
+        "graph answers",
+        non_negative,
+        True,
+    ),
+    Spec(
+        "lockstep",
+        True,
+        "advance only when every finger's unit, shoulder module and controller have answered "
+        "the current step",
+        None,
+        True,
+    ),
+    Spec(
+        "fingers",
+        ",".join(names.FINGERS),
+        "comma-separated fingers the lockstep waits for",
+        _fingers,
+        True,
+    ),
+    Spec(
+        "step_s",
+        0.01,
+        "lockstep: simulated time per step, s (the encoder period)",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "stall_s",
+        5.0,
+        "lockstep: a finger that has not answered for this long (wall clock, s) is left out "
+        "until it answers again (a stopped controller; a busy host only slows the clock down)",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "period_s",
+        0.004,
+        "wall-clock publishing period, s (without lockstep; with it, how often the pace "
+        "is checked)",
+        PERIOD_LIMIT,
+        True,
+    ),
 ]
 
 
@@ -61,22 +96,40 @@ class SimClockNode(LeanNode):
         self.rate = p["rate"]
         self.wall0 = time.monotonic()
         self.sim0 = 1.0  # time 0 means "no clock yet" to rclpy; start just after it
-        self.pub = self.create_publisher(Clock, "/clock", QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        self.pub = self.create_publisher(
+            Clock, "/clock", QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        )
         self.lockstep = None
         if p["lockstep"]:
             fingers = tuple(f for f in p["fingers"].split(",") if f)
-            self.lockstep = LockstepClock(fingers, start_s=self.sim0, step_s=p["step_s"], rate=self.rate,
-                                          stall_s=p["stall_s"])
+            self.lockstep = LockstepClock(
+                fingers, start_s=self.sim0, step_s=p["step_s"], rate=self.rate, stall_s=p["stall_s"]
+            )
             for finger in fingers:
-                self.subscribe_serialized(EncoderReading, names.topic(finger, "encoder", self.graph_ns),
-                                          lambda m, f=finger: self._saw(self.lockstep.encoder, f, m), qos.SENSOR)
-                self.subscribe_serialized(WireForce, names.topic(finger, "wire_force", self.graph_ns),
-                                          lambda m, f=finger: self._saw(self.lockstep.force, f, m), qos.SENSOR)
-                self.subscribe_serialized(DutyCommand, names.topic(finger, "duty", self.graph_ns), lambda m, f=finger: self._answer(f, m),
-                                          qos.COMMAND)
-            self.create_subscription(SupervisorStatus, names.supervisor_status_topic(self.graph_ns),
-                                     lambda m: self._advance(self.lockstep.supervisor(from_msg(m.header.stamp))),
-                                     qos.STATUS)
+                self.subscribe_serialized(
+                    EncoderReading,
+                    names.topic(finger, "encoder", self.graph_ns),
+                    lambda m, f=finger: self._saw(self.lockstep.encoder, f, m),
+                    qos.SENSOR,
+                )
+                self.subscribe_serialized(
+                    WireForce,
+                    names.topic(finger, "wire_force", self.graph_ns),
+                    lambda m, f=finger: self._saw(self.lockstep.force, f, m),
+                    qos.SENSOR,
+                )
+                self.subscribe_serialized(
+                    DutyCommand,
+                    names.topic(finger, "duty", self.graph_ns),
+                    lambda m, f=finger: self._answer(f, m),
+                    qos.COMMAND,
+                )
+            self.create_subscription(
+                SupervisorStatus,
+                names.supervisor_status_topic(self.graph_ns),
+                lambda m: self._advance(self.lockstep.supervisor(from_msg(m.header.stamp))),
+                qos.STATUS,
+            )
             self.pub.publish(Clock(clock=to_msg(self.sim0)))
             self.create_timer(p["period_s"], self._advance)
             self.create_timer(5.0, self._report_stalls)
@@ -85,14 +138,18 @@ class SimClockNode(LeanNode):
             self.create_timer(p["period_s"], self.tick)
 
     def tick(self) -> None:
-        self.pub.publish(Clock(clock=to_msg(self.sim0 + self.rate * (time.monotonic() - self.wall0))))
+        self.pub.publish(
+            Clock(clock=to_msg(self.sim0 + self.rate * (time.monotonic() - self.wall0)))
+        )
 
     def _saw(self, record, finger: str, message) -> None:
         record(finger, seconds_of(message.header_stamp_sec, message.header_stamp_nanosec))
         self._advance()
 
     def _answer(self, finger: str, message) -> None:
-        self.lockstep.duty(finger, seconds_of(message.measurement_stamp_sec, message.measurement_stamp_nanosec))
+        self.lockstep.duty(
+            finger, seconds_of(message.measurement_stamp_sec, message.measurement_stamp_nanosec)
+        )
         self._advance()
 
     def _advance(self, _=None) -> None:
@@ -103,8 +160,10 @@ class SimClockNode(LeanNode):
     def _report_stalls(self) -> None:
         if self.lockstep.stalls > self._stalls_reported:
             self._stalls_reported = self.lockstep.stalls
-            self.get_logger().warning(f"lockstep: {self.lockstep.stalls} steps advanced without every answer "
-                                      f"(taking part now: {', '.join(self.lockstep.joined) or 'none'})")
+            self.get_logger().warning(
+                f"lockstep: {self.lockstep.stalls} steps advanced without every answer "
+                f"(taking part now: {', '.join(self.lockstep.joined) or 'none'})"
+            )
 
 
 def main() -> int:

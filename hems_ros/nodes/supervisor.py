@@ -6,19 +6,22 @@ Subscribes  /hems/<finger>/controller_status (best effort, heartbeat): also the 
             latest encoder and force readings; a stream counts as alive while those readings
             keep changing, so the supervisor need not take 1200 sensor messages a second;
             /hems/sim/<finger>/state (best effort, duty-watchdog flag, heating permission)
-Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, transient local; on change and every status_period_s
-            /hems/supervisor/commands hems_msgs/CommandRecord   reliable, transient local: every service call
-            /hems/joint_states       sensor_msgs/JointState      reliable: tendon position (m) and tendon force (N, as effort)
+Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, transient local; on
+                                                                 change and every status_period_s
+            /hems/supervisor/commands hems_msgs/CommandRecord   reliable, transient local: every
+                                                                service call
+            /hems/joint_states       sensor_msgs/JointState      reliable: tendon position (m) and
+                                                                 tendon force (N, as effort)
             /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz
 
 Monitors: lost encoder or force streams and unit state reports (no new reading for lost_s,
 default 400 ms; shorter gaps over stale_s, 50 ms, are counted in /diagnostics), controller
-heartbeats (> heartbeat_timeout_s, default 400 ms), wire over-force (default 50 N), tendon over-travel,
-a wire temperature estimated at max_wire_temperature_c (170 degC; the controllers cut heating at
-150 degC themselves), duty-watchdog flags held watchdog_hold_s (500 ms), and while ENABLED a unit or controller
-that has not taken ENABLED within enable_grace_s (0.5 s). ``enable`` also waits for every
-unit's state and for its controller's commands to reach it (watchdog flag not held).
-Heating is allowed only in ENABLED: the units and controllers drop every duty to 0 as soon
+heartbeats (> heartbeat_timeout_s, default 400 ms), wire over-force (default 50 N), tendon
+over-travel, a wire temperature estimated at max_wire_temperature_c (170 degC; the controllers cut
+heating at 150 degC themselves), duty-watchdog flags held watchdog_hold_s (500 ms), and while
+ENABLED a unit or controller that has not taken ENABLED within enable_grace_s (0.5 s). ``enable``
+also waits for every unit's state and for its controller's commands to reach it (watchdog flag not
+held). Heating is allowed only in ENABLED: the units and controllers drop every duty to 0 as soon
 as they see any other state. FAULT and ESTOP latch until reset. The controller status and
 state topics are taken serialized (hems_ros.nodes.wire), at each check rather than on
 arrival (a wake-up per message cost more than the message).
@@ -49,35 +52,104 @@ _LIMITS = MonitorLimits()
 def _fingers(value) -> str | None:
     unknown = [f for f in value if f not in names.FINGERS]
     if not value or unknown:
-        return f"must be a non-empty list of fingers from {', '.join(names.FINGERS)} (unknown: {unknown})"
+        return (
+            f"must be a non-empty list of fingers from {', '.join(names.FINGERS)} "
+            f"(unknown: {unknown})"
+        )
     return None
 
 
 PARAMETERS = [
-    Spec("fingers", list(names.FINGERS), "fingers to supervise (all six by default)", _fingers, True),
-    Spec("stale_s", _LIMITS.stale_s, "an encoder or wire-force stream older than this is not ready for enable, "
-         "and a gap longer than this while ENABLED is counted in /diagnostics, s", PERIOD_LIMIT, True),
-    Spec("lost_s", _LIMITS.lost_s, "an encoder or wire-force stream without a new reading for longer than this "
-         "while ENABLED is lost: a fault (the units stop heating 3 control periods into any gap), s",
-         PERIOD_LIMIT, True),
-    Spec("heartbeat_timeout_s", _LIMITS.heartbeat_timeout_s, "a controller heartbeat silent for longer is a fault, s",
-         PERIOD_LIMIT, True),
-    Spec("watchdog_hold_s", _LIMITS.watchdog_hold_s, "a unit's duty-watchdog flag held this long while ENABLED "
-         "is a fault (a lost controller; the unit itself stops heating after 3 control periods), s", PERIOD_LIMIT, True),
-    Spec("enable_grace_s", _LIMITS.enable_grace_s, "while ENABLED, a unit without heating permission or an "
-         "inactive controller for longer than this is a fault, s", PERIOD_LIMIT, True),
+    Spec(
+        "fingers", list(names.FINGERS), "fingers to supervise (all six by default)", _fingers, True
+    ),
+    Spec(
+        "stale_s",
+        _LIMITS.stale_s,
+        "an encoder or wire-force stream older than this is not ready for enable, "
+        "and a gap longer than this while ENABLED is counted in /diagnostics, s",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "lost_s",
+        _LIMITS.lost_s,
+        "an encoder or wire-force stream without a new reading for longer than this "
+        "while ENABLED is lost: a fault (the units stop heating 3 control periods into any gap), s",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "heartbeat_timeout_s",
+        _LIMITS.heartbeat_timeout_s,
+        "a controller heartbeat silent for longer is a fault, s",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "watchdog_hold_s",
+        _LIMITS.watchdog_hold_s,
+        "a unit's duty-watchdog flag held this long while ENABLED "
+        "is a fault (a lost controller; the unit itself stops heating after 3 control periods), s",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "enable_grace_s",
+        _LIMITS.enable_grace_s,
+        "while ENABLED, a unit without heating permission or an "
+        "inactive controller for longer than this is a fault, s",
+        PERIOD_LIMIT,
+        True,
+    ),
     Spec("max_wire_force_n", _LIMITS.max_wire_force_n, "wire over-force limit, N", positive, True),
-    Spec("max_tendon_position_m", _LIMITS.max_tendon_position_m, "tendon over-travel limit, m", positive, True),
-    Spec("max_wire_speed_m_s", _LIMITS.max_wire_speed_m_s, "an encoder reading moving faster than this (on the "
-         "unit's stamps) has jumped: a fault, m/s", PERIOD_LIMIT, True),
-    Spec("max_wire_temperature_c", _LIMITS.max_wire_temperature_c, "wire over-temperature limit on the "
-         "controllers' estimates (from the drive board's readings), degC", positive, True),
-    Spec("check_period_s", 0.02, "monitor period, s: the controller status and state messages are taken "
-         "and judged at each check (the controllers' statuses, which carry their readings, come at 50 Hz)",
-         PERIOD_LIMIT, True),
-    Spec("status_period_s", 0.1, "status re-publishing period, s (also on every change; at the checks, so in "
-         "whole check periods)", PERIOD_LIMIT, True),
-    Spec("joint_states_period_s", 0.02, "joint_states publishing period, s (at the checks)", PERIOD_LIMIT, True),
+    Spec(
+        "max_tendon_position_m",
+        _LIMITS.max_tendon_position_m,
+        "tendon over-travel limit, m",
+        positive,
+        True,
+    ),
+    Spec(
+        "max_wire_speed_m_s",
+        _LIMITS.max_wire_speed_m_s,
+        "an encoder reading moving faster than this (on the "
+        "unit's stamps) has jumped: a fault, m/s",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "max_wire_temperature_c",
+        _LIMITS.max_wire_temperature_c,
+        "wire over-temperature limit on the "
+        "controllers' estimates (from the drive board's readings), degC",
+        positive,
+        True,
+    ),
+    Spec(
+        "check_period_s",
+        0.02,
+        "monitor period, s: the controller status and state messages are taken "
+        "and judged at each check (the controllers' statuses, which carry their readings, "
+        "come at 50 Hz)",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "status_period_s",
+        0.1,
+        "status re-publishing period, s (also on every change; at the checks, so in "
+        "whole check periods)",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "joint_states_period_s",
+        0.02,
+        "joint_states publishing period, s (at the checks)",
+        PERIOD_LIMIT,
+        True,
+    ),
 ]
 
 
@@ -89,15 +161,23 @@ class SupervisorNode(LeanNode):
         self.graph_ns = self.get_namespace()
         p = declare(self, PARAMETERS)
         self.fingers = tuple(p["fingers"])
-        self.logic = SupervisorLogic(self.fingers, MonitorLimits(**{
-            f.name: p[f.name] for f in dataclasses.fields(MonitorLimits)}))
+        self.logic = SupervisorLogic(
+            self.fingers,
+            MonitorLimits(**{f.name: p[f.name] for f in dataclasses.fields(MonitorLimits)}),
+        )
         self.position = {f: float("nan") for f in self.fingers}
         self.force = {f: float("nan") for f in self.fingers}
         self.published = None
-        self.status_pub = self.create_publisher(SupervisorStatus, names.supervisor_status_topic(self.graph_ns), qos.STATUS)
-        self.joints_pub = self.create_publisher(JointState, names.joint_states_topic(self.graph_ns), qos.JOINT_STATES)
+        self.status_pub = self.create_publisher(
+            SupervisorStatus, names.supervisor_status_topic(self.graph_ns), qos.STATUS
+        )
+        self.joints_pub = self.create_publisher(
+            JointState, names.joint_states_topic(self.graph_ns), qos.JOINT_STATES
+        )
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
-        self.commands_pub = self.create_publisher(CommandRecord, names.supervisor_commands_topic(self.graph_ns), qos.COMMAND_LOG)
+        self.commands_pub = self.create_publisher(
+            CommandRecord, names.supervisor_commands_topic(self.graph_ns), qos.COMMAND_LOG
+        )
         self.commands = 0
         self.encoder_stamps = {f: None for f in self.fingers}
         self.force_stamps = {f: None for f in self.fingers}
@@ -108,17 +188,35 @@ class SupervisorNode(LeanNode):
         # permission 0.5 s after ENABLED).
         self.monitored = []
         for finger in self.fingers:
-            self.monitored.append(self.subscribe_serialized(
-                ControllerStatus, names.topic(finger, "controller_status", self.graph_ns),
-                lambda m, f=finger: self.on_controller(f, m), qos.CONTROLLER_STATUS))
-            self.monitored.append(self.subscribe_serialized(
-                ActuatorState, names.sim_topic(finger, "state", self.graph_ns), lambda m, f=finger: self.on_state(f, m), qos.SENSOR))
+            self.monitored.append(
+                self.subscribe_serialized(
+                    ControllerStatus,
+                    names.topic(finger, "controller_status", self.graph_ns),
+                    lambda m, f=finger: self.on_controller(f, m),
+                    qos.CONTROLLER_STATUS,
+                )
+            )
+            self.monitored.append(
+                self.subscribe_serialized(
+                    ActuatorState,
+                    names.sim_topic(finger, "state", self.graph_ns),
+                    lambda m, f=finger: self.on_state(f, m),
+                    qos.SENSOR,
+                )
+            )
         self.poll(*self.monitored)
         for command in names.SUPERVISOR_SERVICES:
-            self.create_service(Trigger, names.service(command, self.graph_ns),
-                                lambda request, response, c=command: self.on_command(c, response))
-        create_grid_timer(self, p["check_period_s"], lambda now: supervisor_check_delay(p["check_period_s"], now),
-                          self.check)
+            self.create_service(
+                Trigger,
+                names.service(command, self.graph_ns),
+                lambda request, response, c=command: self.on_command(c, response),
+            )
+        create_grid_timer(
+            self,
+            p["check_period_s"],
+            lambda now: supervisor_check_delay(p["check_period_s"], now),
+            self.check,
+        )
         self.status_cadence = Cadence(p["status_period_s"], p["check_period_s"])
         self.joints_cadence = Cadence(p["joint_states_period_s"], p["check_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
@@ -162,8 +260,14 @@ class SupervisorNode(LeanNode):
         self.take_reports()
         response.success, response.message = self.logic.request(command, seconds(self))
         self.commands += 1
-        record = CommandRecord(node="supervisor", command=command, value=float("nan"), accepted=response.success,
-                               detail=response.message, sequence=self.commands)
+        record = CommandRecord(
+            node="supervisor",
+            command=command,
+            value=float("nan"),
+            accepted=response.success,
+            detail=response.message,
+            sequence=self.commands,
+        )
         record.header.stamp = stamp_now(self)
         self.commands_pub.publish(record)
         # rclpy ties a severity to each logging call site, so the two levels need two calls
@@ -197,39 +301,55 @@ class SupervisorNode(LeanNode):
     def publish_status(self) -> None:
         logic = self.logic
         if self.published is None or self.published[0] != logic.state:
-            text = f"state {logic.state.name}" + (f": {'; '.join(map(str, logic.faults))}" if logic.faults else "")
+            text = f"state {logic.state.name}" + (
+                f": {'; '.join(map(str, logic.faults))}" if logic.faults else ""
+            )
             if logic.state in (State.FAULT, State.ESTOP):
                 self.get_logger().error(text)
             else:
                 self.get_logger().info(text)
         self.published = (logic.state, len(logic.faults))
-        status = SupervisorStatus(state=int(logic.state), state_name=logic.state.name,
-                                  faults=[str(f) for f in logic.faults],
-                                  fault_fingers=sorted({f.finger for f in logic.faults if f.finger}))
+        status = SupervisorStatus(
+            state=int(logic.state),
+            state_name=logic.state.name,
+            faults=[str(f) for f in logic.faults],
+            fault_fingers=sorted({f.finger for f in logic.faults if f.finger}),
+        )
         status.header.stamp = stamp_now(self)
         self.status_pub.publish(status)
 
     def publish_joint_states(self) -> None:
         # velocity is unknown here and left NaN rather than empty: rclpy serializes an empty
         # float64 array with trailing padding that the rosbags reader rejects.
-        joints = JointState(name=list(self.fingers),
-                            position=[transmission.tendon_position(self.position[f]) for f in self.fingers],
-                            velocity=[float("nan")] * len(self.fingers),
-                            effort=[transmission.tendon_force(self.force[f]) for f in self.fingers])
+        joints = JointState(
+            name=list(self.fingers),
+            position=[transmission.tendon_position(self.position[f]) for f in self.fingers],
+            velocity=[float("nan")] * len(self.fingers),
+            effort=[transmission.tendon_force(self.force[f]) for f in self.fingers],
+        )
         joints.header.stamp = stamp_now(self)
         self.joints_pub.publish(joints)
 
     def publish_diagnostics(self) -> None:
         state = self.logic.state
         level = {State.FAULT: DiagnosticStatus.ERROR, State.ESTOP: DiagnosticStatus.ERROR}.get(
-            state, DiagnosticStatus.OK)
+            state, DiagnosticStatus.OK
+        )
         missing = self.logic.missing_streams(seconds(self))
         status = DiagnosticStatus(
-            level=level, name="hems/supervisor", hardware_id="supervisor", message=state.name,
+            level=level,
+            name="hems/supervisor",
+            hardware_id="supervisor",
+            message=state.name,
             values=[KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
             + [KeyValue(key="not ready", value=m) for m in missing]
-            + [KeyValue(key=f"gaps {finger} {stream}", value=f"{count}, longest {1e3 * longest:.0f} ms")
-               for (finger, stream), (count, longest) in sorted(self.logic.gaps().items())])
+            + [
+                KeyValue(
+                    key=f"gaps {finger} {stream}", value=f"{count}, longest {1e3 * longest:.0f} ms"
+                )
+                for (finger, stream), (count, longest) in sorted(self.logic.gaps().items())
+            ],
+        )
         array = DiagnosticArray(status=[status])
         array.header.stamp = stamp_now(self)
         self.diagnostics_pub.publish(array)

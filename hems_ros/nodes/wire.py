@@ -26,8 +26,8 @@ NS_PER_S = 1_000_000_000
 
 @dataclass(frozen=True)
 class Codec:
-    fields: type                        # named tuple of the leaf fields, in CDR order
-    encode: Callable[[tuple], bytes]    # CdrError names the type and the bad value
+    fields: type  # named tuple of the leaf fields, in CDR order
+    encode: Callable[[tuple], bytes]  # CdrError names the type and the bad value
     _decode: Callable[[bytes], tuple]
 
     def decode(self, data: bytes) -> tuple:
@@ -42,7 +42,9 @@ def codec(msg_type: type) -> Codec:
     types = msgdefs.parse_full_definition(type_name, msgdefs.full_definition(type_name))
     decoder = cdr.build_decoder(type_name, types)
     encoder = cdr.build_encoder(type_name, types)
-    fields = namedtuple(msg_type.__name__ + "Fields", [c.name.replace(".", "_") for c in decoder.columns])
+    fields = namedtuple(
+        msg_type.__name__ + "Fields", [c.name.replace(".", "_") for c in decoder.columns]
+    )
     return Codec(fields, encoder.encode, decoder.decode)
 
 

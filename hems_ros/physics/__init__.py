@@ -13,5 +13,13 @@ from hems_ros.physics.batch import SimResult, simulate
 from hems_ros.physics.params import ParamError, UnitParams, load_params, save_params
 from hems_ros.physics.unit import ActuationUnit, StepResult
 
-__all__ = ["ActuationUnit", "StepResult", "simulate", "SimResult", "UnitParams", "ParamError",
-           "load_params", "save_params"]
+__all__ = [
+    "ActuationUnit",
+    "StepResult",
+    "simulate",
+    "SimResult",
+    "UnitParams",
+    "ParamError",
+    "load_params",
+    "save_params",
+]

@@ -54,7 +54,9 @@ class SimResult:
         if name in DERIVED and name not in self.data:
             _add_sensors(self.data, self.params, self.n_steps, self.record_every, self.time)
         if name not in self.data:
-            raise KeyError(f"SimResult has no channel {name!r} (recorded: {', '.join(self.channels())})")
+            raise KeyError(
+                f"SimResult has no channel {name!r} (recorded: {', '.join(self.channels())})"
+            )
         return self.data[name]
 
     def __getattr__(self, name: str) -> np.ndarray:
@@ -81,7 +83,9 @@ def _drive_array(kind: str, values, n_sets: int) -> np.ndarray:
     if arr.ndim == 1:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[0] not in (1, n_sets):
-        raise ValueError(f"{kind}: expected shape (n_steps,) or ({n_sets}, n_steps), got {np.shape(values)}")
+        raise ValueError(
+            f"{kind}: expected shape (n_steps,) or ({n_sets}, n_steps), got {np.shape(values)}"
+        )
     if arr.shape[1] == 0:
         raise ValueError(f"{kind}: no steps")
     bad = ~np.isfinite(arr)
@@ -100,13 +104,24 @@ def _start_temperatures(start_temperature_c, n_sets: int) -> list:
         return [start_temperature_c] * n_sets
     starts = list(start_temperature_c)
     if len(starts) != n_sets:
-        raise ValueError(f"start_temperature_c: expected one value per set ({n_sets}), got {len(starts)}")
+        raise ValueError(
+            f"start_temperature_c: expected one value per set ({n_sets}), got {len(starts)}"
+        )
     return starts
 
 
-def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
-             duty=None, current=None, voltage=None, temperature=None, record_every: int = 1,
-             channels: Iterable[str] | None = None, start_temperature_c=None) -> SimResult:
+def simulate(
+    params: UnitParams | Sequence[UnitParams],
+    dt: float = 1e-3,
+    *,
+    duty=None,
+    current=None,
+    voltage=None,
+    temperature=None,
+    record_every: int = 1,
+    channels: Iterable[str] | None = None,
+    start_temperature_c=None,
+) -> SimResult:
     """Run one or many parameter sets from the initial state over one drive time series.
 
     Exactly one of ``duty`` (%), ``current`` (A), ``voltage`` (V), ``temperature`` (the wire
@@ -120,8 +135,16 @@ def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
         raise TypeError("params must be a UnitParams or a non-empty sequence of UnitParams")
     if not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt = {dt!r}: must be a finite step > 0 s")
-    given = [(k, v) for k, v in (("duty", duty), ("current", current), ("voltage", voltage),
-                                 ("temperature", temperature)) if v is not None]
+    given = [
+        (k, v)
+        for k, v in (
+            ("duty", duty),
+            ("current", current),
+            ("voltage", voltage),
+            ("temperature", temperature),
+        )
+        if v is not None
+    ]
     if len(given) != 1:
         raise ValueError("give exactly one of duty, current, voltage, temperature arrays")
     kind, values = given[0]
@@ -138,28 +161,51 @@ def simulate(params: UnitParams | Sequence[UnitParams], dt: float = 1e-3, *,
     n_sets, n_steps = len(plist), drives.shape[1]
     n_rec = n_steps // record_every
     imposed = kind == "temperature"
-    packed = np.ascontiguousarray(np.stack([kernel.pack(p, temperature_drive=imposed) for p in plist]))
+    packed = np.ascontiguousarray(
+        np.stack([kernel.pack(p, temperature_drive=imposed) for p in plist])
+    )
     starts = _start_temperatures(start_temperature_c, n_sets)
-    states = np.ascontiguousarray(np.stack([kernel.initial_state(p, t) for p, t in zip(plist, starts)]))
+    states = np.ascontiguousarray(
+        np.stack([kernel.initial_state(p, t) for p, t in zip(plist, starts)])
+    )
     records = np.zeros((len(index), n_sets, n_rec))
     failed_at = np.zeros(n_sets, dtype=np.int64)
-    kernel.run_batch(packed, states, DRIVE_NAMES[kind], drives, float(dt), int(record_every),
-                     index, records, failed_at)
+    kernel.run_batch(
+        packed,
+        states,
+        DRIVE_NAMES[kind],
+        drives,
+        float(dt),
+        int(record_every),
+        index,
+        records,
+        failed_at,
+    )
     if (failed_at >= 0).any():
         i = int(np.argmax(failed_at >= 0))
-        raise FloatingPointError(f"parameter set {i} ({plist[i].name}): state became non-finite "
-                                 f"at step {failed_at[i]} (t = {(failed_at[i] + 1) * dt:.6f} s)")
+        raise FloatingPointError(
+            f"parameter set {i} ({plist[i].name}): state became non-finite "
+            f"at step {failed_at[i]} (t = {(failed_at[i] + 1) * dt:.6f} s)"
+        )
 
     data = {name: records[j] for j, name in enumerate(wanted)}
     time = (np.arange(n_rec) + 1) * record_every * dt
-    return SimResult(params=plist, dt=float(dt), record_every=int(record_every), time=time, data=data,
-                     n_steps=n_steps)
+    return SimResult(
+        params=plist,
+        dt=float(dt),
+        record_every=int(record_every),
+        time=time,
+        data=data,
+        n_steps=n_steps,
+    )
 
 
-def _add_sensors(data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: int, every: int,
-                 time: np.ndarray) -> None:
+def _add_sensors(
+    data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: int, every: int, time: np.ndarray
+) -> None:
     """Sensor channels from the recorded truth, with the same draws as the stepping API; the
     force sensor's drift runs on the time of each record."""
+
     def column(values):
         return np.array(values, dtype=np.float64)[:, None]
 
@@ -167,17 +213,30 @@ def _add_sensors(data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: 
         x = data["slider_position_m"]
         data["strain"] = x / column([p.wire.length_m for p in plist])
         resolution = column([p.encoder.resolution_m for p in plist])
-        counts = sensors.encoder_counts_array(x, resolution, column([p.encoder.gain for p in plist]))
+        counts = sensors.encoder_counts_array(
+            x, resolution, column([p.encoder.gain for p in plist])
+        )
         data["encoder_counts"] = counts
         data["encoder_position_m"] = counts * resolution
     if "wire_force_n" in data:
         picks = np.arange(every - 1, (n_steps // every) * every, every)
-        noise = np.stack([sensors.noise_generator(p.force_sensor.seed).standard_normal(n_steps)[picks]
-                          if p.force_sensor.noise_std_n > 0 else np.zeros(picks.size) for p in plist])
+        noise = np.stack(
+            [
+                sensors.noise_generator(p.force_sensor.seed).standard_normal(n_steps)[picks]
+                if p.force_sensor.noise_std_n > 0
+                else np.zeros(picks.size)
+                for p in plist
+            ]
+        )
         fs = [p.force_sensor for p in plist]
         reading, saturated = sensors.force_reading_array(
-            data["wire_force_n"], noise * column([f.noise_std_n for f in fs]),
-            column([f.range_max_n for f in fs]), column([f.resolution_n for f in fs]),
-            column([f.offset_n for f in fs]), column([f.drift_n_per_s for f in fs]), time)
+            data["wire_force_n"],
+            noise * column([f.noise_std_n for f in fs]),
+            column([f.range_max_n for f in fs]),
+            column([f.resolution_n for f in fs]),
+            column([f.offset_n for f in fs]),
+            column([f.drift_n_per_s for f in fs]),
+            time,
+        )
         data["force_reading_n"] = reading
         data["force_saturated"] = saturated

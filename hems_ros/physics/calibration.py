@@ -53,15 +53,21 @@ def with_values(base: UnitParams, values) -> UnitParams:
     of the whole sheath's); ValueError if the first node would take all of it."""
     c, eps_l, gap, cap, contact = (float(v) for v in values)
     if not cap < WHOLE_SHEATH_J_PER_K:
-        raise ValueError(f"sheath.heat_capacity_j_per_k = {cap}: must leave the helix part of "
-                         f"{WHOLE_SHEATH_J_PER_K} J/K")
-    return base.replace({
-        "kinetics.cm_pa_per_c": c, "kinetics.ca_pa_per_c": c,
-        "constitutive.max_recoverable_strain": eps_l,
-        "sheath.gap_resistance_k_per_w": gap, "sheath.heat_capacity_j_per_k": cap,
-        "sheath.helix_heat_capacity_j_per_k": WHOLE_SHEATH_J_PER_K - cap,
-        "sheath.liner_helix_resistance_k_per_w": contact,
-    })
+        raise ValueError(
+            f"sheath.heat_capacity_j_per_k = {cap}: must leave the helix part of "
+            f"{WHOLE_SHEATH_J_PER_K} J/K"
+        )
+    return base.replace(
+        {
+            "kinetics.cm_pa_per_c": c,
+            "kinetics.ca_pa_per_c": c,
+            "constitutive.max_recoverable_strain": eps_l,
+            "sheath.gap_resistance_k_per_w": gap,
+            "sheath.heat_capacity_j_per_k": cap,
+            "sheath.helix_heat_capacity_j_per_k": WHOLE_SHEATH_J_PER_K - cap,
+            "sheath.liner_helix_resistance_k_per_w": contact,
+        }
+    )
 
 
 def metrics(params: UnitParams, dt: float = 2e-3) -> dict[str, float]:
@@ -89,7 +95,9 @@ def objective(m: dict[str, float]) -> float:
     terms.append(2.0 * math.log(m["displacement_ratio"] / TARGET_DISPLACEMENT_RATIO) ** 2)
     terms.append(_log_ratio(m["cooling_bare"], scenarios.COOLING_BARE_S) ** 2)
     terms.append(_log_ratio(m["cooling_sheathed"], scenarios.COOLING_SHEATHED_S) ** 2)
-    terms.append(3.0 * _log_ratio(m["cooling_sheathed"] / m["cooling_bare"], TARGET_COOLING_RATIO) ** 2)
+    terms.append(
+        3.0 * _log_ratio(m["cooling_sheathed"] / m["cooling_bare"], TARGET_COOLING_RATIO) ** 2
+    )
     return float(sum(terms))
 
 
@@ -97,8 +105,9 @@ def _log_ratio(value: float, ref: float) -> float:
     return math.log(value / ref) if math.isfinite(value) and value > 0 else 3.0
 
 
-def calibrate(base: UnitParams, start=(30e6, 0.033, 1.5, 0.5, 2.0), max_iterations: int = 600,
-              progress=None) -> tuple[UnitParams, dict[str, float]]:
+def calibrate(
+    base: UnitParams, start=(30e6, 0.033, 1.5, 0.5, 2.0), max_iterations: int = 600, progress=None
+) -> tuple[UnitParams, dict[str, float]]:
     """Fit the free parameters; returns the calibrated set and its metrics."""
     from scipy.optimize import minimize
 
@@ -112,8 +121,12 @@ def calibrate(base: UnitParams, start=(30e6, 0.033, 1.5, 0.5, 2.0), max_iteratio
             progress(np.exp(logv), c)
         return c
 
-    res = minimize(cost, np.log(np.asarray(start, dtype=float)), method="Nelder-Mead",
-                   options={"maxiter": max_iterations, "xatol": 1e-3, "fatol": 1e-5})
+    res = minimize(
+        cost,
+        np.log(np.asarray(start, dtype=float)),
+        method="Nelder-Mead",
+        options={"maxiter": max_iterations, "xatol": 1e-3, "fatol": 1e-5},
+    )
     fitted = with_values(base, np.exp(res.x))
     return fitted, metrics(fitted)
 
@@ -129,27 +142,42 @@ def presets(calibrated: UnitParams) -> dict[str, UnitParams]:
         "table41": UnitParams(
             name="table41",
             description="Dissertation Table 4.1 wire model (bare wire, no sheath); load: the "
-                        "validation rig's bias spring, 900 N/m preloaded 12 N."),
+            "validation rig's bias spring, 900 N/m preloaded 12 N.",
+        ),
         "sheathed_calibrated": scenarios.characterization_rig(wire, True).replace(
             name="sheathed_calibrated",
             description="Table 4.1 with the fewest parameters calibrated to the chapter 3 facts "
-                        f"(hems_ros.physics.calibration; {fitted}); sheath on; load: the chapter 3 "
-                        "characterization rig, 30 N hanging mass + 20 N spring pretension (754 N/m)."),
-        "ch5_straight_40n": wire.replace({
-            "name": "ch5_straight_40n",
-            "description": "Calibrated wire + sheath; chapter 5 controller rig: straight actuator "
-                           "with a 40 N hanging mass.",
-            "sheath.enabled": True, "load.kind": "hanging_mass", "load.mass_kg": 40.0 / 9.81,
-            "load.pretension_n": 0.0, "load.stiffness_n_per_m": 0.0, "load.pulley_ratio": 1.0,
-        }),
-        "ch6_hems_index": wire.replace({
-            "name": "ch6_hems_index",
-            "description": "Calibrated wire + sheath; chapter 6 HEMS index finger: tendon behind the "
-                           "x2 pulley, glove as a bias spring pretensioned 2 N (tendon side) with "
-                           "112 N/m (= 448 N/m wire side, from (63 - 50) N over 29 mm in the chapter 6 "
-                           "characterization), capstan friction over pi of bends, 1 N glove friction.",
-            "sheath.enabled": True, "load.kind": "hems_finger", "load.mass_kg": 0.0,
-            "load.pretension_n": 2.0, "load.stiffness_n_per_m": 112.0, "load.pulley_ratio": 2.0,
-            "capstan.enabled": True, "glove_friction.enabled": True,
-        }),
+            f"(hems_ros.physics.calibration; {fitted}); sheath on; load: the chapter 3 "
+            "characterization rig, 30 N hanging mass + 20 N spring pretension (754 N/m).",
+        ),
+        "ch5_straight_40n": wire.replace(
+            {
+                "name": "ch5_straight_40n",
+                "description": "Calibrated wire + sheath; chapter 5 controller rig: straight "
+                "actuator with a 40 N hanging mass.",
+                "sheath.enabled": True,
+                "load.kind": "hanging_mass",
+                "load.mass_kg": 40.0 / 9.81,
+                "load.pretension_n": 0.0,
+                "load.stiffness_n_per_m": 0.0,
+                "load.pulley_ratio": 1.0,
+            }
+        ),
+        "ch6_hems_index": wire.replace(
+            {
+                "name": "ch6_hems_index",
+                "description": "Calibrated wire + sheath; chapter 6 HEMS index finger: tendon "
+                "behind the x2 pulley, glove as a bias spring pretensioned 2 N (tendon side) with "
+                "112 N/m (= 448 N/m wire side, from (63 - 50) N over 29 mm in the chapter 6 "
+                "characterization), capstan friction over pi of bends, 1 N glove friction.",
+                "sheath.enabled": True,
+                "load.kind": "hems_finger",
+                "load.mass_kg": 0.0,
+                "load.pretension_n": 2.0,
+                "load.stiffness_n_per_m": 112.0,
+                "load.pulley_ratio": 2.0,
+                "capstan.enabled": True,
+                "glove_friction.enabled": True,
+            }
+        ),
     }

@@ -25,7 +25,8 @@ def transformation_coefficient(modulus, max_recoverable_strain):
 
 @jit
 def thermoelastic_coefficient(xi, modulus, alpha_martensite, alpha_austenite, poisson_ratio):
-    """Theta(xi) = alpha(xi) E(xi), alpha = alpha_M xi + alpha_A (1 - xi)(1 + nu) (eqs. 4.30-4.31)."""
+    """Theta(xi) = alpha(xi) E(xi), alpha = alpha_M xi + alpha_A (1 - xi)(1 + nu)
+    (eqs. 4.30-4.31)."""
     alpha = alpha_martensite * xi + alpha_austenite * (1.0 - xi) * (1.0 + poisson_ratio)
     return alpha * modulus
 

@@ -18,8 +18,12 @@ DRIVE_DUTY = 0
 DRIVE_CURRENT = 1
 DRIVE_VOLTAGE = 2
 DRIVE_TEMPERATURE = 3
-DRIVE_NAMES = {"duty": DRIVE_DUTY, "current": DRIVE_CURRENT, "voltage": DRIVE_VOLTAGE,
-               "temperature": DRIVE_TEMPERATURE}
+DRIVE_NAMES = {
+    "duty": DRIVE_DUTY,
+    "current": DRIVE_CURRENT,
+    "voltage": DRIVE_VOLTAGE,
+    "temperature": DRIVE_TEMPERATURE,
+}
 
 
 @jit

@@ -35,18 +35,26 @@ def churchill_chu_nusselt(rayleigh: float, prandtl: float) -> float:
     """Nu = (0.60 + 0.387 Ra^(1/6) / (1 + (0.559/Pr)^(9/16))^(8/27))^2 (appendix 4.4)."""
     if not (rayleigh > 0 and prandtl > 0):
         raise ValueError(f"Rayleigh {rayleigh!r} and Prandtl {prandtl!r} must be > 0")
-    return (0.60 + 0.387 * rayleigh ** (1 / 6) / (1 + (0.559 / prandtl) ** (9 / 16)) ** (8 / 27)) ** 2
+    return (
+        0.60 + 0.387 * rayleigh ** (1 / 6) / (1 + (0.559 / prandtl) ** (9 / 16)) ** (8 / 27)
+    ) ** 2
 
 
-def grashof_number(diameter_m: float, surface_c: float, air_c: float,
-                   kinematic_viscosity_m2_s: float, gravity: float = 9.81) -> float:
+def grashof_number(
+    diameter_m: float,
+    surface_c: float,
+    air_c: float,
+    kinematic_viscosity_m2_s: float,
+    gravity: float = 9.81,
+) -> float:
     """Gr = g beta (T_s - T_air) d^3 / nu^2 with beta = 1/T_air (ideal gas, K)."""
     beta = 1.0 / (air_c + 273.15)
     return gravity * beta * (surface_c - air_c) * diameter_m**3 / kinematic_viscosity_m2_s**2
 
 
-def free_convection_h(diameter_m: float, grashof: float, prandtl: float,
-                      air_conductivity_w_m_k: float) -> tuple[float, float]:
+def free_convection_h(
+    diameter_m: float, grashof: float, prandtl: float, air_conductivity_w_m_k: float
+) -> tuple[float, float]:
     """(Nu, h = Nu k / d) of a horizontal cylinder from Gr and Pr (appendix 4.4)."""
     nu = churchill_chu_nusselt(grashof * prandtl, prandtl)
     return nu, nu * air_conductivity_w_m_k / diameter_m
@@ -54,11 +62,18 @@ def free_convection_h(diameter_m: float, grashof: float, prandtl: float,
 
 def appendix_free_convection(diameter_m: float = 0.508e-3) -> tuple[float, float]:
     """(Nu, h) at the appendix 4.4 conditions: Nu = 0.8403, h = 42.51 W/m2K."""
-    return free_convection_h(diameter_m, APPENDIX_GRASHOF, APPENDIX_PRANDTL, APPENDIX_AIR_CONDUCTIVITY)
+    return free_convection_h(
+        diameter_m, APPENDIX_GRASHOF, APPENDIX_PRANDTL, APPENDIX_AIR_CONDUCTIVITY
+    )
 
 
-def lossless_temperature_c(energy_j: float, transformed_fraction: float, heat_capacity_j_per_k: float,
-                           latent_heat_j: float, ambient_c: float) -> float:
+def lossless_temperature_c(
+    energy_j: float,
+    transformed_fraction: float,
+    heat_capacity_j_per_k: float,
+    latent_heat_j: float,
+    ambient_c: float,
+) -> float:
     """Wire temperature after ``energy_j`` of heating with no heat loss at all, degC.
 
     Eq. 4.7 integrated with Q_out = 0 from a cold, fully martensitic wire at ambient:
@@ -75,6 +90,11 @@ def lossless_temperature_c(energy_j: float, transformed_fraction: float, heat_ca
 
 
 __all__ = [
-    "convection_coefficient", "convection_loss", "lossless_temperature_c",
-    "churchill_chu_nusselt", "grashof_number", "free_convection_h", "appendix_free_convection",
+    "convection_coefficient",
+    "convection_loss",
+    "lossless_temperature_c",
+    "churchill_chu_nusselt",
+    "grashof_number",
+    "free_convection_h",
+    "appendix_free_convection",
 ]

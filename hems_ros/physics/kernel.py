@@ -75,26 +75,97 @@ def use_current_cache() -> None:
 
 
 # ---------------------------------------------------------------- packed parameters
-(P_L0, P_S, P_AREA, P_CW, P_LAT,
- P_RHO0M, P_T0M, P_DRDTM, P_DRDSM, P_RHO0A, P_T0A, P_DRDTA, P_DRDSA,
- P_H0, P_H2, P_TAMB,
- P_MF0, P_INV_MW, P_AS0, P_INV_AW,
- P_EM, P_EA, P_ALM, P_ALA, P_EPSL, P_NU,
- P_VSUP, P_ILIM, P_RSRC,
- P_MN, P_BN, P_KN, P_K3N, P_FSTAT, P_N,
- P_SHEATH, P_GWS, P_GSA, P_CS, P_GHA, P_CH, P_INV_CH, P_HELIX,
- P_A_IN, P_F_IN, P_A_OUT, P_F_OUT,
- P_INV_CW, P_INV_CM, P_INV_CA, P_INV_L0, P_INV_CS, P_INV_S, P_TPX, N_P) = range(55)
+(
+    P_L0,
+    P_S,
+    P_AREA,
+    P_CW,
+    P_LAT,
+    P_RHO0M,
+    P_T0M,
+    P_DRDTM,
+    P_DRDSM,
+    P_RHO0A,
+    P_T0A,
+    P_DRDTA,
+    P_DRDSA,
+    P_H0,
+    P_H2,
+    P_TAMB,
+    P_MF0,
+    P_INV_MW,
+    P_AS0,
+    P_INV_AW,
+    P_EM,
+    P_EA,
+    P_ALM,
+    P_ALA,
+    P_EPSL,
+    P_NU,
+    P_VSUP,
+    P_ILIM,
+    P_RSRC,
+    P_MN,
+    P_BN,
+    P_KN,
+    P_K3N,
+    P_FSTAT,
+    P_N,
+    P_SHEATH,
+    P_GWS,
+    P_GSA,
+    P_CS,
+    P_GHA,
+    P_CH,
+    P_INV_CH,
+    P_HELIX,
+    P_A_IN,
+    P_F_IN,
+    P_A_OUT,
+    P_F_OUT,
+    P_INV_CW,
+    P_INV_CM,
+    P_INV_CA,
+    P_INV_L0,
+    P_INV_CS,
+    P_INV_S,
+    P_TPX,
+    N_P,
+) = range(55)
 
 # ---------------------------------------------------------------- state row
 STATE_NAMES = (
-    "wire_temperature_c", "martensite_fraction", "stress_pa", "slider_position_m",
-    "slider_velocity_m_s", "sheath_temperature_c", "sheath_helix_temperature_c",
-    "energy_joule_j", "energy_stored_j", "energy_convected_j", "energy_latent_j",
-    "energy_to_sheath_j", "energy_sheath_stored_j", "energy_sheath_convected_j",
+    "wire_temperature_c",
+    "martensite_fraction",
+    "stress_pa",
+    "slider_position_m",
+    "slider_velocity_m_s",
+    "sheath_temperature_c",
+    "sheath_helix_temperature_c",
+    "energy_joule_j",
+    "energy_stored_j",
+    "energy_convected_j",
+    "energy_latent_j",
+    "energy_to_sheath_j",
+    "energy_sheath_stored_j",
+    "energy_sheath_convected_j",
 )
-(S_T, S_XI, S_SIG, S_X, S_V, S_TS, S_TH,
- S_EJ, S_ESTORED, S_ECONV, S_ELAT, S_ESH, S_ESHSTORED, S_ESHCONV) = range(len(STATE_NAMES))
+(
+    S_T,
+    S_XI,
+    S_SIG,
+    S_X,
+    S_V,
+    S_TS,
+    S_TH,
+    S_EJ,
+    S_ESTORED,
+    S_ECONV,
+    S_ELAT,
+    S_ESH,
+    S_ESHSTORED,
+    S_ESHCONV,
+) = range(len(STATE_NAMES))
 N_S = len(STATE_NAMES)
 # kinetics memory: last direction (+1 heating, -1 cooling, 0 none yet), number of reversal
 # points, then the points (kinetics.memory_branch layout)
@@ -108,8 +179,14 @@ XI_TOLERANCE = 1e-12
 MAX_ITERATIONS = 60
 
 # ---------------------------------------------------------------- per-step outputs
-OUT_NAMES = ("resistance_ohm", "current_a", "electrical_power_w", "wire_force_n",
-             "tendon_force_n", "tendon_position_m")
+OUT_NAMES = (
+    "resistance_ohm",
+    "current_a",
+    "electrical_power_w",
+    "wire_force_n",
+    "tendon_force_n",
+    "tendon_position_m",
+)
 O_R, O_I, O_P, O_FW, O_FT, O_XT = range(len(OUT_NAMES))
 N_O = len(OUT_NAMES)
 
@@ -121,7 +198,13 @@ def pack(params: UnitParams, temperature_drive: bool = False) -> np.ndarray:
     leaves the latent heat nothing to change (P_LAT = P_TPX = 0; see the module docstring).
     """
     use_current_cache()
-    w, th, el, ki, co = params.wire, params.thermal, params.electrical, params.kinetics, params.constitutive
+    w, th, el, ki, co = (
+        params.wire,
+        params.thermal,
+        params.electrical,
+        params.kinetics,
+        params.constitutive,
+    )
     ld = params.load
     p = np.zeros(N_P)
     p[P_L0] = w.length_m
@@ -130,18 +213,28 @@ def pack(params: UnitParams, temperature_drive: bool = False) -> np.ndarray:
     p[P_CW] = params.wire_heat_capacity_j_per_k
     p[P_LAT] = params.wire_latent_heat_j
     p[P_RHO0M], p[P_T0M] = el.rho0_martensite_ohm_m, el.t0_martensite_c
-    p[P_DRDTM], p[P_DRDSM] = el.drho_dt_martensite_ohm_m_per_c, el.drho_dsigma_martensite_ohm_m_per_pa
+    p[P_DRDTM], p[P_DRDSM] = (
+        el.drho_dt_martensite_ohm_m_per_c,
+        el.drho_dsigma_martensite_ohm_m_per_pa,
+    )
     p[P_RHO0A], p[P_T0A] = el.rho0_austenite_ohm_m, el.t0_austenite_c
     p[P_DRDTA], p[P_DRDSA] = el.drho_dt_austenite_ohm_m_per_c, el.drho_dsigma_austenite_ohm_m_per_pa
     p[P_H0], p[P_H2], p[P_TAMB] = th.h0_w_m2_c, th.h2_w_m2_c3, params.ambient_temperature_c
-    p[P_MF0], p[P_INV_MW], p[P_AS0], p[P_INV_AW] = kinetics.band(ki.ms0_c, ki.mf0_c, ki.as0_c, ki.af0_c)
+    p[P_MF0], p[P_INV_MW], p[P_AS0], p[P_INV_AW] = kinetics.band(
+        ki.ms0_c, ki.mf0_c, ki.as0_c, ki.af0_c
+    )
     p[P_EM], p[P_EA] = co.e_martensite_pa, co.e_austenite_pa
     p[P_ALM], p[P_ALA] = co.alpha_martensite_per_c, co.alpha_austenite_per_c
     p[P_EPSL], p[P_NU] = co.max_recoverable_strain, co.poisson_ratio
     p[P_VSUP], p[P_ILIM] = params.drive.supply_voltage_v, params.drive.current_limit_a
     p[P_RSRC] = params.drive.source_resistance_ohm
     p[P_MN], p[P_BN], p[P_KN], p[P_K3N] = loads.referred_load(
-        ld.mass_kg, ld.damping_n_s_per_m, ld.stiffness_n_per_m, ld.pulley_ratio, ld.cubic_stiffness_n_per_m3)
+        ld.mass_kg,
+        ld.damping_n_s_per_m,
+        ld.stiffness_n_per_m,
+        ld.pulley_ratio,
+        ld.cubic_stiffness_n_per_m3,
+    )
     p[P_FSTAT], p[P_N] = ld.static_force_n(), ld.pulley_ratio
     if params.sheath.enabled:
         sh = params.sheath
@@ -164,12 +257,16 @@ def pack(params: UnitParams, temperature_drive: bool = False) -> np.ndarray:
     p[P_INV_CW], p[P_INV_L0], p[P_INV_S] = 1.0 / p[P_CW], 1.0 / w.length_m, 1.0 / w.cross_section_m2
     if temperature_drive:
         p[P_LAT] = 0.0
-    p[P_TPX] = p[P_LAT] * p[P_INV_CW]   # temperature rise per unit of martensite formed (eq. 4.10)
+    p[P_TPX] = p[P_LAT] * p[P_INV_CW]  # temperature rise per unit of martensite formed (eq. 4.10)
     p[P_INV_CM], p[P_INV_CA] = 1.0 / ki.cm_pa_per_c, 1.0 / ki.ca_pa_per_c
     cap = params.capstan
-    capstan = friction.capstan_ratio(cap.friction_coefficient, cap.bend_angle_rad) if cap.enabled else 1.0
+    capstan = (
+        friction.capstan_ratio(cap.friction_coefficient, cap.bend_angle_rad) if cap.enabled else 1.0
+    )
     coulomb = params.glove_friction.force_n if params.glove_friction.enabled else 0.0
-    p[P_A_IN], p[P_F_IN], p[P_A_OUT], p[P_F_OUT] = loads.transmission(capstan, ld.pulley_ratio, coulomb)
+    p[P_A_IN], p[P_F_IN], p[P_A_OUT], p[P_F_OUT] = loads.transmission(
+        capstan, ld.pulley_ratio, coulomb
+    )
     return p
 
 
@@ -186,12 +283,16 @@ def initial_state(params: UnitParams, temperature_c: float | None = None) -> np.
     else:
         start = float(temperature_c)
     if not math.isfinite(start) or start >= params.kinetics.as0_c:
-        raise ValueError(f"start temperature must be finite and below As0 = {params.kinetics.as0_c:g} degC "
-                         f"(a martensite wire), got {start!r}")
+        raise ValueError(
+            f"start temperature must be finite and below As0 = {params.kinetics.as0_c:g} degC "
+            f"(a martensite wire), got {start!r}"
+        )
     s = np.zeros(N_STATE)
     s[S_T] = s[S_TS] = s[S_TH] = start
     s[S_XI] = 1.0
-    s[S_SIG] = params.load.pulley_ratio * params.load.static_force_n() / params.wire.cross_section_m2
+    s[S_SIG] = (
+        params.load.pulley_ratio * params.load.static_force_n() / params.wire.cross_section_m2
+    )
     return s
 
 
@@ -208,6 +309,7 @@ def _mechanics(sig_free, area, relax, c_in, g_in, c_out, g_out):
 # set through (array, offset, stride): field f of the set is a[offset + f * stride]; a packed
 # row (pack, initial_state) is offset 0, stride 1, a block of BLOCK sets is stride BLOCK.
 
+
 @jit_inline
 def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     """Start of a step: drive, heat flows, elastic trial and the kinetic solve's coefficients."""
@@ -219,28 +321,36 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     t_sheath = s[sk + S_TS * n]
     t_helix = s[sk + S_TH * n]
 
-    rho_m = electrical.phase_resistivity(p[pk + P_RHO0M * n], p[pk + P_T0M * n], p[pk + P_DRDTM * n],
-                                         p[pk + P_DRDSM * n], temp, sig)
-    rho_a = electrical.phase_resistivity(p[pk + P_RHO0A * n], p[pk + P_T0A * n], p[pk + P_DRDTA * n],
-                                         p[pk + P_DRDSA * n], temp, sig)
-    res = electrical.wire_resistance(electrical.mixture_resistivity(xi, rho_m, rho_a), p[pk + P_L0 * n] - x,
-                                     p[pk + P_INV_S * n])
+    rho_m = electrical.phase_resistivity(
+        p[pk + P_RHO0M * n], p[pk + P_T0M * n], p[pk + P_DRDTM * n], p[pk + P_DRDSM * n], temp, sig
+    )
+    rho_a = electrical.phase_resistivity(
+        p[pk + P_RHO0A * n], p[pk + P_T0A * n], p[pk + P_DRDTA * n], p[pk + P_DRDSA * n], temp, sig
+    )
+    res = electrical.wire_resistance(
+        electrical.mixture_resistivity(xi, rho_m, rho_a), p[pk + P_L0 * n] - x, p[pk + P_INV_S * n]
+    )
     if drive_kind == electrical.DRIVE_DUTY:
-        cur, power = electrical.pwm_stage(drive_value, res, p[pk + P_VSUP * n], p[pk + P_ILIM * n],
-                                          p[pk + P_RSRC * n])
+        cur, power = electrical.pwm_stage(
+            drive_value, res, p[pk + P_VSUP * n], p[pk + P_ILIM * n], p[pk + P_RSRC * n]
+        )
     elif drive_kind == electrical.DRIVE_CURRENT:
         cur, power = electrical.current_source(drive_value, res)
     elif drive_kind == electrical.DRIVE_VOLTAGE:
         cur, power = electrical.voltage_source(drive_value, res)
     else:
-        cur, power = 0.0, 0.0      # temperature drive: the wire is heated from outside
+        cur, power = 0.0, 0.0  # temperature drive: the wire is heated from outside
 
     t_amb = p[pk + P_TAMB * n]
     # q_sa: out of the (first) sheath node to the helix node, which stays at ambient when
     # there is none (pack); q_ha: helix -> air
-    q_sh, q_sa = sheath.sheath_heat_flows(temp, t_sheath, t_helix, p[pk + P_GWS * n], p[pk + P_GSA * n])
+    q_sh, q_sa = sheath.sheath_heat_flows(
+        temp, t_sheath, t_helix, p[pk + P_GWS * n], p[pk + P_GSA * n]
+    )
     q_ha = sheath.helix_heat_loss(t_helix, t_amb, p[pk + P_GHA * n])
-    q_air = heat.convection_loss(temp, t_amb, p[pk + P_H0 * n], p[pk + P_H2 * n], p[pk + P_AREA * n])
+    q_air = heat.convection_loss(
+        temp, t_amb, p[pk + P_H0 * n], p[pk + P_H2 * n], p[pk + P_AREA * n]
+    )
     if p[pk + P_SHEATH * n] > 0.0:
         q_air = 0.0
     else:
@@ -259,31 +369,103 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     temp_per_xi = p[pk + P_TPX * n]
     modulus = constitutive.reuss_modulus(xi, p[pk + P_EM * n], p[pk + P_EA * n])
     omega = constitutive.transformation_coefficient(modulus, p[pk + P_EPSL * n])
-    theta = constitutive.thermoelastic_coefficient(xi, modulus, p[pk + P_ALM * n], p[pk + P_ALA * n],
-                                                   p[pk + P_NU * n])
+    theta = constitutive.thermoelastic_coefficient(
+        xi, modulus, p[pk + P_ALM * n], p[pk + P_ALA * n], p[pk + P_NU * n]
+    )
     sig_free0 = sig + constitutive.stress_increment_at_fixed_strain(omega, theta, 0.0, d_temp0)
     sig_free_per_xi = constitutive.stress_increment_at_fixed_strain(omega, theta, 1.0, temp_per_xi)
 
     area = p[pk + P_S * n]
     inv_l0 = p[pk + P_INV_L0 * n]
-    relax = modulus * dt * inv_l0                  # stress drop per slider velocity
+    relax = modulus * dt * inv_l0  # stress drop per slider velocity
     c_in, g_in, c_out, g_out = loads.slider_response(
-        area * modulus * inv_l0, x, v, dt, p[pk + P_MN * n], p[pk + P_BN * n], p[pk + P_KN * n],
-        p[pk + P_FSTAT * n], p[pk + P_A_IN * n], p[pk + P_F_IN * n],
-        p[pk + P_A_OUT * n], p[pk + P_F_OUT * n], p[pk + P_K3N * n])
+        area * modulus * inv_l0,
+        x,
+        v,
+        dt,
+        p[pk + P_MN * n],
+        p[pk + P_BN * n],
+        p[pk + P_KN * n],
+        p[pk + P_FSTAT * n],
+        p[pk + P_A_IN * n],
+        p[pk + P_F_IN * n],
+        p[pk + P_A_OUT * n],
+        p[pk + P_F_OUT * n],
+        p[pk + P_K3N * n],
+    )
 
     inv_cm, inv_ca = p[pk + P_INV_CM * n], p[pk + P_INV_CA * n]
     um_old, ua_old = kinetics.effective_temperatures(temp, sig, inv_cm, inv_ca)
     v_new, sig_new, sig_gain = _mechanics(sig_free0, area, relax, c_in, g_in, c_out, g_out)
     um, ua = kinetics.effective_temperatures(temp + d_temp0, sig_new, inv_cm, inv_ca)
-    return (temp, xi, sig, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh, q_sa, q_ha,
-            d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
-            inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua)
+    return (
+        temp,
+        xi,
+        sig,
+        x,
+        v,
+        t_sheath,
+        t_helix,
+        res,
+        cur,
+        power,
+        q_air,
+        q_sh,
+        q_sa,
+        q_ha,
+        d_temp0,
+        temp_per_xi,
+        sig_free0,
+        sig_free_per_xi,
+        area,
+        relax,
+        c_in,
+        g_in,
+        c_out,
+        g_out,
+        inv_cm,
+        inv_ca,
+        um_old,
+        ua_old,
+        v_new,
+        sig_new,
+        sig_gain,
+        um,
+        ua,
+    )
 
 
 @jit_inline
-def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh,
-            q_sa, q_ha, d_temp0, temp_per_xi, d_xi, v_new, sig_new, energy):
+def _finish(
+    p,
+    pk,
+    s,
+    sk,
+    dk,
+    n,
+    out,
+    ok,
+    dt,
+    temp,
+    xi,
+    x,
+    v,
+    t_sheath,
+    t_helix,
+    res,
+    cur,
+    power,
+    q_air,
+    q_sh,
+    q_sa,
+    q_ha,
+    d_temp0,
+    temp_per_xi,
+    d_xi,
+    v_new,
+    sig_new,
+    energy,
+):
     """End of a step: new state (read at sk, written at dk), outputs and, with ``energy``, the
     energy accumulators; True if finite."""
     d_temp = d_temp0 + temp_per_xi * d_xi
@@ -296,26 +478,40 @@ def _finish(p, pk, s, sk, dk, n, out, ok, dt, temp, xi, x, v, t_sheath, t_helix,
     s[dk + S_X * n] = x_new
     s[dk + S_V * n] = v_new
     d_ts = (q_sh - q_sa) * dt * p[pk + P_INV_CS * n]
-    d_th = (q_sa - q_ha) * dt * p[pk + P_INV_CH * n]      # 0 without a helix node
+    d_th = (q_sa - q_ha) * dt * p[pk + P_INV_CH * n]  # 0 without a helix node
     sheathed = p[pk + P_SHEATH * n] > 0.0
     s[dk + S_TS * n] = t_sheath + d_ts if sheathed else t_sheath
     s[dk + S_TH * n] = t_helix + d_th
     if energy:
-        s[dk + S_ESHSTORED * n] = (s[sk + S_ESHSTORED * n] + (p[pk + P_CS * n] * d_ts + p[pk + P_CH * n] * d_th)
-                                   if sheathed else s[sk + S_ESHSTORED * n])
+        s[dk + S_ESHSTORED * n] = (
+            s[sk + S_ESHSTORED * n] + (p[pk + P_CS * n] * d_ts + p[pk + P_CH * n] * d_th)
+            if sheathed
+            else s[sk + S_ESHSTORED * n]
+        )
         s[dk + S_EJ * n] = s[sk + S_EJ * n] + power * dt
         s[dk + S_ESTORED * n] = s[sk + S_ESTORED * n] + p[pk + P_CW * n] * d_temp
         s[dk + S_ECONV * n] = s[sk + S_ECONV * n] + q_air * dt
         s[dk + S_ELAT * n] = s[sk + S_ELAT * n] - p[pk + P_LAT * n] * d_xi
         s[dk + S_ESH * n] = s[sk + S_ESH * n] + q_sh * dt
-        s[dk + S_ESHCONV * n] = s[sk + S_ESHCONV * n] + (q_ha if p[pk + P_HELIX * n] > 0.0 else q_sa) * dt
+        s[dk + S_ESHCONV * n] = (
+            s[sk + S_ESHCONV * n] + (q_ha if p[pk + P_HELIX * n] > 0.0 else q_sa) * dt
+        )
 
     out[ok + O_R * n] = res
     out[ok + O_I * n] = cur
     out[ok + O_P * n] = power
     out[ok + O_FW * n] = p[pk + P_S * n] * sig_new
-    out[ok + O_FT * n] = loads.load_force(v_new, v, x_new, dt, p[pk + P_MN * n], p[pk + P_BN * n],
-                                          p[pk + P_KN * n], p[pk + P_FSTAT * n], p[pk + P_K3N * n])
+    out[ok + O_FT * n] = loads.load_force(
+        v_new,
+        v,
+        x_new,
+        dt,
+        p[pk + P_MN * n],
+        p[pk + P_BN * n],
+        p[pk + P_KN * n],
+        p[pk + P_FSTAT * n],
+        p[pk + P_K3N * n],
+    )
     out[ok + O_XT * n] = p[pk + P_N * n] * x_new
     return math.isfinite(temp_new) and math.isfinite(sig_new) and math.isfinite(x_new)
 
@@ -340,14 +536,45 @@ def step(p, s, drive_kind, drive_value, dt, out):
     extra iterations cost the batch 15 % of its time). Otherwise it iterates to XI_TOLERANCE
     (Newton steps, bisection fallback). Returns False when the new state is not finite.
     """
-    (temp, xi, sig, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh, q_sa, q_ha,
-     d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
-     inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua) = _begin(
-        p, 0, s, 0, 1, drive_kind, drive_value, dt)
+    (
+        temp,
+        xi,
+        sig,
+        x,
+        v,
+        t_sheath,
+        t_helix,
+        res,
+        cur,
+        power,
+        q_air,
+        q_sh,
+        q_sa,
+        q_ha,
+        d_temp0,
+        temp_per_xi,
+        sig_free0,
+        sig_free_per_xi,
+        area,
+        relax,
+        c_in,
+        g_in,
+        c_out,
+        g_out,
+        inv_cm,
+        inv_ca,
+        um_old,
+        ua_old,
+        v_new,
+        sig_new,
+        sig_gain,
+        um,
+        ua,
+    ) = _begin(p, 0, s, 0, 1, drive_kind, drive_value, dt)
     d_xi = 0.0
     heating = ua > ua_old
     cooling = um < um_old
-    if heating and cooling:          # only when C_A != C_M: keep the current direction
+    if heating and cooling:  # only when C_A != C_M: keep the current direction
         heating = s[S_DIR] > 0.0
     if heating or cooling:
         direction = 1.0 if heating else -1.0
@@ -355,18 +582,36 @@ def step(p, s, drive_kind, drive_value, dt, out):
         n_points = int(s[S_NREV])
         mf0, inv_mw, as0, inv_aw = p[P_MF0], p[P_INV_MW], p[P_AS0], p[P_INV_AW]
         if s[S_DIR] != 0.0 and s[S_DIR] != direction:
-            n_points = kinetics.push_reversal(memory, n_points, ua_old, um_old, xi, mf0, inv_mw, as0, inv_aw)
+            n_points = kinetics.push_reversal(
+                memory, n_points, ua_old, um_old, xi, mf0, inv_mw, as0, inv_aw
+            )
         s[S_DIR] = direction
         # the printed law's slope at the start, needed only on an outermost branch
-        slope0 = (kinetics.transformation_slope(ua_old, um_old, xi, heating, mf0, inv_mw, as0, inv_aw)
-                  if n_points < 2 else 0.0)
+        slope0 = (
+            kinetics.transformation_slope(ua_old, um_old, xi, heating, mf0, inv_mw, as0, inv_aw)
+            if n_points < 2
+            else 0.0
+        )
         inv_c = inv_ca if heating else inv_cm
         lo = -xi if heating else 0.0
         hi = 0.0 if heating else 1.0 - xi
         closed = 0
         for _ in range(MAX_ITERATIONS):
             xi_branch, dxi_du, closed = kinetics.memory_branch(
-                ua, um, heating, memory, n_points, xi, ua_old, um_old, slope0, mf0, inv_mw, as0, inv_aw)
+                ua,
+                um,
+                heating,
+                memory,
+                n_points,
+                xi,
+                ua_old,
+                um_old,
+                slope0,
+                mf0,
+                inv_mw,
+                as0,
+                inv_aw,
+            )
             r = xi + d_xi - xi_branch
             if abs(r) <= XI_TOLERANCE:
                 break
@@ -379,14 +624,45 @@ def step(p, s, drive_kind, drive_value, dt, out):
             newton = lo < d_next < hi
             d_xi = d_next if newton else 0.5 * (lo + hi)
             gain_before = sig_gain
-            v_new, sig_new, sig_gain = _mechanics(sig_free0 + sig_free_per_xi * d_xi, area, relax,
-                                                  c_in, g_in, c_out, g_out)
-            um, ua = kinetics.effective_temperatures(temp + d_temp0 + temp_per_xi * d_xi, sig_new, inv_cm, inv_ca)
+            v_new, sig_new, sig_gain = _mechanics(
+                sig_free0 + sig_free_per_xi * d_xi, area, relax, c_in, g_in, c_out, g_out
+            )
+            um, ua = kinetics.effective_temperatures(
+                temp + d_temp0 + temp_per_xi * d_xi, sig_new, inv_cm, inv_ca
+            )
             if newton and closed == 0 and sig_gain == gain_before:
                 break
         s[S_NREV] = n_points - 2 * closed
-    return _finish(p, 0, s, 0, 0, 1, out, 0, dt, temp, xi, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh,
-                   q_sa, q_ha, d_temp0, temp_per_xi, d_xi, v_new, sig_new, True)
+    return _finish(
+        p,
+        0,
+        s,
+        0,
+        0,
+        1,
+        out,
+        0,
+        dt,
+        temp,
+        xi,
+        x,
+        v,
+        t_sheath,
+        t_helix,
+        res,
+        cur,
+        power,
+        q_air,
+        q_sh,
+        q_sa,
+        q_ha,
+        d_temp0,
+        temp_per_xi,
+        d_xi,
+        v_new,
+        sig_new,
+        True,
+    )
 
 
 @jit
@@ -405,11 +681,11 @@ def steps(p, s, drive_kind, drive_value, dt, out, n):
 # kinetic solve's first iteration, _block_iterate the further iterations while any set needs
 # them, _block_finish the end of the step for those sets. They take step's arithmetic in step's
 # order, so a set gives the same bits in both APIs (without the energy accumulators, the same
-# to rounding: LLVM may fuse a multiply-add differently). Sets that push or wipe out reversal points,
-# or need more than BLOCK_ITERATIONS iterations, or turn non-finite, are flagged (B_REDO) and
-# redone from their old state by step itself (0.04 % of the steps of the benchmark's pulse train).
-# One float64 buffer holds the block, field f of set j at f * BLOCK + j: the constant offsets
-# let LLVM prove that a loop's loads and stores do not overlap.
+# to rounding: LLVM may fuse a multiply-add differently). Sets that push or wipe out reversal
+# points, or need more than BLOCK_ITERATIONS iterations, or turn non-finite, are flagged (B_REDO)
+# and redone from their old state by step itself (0.04 % of the steps of the benchmark's pulse
+# train). One float64 buffer holds the block, field f of set j at f * BLOCK + j: the constant
+# offsets let LLVM prove that a loop's loads and stores do not overlap.
 BLOCK = 32
 BLOCK_ITERATIONS = 8
 # top two reversal points (kinetics.memory_branch's r and t: u_A, u_M, xi, z+, z-), a copy of
@@ -418,24 +694,54 @@ BLOCK_ITERATIONS = 8
 # what the iterations and the end of a step need from its start
 # (the state at the start of the step and the set's constants are read where they are, in the
 # s_in region and in the packed parameters)
-(W_RES, W_CUR, W_POWER, W_QAIR, W_QSH, W_QSA, W_QHA, W_DTEMP0,
- W_SF0, W_SFX, W_RELAX, W_CIN, W_GIN, W_COUT, W_GOUT, W_UMOLD, W_UAOLD,
- W_HEATING, W_NPOINTS, W_SLOPE0,
- W_DXI, W_LO, W_HI, W_VNEW, W_SIGNEW, W_GAIN, W_UM, W_UA, W_ACTIVE, N_W) = range(30)
+(
+    W_RES,
+    W_CUR,
+    W_POWER,
+    W_QAIR,
+    W_QSH,
+    W_QSA,
+    W_QHA,
+    W_DTEMP0,
+    W_SF0,
+    W_SFX,
+    W_RELAX,
+    W_CIN,
+    W_GIN,
+    W_COUT,
+    W_GOUT,
+    W_UMOLD,
+    W_UAOLD,
+    W_HEATING,
+    W_NPOINTS,
+    W_SLOPE0,
+    W_DXI,
+    W_LO,
+    W_HI,
+    W_VNEW,
+    W_SIGNEW,
+    W_GAIN,
+    W_UM,
+    W_UA,
+    W_ACTIVE,
+    N_W,
+) = range(30)
 # state fields up to the memory (S_T ... S_NREV) in two regions: a step reads one and writes
 # the other, the next step the other way round (s_in, s_out below), instead of copying
 B_STATE0 = N_P
 B_STATE1 = B_STATE0 + S_MEM
-B_OUT = B_STATE1 + S_MEM           # outputs of the step
-B_DRIVE = B_OUT + N_O              # drive value of the step
-B_REDO = B_DRIVE + 1               # 1.0: the set needs step
+B_OUT = B_STATE1 + S_MEM  # outputs of the step
+B_DRIVE = B_OUT + N_O  # drive value of the step
+B_REDO = B_DRIVE + 1  # 1.0: the set needs step
 B_TOP = B_REDO + 1
 B_WORK = B_TOP + N_M
 B_SIZE = B_WORK + N_W
 
 
 @jit_inline
-def _branch(u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, mf0, inv_mw, as0, inv_aw, scaled):
+def _branch(
+    u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, mf0, inv_mw, as0, inv_aw, scaled
+):
     """kinetics.memory_branch with at most the top two reversal points ahead (``top``: their
     fields, M_*): (xi, dxi/du, 1.0 if u passed t, i.e. the branch would wipe out a loop).
 
@@ -453,30 +759,87 @@ def _branch(u_a, u_m, heating, xi, ua_old, um_old, slope0, n_points, top, mf0, i
     if (u <= u_s) if heating else (u >= u_s):
         return xi, 0.0, 0.0
     if (u < u_t) if heating else (u > u_t):
-        xi_b, dxi = kinetics.scaled_branch(u, heating, top[M_RUA] if heating else top[M_RUM], top[M_RXI],
-                                           top[M_RZP] if heating else top[M_RZM], u_t, top[M_TXI],
-                                           top[M_TZP] if heating else top[M_TZM], mf0, inv_mw, as0, inv_aw)
+        xi_b, dxi = kinetics.scaled_branch(
+            u,
+            heating,
+            top[M_RUA] if heating else top[M_RUM],
+            top[M_RXI],
+            top[M_RZP] if heating else top[M_RZM],
+            u_t,
+            top[M_TXI],
+            top[M_TZP] if heating else top[M_TZM],
+            mf0,
+            inv_mw,
+            as0,
+            inv_aw,
+        )
         return xi_b, dxi, 0.0
     return xi, 0.0, 1.0
 
 
 @jit_inline
-def _solve_iteration(b, j, heating, xi, n_points, ua_old, um_old, slope0, temp, d_temp0, sig_free0,
-                     sig_free_per_xi, relax, c_in, g_in, c_out, g_out, d_xi, lo, hi, v_new, sig_new, sig_gain,
-                     um, ua, scaled):
+def _solve_iteration(
+    b,
+    j,
+    heating,
+    xi,
+    n_points,
+    ua_old,
+    um_old,
+    slope0,
+    temp,
+    d_temp0,
+    sig_free0,
+    sig_free_per_xi,
+    relax,
+    c_in,
+    g_in,
+    c_out,
+    g_out,
+    d_xi,
+    lo,
+    hi,
+    v_new,
+    sig_new,
+    sig_gain,
+    um,
+    ua,
+    scaled,
+):
     """One iteration of step's kinetic solve for set j of block b, from the start-of-step
     values given (the set's constants and reversal points are read from b).
 
     Returns the updated (d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua), 1.0 while the solve
     goes on and 1.0 if the set has to be redone by step.
     """
-    top = (b[(B_TOP + M_RUA) * BLOCK + j], b[(B_TOP + M_RUM) * BLOCK + j], b[(B_TOP + M_RXI) * BLOCK + j],
-           b[(B_TOP + M_RZP) * BLOCK + j], b[(B_TOP + M_RZM) * BLOCK + j], b[(B_TOP + M_TUA) * BLOCK + j],
-           b[(B_TOP + M_TUM) * BLOCK + j], b[(B_TOP + M_TXI) * BLOCK + j], b[(B_TOP + M_TZP) * BLOCK + j],
-           b[(B_TOP + M_TZM) * BLOCK + j])
-    xi_branch, dxi_du, closes = _branch(ua, um, heating, xi, ua_old, um_old, slope0, n_points, top,
-                                        b[j + P_MF0 * BLOCK], b[j + P_INV_MW * BLOCK], b[j + P_AS0 * BLOCK],
-                                        b[j + P_INV_AW * BLOCK], scaled)
+    top = (
+        b[(B_TOP + M_RUA) * BLOCK + j],
+        b[(B_TOP + M_RUM) * BLOCK + j],
+        b[(B_TOP + M_RXI) * BLOCK + j],
+        b[(B_TOP + M_RZP) * BLOCK + j],
+        b[(B_TOP + M_RZM) * BLOCK + j],
+        b[(B_TOP + M_TUA) * BLOCK + j],
+        b[(B_TOP + M_TUM) * BLOCK + j],
+        b[(B_TOP + M_TXI) * BLOCK + j],
+        b[(B_TOP + M_TZP) * BLOCK + j],
+        b[(B_TOP + M_TZM) * BLOCK + j],
+    )
+    xi_branch, dxi_du, closes = _branch(
+        ua,
+        um,
+        heating,
+        xi,
+        ua_old,
+        um_old,
+        slope0,
+        n_points,
+        top,
+        b[j + P_MF0 * BLOCK],
+        b[j + P_INV_MW * BLOCK],
+        b[j + P_AS0 * BLOCK],
+        b[j + P_INV_AW * BLOCK],
+        scaled,
+    )
     r = xi + d_xi - xi_branch
     if abs(r) <= XI_TOLERANCE:
         return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0, closes
@@ -491,9 +854,12 @@ def _solve_iteration(b, j, heating, xi, n_points, ua_old, um_old, slope0, temp, 
     newton = lo < d_next < hi
     d_xi = d_next if newton else 0.5 * (lo + hi)
     gain_before = sig_gain
-    v_new, sig_new, sig_gain = _mechanics(sig_free0 + sig_free_per_xi * d_xi, b[j + P_S * BLOCK], relax,
-                                          c_in, g_in, c_out, g_out)
-    um, ua = kinetics.effective_temperatures(temp + d_temp0 + temp_per_xi * d_xi, sig_new, inv_cm, inv_ca)
+    v_new, sig_new, sig_gain = _mechanics(
+        sig_free0 + sig_free_per_xi * d_xi, b[j + P_S * BLOCK], relax, c_in, g_in, c_out, g_out
+    )
+    um, ua = kinetics.effective_temperatures(
+        temp + d_temp0 + temp_per_xi * d_xi, sig_new, inv_cm, inv_ca
+    )
     done = newton and closes == 0.0 and sig_gain == gain_before
     return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0 if done else 1.0, closes
 
@@ -504,12 +870,33 @@ def _iteration(b, j, s_in, scaled):
     w = B_WORK * BLOCK + j
     c = s_in * BLOCK + j
     return _solve_iteration(
-        b, j, b[w + W_HEATING * BLOCK] > 0.0, b[c + S_XI * BLOCK], b[w + W_NPOINTS * BLOCK],
-        b[w + W_UAOLD * BLOCK], b[w + W_UMOLD * BLOCK], b[w + W_SLOPE0 * BLOCK], b[c + S_T * BLOCK],
-        b[w + W_DTEMP0 * BLOCK], b[w + W_SF0 * BLOCK], b[w + W_SFX * BLOCK], b[w + W_RELAX * BLOCK],
-        b[w + W_CIN * BLOCK], b[w + W_GIN * BLOCK], b[w + W_COUT * BLOCK], b[w + W_GOUT * BLOCK],
-        b[w + W_DXI * BLOCK], b[w + W_LO * BLOCK], b[w + W_HI * BLOCK], b[w + W_VNEW * BLOCK],
-        b[w + W_SIGNEW * BLOCK], b[w + W_GAIN * BLOCK], b[w + W_UM * BLOCK], b[w + W_UA * BLOCK], scaled)
+        b,
+        j,
+        b[w + W_HEATING * BLOCK] > 0.0,
+        b[c + S_XI * BLOCK],
+        b[w + W_NPOINTS * BLOCK],
+        b[w + W_UAOLD * BLOCK],
+        b[w + W_UMOLD * BLOCK],
+        b[w + W_SLOPE0 * BLOCK],
+        b[c + S_T * BLOCK],
+        b[w + W_DTEMP0 * BLOCK],
+        b[w + W_SF0 * BLOCK],
+        b[w + W_SFX * BLOCK],
+        b[w + W_RELAX * BLOCK],
+        b[w + W_CIN * BLOCK],
+        b[w + W_GIN * BLOCK],
+        b[w + W_COUT * BLOCK],
+        b[w + W_GOUT * BLOCK],
+        b[w + W_DXI * BLOCK],
+        b[w + W_LO * BLOCK],
+        b[w + W_HI * BLOCK],
+        b[w + W_VNEW * BLOCK],
+        b[w + W_SIGNEW * BLOCK],
+        b[w + W_GAIN * BLOCK],
+        b[w + W_UM * BLOCK],
+        b[w + W_UA * BLOCK],
+        scaled,
+    )
 
 
 @jit_inline
@@ -531,12 +918,36 @@ def _finish_set(b, j, s_in, s_out, dt, energy):
     """_finish for set j of block b from its W_* fields; True if the new state is finite."""
     w = B_WORK * BLOCK + j
     c = s_in * BLOCK + j
-    return _finish(b, j, b, c, s_out * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt,
-                   b[c + S_T * BLOCK], b[c + S_XI * BLOCK], b[c + S_X * BLOCK], b[c + S_V * BLOCK],
-                   b[c + S_TS * BLOCK], b[c + S_TH * BLOCK], b[w + W_RES * BLOCK], b[w + W_CUR * BLOCK],
-                   b[w + W_POWER * BLOCK], b[w + W_QAIR * BLOCK], b[w + W_QSH * BLOCK], b[w + W_QSA * BLOCK],
-                   b[w + W_QHA * BLOCK], b[w + W_DTEMP0 * BLOCK], b[j + P_TPX * BLOCK], b[w + W_DXI * BLOCK], b[w + W_VNEW * BLOCK], b[w + W_SIGNEW * BLOCK],
-                   energy)
+    return _finish(
+        b,
+        j,
+        b,
+        c,
+        s_out * BLOCK + j,
+        BLOCK,
+        b,
+        B_OUT * BLOCK + j,
+        dt,
+        b[c + S_T * BLOCK],
+        b[c + S_XI * BLOCK],
+        b[c + S_X * BLOCK],
+        b[c + S_V * BLOCK],
+        b[c + S_TS * BLOCK],
+        b[c + S_TH * BLOCK],
+        b[w + W_RES * BLOCK],
+        b[w + W_CUR * BLOCK],
+        b[w + W_POWER * BLOCK],
+        b[w + W_QAIR * BLOCK],
+        b[w + W_QSH * BLOCK],
+        b[w + W_QSA * BLOCK],
+        b[w + W_QHA * BLOCK],
+        b[w + W_DTEMP0 * BLOCK],
+        b[j + P_TPX * BLOCK],
+        b[w + W_DXI * BLOCK],
+        b[w + W_VNEW * BLOCK],
+        b[w + W_SIGNEW * BLOCK],
+        energy,
+    )
 
 
 @jit_inline
@@ -548,14 +959,45 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
     runs the step again with ``keep`` when one needs to); most steps need no further
     iteration and save the stores.
     """
-    n_active = 0     # an integer count: a float sum is a reduction LLVM may not reorder
+    n_active = 0  # an integer count: a float sum is a reduction LLVM may not reorder
     for j in range(BLOCK):
         sk = s_in * BLOCK + j
         w = B_WORK * BLOCK + j
-        (temp, xi, sig, x, v, t_sheath, t_helix, res, cur, power, q_air, q_sh, q_sa, q_ha,
-         d_temp0, temp_per_xi, sig_free0, sig_free_per_xi, area, relax, c_in, g_in, c_out, g_out,
-         inv_cm, inv_ca, um_old, ua_old, v_new, sig_new, sig_gain, um, ua) = _begin(
-            b, j, b, sk, BLOCK, drive_kind, b[B_DRIVE * BLOCK + j], dt)
+        (
+            temp,
+            xi,
+            sig,
+            x,
+            v,
+            t_sheath,
+            t_helix,
+            res,
+            cur,
+            power,
+            q_air,
+            q_sh,
+            q_sa,
+            q_ha,
+            d_temp0,
+            temp_per_xi,
+            sig_free0,
+            sig_free_per_xi,
+            area,
+            relax,
+            c_in,
+            g_in,
+            c_out,
+            g_out,
+            inv_cm,
+            inv_ca,
+            um_old,
+            ua_old,
+            v_new,
+            sig_new,
+            sig_gain,
+            um,
+            ua,
+        ) = _begin(b, j, b, sk, BLOCK, drive_kind, b[B_DRIVE * BLOCK + j], dt)
         old_dir = b[sk + S_DIR * BLOCK]
         heating = ua > ua_old
         cooling = um < um_old
@@ -564,8 +1006,16 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
         moving = heating or cooling
         direction = 1.0 if heating else -1.0
         n_points = b[sk + S_NREV * BLOCK]
-        slope0 = kinetics.transformation_slope(ua_old, um_old, xi, heating, b[j + P_MF0 * BLOCK],
-                                               b[j + P_INV_MW * BLOCK], b[j + P_AS0 * BLOCK], b[j + P_INV_AW * BLOCK])
+        slope0 = kinetics.transformation_slope(
+            ua_old,
+            um_old,
+            xi,
+            heating,
+            b[j + P_MF0 * BLOCK],
+            b[j + P_INV_MW * BLOCK],
+            b[j + P_AS0 * BLOCK],
+            b[j + P_INV_AW * BLOCK],
+        )
         if keep:
             b[w + W_RES * BLOCK] = res
             b[w + W_CUR * BLOCK] = cur
@@ -590,8 +1040,33 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
         lo = -xi if heating else 0.0
         hi = 0.0 if heating else 1.0 - xi
         d_xi1, lo1, hi1, v1, sig1, gain1, um1, ua1, active, closes = _solve_iteration(
-            b, j, heating, xi, n_points, ua_old, um_old, slope0, temp, d_temp0, sig_free0, sig_free_per_xi, relax,
-            c_in, g_in, c_out, g_out, 0.0, lo, hi, v_new, sig_new, sig_gain, um, ua, scaled)
+            b,
+            j,
+            heating,
+            xi,
+            n_points,
+            ua_old,
+            um_old,
+            slope0,
+            temp,
+            d_temp0,
+            sig_free0,
+            sig_free_per_xi,
+            relax,
+            c_in,
+            g_in,
+            c_out,
+            g_out,
+            0.0,
+            lo,
+            hi,
+            v_new,
+            sig_new,
+            sig_gain,
+            um,
+            ua,
+            scaled,
+        )
         redo = moving and (closes > 0.0 or (old_dir != 0.0 and old_dir != direction))
         if moving:
             d_xi, v_new, sig_new = d_xi1, v1, sig1
@@ -601,9 +1076,36 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
             _store_solve(b, j, d_xi, lo1, hi1, v_new, sig_new, gain1, um1, ua1, active)
         b[s_out * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
         b[s_out * BLOCK + j + S_NREV * BLOCK] = n_points
-        finite = _finish(b, j, b, sk, s_out * BLOCK + j, BLOCK, b, B_OUT * BLOCK + j, dt, temp, xi, x, v,
-                         t_sheath, t_helix, res, cur, power, q_air, q_sh, q_sa, q_ha, d_temp0, temp_per_xi, d_xi,
-                         v_new, sig_new, energy)
+        finite = _finish(
+            b,
+            j,
+            b,
+            sk,
+            s_out * BLOCK + j,
+            BLOCK,
+            b,
+            B_OUT * BLOCK + j,
+            dt,
+            temp,
+            xi,
+            x,
+            v,
+            t_sheath,
+            t_helix,
+            res,
+            cur,
+            power,
+            q_air,
+            q_sh,
+            q_sa,
+            q_ha,
+            d_temp0,
+            temp_per_xi,
+            d_xi,
+            v_new,
+            sig_new,
+            energy,
+        )
         b[B_REDO * BLOCK + j] = 1.0 if redo or not finite else 0.0
         n_active += 1 if active > 0.0 else 0
     return n_active
@@ -615,7 +1117,9 @@ def _block_iterate(b, s_in):
     n_active = 0
     for j in range(BLOCK):
         w = B_WORK * BLOCK + j
-        d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active, closes = _iteration(b, j, s_in, True)
+        d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active, closes = _iteration(
+            b, j, s_in, True
+        )
         if b[w + W_ACTIVE * BLOCK] > 0.0:
             _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active)
             if closes > 0.0:
@@ -650,7 +1154,7 @@ def _step_block(b, drive_kind, dt, s_in, s_out, energy):
         n_active = _block_begin(b, drive_kind, dt, True, False, s_in, s_out, energy)
     else:
         n_active = _block_begin(b, drive_kind, dt, False, False, s_in, s_out, energy)
-    if n_active > 0:              # the same step again, keeping what the iterations need
+    if n_active > 0:  # the same step again, keeping what the iterations need
         n_active = _block_begin(b, drive_kind, dt, True, True, s_in, s_out, energy)
     if n_active > 0:
         for _ in range(BLOCK_ITERATIONS - 1):
@@ -690,7 +1194,9 @@ def _copy_top(b, j, s):
 
 
 @jit
-def _run_block(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at, first, count):
+def _run_block(
+    params, states, drive_kind, drives, dt, record_every, channels, records, failed_at, first, count
+):
     """Sets first .. first + count - 1 of run_batch (count <= BLOCK) through every step."""
     n_steps = drives.shape[1]
     shared = drives.shape[0] == 1
@@ -701,7 +1207,7 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
     b = np.zeros(B_SIZE * BLOCK)
     out = np.zeros(N_O)
     for j in range(BLOCK):
-        i = first + min(j, count - 1)   # spare lanes repeat the last set and are never read
+        i = first + min(j, count - 1)  # spare lanes repeat the last set and are never read
         for f in range(N_P):
             b[f * BLOCK + j] = params[i, f]
         for f in range(S_MEM):
@@ -747,13 +1253,15 @@ def _run_block(params, states, drive_kind, drives, dt, record_every, channels, r
             r += 1
         s_in, s_out = s_out, s_in
     for j in range(count):
-        if failed_at[first + j] < 0:       # a failed set's row in states keeps its last state
+        if failed_at[first + j] < 0:  # a failed set's row in states keeps its last state
             for f in range(S_MEM):
                 states[first + j, f] = b[(s_in + f) * BLOCK + j]
 
 
 @jit
-def _run_sets(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at, first, count):
+def _run_sets(
+    params, states, drive_kind, drives, dt, record_every, channels, records, failed_at, first, count
+):
     """Sets first .. first + count - 1 of run_batch one after the other, through step alone."""
     n_steps = drives.shape[1]
     shared = drives.shape[0] == 1
@@ -796,8 +1304,30 @@ def run_batch(params, states, drive_kind, drives, dt, record_every, channels, re
         first = blk * BLOCK
         count = min(BLOCK, n_sets - first)
         if 4 * count < BLOCK:
-            _run_sets(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at,
-                      first, count)
+            _run_sets(
+                params,
+                states,
+                drive_kind,
+                drives,
+                dt,
+                record_every,
+                channels,
+                records,
+                failed_at,
+                first,
+                count,
+            )
         else:
-            _run_block(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at,
-                       first, count)
+            _run_block(
+                params,
+                states,
+                drive_kind,
+                drives,
+                dt,
+                record_every,
+                channels,
+                records,
+                failed_at,
+                first,
+                count,
+            )

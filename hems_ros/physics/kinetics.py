@@ -68,16 +68,24 @@ def effective_temperatures(temperature_c, stress_pa, inv_cm, inv_ca):
 # the scalar step latency-bound), 2^k built in the exponent bits. Within 1 ulp of libm's exp.
 _LN2_HI = 6.93147180369123816490e-01
 _LN2_LO = 1.90821492927058770002e-10
-_INV_LN2 = 1.44269504088896338700e+00
+_INV_LN2 = 1.44269504088896338700e00
 _ROUND = 6755399441055744.0
 _EXP_FLOOR = -708.0
 # (e^r - 1 - r) / r^2 interpolated at 10 Chebyshev nodes of [-ln(2)/2, ln(2)/2] (computed in
 # 50-digit arithmetic): 1.7e-17 from e^r there, as good as the Taylor series to r^13 with two
 # terms fewer
 (_C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11) = (
-    0.5000000000000001, 0.16666666666666669, 0.041666666666624164, 0.008333333333330065,
-    0.0013888888917196719, 0.00019841269863040545, 2.4801521322368692e-05, 2.7557268480310024e-06,
-    2.7620075879983367e-07, 2.5100375832561234e-08)
+    0.5000000000000001,
+    0.16666666666666669,
+    0.041666666666624164,
+    0.008333333333330065,
+    0.0013888888917196719,
+    0.00019841269863040545,
+    2.4801521322368692e-05,
+    2.7557268480310024e-06,
+    2.7620075879983367e-07,
+    2.5100375832561234e-08,
+)
 
 
 @intrinsic
@@ -88,6 +96,7 @@ def _float_bits(typingctx, x):
 
     def codegen(context, builder, signature, args):
         return builder.bitcast(args[0], ir.IntType(64))
+
     return types.int64(types.float64), codegen
 
 
@@ -99,6 +108,7 @@ def _bits_float(typingctx, bits):
 
     def codegen(context, builder, signature, args):
         return builder.bitcast(args[0], ir.DoubleType())
+
     return types.float64(types.int64), codegen
 
 
@@ -117,9 +127,12 @@ def exp_nonpositive(x):
     r = (xc - kf * _LN2_HI) - kf * _LN2_LO
     r2 = r * r
     r4 = r2 * r2
-    tail = (((_C2 + _C3 * r) + (_C4 + _C5 * r) * r2) + ((_C6 + _C7 * r) + (_C8 + _C9 * r) * r2) * r4
-            + (_C10 + _C11 * r) * (r4 * r4))
-    poly = 1.0 + (r + r2 * tail)      # the leading 1 + r added last keeps the rounding near 1/2 ulp
+    tail = (
+        ((_C2 + _C3 * r) + (_C4 + _C5 * r) * r2)
+        + ((_C6 + _C7 * r) + (_C8 + _C9 * r) * r2) * r4
+        + (_C10 + _C11 * r) * (r4 * r4)
+    )
+    poly = 1.0 + (r + r2 * tail)  # the leading 1 + r added last keeps the rounding near 1/2 ulp
     k = _float_bits(t) - _float_bits(_ROUND)
     return poly * _bits_float((k + 1023) << 52) if x >= _EXP_FLOOR else 0.0
 
@@ -164,7 +177,8 @@ def heating_branch(temperature_c, a_s, inv_width):
 
 def heating_branch_temperature(transformed_fraction: float, a_s: float, a_f: float) -> float:
     """Temperature at which the major heating branch (eq. 4.21) has turned ``transformed_fraction``
-    of the martensite to austenite: z+(T) = 1 - f solved for T, T = As + (Af - As)(1/2 - atanh(1 - 2 f)/2).
+    of the martensite to austenite: z+(T) = 1 - f solved for T, T = As + (Af - As)(1/2 -
+    atanh(1 - 2 f)/2).
 
     Pass the stress-shifted As, Af (eq. 4.25) for a loaded wire.
     """
@@ -221,8 +235,9 @@ def scaled_branch(u, heating, u_r, xi_r, z_r, u_t, xi_t, z_t, m_f, inv_m_width, 
 
 
 @jit
-def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, m_f, inv_m_width, a_s,
-                  inv_a_width):
+def memory_branch(
+    u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, m_f, inv_m_width, a_s, inv_a_width
+):
     """xi reached at (u_a, u_m) moving from the state (u_a0, u_m0, xi0) in one direction.
 
     ``memory[POINT_SIZE * k + (0, 1, 2, 3, 4)]`` is reversal point k (u_A, u_M, xi, z+, z-),
@@ -245,8 +260,20 @@ def memory_branch(u_a, u_m, heating, memory, n_points, xi0, u_a0, u_m0, slope0, 
         if (u <= u_s) if heating else (u >= u_s):
             return xi_s, 0.0, closed
         if (u < u_t) if heating else (u > u_t):
-            xi, dxi = scaled_branch(u, heating, memory[r + col], memory[r + 2], memory[r + zcol],
-                                     u_t, memory[t + 2], memory[t + zcol], m_f, inv_m_width, a_s, inv_a_width)
+            xi, dxi = scaled_branch(
+                u,
+                heating,
+                memory[r + col],
+                memory[r + 2],
+                memory[r + zcol],
+                u_t,
+                memory[t + 2],
+                memory[t + zcol],
+                m_f,
+                inv_m_width,
+                a_s,
+                inv_a_width,
+            )
             return xi, dxi, closed
         xi_s, ua_s, um_s = memory[t + 2], memory[t], memory[t + 1]
         closed += 1

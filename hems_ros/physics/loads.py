@@ -27,8 +27,12 @@ from hems_ros.physics.jit import jit
 def transmission(capstan, pulley, coulomb):
     """(a_in, f_in, a_out, f_out): the load receives F_L = a F_wire + f while the slider moves
     in / out (friction.transmitted_force), constants of a parameter set (kernel.pack)."""
-    return (transmitted_force(1.0, 1.0, capstan, pulley, 0.0), transmitted_force(0.0, 1.0, capstan, pulley, coulomb),
-            transmitted_force(1.0, -1.0, capstan, pulley, 0.0), transmitted_force(0.0, -1.0, capstan, pulley, coulomb))
+    return (
+        transmitted_force(1.0, 1.0, capstan, pulley, 0.0),
+        transmitted_force(0.0, 1.0, capstan, pulley, coulomb),
+        transmitted_force(1.0, -1.0, capstan, pulley, 0.0),
+        transmitted_force(0.0, -1.0, capstan, pulley, coulomb),
+    )
 
 
 @jit
@@ -37,12 +41,30 @@ def referred_load(mass, damping, stiffness, pulley, cubic_stiffness=0.0):
     (m n, b n, k n, k3 n^3), so that m n x'' = F_L - F_static - b n x' - k n x - k3 n^3 x^3
     with F_static = m g + F_0 (params.Load.static_force_n): forces stay in load coordinates.
     Constants of a parameter set (kernel.pack), so a step does not multiply them again."""
-    return mass * pulley, damping * pulley, stiffness * pulley, cubic_stiffness * (pulley * pulley * pulley)
+    return (
+        mass * pulley,
+        damping * pulley,
+        stiffness * pulley,
+        cubic_stiffness * (pulley * pulley * pulley),
+    )
 
 
 @jit
-def slider_response(wire_stiffness, x, v, dt, mass_n, damping_n, stiffness_n, static_force,
-                    a_in, f_in, a_out, f_out, cubic_n=0.0):
+def slider_response(
+    wire_stiffness,
+    x,
+    v,
+    dt,
+    mass_n,
+    damping_n,
+    stiffness_n,
+    static_force,
+    a_in,
+    f_in,
+    a_out,
+    f_out,
+    cubic_n=0.0,
+):
     """Slider velocity at the end of the step as v = c + g W0, per direction of motion.
 
     Returns (c_in, g_in, c_out, g_out) for motion inward and outward (eqs. 4.32-4.35 with the
@@ -52,17 +74,22 @@ def slider_response(wire_stiffness, x, v, dt, mass_n, damping_n, stiffness_n, st
     the static force m g + F_0. The cubic spring term k3 x^3 is linearised about the start
     position, k3 x_new^3 ~ k3 x^3 + 3 k3 x^2 v dt, so that v stays linear in W0.
     """
-    inv_dt = 1.0 / dt      # one division per batch loop (dt is the same for every set)
+    inv_dt = 1.0 / dt  # one division per batch loop (dt is the same for every set)
     cubic_x2 = cubic_n * x * x
     inertia = mass_n * inv_dt + damping_n + (stiffness_n + 3.0 * cubic_x2) * dt
     rest = mass_n * v * inv_dt - static_force - stiffness_n * x - cubic_x2 * x
     # F_L(dir) = a_dir * (w0 - K dt v) + f_dir, linear in v
     den_in = inertia + a_in * wire_stiffness * dt
     den_out = inertia + a_out * wire_stiffness * dt
-    inv_both = 1.0 / (den_in * den_out)   # one division for both directions
+    inv_both = 1.0 / (den_in * den_out)  # one division for both directions
     inv_den_in = den_out * inv_both
     inv_den_out = den_in * inv_both
-    return (rest + f_in) * inv_den_in, a_in * inv_den_in, (rest + f_out) * inv_den_out, a_out * inv_den_out
+    return (
+        (rest + f_in) * inv_den_in,
+        a_in * inv_den_in,
+        (rest + f_out) * inv_den_out,
+        a_out * inv_den_out,
+    )
 
 
 @jit
@@ -90,5 +117,10 @@ def load_force(v_new, v_old, x_new, dt, mass_n, damping_n, stiffness_n, static_f
     (:func:`slider_response`), so with k3 > 0 this force and the transmitted wire force differ
     by k3 (3 x dx^2 + dx^3), second order in the step's dx and 0 at rest.
     """
-    return (mass_n * (v_new - v_old) * (1.0 / dt) + static_force + damping_n * v_new + stiffness_n * x_new
-            + cubic_n * x_new * x_new * x_new)
+    return (
+        mass_n * (v_new - v_old) * (1.0 / dt)
+        + static_force
+        + damping_n * v_new
+        + stiffness_n * x_new
+        + cubic_n * x_new * x_new * x_new
+    )

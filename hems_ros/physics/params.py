@@ -156,9 +156,15 @@ class Kinetics(_Group):
 
     def check(self) -> None:
         if not self.af0_c > self.as0_c:
-            raise ParamError(f"kinetics.af0_c = {self.af0_c!r}: must be > kinetics.as0_c = {self.as0_c!r} (Af <= As)")
+            raise ParamError(
+                f"kinetics.af0_c = {self.af0_c!r}: must be > kinetics.as0_c "
+                f"= {self.as0_c!r} (Af <= As)"
+            )
         if not self.ms0_c > self.mf0_c:
-            raise ParamError(f"kinetics.ms0_c = {self.ms0_c!r}: must be > kinetics.mf0_c = {self.mf0_c!r} (Ms <= Mf)")
+            raise ParamError(
+                f"kinetics.ms0_c = {self.ms0_c!r}: must be > kinetics.mf0_c "
+                f"= {self.mf0_c!r} (Ms <= Mf)"
+            )
         self._pos("cm_pa_per_c", "ca_pa_per_c")
 
 
@@ -177,12 +183,15 @@ class Constitutive(_Group):
     def check(self) -> None:
         self._pos("e_martensite_pa", "e_austenite_pa", "max_recoverable_strain")
         if not 0 <= self.poisson_ratio < 0.5:
-            raise ParamError(f"constitutive.poisson_ratio = {self.poisson_ratio!r}: must be in [0, 0.5)")
+            raise ParamError(
+                f"constitutive.poisson_ratio = {self.poisson_ratio!r}: must be in [0, 0.5)"
+            )
 
 
 @dataclass(frozen=True)
 class Drive(_Group):
-    """HEMS PWM stage: one MOSFET per actuator, 20 V supply, 4 A current limit (dissertation chapter 6).
+    """HEMS PWM stage: one MOSFET per actuator, 20 V supply, 4 A current limit
+    (dissertation chapter 6).
 
     ``source_resistance_ohm``: supply sag, the resistance in series with the wire while the
     MOSFET conducts (supply output, MOSFET, leads, contacts). A measured current below
@@ -230,18 +239,29 @@ class Load(_Group):
     def check(self) -> None:
         if self.kind not in LOAD_KINDS:
             raise ParamError(f"load.kind = {self.kind!r}: must be one of {', '.join(LOAD_KINDS)}")
-        self._nonneg("mass_kg", "damping_n_s_per_m", "stiffness_n_per_m", "pretension_n", "gravity_m_s2",
-                     "cubic_stiffness_n_per_m3")
+        self._nonneg(
+            "mass_kg",
+            "damping_n_s_per_m",
+            "stiffness_n_per_m",
+            "pretension_n",
+            "gravity_m_s2",
+            "cubic_stiffness_n_per_m3",
+        )
         if not self.pulley_ratio >= 1:
             raise ParamError(f"load.pulley_ratio = {self.pulley_ratio!r}: must be >= 1")
         if self.kind == "hanging_mass":
             self._pos("mass_kg")
         else:
             if self.mass_kg != 0:
-                raise ParamError(f"load.mass_kg = {self.mass_kg!r}: must be 0 for load.kind = {self.kind} (massless)")
+                raise ParamError(
+                    f"load.mass_kg = {self.mass_kg!r}: must be 0 for load.kind "
+                    f"= {self.kind} (massless)"
+                )
             self._pos("stiffness_n_per_m")
         if self.kind == "bias_spring" and self.pulley_ratio != 1:
-            raise ParamError(f"load.pulley_ratio = {self.pulley_ratio!r}: must be 1 for load.kind = bias_spring")
+            raise ParamError(
+                f"load.pulley_ratio = {self.pulley_ratio!r}: must be 1 for load.kind = bias_spring"
+            )
 
     def static_force_n(self) -> float:
         """Load force at x = 0, at rest, in load coordinates."""
@@ -281,18 +301,32 @@ class Sheath(_Group):
 
     def check(self) -> None:
         self._pos(
-            "ptfe_inner_diameter_m", "ptfe_outer_diameter_m", "ptfe_conductivity_w_per_m_k",
-            "steel_inner_diameter_m", "steel_outer_diameter_m", "steel_conductivity_w_per_m_k",
-            "outer_convection_w_per_m2_k", "outer_area_m2", "heat_capacity_j_per_k",
+            "ptfe_inner_diameter_m",
+            "ptfe_outer_diameter_m",
+            "ptfe_conductivity_w_per_m_k",
+            "steel_inner_diameter_m",
+            "steel_outer_diameter_m",
+            "steel_conductivity_w_per_m_k",
+            "outer_convection_w_per_m2_k",
+            "outer_area_m2",
+            "heat_capacity_j_per_k",
         )
-        self._nonneg("gap_resistance_k_per_w", "helix_heat_capacity_j_per_k", "liner_helix_resistance_k_per_w")
+        self._nonneg(
+            "gap_resistance_k_per_w",
+            "helix_heat_capacity_j_per_k",
+            "liner_helix_resistance_k_per_w",
+        )
         if self.helix_heat_capacity_j_per_k > 0 and not self.liner_helix_resistance_k_per_w > 0:
-            raise ParamError("sheath.liner_helix_resistance_k_per_w: must be > 0 when "
-                             "sheath.helix_heat_capacity_j_per_k > 0 (two sheath nodes)")
+            raise ParamError(
+                "sheath.liner_helix_resistance_k_per_w: must be > 0 when "
+                "sheath.helix_heat_capacity_j_per_k > 0 (two sheath nodes)"
+            )
         if not self.ptfe_outer_diameter_m > self.ptfe_inner_diameter_m:
             raise ParamError("sheath.ptfe_outer_diameter_m: must be > sheath.ptfe_inner_diameter_m")
         if not self.steel_outer_diameter_m > self.steel_inner_diameter_m:
-            raise ParamError("sheath.steel_outer_diameter_m: must be > sheath.steel_inner_diameter_m")
+            raise ParamError(
+                "sheath.steel_outer_diameter_m: must be > sheath.steel_inner_diameter_m"
+            )
 
 
 @dataclass(frozen=True)
@@ -424,7 +458,9 @@ class UnitParams:
             if not isinstance(getattr(self, gname), cls):
                 raise ParamError(f"{gname}: must be a {cls.__name__}")
         if self.sheath.enabled and not self.sheath.ptfe_inner_diameter_m > self.wire.diameter_m:
-            raise ParamError("sheath.ptfe_inner_diameter_m: must be > wire.diameter_m (the wire runs inside)")
+            raise ParamError(
+                "sheath.ptfe_inner_diameter_m: must be > wire.diameter_m (the wire runs inside)"
+            )
 
     @property
     def wire_heat_capacity_j_per_k(self) -> float:
@@ -433,7 +469,8 @@ class UnitParams:
 
     @property
     def wire_latent_heat_j(self) -> float:
-        """rho V dH, the latent heat of the whole wire's transformation (eq. 4.7; Table 4.1: 28.45 J)."""
+        """rho V dH, the latent heat of the whole wire's transformation (eq. 4.7;
+        Table 4.1: 28.45 J)."""
         return self.thermal.density_kg_m3 * self.wire.volume_m3 * self.thermal.latent_heat_j_kg
 
     # ----------------------------------------------------------------- conversion
@@ -463,8 +500,13 @@ class UnitParams:
                 known = {f.name for f in fields(_GROUPS[key])}
                 unknown = sorted(set(value) - known)
                 if unknown:
-                    raise ParamError(f"{source}: unknown key {key}.{unknown[0]} (known: {', '.join(sorted(known))})")
-                groups[key] = _GROUPS[key](**{k: _coerce(_GROUPS[key], k, v) for k, v in value.items()})
+                    raise ParamError(
+                        f"{source}: unknown key {key}.{unknown[0]} (known: "
+                        f"{', '.join(sorted(known))})"
+                    )
+                groups[key] = _GROUPS[key](
+                    **{k: _coerce(_GROUPS[key], k, v) for k, v in value.items()}
+                )
             elif key in ("name", "description", "ambient_temperature_c"):
                 top[key] = value
             else:
@@ -521,8 +563,10 @@ def load_params(path_or_name: str | os.PathLike[str]) -> UnitParams:
     if path.suffix not in (".yaml", ".yml"):
         path = config_dir() / f"{path_or_name}.yaml"
         if not path.is_file():
-            raise ParamError(f"no parameter set named {path_or_name!r} in {config_dir()} "
-                             f"(available: {', '.join(available_configs()) or 'none'})")
+            raise ParamError(
+                f"no parameter set named {path_or_name!r} in {config_dir()} "
+                f"(available: {', '.join(available_configs()) or 'none'})"
+            )
     try:
         data = load_yaml(path.read_text())
     except yaml.YAMLError as exc:
@@ -539,8 +583,24 @@ def save_params(params: UnitParams, path: str | os.PathLike[str]) -> Path:
 
 
 __all__ = [
-    "ParamError", "UnitParams", "WireGeometry", "Electrical", "Thermal", "Kinetics",
-    "Constitutive", "Drive", "Load", "Sheath", "Capstan", "GloveFriction", "Encoder",
-    "ForceSensor", "Start", "LOAD_KINDS", "load_params", "save_params", "config_dir", "available_configs",
+    "ParamError",
+    "UnitParams",
+    "WireGeometry",
+    "Electrical",
+    "Thermal",
+    "Kinetics",
+    "Constitutive",
+    "Drive",
+    "Load",
+    "Sheath",
+    "Capstan",
+    "GloveFriction",
+    "Encoder",
+    "ForceSensor",
+    "Start",
+    "LOAD_KINDS",
+    "load_params",
+    "save_params",
+    "config_dir",
+    "available_configs",
 ]
-

@@ -54,19 +54,23 @@ COOLING_SHEATHED_S = 3.33
 
 def characterization_rig(params: UnitParams, sheathed: bool) -> UnitParams:
     """The chapter 3 rig (30 N mass + 20 N spring, straight) with or without the sheath."""
-    return params.replace({
-        "load.kind": "hanging_mass",
-        "load.mass_kg": RIG_MASS_KG,
-        "load.pretension_n": RIG_SPRING_PRETENSION_N,
-        "load.stiffness_n_per_m": RIG_SPRING_STIFFNESS_N_PER_M,
-        "load.pulley_ratio": 1.0,
-        "sheath.enabled": sheathed,
-        "capstan.enabled": False,
-        "glove_friction.enabled": False,
-    })
+    return params.replace(
+        {
+            "load.kind": "hanging_mass",
+            "load.mass_kg": RIG_MASS_KG,
+            "load.pretension_n": RIG_SPRING_PRETENSION_N,
+            "load.stiffness_n_per_m": RIG_SPRING_STIFFNESS_N_PER_M,
+            "load.pulley_ratio": 1.0,
+            "sheath.enabled": sheathed,
+            "capstan.enabled": False,
+            "glove_friction.enabled": False,
+        }
+    )
 
 
-def pulse_train(pulse_s: float, total_s: float, dt: float, amplitude: float = PULSE_CURRENT_A) -> np.ndarray:
+def pulse_train(
+    pulse_s: float, total_s: float, dt: float, amplitude: float = PULSE_CURRENT_A
+) -> np.ndarray:
     """One pulse of ``pulse_s`` at t = 0, then zero up to ``total_s``."""
     n = int(round(total_s / dt))
     drive = np.zeros(n)
@@ -86,7 +90,9 @@ class PulseResponse:
     min_martensite: float
 
 
-def cooling_time(position: np.ndarray, end_index: int, dt: float, threshold: float = COOLED_POSITION_M) -> float:
+def cooling_time(
+    position: np.ndarray, end_index: int, dt: float, threshold: float = COOLED_POSITION_M
+) -> float:
     """Seconds from sample ``end_index`` until ``position`` is back at or below ``threshold``."""
     if position.max() <= threshold:
         return float("nan")
@@ -94,37 +100,58 @@ def cooling_time(position: np.ndarray, end_index: int, dt: float, threshold: flo
     return float(back[0] * dt) if back.size else float("inf")
 
 
-def pulse_responses(sets: list[UnitParams], pulses: list[float], dt: float = 1e-3,
-                    total_s: float = 16.0) -> list[PulseResponse]:
+def pulse_responses(
+    sets: list[UnitParams], pulses: list[float], dt: float = 1e-3, total_s: float = 16.0
+) -> list[PulseResponse]:
     """4 A pulses, one per (set, pulse) pair, each from rest; maxima and cooling times."""
     drives = np.stack([pulse_train(p, total_s, dt) for p in pulses])
-    res = simulate(sets, dt, current=drives,
-                   channels=["slider_position_m", "wire_force_n", "wire_temperature_c",
-                             "martensite_fraction", "energy_joule_j"])
+    res = simulate(
+        sets,
+        dt,
+        current=drives,
+        channels=[
+            "slider_position_m",
+            "wire_force_n",
+            "wire_temperature_c",
+            "martensite_fraction",
+            "energy_joule_j",
+        ],
+    )
     out = []
     for i, pulse in enumerate(pulses):
         x = res.slider_position_m[i]
         end = int(round(pulse / dt)) - 1
         cooled = cooling_time(x, end, dt)
-        out.append(PulseResponse(
-            pulse_s=pulse,
-            energy_j=float(res.energy_joule_j[i, -1]),
-            max_displacement_m=float(x.max()),
-            max_force_n=float(res.wire_force_n[i].max()),
-            cooling_time_s=cooled,
-            cooled_temperature_c=float(res.wire_temperature_c[i, end + int(round(cooled / dt))])
-            if math.isfinite(cooled) else math.nan,
-            max_temperature_c=float(res.wire_temperature_c[i].max()),
-            min_martensite=float(res.martensite_fraction[i].min()),
-        ))
+        out.append(
+            PulseResponse(
+                pulse_s=pulse,
+                energy_j=float(res.energy_joule_j[i, -1]),
+                max_displacement_m=float(x.max()),
+                max_force_n=float(res.wire_force_n[i].max()),
+                cooling_time_s=cooled,
+                cooled_temperature_c=float(res.wire_temperature_c[i, end + int(round(cooled / dt))])
+                if math.isfinite(cooled)
+                else math.nan,
+                max_temperature_c=float(res.wire_temperature_c[i].max()),
+                min_martensite=float(res.martensite_fraction[i].min()),
+            )
+        )
     return out
 
 
-def controlled_cooling_times(sets: list[UnitParams], target_m: float = CONTROLLED_DISPLACEMENT_M,
-                             dt: float = 1e-3, total_s: float = 25.0) -> list[float]:
+def controlled_cooling_times(
+    sets: list[UnitParams],
+    target_m: float = CONTROLLED_DISPLACEMENT_M,
+    dt: float = 1e-3,
+    total_s: float = 25.0,
+) -> list[float]:
     """Cooling time of each set after 4 A drove its slider to ``target_m`` (then off)."""
-    heat = simulate(sets, dt, current=np.full(int(round(10.0 / dt)), PULSE_CURRENT_A),
-                    channels=["slider_position_m"])
+    heat = simulate(
+        sets,
+        dt,
+        current=np.full(int(round(10.0 / dt)), PULSE_CURRENT_A),
+        channels=["slider_position_m"],
+    )
     cutoff = []
     for i, p in enumerate(sets):
         reached = np.flatnonzero(heat.slider_position_m[i] >= target_m)

@@ -20,7 +20,8 @@ import numpy as np
 
 
 def encoder_counts(position_m: float, resolution_m: float, gain: float = 1.0) -> int:
-    """Integer counts of the slider position as an encoder of scale ``gain`` sees it (nearest count)."""
+    """Integer counts of the slider position as an encoder of scale ``gain`` sees it
+    (nearest count)."""
     return int(round(gain * position_m / resolution_m))
 
 
@@ -29,9 +30,15 @@ def encoder_counts_array(position_m: np.ndarray, resolution_m, gain=1.0) -> np.n
     return np.rint(gain * np.asarray(position_m) / resolution_m).astype(np.int64)
 
 
-def force_reading(force_n: float, noise_n: float, range_max_n: float, resolution_n: float,
-                  offset_n: float = 0.0, drift_n_per_s: float = 0.0,
-                  time_s: float = 0.0) -> tuple[float, bool]:
+def force_reading(
+    force_n: float,
+    noise_n: float,
+    range_max_n: float,
+    resolution_n: float,
+    offset_n: float = 0.0,
+    drift_n_per_s: float = 0.0,
+    time_s: float = 0.0,
+) -> tuple[float, bool]:
     """(reading, saturated) for a true wire force, the sensor's zero error at ``time_s`` (s since
     the unit started) and one noise sample."""
     raw = force_n + offset_n + drift_n_per_s * time_s + noise_n
@@ -42,8 +49,15 @@ def force_reading(force_n: float, noise_n: float, range_max_n: float, resolution
     return min(round(raw / resolution_n) * resolution_n, range_max_n), False
 
 
-def force_reading_array(force_n: np.ndarray, noise_n: np.ndarray, range_max_n, resolution_n,
-                        offset_n=0.0, drift_n_per_s=0.0, time_s=0.0) -> tuple[np.ndarray, np.ndarray]:
+def force_reading_array(
+    force_n: np.ndarray,
+    noise_n: np.ndarray,
+    range_max_n,
+    resolution_n,
+    offset_n=0.0,
+    drift_n_per_s=0.0,
+    time_s=0.0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Vectorised :func:`force_reading`; the sensor constants and ``time_s`` broadcast."""
     raw = np.asarray(force_n) + offset_n + drift_n_per_s * time_s + noise_n
     saturated = (raw >= range_max_n) | (raw <= 0.0)
@@ -56,4 +70,3 @@ def noise_generator(seed: int) -> np.random.Generator:
     """The force sensor's generator; one standard-normal draw per simulation step (none when
     the sensor's noise is zero)."""
     return np.random.default_rng(seed)
-

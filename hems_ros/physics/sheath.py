@@ -25,8 +25,9 @@ from dataclasses import dataclass
 from hems_ros.physics.jit import jit
 
 
-def cylinder_conduction_resistance(inner_d_m: float, outer_d_m: float, conductivity: float,
-                                   length_m: float) -> float:
+def cylinder_conduction_resistance(
+    inner_d_m: float, outer_d_m: float, conductivity: float, length_m: float
+) -> float:
     """Radial conduction through a tube wall: ln(d_o/d_i) / (2 pi k L), K/W."""
     return math.log(outer_d_m / inner_d_m) / (2.0 * math.pi * conductivity * length_m)
 
@@ -65,12 +66,20 @@ def sheath_resistances(sheath, length_m: float) -> SheathResistances:
     """Table 3.1 resistances from a :class:`~hems_ros.physics.params.Sheath` group."""
     return SheathResistances(
         ptfe_conduction=cylinder_conduction_resistance(
-            sheath.ptfe_inner_diameter_m, sheath.ptfe_outer_diameter_m,
-            sheath.ptfe_conductivity_w_per_m_k, length_m),
+            sheath.ptfe_inner_diameter_m,
+            sheath.ptfe_outer_diameter_m,
+            sheath.ptfe_conductivity_w_per_m_k,
+            length_m,
+        ),
         steel_conduction=cylinder_conduction_resistance(
-            sheath.steel_inner_diameter_m, sheath.steel_outer_diameter_m,
-            sheath.steel_conductivity_w_per_m_k, length_m),
-        outer_convection=convection_resistance(sheath.outer_convection_w_per_m2_k, sheath.outer_area_m2),
+            sheath.steel_inner_diameter_m,
+            sheath.steel_outer_diameter_m,
+            sheath.steel_conductivity_w_per_m_k,
+            length_m,
+        ),
+        outer_convection=convection_resistance(
+            sheath.outer_convection_w_per_m2_k, sheath.outer_area_m2
+        ),
         gap=sheath.gap_resistance_k_per_w,
     )
 
@@ -79,8 +88,10 @@ def sheath_resistances(sheath, length_m: float) -> SheathResistances:
 def sheath_heat_flows(wire_c, sheath_c, outer_c, wire_to_sheath_w_per_k, sheath_to_outer_w_per_k):
     """(wire -> sheath, sheath -> outer) heat flows, W; the outer side is the helix node, or
     the air (a helix held at ambient) for a one-node sheath."""
-    return (wire_to_sheath_w_per_k * (wire_c - sheath_c),
-            sheath_to_outer_w_per_k * (sheath_c - outer_c))
+    return (
+        wire_to_sheath_w_per_k * (wire_c - sheath_c),
+        sheath_to_outer_w_per_k * (sheath_c - outer_c),
+    )
 
 
 @jit

@@ -1,7 +1,7 @@
 """Stepping API: one actuation unit advanced at a fixed step (1 kHz default) by a node.
 
     unit = ActuationUnit(load_params("sheathed_calibrated"), dt=1e-3)
-    r = unit.step(duty=35.0)          # or current=4.0 (A), voltage=12.0 (V), temperature=80.0 (degC)
+    r = unit.step(duty=35.0)  # or current=4.0 (A), voltage=12.0 (V), temperature=80.0 (degC)
     r.encoder_counts, r.force_reading, r.wire_temperature_c, r.slider_position_m ...
 
 Exactly one drive per step: ``duty`` in % (0-100) through the HEMS PWM stage (20 V, 4 A
@@ -41,11 +41,11 @@ class StepResult:
     resistance_ohm: float
     current_a: float
     electrical_power_w: float
-    energy_joule_j: float        # Joule heat delivered since reset
+    energy_joule_j: float  # Joule heat delivered since reset
     stress_pa: float
     strain: float
     sheath_temperature_c: float
-    sheath_helix_temperature_c: float   # ambient unless the sheath has a helix node
+    sheath_helix_temperature_c: float  # ambient unless the sheath has a helix node
     slider_position_m: float
     slider_velocity_m_s: float
     tendon_position_m: float
@@ -58,17 +58,33 @@ def check_drive(kind: str, value: float) -> None:
     if not math.isfinite(value):
         raise ValueError(f"{kind} = {value!r}: drive input must be finite")
     if kind == "duty" and not 0.0 <= value <= 100.0:
-        raise ValueError(f"duty = {value!r} %: must be within 0-100 % (the controller clamps, not the plant)")
+        raise ValueError(
+            f"duty = {value!r} %: must be within 0-100 % (the controller clamps, not the plant)"
+        )
 
 
-def select_drive(duty: float | None, current: float | None, voltage: float | None,
-                 temperature: float | None = None):
+def select_drive(
+    duty: float | None,
+    current: float | None,
+    voltage: float | None,
+    temperature: float | None = None,
+):
     """(kind name, value) of the one drive given; ValueError unless exactly one is given."""
-    given = [(k, v) for k, v in (("duty", duty), ("current", current), ("voltage", voltage),
-                                 ("temperature", temperature)) if v is not None]
+    given = [
+        (k, v)
+        for k, v in (
+            ("duty", duty),
+            ("current", current),
+            ("voltage", voltage),
+            ("temperature", temperature),
+        )
+        if v is not None
+    ]
     if len(given) != 1:
-        raise ValueError("give exactly one of duty, current, voltage, temperature "
-                         f"(got {', '.join(k for k, _ in given) or 'none'})")
+        raise ValueError(
+            "give exactly one of duty, current, voltage, temperature "
+            f"(got {', '.join(k for k, _ in given) or 'none'})"
+        )
     return given[0]
 
 
@@ -83,7 +99,9 @@ class ActuationUnit:
             raise TypeError("params must be a UnitParams")
         self.dt = float(dt)
         self._p = kernel.pack(self.params)
-        self._p_imposed = kernel.pack(self.params, temperature_drive=True)   # the temperature drive row
+        self._p_imposed = kernel.pack(
+            self.params, temperature_drive=True
+        )  # the temperature drive row
         self._noisy = self.params.force_sensor.noise_std_n > 0
         self._out = np.zeros(kernel.N_O)
         self.reset()
@@ -99,7 +117,13 @@ class ActuationUnit:
 
     def snapshot(self) -> tuple:
         """Everything :meth:`restore` needs to continue from here (state, time, noise draws)."""
-        return self._s.copy(), self._out.copy(), self._steps, self._rng.bit_generator.state, self._noise
+        return (
+            self._s.copy(),
+            self._out.copy(),
+            self._steps,
+            self._rng.bit_generator.state,
+            self._noise,
+        )
 
     def restore(self, snapshot: tuple) -> None:
         """Go back to a :meth:`snapshot` of this unit: the next steps repeat from there."""
@@ -130,14 +154,27 @@ class ActuationUnit:
         """Energy accumulators since reset, J (Joule = stored + convected + latent + to sheath)."""
         return {k: v for k, v in self.state.items() if k.startswith("energy_")}
 
-    def step(self, duty: float | None = None, current: float | None = None,
-             voltage: float | None = None, *, temperature: float | None = None) -> StepResult:
+    def step(
+        self,
+        duty: float | None = None,
+        current: float | None = None,
+        voltage: float | None = None,
+        *,
+        temperature: float | None = None,
+    ) -> StepResult:
         """Advance by dt with one drive: duty %, current A, voltage V or wire temperature degC."""
         self.advance(duty, current, voltage, temperature=temperature)
         return self.result()
 
-    def advance(self, duty: float | None = None, current: float | None = None,
-                voltage: float | None = None, steps: int = 1, *, temperature: float | None = None) -> None:
+    def advance(
+        self,
+        duty: float | None = None,
+        current: float | None = None,
+        voltage: float | None = None,
+        steps: int = 1,
+        *,
+        temperature: float | None = None,
+    ) -> None:
         """:meth:`step` without building its result, ``steps`` times with the same drive in one
         kernel call: a node integrating at 1 kHz reads only the steps that end on a sensor
         sample (:meth:`result`), and the drive changes only with a command."""
@@ -150,13 +187,17 @@ class ActuationUnit:
         done = kernel.steps(row, self._s, DRIVE_NAMES[kind], value, self.dt, self._out, steps)
         self._steps += done
         if done < steps:
-            raise FloatingPointError(f"state became non-finite at t = {self.time + self.dt:.6f} s ({self.state})")
+            raise FloatingPointError(
+                f"state became non-finite at t = {self.time + self.dt:.6f} s ({self.state})"
+            )
         # the result's force noise is the last step's draw; a block of draws continues the
         # generator's stream exactly as single draws would. A noiseless sensor draws nothing
         # (as the batch API), which spares a unit node, whose force sensor is the shoulder
         # module's, two generator calls a tick.
         if self._noisy:
-            self._noise = self._rng.standard_normal() if steps == 1 else self._rng.standard_normal(steps)[-1]
+            self._noise = (
+                self._rng.standard_normal() if steps == 1 else self._rng.standard_normal(steps)[-1]
+            )
 
     def readings(self) -> tuple[int, float, float]:
         """(encoder counts, encoder position m, wire force N) after the last step: the part of
@@ -179,9 +220,15 @@ class ActuationUnit:
         counts, position, wire_force = self.readings()
         fs = prm.force_sensor
         time = self.time
-        reading, saturated = sensors.force_reading(wire_force, float(self._noise) * fs.noise_std_n,
-                                                   fs.range_max_n, fs.resolution_n, fs.offset_n,
-                                                   fs.drift_n_per_s, time)
+        reading, saturated = sensors.force_reading(
+            wire_force,
+            float(self._noise) * fs.noise_std_n,
+            fs.range_max_n,
+            fs.resolution_n,
+            fs.offset_n,
+            fs.drift_n_per_s,
+            time,
+        )
         return StepResult(
             time_s=time,
             encoder_counts=counts,

@@ -28,17 +28,31 @@ DT = 1e-3
 class MassLoops:
     masses_kg: tuple
     result: SimResult
-    heating_midpoint_c: list      # wire temperature where xi crosses 0.5 on heating (NaN if never)
-    heating_onset_c: list         # wire temperature where xi crosses 0.95 on heating
+    heating_midpoint_c: list  # wire temperature where xi crosses 0.5 on heating (NaN if never)
+    heating_onset_c: list  # wire temperature where xi crosses 0.95 on heating
     min_martensite: list
     cooling_capacity_ratio: list  # peak apparent heat capacity on cooling / c_p rho V
 
 
-def mass_loops(params: UnitParams | None = None, masses=(1.0, 3.0, 5.0), pulse_s: float = 1.8,
-               total_s: float = 25.0) -> MassLoops:
+def mass_loops(
+    params: UnitParams | None = None,
+    masses=(1.0, 3.0, 5.0),
+    pulse_s: float = 1.8,
+    total_s: float = 25.0,
+) -> MassLoops:
     base = params or load_params("table41")
-    sets = [base.replace({"load.kind": "hanging_mass", "load.mass_kg": m, "load.pretension_n": 0.0,
-                          "load.stiffness_n_per_m": 0.0, "sheath.enabled": False}) for m in masses]
+    sets = [
+        base.replace(
+            {
+                "load.kind": "hanging_mass",
+                "load.mass_kg": m,
+                "load.pretension_n": 0.0,
+                "load.stiffness_n_per_m": 0.0,
+                "sheath.enabled": False,
+            }
+        )
+        for m in masses
+    ]
     res = simulate(sets, DT, current=scenarios.pulse_train(pulse_s, total_s, DT))
     end = int(round(pulse_s / DT))
     mid, onset, ximin, cap = [], [], [], []
@@ -59,8 +73,13 @@ def _crossing(temp: np.ndarray, xi: np.ndarray, level: float) -> float:
 def _cooling_capacity_ratio(p: UnitParams, temp: np.ndarray, xi: np.ndarray) -> float:
     """Peak of (convective loss / |C dT/dt|) while cooling: 1 without latent heat."""
     c_w = p.wire_heat_capacity_j_per_k
-    q = heat.convection_loss(temp, p.ambient_temperature_c, p.thermal.h0_w_m2_c, p.thermal.h2_w_m2_c3,
-                             p.wire.surface_area_m2)
+    q = heat.convection_loss(
+        temp,
+        p.ambient_temperature_c,
+        p.thermal.h0_w_m2_c,
+        p.thermal.h2_w_m2_c3,
+        p.wire.surface_area_m2,
+    )
     rate = -np.gradient(temp, DT)
     ok = rate > 1e-3
     return float(np.max(q[ok] / (c_w * rate[ok]))) if ok.any() else float("nan")
@@ -70,16 +89,17 @@ def _cooling_capacity_ratio(p: UnitParams, temp: np.ndarray, xi: np.ndarray) -> 
 class SixPulses:
     result: SimResult
     drive: np.ndarray
-    reversal_temperature_c: list   # peak temperature of each pulse
-    reversal_martensite: list      # xi at that peak
-    pause_martensite: list         # xi at the end of the following pause
-    return_deviation: list         # xi when the next pulse passes the previous peak - xi at the peak
-    return_deviation_effective: list   # same, passing the peak's effective temperature T - sigma/C_A
-    effective_temperature_c: np.ndarray   # u_A = T - sigma/C_A of the run (kinetics.py)
+    reversal_temperature_c: list  # peak temperature of each pulse
+    reversal_martensite: list  # xi at that peak
+    pause_martensite: list  # xi at the end of the following pause
+    return_deviation: list  # xi when the next pulse passes the previous peak - xi at the peak
+    return_deviation_effective: list  # same, passing the peak's effective temperature T - sigma/C_A
+    effective_temperature_c: np.ndarray  # u_A = T - sigma/C_A of the run (kinetics.py)
 
 
-def six_pulses(params: UnitParams | None = None, pulses=(0.5, 0.6, 0.7, 0.8, 0.9, 1.0),
-               pause_s: float = 2.0) -> SixPulses:
+def six_pulses(
+    params: UnitParams | None = None, pulses=(0.5, 0.6, 0.7, 0.8, 0.9, 1.0), pause_s: float = 2.0
+) -> SixPulses:
     base = params or load_params("table41")
     seg = []
     for p in pulses:
@@ -98,8 +118,8 @@ def six_pulses(params: UnitParams | None = None, pulses=(0.5, 0.6, 0.7, 0.8, 0.9
         if j + 1 < len(ends):
             s, nxt = starts[j], ends[j + 1]
             xi_pause.append(float(xi[s - 1]))
-            dev.append(_passing(temp[s:nxt + 1], xi[s:nxt + 1], temp[e]) - xi[e])
-            dev_u.append(_passing(u_a[s:nxt + 1], xi[s:nxt + 1], u_a[e]) - xi[e])
+            dev.append(_passing(temp[s : nxt + 1], xi[s : nxt + 1], temp[e]) - xi[e])
+            dev_u.append(_passing(u_a[s : nxt + 1], xi[s : nxt + 1], u_a[e]) - xi[e])
     return SixPulses(res, drive, t_rev, xi_rev, xi_pause, dev, dev_u, u_a)
 
 
@@ -112,19 +132,26 @@ def _passing(temp: np.ndarray, xi: np.ndarray, level: float) -> float:
 @dataclass
 class Runaway:
     voltage_v: float
-    result: SimResult          # set 0 bare, set 1 sheathed
-    power_gain: list           # peak power / initial power
+    result: SimResult  # set 0 bare, set 1 sheathed
+    power_gain: list  # peak power / initial power
     peak_temperature_c: list
     peak_velocity_m_s: list
 
 
-def voltage_runaway(params: UnitParams | None = None, voltage_v: float = 16.0, total_s: float = 4.0) -> Runaway:
+def voltage_runaway(
+    params: UnitParams | None = None, voltage_v: float = 16.0, total_s: float = 4.0
+) -> Runaway:
     base = params or load_params("sheathed_calibrated")
     sets = [scenarios.characterization_rig(base, False), scenarios.characterization_rig(base, True)]
     res = simulate(sets, DT, voltage=np.full(int(round(total_s / DT)), voltage_v))
     power = res.electrical_power_w
-    return Runaway(voltage_v, res, list(power.max(axis=1) / power[:, 0]),
-                   list(res.wire_temperature_c.max(axis=1)), list(res.slider_velocity_m_s.max(axis=1)))
+    return Runaway(
+        voltage_v,
+        res,
+        list(power.max(axis=1) / power[:, 0]),
+        list(res.wire_temperature_c.max(axis=1)),
+        list(res.slider_velocity_m_s.max(axis=1)),
+    )
 
 
 @dataclass
@@ -135,52 +162,70 @@ class SheathFacts:
     cooling_bare_s: float
     cooling_sheathed_s: float
     cooling_ratio: float
-    cycle_sheath_start_c: list    # sheath temperature at the start of each repeated cycle
-    cycle_cooling_s: list         # cooling time of each repeated cycle
+    cycle_sheath_start_c: list  # sheath temperature at the start of each repeated cycle
+    cycle_cooling_s: list  # cooling time of each repeated cycle
     cycles: SimResult
 
 
-def sheath_facts(params: UnitParams | None = None, cycles: int = 6, period_s: float = 30.0) -> SheathFacts:
+def sheath_facts(
+    params: UnitParams | None = None, cycles: int = 6, period_s: float = 30.0
+) -> SheathFacts:
     base = params or load_params("sheathed_calibrated")
-    bare, sheathed = scenarios.characterization_rig(base, False), scenarios.characterization_rig(base, True)
+    bare, sheathed = (
+        scenarios.characterization_rig(base, False),
+        scenarios.characterization_rig(base, True),
+    )
     resp = scenarios.pulse_responses([bare, sheathed], [1.6, 1.6], DT)
     cb, cs = scenarios.controlled_cooling_times([bare, sheathed], dt=DT)
     one = scenarios.pulse_train(1.6, period_s, DT)
-    rep = simulate(sheathed, DT, current=np.tile(one, cycles),
-                   channels=["slider_position_m", "sheath_temperature_c", "wire_temperature_c"])
+    rep = simulate(
+        sheathed,
+        DT,
+        current=np.tile(one, cycles),
+        channels=["slider_position_m", "sheath_temperature_c", "wire_temperature_c"],
+    )
     n = one.size
     end = int(round(1.6 / DT)) - 1
     starts, cool = [], []
     for c in range(cycles):
-        x = rep.slider_position_m[0, c * n:(c + 1) * n]
+        x = rep.slider_position_m[0, c * n : (c + 1) * n]
         starts.append(float(rep.sheath_temperature_c[0, c * n]))
         cool.append(scenarios.cooling_time(x, end, DT))
-    return SheathFacts(resp[0].max_displacement_m, resp[1].max_displacement_m,
-                       resp[1].max_displacement_m / resp[0].max_displacement_m,
-                       cb, cs, cs / cb, starts, cool, rep)
+    return SheathFacts(
+        resp[0].max_displacement_m,
+        resp[1].max_displacement_m,
+        resp[1].max_displacement_m / resp[0].max_displacement_m,
+        cb,
+        cs,
+        cs / cb,
+        starts,
+        cool,
+        rep,
+    )
 
 
-def sweep(params: UnitParams | None = None, pulses=tuple(scenarios.TABLE_32_33)) -> list[scenarios.PulseResponse]:
+def sweep(
+    params: UnitParams | None = None, pulses=tuple(scenarios.TABLE_32_33)
+) -> list[scenarios.PulseResponse]:
     """Table 3.2/3.3 protocol on the calibrated sheathed rig, each pulse from a cold start."""
     rig = scenarios.characterization_rig(params or load_params("sheathed_calibrated"), True)
     return scenarios.pulse_responses([rig] * len(pulses), list(pulses), DT)
-
 
 
 @dataclass
 class OnsetBound:
     """One measured short pulse on the 50 N characterization rig, and what it says of the wire."""
 
-    source: str                   # where the fact is printed
+    source: str  # where the fact is printed
     pulse_s: float
-    energy_j: float               # measured pulse energy
-    displacement_mm: float        # measured maximum displacement
-    fraction: float               # of the saturated stroke: the austenite fraction reached
-    lossless_c: float             # the hottest the measured wire can have been (no heat loss)
-    branch_c: float               # where the model's heating branch reaches that fraction under 50 N
-    branch_unloaded_c: float      # the same with no stress (the lowest it can be)
+    energy_j: float  # measured pulse energy
+    displacement_mm: float  # measured maximum displacement
+    fraction: float  # of the saturated stroke: the austenite fraction reached
+    lossless_c: float  # the hottest the measured wire can have been (no heat loss)
+    branch_c: float  # where the model's heating branch reaches that fraction under 50 N
+    branch_unloaded_c: float  # the same with no stress (the lowest it can be)
     model_displacement_mm: float  # the model on the same rig, same pulse length at 4 A
-    start_c: float                # the coldest start from which a lossless wire reaches branch_c
+    start_c: float  # the coldest start from which a lossless wire reaches branch_c
 
 
 ONSET_FACTS = (
@@ -189,11 +234,13 @@ ONSET_FACTS = (
     ("section 5", 1.0, *scenarios.CH6_PULSES[1.0], scenarios.CH6_PULSES[3.0][1]),
     ("section 5", 1.6, *scenarios.CH6_PULSES[1.6], scenarios.CH6_PULSES[3.0][1]),
 )
-"""(source, pulse s, energy J, displacement mm, saturated stroke mm) of the measured short pulses."""
+"""(source, pulse s, energy J, displacement mm, saturated stroke mm) of the measured
+short pulses."""
 
 
 def onset_bounds(params: UnitParams | None = None) -> list[OnsetBound]:
-    """Energy balance of the measured short pulses (dissertation chapters 3 and 6) against the model.
+    """Energy balance of the measured short pulses (dissertation chapters 3 and 6)
+    against the model.
 
     A wire that moved fraction f of its saturated stroke has turned f of its martensite to
     austenite and absorbed f rho V dH of latent heat; with no loss at all the rest of the
@@ -206,21 +253,36 @@ def onset_bounds(params: UnitParams | None = None) -> list[OnsetBound]:
     """
     p = params or load_params("sheathed_calibrated")
     rig = scenarios.characterization_rig(p, True)
-    shift = (scenarios.RIG_MASS_KG * 9.81 + scenarios.RIG_SPRING_PRETENSION_N) / p.wire.cross_section_m2 \
+    shift = (
+        (scenarios.RIG_MASS_KG * 9.81 + scenarios.RIG_SPRING_PRETENSION_N)
+        / p.wire.cross_section_m2
         / p.kinetics.ca_pa_per_c
+    )
     pulses = sorted({fact[1] for fact in ONSET_FACTS})
     model = dict(zip(pulses, scenarios.pulse_responses([rig] * len(pulses), pulses, DT)))
     out = []
     for source, pulse, energy, x_mm, stroke_mm in ONSET_FACTS:
         f = x_mm / stroke_mm
-        lossless = heat.lossless_temperature_c(energy, f, p.wire_heat_capacity_j_per_k, p.wire_latent_heat_j,
-                                               p.ambient_temperature_c)
-        branch = kinetics.heating_branch_temperature(f, p.kinetics.as0_c + shift, p.kinetics.af0_c + shift)
-        out.append(OnsetBound(
-            source, pulse, energy, x_mm, f, lossless, branch,
-            kinetics.heating_branch_temperature(f, p.kinetics.as0_c, p.kinetics.af0_c),
-            model[pulse].max_displacement_m * 1e3,
-            branch - (lossless - p.ambient_temperature_c)))
+        lossless = heat.lossless_temperature_c(
+            energy, f, p.wire_heat_capacity_j_per_k, p.wire_latent_heat_j, p.ambient_temperature_c
+        )
+        branch = kinetics.heating_branch_temperature(
+            f, p.kinetics.as0_c + shift, p.kinetics.af0_c + shift
+        )
+        out.append(
+            OnsetBound(
+                source,
+                pulse,
+                energy,
+                x_mm,
+                f,
+                lossless,
+                branch,
+                kinetics.heating_branch_temperature(f, p.kinetics.as0_c, p.kinetics.af0_c),
+                model[pulse].max_displacement_m * 1e3,
+                branch - (lossless - p.ambient_temperature_c),
+            )
+        )
     return out
 
 

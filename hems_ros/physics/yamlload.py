@@ -19,7 +19,8 @@ class NumberLoader(yaml.SafeLoader):
 NumberLoader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
     re.compile(r"""^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"""),
-    list("-+0123456789"))
+    list("-+0123456789"),
+)
 
 
 def load_yaml(text: str):

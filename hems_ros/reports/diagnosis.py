@@ -26,8 +26,13 @@ from hems_ros.diagnosis.workflow import Diagnosis  # noqa: E402
 from hems_ros.physics.params import save_params  # noqa: E402
 
 DPI = 80
-PHASE_COLORS = {"heating": "#f4cccc", "transformation": "#fce5cd", "hold": "#fff2cc", "cooling": "#cfe2f3",
-                "rest": "#ffffff"}
+PHASE_COLORS = {
+    "heating": "#f4cccc",
+    "transformation": "#fce5cd",
+    "hold": "#fff2cc",
+    "cooling": "#cfe2f3",
+    "rest": "#ffffff",
+}
 
 
 def summary(d: Diagnosis) -> dict:
@@ -39,11 +44,17 @@ def summary(d: Diagnosis) -> dict:
         "named": d.named(),
         "recalibrated": d.recalibrated(),
         "unexplained": d.unexplained,
-        "gap": {"metric": f"{g.metric} RMSE", "unit": g.unit, "train_before": g.train_before,
-                "train_after": g.train_after, "heldout_before": g.heldout_before, "heldout_after": g.heldout_after,
-                "noise_floor": g.noise if math.isfinite(g.noise) else None,
-                "heldout_beyond_noise_before": g.beyond_noise(g.heldout_before),
-                "heldout_beyond_noise_after": g.beyond_noise(g.heldout_after)},
+        "gap": {
+            "metric": f"{g.metric} RMSE",
+            "unit": g.unit,
+            "train_before": g.train_before,
+            "train_after": g.train_after,
+            "heldout_before": g.heldout_before,
+            "heldout_after": g.heldout_after,
+            "noise_floor": g.noise if math.isfinite(g.noise) else None,
+            "heldout_beyond_noise_before": g.beyond_noise(g.heldout_before),
+            "heldout_beyond_noise_after": g.beyond_noise(g.heldout_after),
+        },
         "ambiguous_with": [{"effect": e, "rivals": r} for e, r in s.ambiguous_with],
         "findings": s.findings,
         "dropped": s.dropped,
@@ -57,15 +68,26 @@ def summary(d: Diagnosis) -> dict:
 
 def _noise(d: Diagnosis) -> dict:
     if isinstance(d.data, TimeSeriesData):
-        return {c: {"value": d.data.sigma[c] * localise.display(d.data, c)[1], "unit": localise.display(d.data, c)[0]}
-                for c in d.data.channels}
+        return {
+            c: {
+                "value": d.data.sigma[c] * localise.display(d.data, c)[1],
+                "unit": localise.display(d.data, c)[0],
+            }
+            for c in d.data.channels
+        }
     return {}
 
 
 def _fit_entry(f, start) -> dict:
-    return {"candidate": f.structure[-1].name, "kind": f.structure[-1].kind,
-            "parameters": [p for c in f.structure for p in f.describe(c)],
-            "train_cost": f.train, "heldout_cost": f.heldout, "delta_bic": f.bic - start.bic, "pinned": f.pinned}
+    return {
+        "candidate": f.structure[-1].name,
+        "kind": f.structure[-1].kind,
+        "parameters": [p for c in f.structure for p in f.describe(c)],
+        "train_cost": f.train,
+        "heldout_cost": f.heldout,
+        "delta_bic": f.bic - start.bic,
+        "pinned": f.pinned,
+    }
 
 
 def write(d: Diagnosis, out: Path) -> Path:
@@ -78,10 +100,16 @@ def write(d: Diagnosis, out: Path) -> Path:
     partial.mkdir(parents=True)
     try:
         figures = _figures(d, partial)
-        save_params(d.corrected.replace(name=f"{d.model_name}_corrected",
-                                        description=f"{d.model_name} corrected by hems diagnose: {d.summary_line()}"),
-                    partial / "corrected.yaml")
-        (partial / "summary.json").write_text(json.dumps(summary(d), indent=2, default=_json) + "\n")
+        save_params(
+            d.corrected.replace(
+                name=f"{d.model_name}_corrected",
+                description=f"{d.model_name} corrected by hems diagnose: {d.summary_line()}",
+            ),
+            partial / "corrected.yaml",
+        )
+        (partial / "summary.json").write_text(
+            json.dumps(summary(d), indent=2, default=_json) + "\n"
+        )
         (partial / "report.md").write_text(markdown(d, figures))
         if out.exists():
             shutil.rmtree(out)
@@ -105,75 +133,133 @@ def _num(v: float, digits: int = 3) -> str:
 def markdown(d: Diagnosis, figures: list[str]) -> str:
     """report.md: verdict, gap, where the disagreement sits, the candidates, the model."""
     g = d.gap
-    lines = [f"# Diagnosis: {d.model_name} against the measurement", "", f"**{d.summary_line()}**", "",
-             f"Data: {_data_line(d)}. {d.data.split.description}.", ""]
+    lines = [
+        f"# Diagnosis: {d.model_name} against the measurement",
+        "",
+        f"**{d.summary_line()}**",
+        "",
+        f"Data: {_data_line(d)}. {d.data.split.description}.",
+        "",
+    ]
     if isinstance(d.data, TimeSeriesData):
-        lines += ["Noise floor (high-frequency part of the starting model's residual): "
-                  + ", ".join(f"{c} {v['value']:.3g} {v['unit']}" for c, v in _noise(d).items()) + ".", ""]
+        lines += [
+            "Noise floor (high-frequency part of the starting model's residual): "
+            + ", ".join(f"{c} {v['value']:.3g} {v['unit']}" for c, v in _noise(d).items())
+            + ".",
+            "",
+        ]
     notes = [f"- {r.name}: {n}" for r in d.data.runs for n in r.notes]
     if notes:
         lines += ["What the loaders adjusted:", ""] + notes + [""]
-    lines += ["## Gap", "", f"| {g.metric} RMSE, {g.unit} | before | after |", "|---|---|---|",
-              f"| training data | {_num(g.train_before)} | {_num(g.train_after)} |",
-              f"| held-out data | {_num(g.heldout_before)} | {_num(g.heldout_after)} |"]
+    lines += [
+        "## Gap",
+        "",
+        f"| {g.metric} RMSE, {g.unit} | before | after |",
+        "|---|---|---|",
+        f"| training data | {_num(g.train_before)} | {_num(g.train_after)} |",
+        f"| held-out data | {_num(g.heldout_before)} | {_num(g.heldout_after)} |",
+    ]
     if math.isfinite(g.noise):
-        lines += [f"| held-out, beyond the noise floor ({_num(g.noise)} {g.unit}) | "
-                  f"{_num(g.beyond_noise(g.heldout_before))} | {_num(g.beyond_noise(g.heldout_after))} |"]
+        lines += [
+            f"| held-out, beyond the noise floor ({_num(g.noise)} {g.unit}) | "
+            f"{_num(g.beyond_noise(g.heldout_before))} | {_num(g.beyond_noise(g.heldout_after))} |"
+        ]
     lines += [""]
-    lines += ["## Where the model and the measurement disagree", "",
-              "Residual RMS by phase (time series) or figure (tables), before / after; cost is the mean squared "
-              "residual in noise-floor units (1 = the noise).", "",
-              "| group | channel | samples | RMS before | RMS after | cost before | cost after |",
-              "|---|---|---|---|---|---|---|"]
+    lines += [
+        "## Where the model and the measurement disagree",
+        "",
+        "Residual RMS by phase (time series) or figure (tables), before / after; cost is the mean "
+        "squared residual in noise-floor units (1 = the noise).",
+        "",
+        "| group | channel | samples | RMS before | RMS after | cost before | cost after |",
+        "|---|---|---|---|---|---|---|",
+    ]
     after = {(r.group, r.channel): r for r in d.phases_after}
     for r in d.phases_before:
         a = after[(r.group, r.channel)]
-        lines.append(f"| {r.group} | {r.channel} | {r.samples} | {_num(r.rms)} {r.unit} | {_num(a.rms)} {a.unit} "
-                     f"| {_num(r.cost)} | {_num(a.cost)} |")
+        lines.append(
+            f"| {r.group} | {r.channel} | {r.samples} | {_num(r.rms)} {r.unit} | {_num(a.rms)} "
+            f"{a.unit} | {_num(r.cost)} | {_num(a.cost)} |"
+        )
     lines += ["", f"Left unexplained: {', '.join(d.unexplained) or 'nothing'}.", ""]
     lines += _candidate_lines(d)
-    lines += ["## Corrected model", "", "`corrected.yaml` (loads with `--physics-config`, "
-              "`ros2 run hems_ros actuation_unit --ros-args -p physics_config:=<path>`):", ""]
+    lines += [
+        "## Corrected model",
+        "",
+        "`corrected.yaml` (loads with `--physics-config`, "
+        "`ros2 run hems_ros actuation_unit --ros-args -p physics_config:=<path>`):",
+        "",
+    ]
     changes = _changes(d)
-    lines += (["| parameter | starting model | corrected |", "|---|---|---|"]
-              + [f"| {k} | {a} | {b} |" for k, a, b in changes] if changes else ["No change."])
+    lines += (
+        ["| parameter | starting model | corrected |", "|---|---|---|"]
+        + [f"| {k} | {a} | {b} |" for k, a, b in changes]
+        if changes
+        else ["No change."]
+    )
     lines += ["", "## Figures", ""] + [f"![{Path(f).stem}]({f})" for f in figures] + [""]
     return "\n".join(lines)
 
 
 def _data_line(d: Diagnosis) -> str:
     if isinstance(d.data, TimeSeriesData):
-        return "; ".join(f"{r.name} ({r.n_samples} samples, {r.duration_s:.1f} s, {r.drive} in)" for r in d.data.runs)
+        return "; ".join(
+            f"{r.name} ({r.n_samples} samples, {r.duration_s:.1f} s, {r.drive} in)"
+            for r in d.data.runs
+        )
     return "; ".join(f"{r.name} ({len(r.tests)} rows)" for r in d.data.runs)
 
 
 def _candidate_lines(d: Diagnosis) -> list[str]:
     s = d.search
-    lines = ["## Candidates", "",
-             f"Starting model: training cost {_num(s.start.train)}, held-out cost {_num(s.start.heldout)}. "
-             "Each step fits every candidate on top of the model so far (bounded least squares, several starts) "
-             "and ranks them by BIC on the training data (dBIC: against the starting model); the held-out cost "
-             "decides whether the best one generalises.", ""]
+    lines = [
+        "## Candidates",
+        "",
+        f"Starting model: training cost {_num(s.start.train)}, held-out cost "
+        f"{_num(s.start.heldout)}. Each step fits every candidate on top of the model so far "
+        f"(bounded least squares, several starts) and ranks them by BIC on the training data "
+        f"(dBIC: against the starting model); the held-out cost decides whether the best one "
+        f"generalises.",
+        "",
+    ]
     for i, step in enumerate(s.steps, start=1):
-        lines += [f"### Step {i}", "", "| candidate | kind | fitted | train cost | held-out cost | dBIC | |",
-                  "|---|---|---|---|---|---|---|"]
+        lines += [
+            f"### Step {i}",
+            "",
+            "| candidate | kind | fitted | train cost | held-out cost | dBIC | |",
+            "|---|---|---|---|---|---|---|",
+        ]
         for f in step.ranked:
             c = f.structure[-1]
-            mark = "accepted" if f is step.chosen else ("as good" if f in step.rivals else
-                                                         ("on a bound" if f.pinned else ""))
-            lines.append(f"| {c.name} | {c.kind} | {', '.join(f.describe(c))} | {_num(f.train)} | "
-                         f"{_num(f.heldout)} | {f.bic - s.start.bic:.0f} | {mark} |")
+            mark = (
+                "accepted"
+                if f is step.chosen
+                else ("as good" if f in step.rivals else ("on a bound" if f.pinned else ""))
+            )
+            lines.append(
+                f"| {c.name} | {c.kind} | {', '.join(f.describe(c))} | {_num(f.train)} | "
+                f"{_num(f.heldout)} | {f.bic - s.start.bic:.0f} | {mark} |"
+            )
         lines.append("")
     if s.dropped:
         lines += [f"Dropped again once later terms were in: {', '.join(s.dropped)}.", ""]
     if s.findings:
-        lines += ["Findings (fits that ended on a published bound at some step; such a fit is not accepted):", ""]
+        lines += [
+            "Findings (fits that ended on a published bound at some step; such a fit is "
+            "not accepted):",
+            "",
+        ]
         lines += [f"- {p}" for p in s.findings] + [""]
     lines += ["Bounds and where they come from:", ""]
-    lines += [f"- **{c.name}** ({c.kind}; {c.title}; changes {', '.join(c.phases)}): "
-              + ", ".join(f"{p.symbol} {p.display(lo):.4g}-{p.display(hi):.4g} {p.unit}".rstrip()
-                          for p, (lo, hi) in zip(c.parameters, c.bounds(d.start)))
-              + f". {c.source}." for c in d.candidates]
+    lines += [
+        f"- **{c.name}** ({c.kind}; {c.title}; changes {', '.join(c.phases)}): "
+        + ", ".join(
+            f"{p.symbol} {p.display(lo):.4g}-{p.display(hi):.4g} {p.unit}".rstrip()
+            for p, (lo, hi) in zip(c.parameters, c.bounds(d.start))
+        )
+        + f". {c.source}."
+        for c in d.candidates
+    ]
     return lines + [""]
 
 
@@ -213,15 +299,29 @@ def _overlays(d: Diagnosis, folder: Path) -> list[str]:
     names = []
     for i, run in enumerate(data.runs[:6]):
         channels = [c for c in data.channels if c in run.outputs]
-        fig, axes = plt.subplots(len(channels) + 1, 1, figsize=(10, 2.2 * (len(channels) + 1)), sharex=True)
+        fig, axes = plt.subplots(
+            len(channels) + 1, 1, figsize=(10, 2.2 * (len(channels) + 1)), sharex=True
+        )
         seg, test = data.segments[i], data.split.heldout[i]
         for ax, name in zip(axes, channels):
             unit, scale = localise.display(data, name)
             _shade(ax, run.time, seg.phase, test)
             ax.plot(run.time, run.outputs[name] * scale, color="k", lw=1.0, label="measured")
-            ax.plot(run.time, start.outputs[i][name] * scale, color="tab:red", lw=0.9, label=f"{d.model_name}")
-            ax.plot(run.time, corrected.outputs[i][name] * scale, color="tab:green", lw=0.9, ls="--",
-                    label="corrected")
+            ax.plot(
+                run.time,
+                start.outputs[i][name] * scale,
+                color="tab:red",
+                lw=0.9,
+                label=f"{d.model_name}",
+            )
+            ax.plot(
+                run.time,
+                corrected.outputs[i][name] * scale,
+                color="tab:green",
+                lw=0.9,
+                ls="--",
+                label="corrected",
+            )
             ax.set_ylabel(f"{name}, {unit}")
         axes[0].legend(loc="upper right", fontsize=8)
         axes[0].set_title(f"{run.name}: measured and replayed (shaded: held out; colours: phases)")
@@ -243,7 +343,9 @@ def _shade(ax, t, phase, heldout) -> None:
     for a, b in zip(bounds[:-1], bounds[1:]):
         ax.axvspan(t[a], t[b], color=PHASE_COLORS[PHASES[phase[a]]], lw=0)
     held = np.flatnonzero(np.diff(heldout.astype(int)))
-    marks = np.concatenate([[0] if heldout[0] else [], held + 1, [t.size - 1] if heldout[-1] else []]).astype(int)
+    marks = np.concatenate(
+        [[0] if heldout[0] else [], held + 1, [t.size - 1] if heldout[-1] else []]
+    ).astype(int)
     for a, b in zip(marks[::2], marks[1::2]):
         ax.axvspan(t[a], t[b], facecolor="none", edgecolor="0.6", hatch="//", lw=0)
 
@@ -254,12 +356,23 @@ def _figure_bars(d: Diagnosis, folder: Path) -> str:
     fig, axes = plt.subplots(1, len(channels), figsize=(4 * len(channels), 3.5), squeeze=False)
     for ax, name in zip(axes[0], channels):
         unit, scale = localise.display(data, name)
-        rows = [(t.name, t.figures[name], d.predictions["start"].outputs[j].get(name, math.nan),
-                 d.predictions["corrected"].outputs[j].get(name, math.nan))
-                for j, (_, t) in enumerate(data.tests) if name in t.figures]
+        rows = [
+            (
+                t.name,
+                t.figures[name],
+                d.predictions["start"].outputs[j].get(name, math.nan),
+                d.predictions["corrected"].outputs[j].get(name, math.nan),
+            )
+            for j, (_, t) in enumerate(data.tests)
+            if name in t.figures
+        ]
         x = np.arange(len(rows))
-        for k, (label, color) in enumerate((("measured", "k"), (d.model_name, "tab:red"), ("corrected", "tab:green"))):
-            ax.bar(x + (k - 1) * 0.27, [r[k + 1] * scale for r in rows], 0.27, color=color, label=label)
+        for k, (label, color) in enumerate(
+            (("measured", "k"), (d.model_name, "tab:red"), ("corrected", "tab:green"))
+        ):
+            ax.bar(
+                x + (k - 1) * 0.27, [r[k + 1] * scale for r in rows], 0.27, color=color, label=label
+            )
         ax.set_xticks(x, [r[0] for r in rows], rotation=45, ha="right", fontsize=7)
         ax.set_ylabel(f"{name}, {unit}")
     axes[0][0].legend(fontsize=8)
@@ -276,8 +389,13 @@ def _phase_bars(d: Diagnosis, folder: Path) -> str:
     x = np.arange(len(before))
     fig, ax = plt.subplots(figsize=(max(6, 0.7 * len(before) + 2), 3.5))
     ax.bar(x - 0.2, [max(r.cost, 1e-3) for r in before], 0.4, color="tab:red", label=d.model_name)
-    ax.bar(x + 0.2, [max(after[(r.group, r.channel)].cost, 1e-3) for r in before], 0.4, color="tab:green",
-           label="corrected")
+    ax.bar(
+        x + 0.2,
+        [max(after[(r.group, r.channel)].cost, 1e-3) for r in before],
+        0.4,
+        color="tab:green",
+        label="corrected",
+    )
     ax.axhline(1.0, color="k", lw=0.8, ls=":", label="noise floor")
     ax.set_yscale("log")
     ax.set_xticks(x, labels, fontsize=7)
@@ -294,15 +412,25 @@ def _ranking(d: Diagnosis, folder: Path) -> str:
     ranked = s.steps[0].ranked
     fig, ax = plt.subplots(figsize=(7, 0.35 * len(ranked) + 1.2))
     y = np.arange(len(ranked))[::-1]
-    colors = ["tab:green" if f is s.steps[0].chosen else ("tab:gray" if f.pinned else
-              ("tab:blue" if f.structure[-1].kind == "effect" else "tab:purple")) for f in ranked]
+    colors = [
+        "tab:green"
+        if f is s.steps[0].chosen
+        else (
+            "tab:gray"
+            if f.pinned
+            else ("tab:blue" if f.structure[-1].kind == "effect" else "tab:purple")
+        )
+        for f in ranked
+    ]
     ax.barh(y, [max(f.heldout, 1e-3) for f in ranked], color=colors)
     ax.axvline(s.start.heldout, color="tab:red", lw=1, label=f"{d.model_name}")
     ax.axvline(1.0, color="k", lw=0.8, ls=":", label="noise floor")
     ax.set_yticks(y, [f.structure[-1].name for f in ranked], fontsize=8)
     ax.set_xscale("log")
-    ax.set_xlabel("held-out cost (step 1, best BIC on top; green: accepted, purple: recalibration, "
-                  "grey: on a bound)")
+    ax.set_xlabel(
+        "held-out cost (step 1, best BIC on top; green: accepted, purple: recalibration, "
+        "grey: on a bound)"
+    )
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(folder / "candidate_ranking.png", dpi=DPI)

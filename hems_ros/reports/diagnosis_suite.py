@@ -27,9 +27,14 @@ from hems_ros.physics.params import load_params  # noqa: E402
 DPI = 80
 #: Seeds per case: single effects twice, the null five times (its rate is the one measured).
 SEEDS = {"single": 2, "null": 5}
-QUICK = (("load_damping", "pulses", "mid"), ("supply_sag", "staircase", "high"), ("as_shifted", "pulses", "low"),
-         ("nothing", "pulses", "high"), ("encoder_ripple", "staircase", "mid"),
-         ("friction_and_sag", "pulses", "low"))
+QUICK = (
+    ("load_damping", "pulses", "mid"),
+    ("supply_sag", "staircase", "high"),
+    ("as_shifted", "pulses", "low"),
+    ("nothing", "pulses", "high"),
+    ("encoder_ripple", "staircase", "mid"),
+    ("friction_and_sag", "pulses", "low"),
+)
 #: What the suite must show (the floors of the workflow's acceptance).
 FLOORS = {"single_low": 0.9, "single_high": 0.8, "null": 0.9, "gap_cut": 0.5, "recovery_low": 0.15}
 
@@ -52,12 +57,22 @@ def grid(seed: int, quick: bool) -> list[tuple[suite.Case, str, str, int]]:
     by_name = {c.name: c for c in suite.CASES}
     if quick:
         return [(by_name[c], p, n, seed) for c, p, n in QUICK]
-    return [(case, prof, noise, seed + k) for case in suite.CASES for prof in suite.PROFILES for noise in suite.NOISE
-            for k in range(SEEDS.get(case.category, 1))]
+    return [
+        (case, prof, noise, seed + k)
+        for case in suite.CASES
+        for prof in suite.PROFILES
+        for noise in suite.NOISE
+        for k in range(SEEDS.get(case.category, 1))
+    ]
 
 
-def run(out: Path, seed: int = 0, quick: bool = False, dissertation: bool = True,
-        progress: Callable[[str], None] | None = None) -> SuiteResult:
+def run(
+    out: Path,
+    seed: int = 0,
+    quick: bool = False,
+    dissertation: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> SuiteResult:
     """Run the suite (and the dissertation's studies), write the results into ``out``."""
     say = progress or (lambda message: None)
     base = load_params(suite.BASE)
@@ -68,8 +83,11 @@ def run(out: Path, seed: int = 0, quick: bool = False, dissertation: bool = True
         start = time.perf_counter()
         o = suite.run_case(case, prof, noise, s, base, duties[prof])
         outcomes.append(o)
-        say(f"[{k}/{len(runs)}] {case.name} {prof} {noise} seed {s}: {o.verdict} "
-            f"{','.join(o.named) or '-'} ({'right' if o.right else 'WRONG'}, {time.perf_counter() - start:.1f} s)")
+        say(
+            f"[{k}/{len(runs)}] {case.name} {prof} {noise} seed {s}: {o.verdict} "
+            f"{','.join(o.named) or '-'} ({'right' if o.right else 'WRONG'}, "
+            f"{time.perf_counter() - start:.1f} s)"
+        )
     studies = []
     graph = None
     if dissertation:
@@ -83,19 +101,46 @@ def run(out: Path, seed: int = 0, quick: bool = False, dissertation: bool = True
     out.mkdir(parents=True, exist_ok=True)
     stats = statistics(outcomes)
     _confusion_figure(outcomes, out / "confusion.png")
-    (out / "suite.json").write_text(json.dumps({"seed": seed, "quick": quick, "statistics": stats,
-                                                "runs": [_record(o) for o in outcomes]}, indent=1) + "\n")
-    page = render(outcomes, stats, studies, graph, seed, quick, figure="figures/diagnosis_confusion.png")
-    (out / "suite.md").write_text(render(outcomes, stats, studies, graph, seed, quick, figure="confusion.png"))
+    (out / "suite.json").write_text(
+        json.dumps(
+            {
+                "seed": seed,
+                "quick": quick,
+                "statistics": stats,
+                "runs": [_record(o) for o in outcomes],
+            },
+            indent=1,
+        )
+        + "\n"
+    )
+    page = render(
+        outcomes, stats, studies, graph, seed, quick, figure="figures/diagnosis_confusion.png"
+    )
+    (out / "suite.md").write_text(
+        render(outcomes, stats, studies, graph, seed, quick, figure="confusion.png")
+    )
     return SuiteResult(outcomes, studies, page, headline(stats, len(outcomes)))
 
 
 def _record(o: suite.Outcome) -> dict:
-    return {"case": o.case.name, "category": o.case.category, "profile": o.profile, "noise": o.noise,
-            "seed": o.seed, "verdict": o.verdict, "named": list(o.named), "first": o.first,
-            "ranking": list(o.ranking), "right": o.right, "errors": o.errors, "gap_before": o.gap_before,
-            "gap_after": o.gap_after, "beyond_noise_before": o.beyond_before, "beyond_noise_after": o.beyond_after,
-            "unexplained": list(o.unexplained)}
+    return {
+        "case": o.case.name,
+        "category": o.case.category,
+        "profile": o.profile,
+        "noise": o.noise,
+        "seed": o.seed,
+        "verdict": o.verdict,
+        "named": list(o.named),
+        "first": o.first,
+        "ranking": list(o.ranking),
+        "right": o.right,
+        "errors": o.errors,
+        "gap_before": o.gap_before,
+        "gap_after": o.gap_after,
+        "beyond_noise_before": o.beyond_before,
+        "beyond_noise_after": o.beyond_after,
+        "unexplained": list(o.unexplained),
+    }
 
 
 def _rate(items: list[bool]) -> float:
@@ -108,33 +153,49 @@ def statistics(outcomes: list[suite.Outcome]) -> dict:
     named = [o for o in outcomes if o.verdict in ("named", "ambiguous") and o.case.expected]
     cuts = [1.0 - o.gap_after / o.gap_before for o in named if o.gap_before > 0]
     beyond = [1.0 - o.beyond_after / o.beyond_before for o in named if o.beyond_before > 0]
-    short = sorted({f"{o.case.name} ({o.profile}, {o.noise})" for o in named
-                    if o.gap_before > 0 and o.gap_after > 0.5 * o.gap_before})
+    short = sorted(
+        {
+            f"{o.case.name} ({o.profile}, {o.noise})"
+            for o in named
+            if o.gap_before > 0 and o.gap_after > 0.5 * o.gap_before
+        }
+    )
     low_errors = [e for o in outcomes if o.noise == "low" and o.right for e in o.errors.values()]
     by = {}
     for level in suite.NOISE:
         group = [o for o in single if o.noise == level]
-        by[level] = {"ranked_first": _rate([o.ranked_first for o in group]), "right": _rate([o.right for o in group]),
-                     "runs": len(group)}
+        by[level] = {
+            "ranked_first": _rate([o.ranked_first for o in group]),
+            "right": _rate([o.right for o in group]),
+            "runs": len(group),
+        }
     cat = {}
     for category in ("structural", "pair", "parameter", "outside", "null"):
         group = [o for o in outcomes if o.case.category == category]
         cat[category] = {"right": _rate([o.right for o in group]), "runs": len(group)}
-    return {"single": by, "categories": cat,
-            "gap_cut_min": float(min(cuts)) if cuts else math.nan,
-            "beyond_noise_cut_min": float(min(beyond)) if beyond else math.nan,
-            "gap_cut_short": short,
-            "recovery_error_max_low": float(max(low_errors)) if low_errors else math.nan}
+    return {
+        "single": by,
+        "categories": cat,
+        "gap_cut_min": float(min(cuts)) if cuts else math.nan,
+        "beyond_noise_cut_min": float(min(beyond)) if beyond else math.nan,
+        "gap_cut_short": short,
+        "recovery_error_max_low": float(max(low_errors)) if low_errors else math.nan,
+    }
 
 
 def headline(stats: dict, n: int) -> str:
     s = stats["single"]
     c = stats["categories"]
-    parts = [f"{n} runs", f"single effects ranked first: low {_pct(s['low']['ranked_first'])}, "
-             f"mid {_pct(s['mid']['ranked_first'])}, high {_pct(s['high']['ranked_first'])}"]
+    parts = [
+        f"{n} runs",
+        f"single effects ranked first: low {_pct(s['low']['ranked_first'])}, "
+        f"mid {_pct(s['mid']['ranked_first'])}, high {_pct(s['high']['ranked_first'])}",
+    ]
     parts += [f"{k} {_pct(v['right'])}" for k, v in c.items() if v["runs"]]
-    parts.append(f"smallest held-out cut {_pct(stats['gap_cut_min'])} "
-                 f"({_pct(stats['beyond_noise_cut_min'])} beyond the noise)")
+    parts.append(
+        f"smallest held-out cut {_pct(stats['gap_cut_min'])} "
+        f"({_pct(stats['beyond_noise_cut_min'])} beyond the noise)"
+    )
     return "; ".join(parts)
 
 
@@ -143,16 +204,24 @@ def _pct(v: float) -> str:
 
 
 # --------------------------------------------------------------------------- page
-def render(outcomes, stats, studies, graph: Diagnosis | None, seed: int, quick: bool, figure: str) -> str:
-    lines = ["# Finding what the model misses (generated by `hems diagnose-suite --docs docs/diagnosis.md`)", "",
-             "`hems diagnose` replays measured runs on the physics model, the measured input driving it open "
-             "loop; localises the residual by phase (heating, transformation, hold, cooling, rest) and cycle; "
-             "then explains it, first by a recalibration of the printed model's parameters within published "
-             "NiTi bounds, then by missing effects from the library below. Each candidate is fitted by bounded "
-             "least squares from several starts on the training data, ranked by BIC and kept only when it "
-             "removes a fair share of what is left there and improves the held-out data beyond the noise "
-             "(`hems_ros/diagnosis/search.py`). The verdict is one of none, recalibrated, named, ambiguous, "
-             "unexplained. The README shows a worked example; `hems diagnose --help` the options.", ""]
+def render(
+    outcomes, stats, studies, graph: Diagnosis | None, seed: int, quick: bool, figure: str
+) -> str:
+    lines = [
+        "# Finding what the model misses (generated by `hems diagnose-suite --docs "
+        "docs/diagnosis.md`)",
+        "",
+        "`hems diagnose` replays measured runs on the physics model, the measured input driving it "
+        "open loop; localises the residual by phase (heating, transformation, hold, cooling, rest) "
+        "and cycle; then explains it, first by a recalibration of the printed model's parameters "
+        "within published NiTi bounds, then by missing effects from the library below. Each "
+        "candidate is fitted by bounded least squares from several starts on the training data, "
+        "ranked by BIC and kept only when it removes a fair share of what is left there and "
+        "improves the held-out data beyond the noise (`hems_ros/diagnosis/search.py`). The verdict "
+        "is one of none, recalibrated, named, ambiguous, unexplained. The README shows a worked "
+        "example; `hems diagnose --help` the options.",
+        "",
+    ]
     lines += _library()
     lines += _suite_section(outcomes, stats, seed, quick, figure)
     for study, d in studies:
@@ -164,23 +233,39 @@ def render(outcomes, stats, studies, graph: Diagnosis | None, seed: int, quick: 
 
 def _graph_section(d: Diagnosis) -> list[str]:
     truth = load_params(GRAPH_BAG / "physics.yaml")
-    return ["## A graph run", "",
-            f"`bags/diagnose_index_damping` was recorded from the one-finger graph (separate processes over "
-            f"Fast DDS) whose actuation unit ran `{GRAPH_BAG.name}/physics.yaml`: {GRAPH_MODEL} with the load "
-            f"damping at {truth.load.damping_n_s_per_m:g} N s/m instead of "
-            f"{load_params(GRAPH_MODEL).load.damping_n_s_per_m:g}. The diagnosis reads the measured topics "
-            "only (duty, encoder, wire force, setpoints; never /hems/sim).", "",
-            f"`hems diagnose bags/diagnose_index_damping --model {GRAPH_MODEL}`", "", f"**{d.summary_line()}**", "",
-            "What the loader adjusted: " + ("; ".join(n for r in d.data.runs for n in r.notes) or "nothing") + ".", ""]
+    return [
+        "## A graph run",
+        "",
+        f"`bags/diagnose_index_damping` was recorded from the one-finger graph (separate processes "
+        f"over Fast DDS) whose actuation unit ran `{GRAPH_BAG.name}/physics.yaml`: {GRAPH_MODEL} "
+        f"with the load damping at {truth.load.damping_n_s_per_m:g} N s/m instead of "
+        f"{load_params(GRAPH_MODEL).load.damping_n_s_per_m:g}. The diagnosis reads the measured "
+        f"topics only (duty, encoder, wire force, setpoints; never /hems/sim).",
+        "",
+        f"`hems diagnose bags/diagnose_index_damping --model {GRAPH_MODEL}`",
+        "",
+        f"**{d.summary_line()}**",
+        "",
+        "What the loader adjusted: "
+        + ("; ".join(n for r in d.data.runs for n in r.notes) or "nothing")
+        + ".",
+        "",
+    ]
 
 
 def _library() -> list[str]:
     base = load_params(suite.BASE)
-    lines = ["## The candidates", "",
-             "| candidate | kind | what | parameters (bounds) | phases it changes |", "|---|---|---|---|---|"]
+    lines = [
+        "## The candidates",
+        "",
+        "| candidate | kind | what | parameters (bounds) | phases it changes |",
+        "|---|---|---|---|---|",
+    ]
     for c in library.ALL:
-        bounds = ", ".join(f"{p.symbol} {p.display(lo):.4g}-{p.display(hi):.4g} {p.unit}".rstrip()
-                           for p, (lo, hi) in zip(c.parameters, c.bounds(base)))
+        bounds = ", ".join(
+            f"{p.symbol} {p.display(lo):.4g}-{p.display(hi):.4g} {p.unit}".rstrip()
+            for p, (lo, hi) in zip(c.parameters, c.bounds(base))
+        )
         lines.append(f"| {c.name} | {c.kind} | {c.title} | {bounds} | {', '.join(c.phases)} |")
     lines += ["", "Where the bounds come from:", ""]
     lines += [f"- **{c.name}**: {c.source}." for c in library.ALL]
@@ -190,61 +275,99 @@ def _library() -> list[str]:
 def _suite_section(outcomes, stats, seed, quick, figure) -> list[str]:
     s, c = stats["single"], stats["categories"]
     noise = ", ".join(f"{k} {v[0] * 1e3:g} mm / {v[1]:g} N" for k, v in suite.NOISE.items())
-    lines = ["## Hidden-effect suite", "",
-             f"Starting model `{suite.BASE}` (Table 4.1, bare wire, 12 N bias spring, 20 V PWM stage). For each "
-             "case the truth is that model with something changed; it is driven by a duty profile (`pulses`: "
-             "eight pulses of 1.0-2.2 s at 60-100 % duty, one every 8 s; `staircase`: the duty a BPID "
-             "recorded on the starting model holding 5, 10, 15 mm for 3 s each, three times), sampled at "
-             f"100 Hz and read by sensors with Gaussian noise ({noise} standard deviation) quantised to 1 um "
-             f"and 0.01 N. Each case is recorded twice: the workflow fits on the profile and holds out a second "
-             "recording of the same kind at other lengths, duties and levels (pulses of 1.1-2.2 s at "
-             "65-100 %; a staircase of 8, 14, 4 mm), as a lab keeps a validation run; a warm start, which "
-             "acts in the first cycle only, is tested that way too. The workflow sees the measured duty, "
-             f"position and wire force only. Seed {seed}"
-             + (" (reduced subset)." if quick else "."), "",
-             "| what the suite must show | floor | measured |", "|---|---|---|",
-             f"| single effect ranked first, low noise | {_pct(FLOORS['single_low'])} | {_pct(s['low']['ranked_first'])} "
-             f"of {s['low']['runs']} |",
-             f"| single effect ranked first, mid noise | - | {_pct(s['mid']['ranked_first'])} of {s['mid']['runs']} |",
-             f"| single effect ranked first, high noise | {_pct(FLOORS['single_high'])} | "
-             f"{_pct(s['high']['ranked_first'])} of {s['high']['runs']} |",
-             f"| structural mismatch: right effect named | - | {_pct(c['structural']['right'])} of "
-             f"{c['structural']['runs']} |",
-             f"| two at once: both named | - | {_pct(c['pair']['right'])} of {c['pair']['runs']} |",
-             f"| parameter only: recalibrated | - | {_pct(c['parameter']['right'])} of {c['parameter']['runs']} |",
-             f"| outside the library: unexplained | - | {_pct(c['outside']['right'])} of {c['outside']['runs']} |",
-             f"| null: no missing effect | {_pct(FLOORS['null'])} | {_pct(c['null']['right'])} of {c['null']['runs']} |",
-             f"| whenever named: held-out RMSE beyond the noise floor cut | {_pct(FLOORS['gap_cut'])} | at least "
-             f"{_pct(stats['beyond_noise_cut_min'])} |",
-             f"| whenever named: held-out RMSE cut (noise included) | {_pct(FLOORS['gap_cut'])} | at least "
-             f"{_pct(stats['gap_cut_min'])} |",
-             f"| recovered parameters, low noise: largest error | {_pct(FLOORS['recovery_low'])} | "
-             f"{_pct(stats['recovery_error_max_low'])} |", ""]
+    lines = [
+        "## Hidden-effect suite",
+        "",
+        f"Starting model `{suite.BASE}` (Table 4.1, bare wire, 12 N bias spring, 20 V PWM stage). "
+        f"For each case the truth is that model with something changed; it is driven by a duty "
+        f"profile (`pulses`: eight pulses of 1.0-2.2 s at 60-100 % duty, one every 8 s; "
+        f"`staircase`: the duty a BPID recorded on the starting model holding 5, 10, 15 mm for 3 s "
+        f"each, three times), sampled at 100 Hz and read by sensors with Gaussian noise ({noise} "
+        f"standard deviation) quantised to 1 um and 0.01 N. Each case is recorded twice: the "
+        f"workflow fits on the profile and holds out a second recording of the same kind at other "
+        f"lengths, duties and levels (pulses of 1.1-2.2 s at 65-100 %; a staircase of "
+        f"8, 14, 4 mm), as a lab keeps a validation run; a warm start, which acts in the first "
+        f"cycle only, is tested that way too. The workflow sees the measured duty, position and "
+        f"wire force only. Seed {seed}" + (" (reduced subset)." if quick else "."),
+        "",
+        "| what the suite must show | floor | measured |",
+        "|---|---|---|",
+        f"| single effect ranked first, low noise | {_pct(FLOORS['single_low'])} | "
+        f"{_pct(s['low']['ranked_first'])} of {s['low']['runs']} |",
+        f"| single effect ranked first, mid noise | - | {_pct(s['mid']['ranked_first'])} of "
+        f"{s['mid']['runs']} |",
+        f"| single effect ranked first, high noise | {_pct(FLOORS['single_high'])} | "
+        f"{_pct(s['high']['ranked_first'])} of {s['high']['runs']} |",
+        f"| structural mismatch: right effect named | - | {_pct(c['structural']['right'])} of "
+        f"{c['structural']['runs']} |",
+        f"| two at once: both named | - | {_pct(c['pair']['right'])} of {c['pair']['runs']} |",
+        f"| parameter only: recalibrated | - | {_pct(c['parameter']['right'])} of "
+        f"{c['parameter']['runs']} |",
+        f"| outside the library: unexplained | - | {_pct(c['outside']['right'])} of "
+        f"{c['outside']['runs']} |",
+        f"| null: no missing effect | {_pct(FLOORS['null'])} | {_pct(c['null']['right'])} of "
+        f"{c['null']['runs']} |",
+        f"| whenever named: held-out RMSE beyond the noise floor cut | {_pct(FLOORS['gap_cut'])} | "
+        f"at least {_pct(stats['beyond_noise_cut_min'])} |",
+        f"| whenever named: held-out RMSE cut (noise included) | {_pct(FLOORS['gap_cut'])} | at "
+        f"least {_pct(stats['gap_cut_min'])} |",
+        f"| recovered parameters, low noise: largest error | {_pct(FLOORS['recovery_low'])} | "
+        f"{_pct(stats['recovery_error_max_low'])} |",
+        "",
+    ]
     if stats["gap_cut_short"]:
-        lines += ["The held-out RMSE counts the sensor noise too; it falls by less than half where the hidden "
-                  "effect leaves the held-out recording little above the noise: " + ", ".join(stats["gap_cut_short"])
-                  + ". Beyond the noise floor (sqrt(RMSE^2 - noise^2), the noise floor estimated from the data) "
-                  "the named effects remove at least the share in the row above.", ""]
-    lines += ["Cases:", ""] + [f"- `{case.name}` ({case.category}): {case.description}" for case in suite.CASES]
-    lines += ["", f"![confusion matrix]({figure})", "",
-              "Every run (gap: held-out RMSE of the output the starting model misses most, before -> after; "
-              "error: largest relative error of the recovered values):", "",
-              "| case | profile | noise | seed | verdict | named | first in ranking | gap | error | unexplained |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+        lines += [
+            "The held-out RMSE counts the sensor noise too; it falls by less than half where the "
+            "hidden effect leaves the held-out recording little above the noise: "
+            + ", ".join(stats["gap_cut_short"])
+            + ". Beyond the noise floor (sqrt(RMSE^2 - noise^2), the noise floor estimated from "
+            "the data) the named effects remove at least the share in the row above.",
+            "",
+        ]
+    lines += ["Cases:", ""] + [
+        f"- `{case.name}` ({case.category}): {case.description}" for case in suite.CASES
+    ]
+    lines += [
+        "",
+        f"![confusion matrix]({figure})",
+        "",
+        "Every run (gap: held-out RMSE of the output the starting model misses most, before "
+        "-> after; error: largest relative error of the recovered values):",
+        "",
+        "| case | profile | noise | seed | verdict | named | first in ranking | gap | error | "
+        "unexplained |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for o in outcomes:
         err = max(o.errors.values()) if o.errors else math.nan
-        lines.append(f"| {o.case.name} | {o.profile} | {o.noise} | {o.seed} | {o.verdict}{'' if o.right else ' (wrong)'}"
-                     f" | {', '.join(o.named) or '-'} | {o.ranking[0] if o.ranking else '-'} | "
-                     f"{o.gap_before:.3g} -> {o.gap_after:.3g} | {_pct(err)} | {', '.join(o.unexplained) or '-'} |")
+        lines.append(
+            f"| {o.case.name} | {o.profile} | {o.noise} | {o.seed} | "
+            f"{o.verdict}{'' if o.right else ' (wrong)'} | {', '.join(o.named) or '-'} | "
+            f"{o.ranking[0] if o.ranking else '-'} | {o.gap_before:.3g} -> {o.gap_after:.3g} | "
+            f"{_pct(err)} | {', '.join(o.unexplained) or '-'} |"
+        )
     return lines + [""]
 
 
 def _study_section(study: studies_module.Study, d: Diagnosis) -> list[str]:
     data = d.data
-    lines = [f"## {study.title}", "", study.question, "", f"`{study.command}`", "", f"**{d.summary_line()}**", ""]
+    lines = [
+        f"## {study.title}",
+        "",
+        study.question,
+        "",
+        f"`{study.command}`",
+        "",
+        f"**{d.summary_line()}**",
+        "",
+    ]
     channels = data.channels
-    lines += ["| row | " + " | ".join(f"{c} measured / {d.model_name} / corrected" for c in channels) + " |",
-              "|---" * (len(channels) + 1) + "|"]
+    lines += [
+        "| row | "
+        + " | ".join(f"{c} measured / {d.model_name} / corrected" for c in channels)
+        + " |",
+        "|---" * (len(channels) + 1) + "|",
+    ]
     start, corrected = d.predictions["start"], d.predictions["corrected"]
     held = data.split.heldout[0]
     for j, (_, test) in enumerate(data.tests):
@@ -252,19 +375,30 @@ def _study_section(study: studies_module.Study, d: Diagnosis) -> list[str]:
         for name in channels:
             scale = _scale(name)
             if name in test.figures:
-                cells.append(f"{test.figures[name] * scale:.3g} / {start.outputs[j].get(name, math.nan) * scale:.3g}"
-                             f" / {corrected.outputs[j].get(name, math.nan) * scale:.3g}")
+                cells.append(
+                    f"{test.figures[name] * scale:.3g} "
+                    f"/ {start.outputs[j].get(name, math.nan) * scale:.3g} "
+                    f"/ {corrected.outputs[j].get(name, math.nan) * scale:.3g}"
+                )
             else:
                 cells.append("-")
-        lines.append(f"| {test.name}{' (held out)' if held[j] else ''} | " + " | ".join(cells) + " |")
+        lines.append(
+            f"| {test.name}{' (held out)' if held[j] else ''} | " + " | ".join(cells) + " |"
+        )
     lines.append("")
     if d.search.findings:
-        lines += ["Fits that ended on a published bound at some step (findings; such a fit is not accepted):", ""]
+        lines += [
+            "Fits that ended on a published bound at some step (findings; such a fit is "
+            "not accepted):",
+            "",
+        ]
         lines += [f"- {f}" for f in d.search.findings] + [""]
     steps = d.search.steps
     if steps:
-        ranked = ", ".join(f"{f.structure[-1].name} ({', '.join(f.describe(f.structure[-1]))})"
-                           for f in steps[0].ranked[:4])
+        ranked = ", ".join(
+            f"{f.structure[-1].name} ({', '.join(f.describe(f.structure[-1]))})"
+            for f in steps[0].ranked[:4]
+        )
         lines += [f"First step, best four by BIC: {ranked}.", ""]
     if study.sheath_check:
         lines += _sheath_lines(studies_module.sheath_check(d))
@@ -277,31 +411,63 @@ def _sheath_lines(check: studies_module.SheathCheck) -> list[str]:
     c, k = check.corrected, check.calibrated
     lo_d, hi_d = studies_module.DISPLACEMENT_RATIO
     lo_c, hi_c = studies_module.COOLING_RATIO
-    rows = [("106.8 J, cold sheath: sheathed / bare displacement", f"{lo_d}-{hi_d}", c.displacement_ratio,
-             k.displacement_ratio),
-            ("cooling after 20 mm: sheathed / bare", f"{lo_c}-{hi_c}", c.cooling_ratio, k.cooling_ratio),
-            ("1.6 s every 30 s: sheath temperature at the 6th start, degC", "builds up slowly",
-             c.cycle_sheath_start_c[-1], k.cycle_sheath_start_c[-1]),
-            ("same: cooling time of the 6th cycle, s", "lengthens slowly", c.cycle_cooling_s[-1],
-             k.cycle_cooling_s[-1])]
-    lines = ["Could the corrected wire and sheath (cold start) replace the calibrated set the graph runs? "
-             "The chapter 3 sheath facts of both:", "",
-             "| fact | accepted | corrected | calibrated set |", "|---|---|---|---|"]
-    lines += [f"| {name} | {accepted} | {_figure(a)} | {_figure(b)} |" for name, accepted, a, b in rows]
-    lines += ["", "The corrected set meets both accepted ranges: it is the better-founded set." if check.within else
-              "The corrected set misses the accepted ranges of the sheath facts the calibration was fitted to, so "
-              "the calibrated set stays; what the table supports within physical bounds is the named effects "
-              "above, not stress slopes beyond NiTi's.", ""]
+    rows = [
+        (
+            "106.8 J, cold sheath: sheathed / bare displacement",
+            f"{lo_d}-{hi_d}",
+            c.displacement_ratio,
+            k.displacement_ratio,
+        ),
+        (
+            "cooling after 20 mm: sheathed / bare",
+            f"{lo_c}-{hi_c}",
+            c.cooling_ratio,
+            k.cooling_ratio,
+        ),
+        (
+            "1.6 s every 30 s: sheath temperature at the 6th start, degC",
+            "builds up slowly",
+            c.cycle_sheath_start_c[-1],
+            k.cycle_sheath_start_c[-1],
+        ),
+        (
+            "same: cooling time of the 6th cycle, s",
+            "lengthens slowly",
+            c.cycle_cooling_s[-1],
+            k.cycle_cooling_s[-1],
+        ),
+    ]
+    lines = [
+        "Could the corrected wire and sheath (cold start) replace the calibrated set the graph "
+        "runs? The chapter 3 sheath facts of both:",
+        "",
+        "| fact | accepted | corrected | calibrated set |",
+        "|---|---|---|---|",
+    ]
+    lines += [
+        f"| {name} | {accepted} | {_figure(a)} | {_figure(b)} |" for name, accepted, a, b in rows
+    ]
+    lines += [
+        "",
+        "The corrected set meets both accepted ranges: it is the better-founded set."
+        if check.within
+        else "The corrected set misses the accepted ranges of the sheath facts the calibration was "
+        "fitted to, so the calibrated set stays; what the table supports within physical bounds is "
+        "the named effects above, not stress slopes beyond NiTi's.",
+        "",
+    ]
     return lines
 
 
 def _figure(value: float) -> str:
-    """A figure, or what it means when there is none (a wire that never moved past the cooled mark)."""
+    """A figure, or what it means when there is none (a wire that never moved past the
+    cooled mark)."""
     return f"{value:.3g}" if math.isfinite(value) else "never moved past 4.5 mm"
 
 
 def _scale(name: str) -> float:
     from hems_ros.diagnosis.runs import FIGURE_UNITS
+
     return FIGURE_UNITS[name][2]
 
 

@@ -61,17 +61,21 @@ def ch5_tables(ch5: dict) -> str:
                 cells.append(f"{table[p, s]:.2f} / {ours:.2f} / {_ratio(ours, table[p, s])}")
             lines.append(f"| {STRATEGY_LABELS[s]} | " + " | ".join(cells) + " |")
         lines.append("")
-    lines += ["**Step figures** (dissertation / ours; rise time 10-90 %, mean over rising jumps; "
-              "overshoot and steady-state error: largest over the jumps)", "",
-              "| controller | step rise time s | step overshoot mm | step ss error mm | "
-              "staircase rise time s | staircase overshoot mm | staircase ss error mm |",
-              "|---|---|---|---|---|---|---|"]
+    lines += [
+        "**Step figures** (dissertation / ours; rise time 10-90 %, mean over rising jumps; "
+        "overshoot and steady-state error: largest over the jumps)",
+        "",
+        "| controller | step rise time s | step overshoot mm | step ss error mm | "
+        "staircase rise time s | staircase overshoot mm | staircase ss error mm |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for s in CH5_STRATEGIES:
         st, sc = ch5["ch5_step", s].metrics, ch5["ch5_staircase", s].metrics
         lines.append(
             f"| {STRATEGY_LABELS[s]} | {CH5_RISE_TIME_S[s]:.1f} / {st['rise_time_s']:.2f} | 0 / "
             f"{st['overshoot']:.2f} | {CH5_SS_ERROR_MM[s]:.2f} / {st['ss_error']:.3f} | - / "
-            f"{sc['rise_time_s']:.2f} | - / {sc['overshoot']:.2f} | - / {sc['ss_error']:.3f} |")
+            f"{sc['rise_time_s']:.2f} | - / {sc['overshoot']:.2f} | - / {sc['ss_error']:.3f} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -80,21 +84,32 @@ def ch6_tables(ch6: dict) -> str:
     lines = []
     for kind, names in (("position", CH6_POSITION), ("force", CH6_FORCE)):
         title, unit, table = CH6_TABLES[kind]
-        lines += [f"**{title}** (dissertation / ours / ratio)", "",
-                  "| reference | RMSE " + unit + " | mean power W (APC) | rise time s | ss error "
-                  + unit + " | overshoot " + unit + " | hold excursion " + unit
-                  + " | model mean electrical power W |",
-                  "|---|---|---|---|---|---|---|---|"]
+        lines += [
+            f"**{title}** (dissertation / ours / ratio)",
+            "",
+            "| reference | RMSE "
+            + unit
+            + " | mean power W (APC) | rise time s | ss error "
+            + unit
+            + " | overshoot "
+            + unit
+            + " | hold excursion "
+            + unit
+            + " | model mean electrical power W |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
         for p in names:
             m, d = ch6[p].metrics, table[p]
             ss_d = CH6_SS_ERROR.get(p, math.nan)
             lines.append(
                 f"| {PROTOCOL_LABELS[p]} | {_num(d['rmse'], 3)} / {_num(m['rmse'], 3)} / "
                 f"{_ratio(m['rmse'], d['rmse'])} | {_num(d['apc_w'])} / {_num(m['apc_w'])} / "
-                f"{_ratio(m['apc_w'], d['apc_w'])} | {_num(d['rise_time_s'])} / {_num(m['rise_time_s'])} | "
-                f"{_num(ss_d)} / {_num(m['ss_error'], 3)} | 0 / {_num(m['overshoot'], 3)} | "
-                f"{CH6_HOLD.get(kind, '-') if math.isfinite(m['excursion']) else '-'} / "
-                f"{_num(m['excursion'], 3)} | {ch6[p].power_w.mean():.1f} |")
+                f"{_ratio(m['apc_w'], d['apc_w'])} | {_num(d['rise_time_s'])} "
+                f"/ {_num(m['rise_time_s'])} | {_num(ss_d)} / {_num(m['ss_error'], 3)} | "
+                f"0 / {_num(m['overshoot'], 3)} | "
+                f"{CH6_HOLD.get(kind, '-') if math.isfinite(m['excursion']) else '-'} "
+                f"/ {_num(m['excursion'], 3)} | {ch6[p].power_w.mean():.1f} |"
+            )
         lines.append("")
     return "\n".join(lines)
 
@@ -157,8 +172,13 @@ def plot_ch6(ch6: dict, folder: Path) -> list[Path]:
         unit, k = ("mm", 1e3) if run.mode == "position" else ("N", 1.0)
         fig, ax = _axes(f"Chapter 6, index finger, BPID {run.mode}: {PROTOCOL_LABELS[p]}", unit)
         ax[0].plot(run.time, run.reference * k, "k--", lw=1, label="reference")
-        ax[0].plot(run.time, run.measurement * k, color=COLORS["bpid"], lw=0.9,
-                   label="encoder" if run.mode == "position" else "force sensor")
+        ax[0].plot(
+            run.time,
+            run.measurement * k,
+            color=COLORS["bpid"],
+            lw=0.9,
+            label="encoder" if run.mode == "position" else "force sensor",
+        )
         ax[1].plot(run.time, (run.reference - run.measurement) * k, color=COLORS["bpid"], lw=0.9)
         ax[2].plot(run.time, run.duty, color=COLORS["bpid"], lw=0.6)
         ax[0].legend(fontsize=8, loc="upper right")
@@ -166,24 +186,28 @@ def plot_ch6(ch6: dict, folder: Path) -> list[Path]:
     return paths
 
 
-SETUP_CH5 = ("Straight sheathed actuator with a 40 N hanging mass (`config/physics/ch5_straight_40n.yaml`), "
-             "plant 1 kHz, controllers at 100 Hz (zero-order hold), encoder feedback (1 um counts), "
-             "Table 5.1 gains with the error in micrometres, derivative filter N = 20 rad/s. One run "
-             "per reference from a cold wire (the dissertation averaged three repetitions). "
-             "`config/physics/ch5_straight_40n_table32.yaml` (same rig on the earlier one-node sheath "
-             "calibration, heating band refitted to Table 3.2's displacement per pulse energy) serves "
-             "only as an evidence run in the findings: it reproduces the 1.0 s row and a slower rise, "
-             "but loses the 2.2-2.8 s rows (22.5-26.2 mm against 24.5-27.5 mm; calibration objective "
-             "0.51 against 0.16), so the validated set stays the plant.")
-SETUP_CH6 = ("HEMS index unit (`config/physics/ch6_hems_index.yaml`: x2 pulley, glove as a bias spring "
-             "pretensioned 2 N on the tendon, capstan and glove friction), BPID with Table 5.1 gains on "
-             f"the encoder (position) and `FORCE_MODE_BPID` (Kp {FORCE_MODE_BPID.kp:g}, Ki "
-             f"{FORCE_MODE_BPID.ki:g}, Kd {FORCE_MODE_BPID.kd:g}, Kb {FORCE_MODE_BPID.kb:g}, error in 10 mN; "
-             "why: hems_ros/control/gains.py and the force overshoot finding) on the force sensor "
-             "(0.03 N rms noise). Position RMSE on ascending parts (sine, ramp) or on plateaus once the "
-             "rise is over (steps); force references run from the wire's rest tension (4 N: 2 N behind "
-             "the x2 pulley) to 20 N. Overshoot is the first peak past each new level; hold excursion "
-             "the largest distance past it anywhere on the plateau (the ripple while holding).")
+SETUP_CH5 = (
+    "Straight sheathed actuator with a 40 N hanging mass (`config/physics/ch5_straight_40n.yaml`), "
+    "plant 1 kHz, controllers at 100 Hz (zero-order hold), encoder feedback (1 um counts), "
+    "Table 5.1 gains with the error in micrometres, derivative filter N = 20 rad/s. One run "
+    "per reference from a cold wire (the dissertation averaged three repetitions). "
+    "`config/physics/ch5_straight_40n_table32.yaml` (same rig on the earlier one-node sheath "
+    "calibration, heating band refitted to Table 3.2's displacement per pulse energy) serves "
+    "only as an evidence run in the findings: it reproduces the 1.0 s row and a slower rise, "
+    "but loses the 2.2-2.8 s rows (22.5-26.2 mm against 24.5-27.5 mm; calibration objective "
+    "0.51 against 0.16), so the validated set stays the plant."
+)
+SETUP_CH6 = (
+    "HEMS index unit (`config/physics/ch6_hems_index.yaml`: x2 pulley, glove as a bias spring "
+    "pretensioned 2 N on the tendon, capstan and glove friction), BPID with Table 5.1 gains on "
+    f"the encoder (position) and `FORCE_MODE_BPID` (Kp {FORCE_MODE_BPID.kp:g}, Ki "
+    f"{FORCE_MODE_BPID.ki:g}, Kd {FORCE_MODE_BPID.kd:g}, Kb {FORCE_MODE_BPID.kb:g}, error in "
+    f"10 mN; why: hems_ros/control/gains.py and the force overshoot finding) on the force sensor "
+    "(0.03 N rms noise). Position RMSE on ascending parts (sine, ramp) or on plateaus once the "
+    "rise is over (steps); force references run from the wire's rest tension (4 N: 2 N behind "
+    "the x2 pulley) to 20 N. Overshoot is the first peak past each new level; hold excursion "
+    "the largest distance past it anywhere on the plateau (the ripple while holding)."
+)
 
 
 def _figure_list(paths: list[Path], rel: str) -> str:
@@ -197,28 +221,33 @@ def write_chapter(chapter: str, runs: dict, findings: list[Finding], folder: Pat
         tables, setup, figs = ch5_tables(runs), SETUP_CH5, plot_ch5(runs, folder)
     else:
         tables, setup, figs = ch6_tables(runs), SETUP_CH6, plot_ch6(runs, folder)
-    text = (f"# Chapter {chapter[2:]} in simulation (generated by `hems experiment {chapter}`)\n\n"
-            f"{setup}\n\n{tables}\n## Findings\n\n{findings_md(findings)}\n## Figures\n\n"
-            + _figure_list(figs, ""))
+    text = (
+        f"# Chapter {chapter[2:]} in simulation (generated by `hems experiment {chapter}`)\n\n"
+        f"{setup}\n\n{tables}\n## Findings\n\n{findings_md(findings)}\n## Figures\n\n"
+        + _figure_list(figs, "")
+    )
     (folder / f"{chapter}.md").write_text(text)
     return figs
 
 
-def docs_page(ch5: dict, ch6: dict, f5: list[Finding], f6: list[Finding], figures: list[Path]) -> str:
+def docs_page(
+    ch5: dict, ch6: dict, f5: list[Finding], f6: list[Finding], figures: list[Path]
+) -> str:
     """The text of docs/experiments.md, listing ``figures`` (in docs/figures)."""
     return (
         "# Controller experiments (generated by `hems experiment all --docs docs`)\n\n"
-        "The dissertation's closed-loop tests (dissertation chapters 5 and 6) run in the in-process "
-        "lockstep of `hems_ros/experiments/lockstep.py`: physics kernel at 1 kHz, controller at "
-        "100 Hz with the duty held between samples, the controller reading the simulated "
-        "encoder or force sensor. Cells read dissertation / ours / ratio. Regenerate with "
-        "`hems experiment all --docs docs`; `hems experiment ch5|ch6` writes the same tables "
+        "The dissertation's closed-loop tests (dissertation chapters 5 and 6) run in the "
+        "in-process lockstep of `hems_ros/experiments/lockstep.py`: physics kernel at 1 kHz, "
+        "controller at 100 Hz with the duty held between samples, the controller reading the "
+        "simulated encoder or force sensor. Cells read dissertation / ours / ratio. Regenerate "
+        "with `hems experiment all --docs docs`; `hems experiment ch5|ch6` writes the same tables "
         "into `results/<chapter>/`.\n\n"
         f"## Chapter 5: PID, PI-PD and BPID\n\n{SETUP_CH5}\n\n{ch5_tables(ch5)}\n"
         f"### Findings\n\n{findings_md(f5)}\n"
         f"## Chapter 6: BPID on the HEMS index finger\n\n{SETUP_CH6}\n\n{ch6_tables(ch6)}\n"
         f"### Findings\n\n{findings_md(f6)}\n"
-        "## Figures\n\n" + _figure_list(figures, "figures/"))
+        "## Figures\n\n" + _figure_list(figures, "figures/")
+    )
 
 
 def write_docs(ch5: dict, ch6: dict, f5: list[Finding], f6: list[Finding], docs: Path) -> Path:

@@ -22,10 +22,15 @@ def main() -> int:
     parser.add_argument("--value", type=float, default=0.0, help="mm")
     parser.add_argument("--best-effort", action="store_true")
     parser.add_argument("--latched", action="store_true", help="transient local")
-    parser.add_argument("--linger", type=float, default=0.0, help="seconds to stay after publishing")
-    parser.add_argument("--until-taken", action="store_true",
-                        help="publish each value at 100 Hz until the controller status shows it (as a user "
-                             "running `ros2 topic pub -r 100` until the finger moves), 10 s at most")
+    parser.add_argument(
+        "--linger", type=float, default=0.0, help="seconds to stay after publishing"
+    )
+    parser.add_argument(
+        "--until-taken",
+        action="store_true",
+        help="publish each value at 100 Hz until the controller status shows it (as a user "
+        "running `ros2 topic pub -r 100` until the finger moves), 10 s at most",
+    )
     args = parser.parse_args()
 
     import rclpy
@@ -36,13 +41,19 @@ def main() -> int:
     node = rclpy.create_node("command_publisher")
     reliability = ReliabilityPolicy.BEST_EFFORT if args.best_effort else ReliabilityPolicy.RELIABLE
     durability = DurabilityPolicy.TRANSIENT_LOCAL if args.latched else DurabilityPolicy.VOLATILE
-    publisher = node.create_publisher(FingerSetpoint, args.topic,
-                                      QoSProfile(depth=10, reliability=reliability, durability=durability))
+    publisher = node.create_publisher(
+        FingerSetpoint,
+        args.topic,
+        QoSProfile(depth=10, reliability=reliability, durability=durability),
+    )
     deadline = time.monotonic() + 30.0
     while publisher.get_subscription_count() < args.subscribers:
         if time.monotonic() > deadline:
-            print(f"only {publisher.get_subscription_count()} of {args.subscribers} subscriptions matched",
-                  file=sys.stderr)
+            print(
+                f"only {publisher.get_subscription_count()} of {args.subscribers} "
+                f"subscriptions matched",
+                file=sys.stderr,
+            )
             return 1
         time.sleep(0.02)
     shown = []
@@ -51,8 +62,12 @@ def main() -> int:
 
         from hems_ros.nodes import qos
 
-        node.create_subscription(ControllerStatus, args.topic.rsplit("/", 1)[0] + "/controller_status",
-                                 lambda m: shown.append(m.setpoint), qos.CONTROLLER_STATUS)
+        node.create_subscription(
+            ControllerStatus,
+            args.topic.rsplit("/", 1)[0] + "/controller_status",
+            lambda m: shown.append(m.setpoint),
+            qos.CONTROLLER_STATUS,
+        )
     for k in range(args.count):
         value = (args.value + k) * 1e-3
         until = time.monotonic() + 10.0
@@ -62,7 +77,9 @@ def main() -> int:
             if not args.until_taken or value in shown[-5:] or time.monotonic() > until:
                 break
     until = time.monotonic() + args.linger
-    while rclpy.ok() and time.monotonic() < until:   # SIGTERM shuts the context down (rclpy's handler)
+    while (
+        rclpy.ok() and time.monotonic() < until
+    ):  # SIGTERM shuts the context down (rclpy's handler)
         time.sleep(0.05)
     node.destroy_node()
     rclpy.try_shutdown()

@@ -1,4 +1,5 @@
-"""Helpers of the graph bag tests: reference bags, node processes, the controller replay, metrics."""
+"""Helpers of the graph bag tests: reference bags, node processes, the controller
+replay, metrics."""
 
 from __future__ import annotations
 
@@ -37,10 +38,13 @@ def stamp_ns(data, prefix: str = "header.stamp") -> np.ndarray:
     return data[f"{prefix}.sec"].astype(np.int64) * 1_000_000_000 + data[f"{prefix}.nanosec"]
 
 
-def start_node(executable: str, node: str, params: dict[str, str], extra: tuple[str, ...] = ()) -> subprocess.Popen:
+def start_node(
+    executable: str, node: str, params: dict[str, str], extra: tuple[str, ...] = ()
+) -> subprocess.Popen:
     options = GraphOptions(extra_ros_args=extra, log_level="warn")
-    return subprocess.Popen(executable_path(executable) + ros_arguments(node, params, options),
-                            env=child_environment())
+    return subprocess.Popen(
+        executable_path(executable) + ros_arguments(node, params, options), env=child_environment()
+    )
 
 
 class ControllerReplay:
@@ -70,18 +74,29 @@ class ControllerReplay:
         self.executor.add_node(self.node)
         self.duties: list = []
         self.statuses: list = []
-        self.node.create_subscription(DutyCommand, names.topic(finger, "duty"), self.duties.append, qos.COMMAND)
-        self.node.create_subscription(ControllerStatus, names.topic(finger, "controller_status"),
-                                      self.statuses.append, qos.CONTROLLER_STATUS)
+        self.node.create_subscription(
+            DutyCommand, names.topic(finger, "duty"), self.duties.append, qos.COMMAND
+        )
+        self.node.create_subscription(
+            ControllerStatus,
+            names.topic(finger, "controller_status"),
+            self.statuses.append,
+            qos.CONTROLLER_STATUS,
+        )
         self.publishers = {
             names.topic(finger, "setpoint"): self.node.create_publisher(
-                FingerSetpoint, names.topic(finger, "setpoint"), qos.COMMAND),
+                FingerSetpoint, names.topic(finger, "setpoint"), qos.COMMAND
+            ),
             names.topic(finger, "encoder"): self.node.create_publisher(
-                EncoderReading, names.topic(finger, "encoder"), qos.SENSOR),
+                EncoderReading, names.topic(finger, "encoder"), qos.SENSOR
+            ),
             names.topic(finger, "wire_force"): self.node.create_publisher(
-                WireForce, names.topic(finger, "wire_force"), qos.WIRE_FORCE),
+                WireForce, names.topic(finger, "wire_force"), qos.WIRE_FORCE
+            ),
         }
-        self.status = self.node.create_publisher(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
+        self.status = self.node.create_publisher(
+            SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS
+        )
 
     def spin_until(self, condition, timeout: float, what: str) -> None:
         deadline = time.monotonic() + timeout
@@ -91,8 +106,12 @@ class ControllerReplay:
             self.executor.spin_once(timeout_sec=0.005)
 
     def wait_for_controller(self, timeout: float = 60.0) -> None:
-        self.spin_until(lambda: all(p.get_subscription_count() for p in self.publishers.values())
-                        and self.statuses, timeout, "controller")
+        self.spin_until(
+            lambda: all(p.get_subscription_count() for p in self.publishers.values())
+            and self.statuses,
+            timeout,
+            "controller",
+        )
 
     def enable(self) -> None:
         from hems_msgs.msg import SupervisorStatus
@@ -104,8 +123,12 @@ class ControllerReplay:
         before = len(self.duties)
         self.publishers[topic].publish(data)
         if triggers:
-            self.spin_until(lambda: len(self.duties) > before and stamp_ns_of(self.duties[-1].measurement_stamp) == stamp,
-                            5.0, f"duty for the sample stamped {stamp}")
+            self.spin_until(
+                lambda: len(self.duties) > before
+                and stamp_ns_of(self.duties[-1].measurement_stamp) == stamp,
+                5.0,
+                f"duty for the sample stamped {stamp}",
+            )
         else:
             # a setpoint or the other mode's feedback: no reply to wait for, but the
             # controller must have taken it before the next sample arrives
@@ -128,16 +151,22 @@ def stamp_ns_of(message) -> int:
 def controller_inputs(bag_path: Path, finger: str):
     """The recorded controller inputs in the order the controller took them (see below).
 
-    Returns (inputs, first_enabled_index): inputs are (topic, raw bytes, decoded message, time taken) of the
-    setpoint, encoder and wire-force streams and the supervisor status.
+    Returns (inputs, first_enabled_index): inputs are (topic, raw bytes, decoded message, time
+    taken) of the setpoint, encoder and wire-force streams and the supervisor status.
     """
     from hems_msgs.msg import EncoderReading, FingerSetpoint, SupervisorStatus, WireForce
     from rclpy.serialization import deserialize_message
 
-    types = {names.topic(finger, "setpoint"): FingerSetpoint, names.topic(finger, "encoder"): EncoderReading,
-             names.topic(finger, "wire_force"): WireForce, names.SUPERVISOR_STATUS_TOPIC: SupervisorStatus}
+    types = {
+        names.topic(finger, "setpoint"): FingerSetpoint,
+        names.topic(finger, "encoder"): EncoderReading,
+        names.topic(finger, "wire_force"): WireForce,
+        names.SUPERVISOR_STATUS_TOPIC: SupervisorStatus,
+    }
     duty = load_bag(bag_path, topics=[names.topic(finger, "duty")])[names.topic(finger, "duty")]
-    computed = dict(zip(stamp_ns(duty, "measurement_stamp")[::-1].tolist(), stamp_ns(duty)[::-1].tolist()))
+    computed = dict(
+        zip(stamp_ns(duty, "measurement_stamp")[::-1].tolist(), stamp_ns(duty)[::-1].tolist())
+    )
     decoded = []
     for m in iter_messages(bag_path, topics=list(types)):
         msg = deserialize_message(m.data, types[m.topic])
@@ -156,15 +185,27 @@ def controller_inputs(bag_path: Path, finger: str):
     # (every ENABLED sent before then, the status being republished, waits until then).
     first_active = _first_active_measurement(bag_path, finger)
     feedback = (names.topic(finger, "encoder"), names.topic(finger, "wire_force"))
-    enable_at = min((taken for topic, _, msg, taken in decoded
-                     if topic in feedback and stamp_ns_of(msg.header.stamp) == first_active), default=None)
+    enable_at = min(
+        (
+            taken
+            for topic, _, msg, taken in decoded
+            if topic in feedback and stamp_ns_of(msg.header.stamp) == first_active
+        ),
+        default=None,
+    )
     if enable_at is not None:
-        decoded = [(topic, data, msg, max(taken, enable_at - 1))
-                   if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED
-                   else (topic, data, msg, taken) for topic, data, msg, taken in decoded]
+        decoded = [
+            (topic, data, msg, max(taken, enable_at - 1))
+            if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED
+            else (topic, data, msg, taken)
+            for topic, data, msg, taken in decoded
+        ]
     decoded.sort(key=lambda entry: entry[3])
-    enabled = next(i for i, (topic, _, msg, _) in enumerate(decoded)
-                   if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED)
+    enabled = next(
+        i
+        for i, (topic, _, msg, _) in enumerate(decoded)
+        if topic == names.SUPERVISOR_STATUS_TOPIC and msg.state == SupervisorStatus.ENABLED
+    )
     return decoded, enabled
 
 
@@ -190,13 +231,22 @@ def _first_active_measurement(bag_path: Path, finger: str) -> int | None:
 OTHER_FEEDBACK_NS = 40_000_000
 
 
-def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]], list[tuple[int, float]]]:
-    """Replay ``reference`` into a fresh controller; (replayed, recorded) duties as (measurement stamp, duty)."""
+def replay_into_controller(
+    reference: Reference,
+) -> tuple[list[tuple[int, float]], list[tuple[int, float]]]:
+    """Replay ``reference`` into a fresh controller; (replayed, recorded) duties as (measurement
+    stamp, duty)."""
     finger = reference.finger
     inputs, enabled = controller_inputs(reference.path, finger)
-    encoder, wire_force, setpoint = (names.topic(finger, s) for s in ("encoder", "wire_force", "setpoint"))
-    controller = start_node("finger_controller", f"finger_controller_{finger}", {"finger": finger},
-                            ("-p", f"pulley_ratio:={reference.pulley_ratio!r}"))
+    encoder, wire_force, setpoint = (
+        names.topic(finger, s) for s in ("encoder", "wire_force", "setpoint")
+    )
+    controller = start_node(
+        "finger_controller",
+        f"finger_controller_{finger}",
+        {"finger": finger},
+        ("-p", f"pulley_ratio:={reference.pulley_ratio!r}"),
+    )
     replay = ControllerReplay(finger)
     try:
         replay.wait_for_controller()
@@ -217,13 +267,13 @@ def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]
         replay.enable()
         first_duty = len(replay.duties)
         held, other_fed = {}, 0
-        for topic, data, msg, _ in inputs[enabled + 1:]:
+        for topic, data, msg, _ in inputs[enabled + 1 :]:
             if topic == names.SUPERVISOR_STATUS_TOPIC:
                 if msg.state_name != "ENABLED":
                     break  # the run ends at the first state change after ENABLED
                 continue
             if topic == setpoint:
-                if held:         # the value a mode switch starts from: the latest reading
+                if held:  # the value a mode switch starts from: the latest reading
                     replay.feed(*held.popitem(), False)
                 mode = msg.mode
                 replay.feed(topic, data, False)
@@ -235,28 +285,46 @@ def replay_into_controller(reference: Reference) -> tuple[list[tuple[int, float]
                 held.clear()
             else:
                 held = {topic: data}
-        replayed = [(stamp_ns_of(d.measurement_stamp), d.duty_percent) for d in replay.duties[first_duty:]]
+        replayed = [
+            (stamp_ns_of(d.measurement_stamp), d.duty_percent) for d in replay.duties[first_duty:]
+        ]
     finally:
         replay.close()
         stop_process(controller, 10.0)
-    duty = load_bag(reference.path, topics=[names.topic(finger, "duty")])[names.topic(finger, "duty")]
-    recorded = list(zip(stamp_ns(duty, "measurement_stamp").tolist(), duty["duty_percent"].tolist()))
+    duty = load_bag(reference.path, topics=[names.topic(finger, "duty")])[
+        names.topic(finger, "duty")
+    ]
+    recorded = list(
+        zip(stamp_ns(duty, "measurement_stamp").tolist(), duty["duty_percent"].tolist())
+    )
     start = next(i for i, (stamp, _) in enumerate(recorded) if stamp == replayed[0][0])
-    return replayed, recorded[start:start + len(replayed)]
+    return replayed, recorded[start : start + len(replayed)]
 
 
 def grasp_metrics(bag_path: Path, finger: str, plan: GraspPlan, phase_starts: list[float]):
     """The demo's per-finger summary computed from a bag: tendon position and force from the
     encoder and wire-force streams (matched by stamp), power from the actuator state."""
-    bag = load_bag(bag_path, topics=[names.topic(finger, "encoder"), names.topic(finger, "wire_force"),
-                                     names.sim_topic(finger, "state"), names.topic(finger, "duty")])
+    bag = load_bag(
+        bag_path,
+        topics=[
+            names.topic(finger, "encoder"),
+            names.topic(finger, "wire_force"),
+            names.sim_topic(finger, "state"),
+            names.topic(finger, "duty"),
+        ],
+    )
     encoder, force = bag[names.topic(finger, "encoder")], bag[names.topic(finger, "wire_force")]
     state, duty = bag[names.sim_topic(finger, "state")], bag[names.topic(finger, "duty")]
     common, ei, fi = np.intersect1d(stamp_ns(encoder), stamp_ns(force), return_indices=True)
-    trace = FingerTrace(list(common * 1e-9), list(transmission.tendon_position(encoder["position"][ei])),
-                        list(transmission.tendon_force(force["force"][fi])),
-                        list(state.stamp), list(state["electrical_energy"]), list(duty.stamp),
-                        list(duty["duty_percent"]))
+    trace = FingerTrace(
+        list(common * 1e-9),
+        list(transmission.tendon_position(encoder["position"][ei])),
+        list(transmission.tendon_force(force["force"][fi])),
+        list(state.stamp),
+        list(state["electrical_energy"]),
+        list(duty.stamp),
+        list(duty["duty_percent"]),
+    )
     return summarize(finger, trace, plan, phase_starts)
 
 
@@ -265,7 +333,16 @@ def phase_stamps(bag_path: Path, finger: str) -> list[float]:
     topic = names.topic(finger, "controller_status")
     status = load_bag(bag_path, topics=[topic])[topic]
     tracker = PhaseTracker()
-    encoder, force = stamp_ns(status, "encoder_stamp") * 1e-9, stamp_ns(status, "force_stamp") * 1e-9
+    encoder, force = (
+        stamp_ns(status, "encoder_stamp") * 1e-9,
+        stamp_ns(status, "force_stamp") * 1e-9,
+    )
     for i in range(len(status.stamp)):
-        tracker.feed(status["mode"][i], status["setpoint"][i], bool(status["active"][i]), encoder[i], force[i])
+        tracker.feed(
+            status["mode"][i],
+            status["setpoint"][i],
+            bool(status["active"][i]),
+            encoder[i],
+            force[i],
+        )
     return tracker.starts

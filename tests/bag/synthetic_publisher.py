@@ -39,10 +39,17 @@ def build(topic: str, sequence: int):
 
     values = expected_values(topic, sequence)
     if topic.endswith("encoder"):
-        return EncoderReading(finger="index", counts=values["counts"], position=values["position"],
-                              resolution=1e-5, sequence=sequence)
+        return EncoderReading(
+            finger="index",
+            counts=values["counts"],
+            position=values["position"],
+            resolution=1e-5,
+            sequence=sequence,
+        )
     if topic.endswith("wire_force"):
-        return WireForce(finger="index", force=values["force"], saturated=values["saturated"], sequence=sequence)
+        return WireForce(
+            finger="index", force=values["force"], saturated=values["saturated"], sequence=sequence
+        )
     if topic.endswith("duty"):
         return DutyCommand(finger="index", duty_percent=values["duty_percent"], sequence=sequence)
     message = JointState(name=["index", "middle"], position=[sequence * 1e-3, -sequence * 1e-3])
@@ -67,13 +74,24 @@ def main() -> int:
 
     rclpy.init()
     node = Node("synthetic_publisher")
-    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    latched = QoSProfile(
+        depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+    )
     status_publisher = node.create_publisher(SupervisorStatus, STATUS_TOPIC, latched)
     status_publisher.publish(SupervisorStatus(state=1, state_name="ENABLED", faults=["none"]))
     publishers = {
-        topic: node.create_publisher(message_class(type_name), topic, QoSProfile(
-            depth=100, reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT))
-        for topic, (type_name, reliable) in STREAMS.items()}
+        topic: node.create_publisher(
+            message_class(type_name),
+            topic,
+            QoSProfile(
+                depth=100,
+                reliability=ReliabilityPolicy.RELIABLE
+                if reliable
+                else ReliabilityPolicy.BEST_EFFORT,
+            ),
+        )
+        for topic, (type_name, reliable) in STREAMS.items()
+    }
     deadline = time.monotonic() + args.timeout
     while any(p.get_subscription_count() == 0 for p in publishers.values()):
         if time.monotonic() > deadline:
@@ -90,7 +108,10 @@ def main() -> int:
         if delay > 0:
             time.sleep(delay)
     time.sleep(args.linger)
-    print(json.dumps({"published": {topic: args.count for topic in publishers} | {STATUS_TOPIC: 1}}), flush=True)
+    print(
+        json.dumps({"published": {topic: args.count for topic in publishers} | {STATUS_TOPIC: 1}}),
+        flush=True,
+    )
     node.destroy_node()
     rclpy.try_shutdown()
     return 0

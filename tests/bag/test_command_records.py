@@ -43,12 +43,28 @@ def test_every_setpoint_and_supervisor_call_is_in_the_bag(ros_domain_id, tmp_pat
             assert not client.fingers_without_readers((FINGER,), timeout=60.0)
             client.call("disable")
             for value in CLI_SETPOINTS_MM:
-                subprocess.run([str(venv / "bin" / "hems"), "setpoint", FINGER, f"{value:g}", "--unit", "mm"],
-                               capture_output=True, text=True, timeout=120)
+                subprocess.run(
+                    [str(venv / "bin" / "hems"), "setpoint", FINGER, f"{value:g}", "--unit", "mm"],
+                    capture_output=True,
+                    text=True,
+                    timeout=120,
+                )
             for value in QUICK_SETPOINTS_MM:
-                result = subprocess.run([sys.executable, str(COMMAND_SCRIPT), "--subscribers", "1", "--value",
-                                         f"{value:g}", "--until-taken"], env=child_environment(),
-                                        capture_output=True, text=True, timeout=60)
+                result = subprocess.run(
+                    [
+                        sys.executable,
+                        str(COMMAND_SCRIPT),
+                        "--subscribers",
+                        "1",
+                        "--value",
+                        f"{value:g}",
+                        "--until-taken",
+                    ],
+                    env=child_environment(),
+                    capture_output=True,
+                    text=True,
+                    timeout=60,
+                )
                 assert result.returncode == 0, result.stderr
             client.call("estop")
             client.call("reset")
@@ -61,8 +77,10 @@ def test_every_setpoint_and_supervisor_call_is_in_the_bag(ros_domain_id, tmp_pat
     received = [v * 1e3 for v in records["value"]]
     # every value the tools sent reached the controller, and every one of them is in the bag
     expected = CLI_SETPOINTS_MM + QUICK_SETPOINTS_MM
-    assert [v for v in expected if any(math.isclose(v, r, abs_tol=1e-9) for r in received)] == expected
-    assert np.array_equal(records["sequence"], np.arange(1, len(records) + 1))   # no record lost
+    assert [
+        v for v in expected if any(math.isclose(v, r, abs_tol=1e-9) for r in received)
+    ] == expected
+    assert np.array_equal(records["sequence"], np.arange(1, len(records) + 1))  # no record lost
     assert all(records["accepted"]) and set(records["command"]) == {"position"}
     supervisor = bag[names.SUPERVISOR_COMMANDS_TOPIC]
     assert list(supervisor["command"])[-3:] == ["disable", "estop", "reset"]

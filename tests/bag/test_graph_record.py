@@ -27,35 +27,60 @@ from hems_ros.bag.recording import RecorderProcess
 from hems_ros.client.recording import graph_topics
 from hems_ros.graph import names
 
-FINGER = "index"   # the finger whose streams are also read back with rosbags and mcap
+FINGER = "index"  # the finger whose streams are also read back with rosbags and mcap
 # per-finger topic -> (field compared with the test's own subscriber, minimum count in the window).
 # The minimum only shows that the window holds about 10 s of every stream (gaps and counts are
 # checked exactly): 90 % of the nominal rate, since a starved host publishes a little less (the
 # one-finger module sent 940 wire forces in one fresh-clone `make test` here, with no gap).
 STREAMS = {
-    "encoder": ("position", 900), "wire_force": ("force", 900), "wire_tension": ("force", 900),
-    "state": ("wire_temperature_c", 180), "duty": ("duty_percent", 900), "controller_status": ("measurement", 450),
+    "encoder": ("position", 900),
+    "wire_force": ("force", 900),
+    "wire_tension": ("force", 900),
+    "state": ("wire_temperature_c", 180),
+    "duty": ("duty_percent", 900),
+    "controller_status": ("measurement", 450),
 }
 
 
 def stream_topic(finger: str, stream: str) -> str:
-    return names.sim_topic(finger, stream) if stream in ("wire_tension", "state") else names.topic(finger, stream)
+    return (
+        names.sim_topic(finger, stream)
+        if stream in ("wire_tension", "state")
+        else names.topic(finger, stream)
+    )
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("fingers", [
-    pytest.param((FINGER,), id="one_finger"),
-    pytest.param(names.FINGERS, id="full_graph", marks=pytest.mark.graph_realtime),
-])
-def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int, tmp_path: Path, fingers) -> None:
-    from hems_msgs.msg import ActuatorState, ControllerStatus, DutyCommand, EncoderReading, WireForce
+@pytest.mark.parametrize(
+    "fingers",
+    [
+        pytest.param((FINGER,), id="one_finger"),
+        pytest.param(names.FINGERS, id="full_graph", marks=pytest.mark.graph_realtime),
+    ],
+)
+def test_ten_seconds_of_the_graph_every_message_decoded_equal(
+    ros_domain_id: int, tmp_path: Path, fingers
+) -> None:
+    from hems_msgs.msg import (
+        ActuatorState,
+        ControllerStatus,
+        DutyCommand,
+        EncoderReading,
+        WireForce,
+    )
 
     from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
     from hems_ros.nodes import qos
 
-    kinds = {"encoder": EncoderReading, "wire_force": WireForce, "wire_tension": WireForce, "state": ActuatorState,
-             "duty": DutyCommand, "controller_status": ControllerStatus}
+    kinds = {
+        "encoder": EncoderReading,
+        "wire_force": WireForce,
+        "wire_tension": WireForce,
+        "state": ActuatorState,
+        "duty": DutyCommand,
+        "controller_status": ControllerStatus,
+    }
     sequenced = {stream_topic(f, s): field for f in fingers for s, (field, _) in STREAMS.items()}
     minimum = {stream_topic(f, s): n for f in fingers for s, (_, n) in STREAMS.items()}
     # the test's own subscriber (the witness of the published values) takes FINGER's streams:
@@ -69,8 +94,12 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
         graph = cleanup.enter_context(Graph(GraphOptions(fingers=tuple(fingers), log_level="warn")))
         client = cleanup.enter_context(GraphClient("hems_test_record"))
         for topic, msg_type in witnessed.items():
-            client.node.create_subscription(msg_type, topic, received[topic].append,
-                                            qos.COMMAND if msg_type is DutyCommand else qos.SENSOR)
+            client.node.create_subscription(
+                msg_type,
+                topic,
+                received[topic].append,
+                qos.COMMAND if msg_type is DutyCommand else qos.SENSOR,
+            )
         for finger in fingers:
             assert client.send_setpoint(finger, "position", 0.0, timeout=60)
         recorder = cleanup.enter_context(RecorderProcess(output, flush_period=0.2))
@@ -84,7 +113,9 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
         assert ok, message
         started = time.monotonic()
         for finger in fingers:
-            client.send_setpoint(finger, "position", 0.015)   # values that move: heating, travel, duty
+            client.send_setpoint(
+                finger, "position", 0.015
+            )  # values that move: heating, travel, duty
         refaults = 0
         while time.monotonic() - started < 10.0:
             client.spin_for(min(1.0, 10.0 - (time.monotonic() - started)))
@@ -116,8 +147,9 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
             mine = {m.sequence: getattr(m, name) for m in received[topic]}
             common = [i for i, s in enumerate(everything.tolist()) if s in mine]
             assert len(common) > 0.5 * len(data), topic
-            assert np.array_equal(data[name][common], [mine[s] for s in everything[common].tolist()],
-                                  equal_nan=True), topic
+            assert np.array_equal(
+                data[name][common], [mine[s] for s in everything[common].tolist()], equal_nan=True
+            ), topic
     duty = bag[names.topic(FINGER, "duty")]
     assert duty["duty_percent"].max() > 0.0, f"no heating ({refaults} supervisor faults re-enabled)"
     assert set(bag[names.SUPERVISOR_STATUS_TOPIC]["state_name"]) >= {"ENABLED"}
@@ -129,11 +161,18 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
     encoder = bag[names.topic(FINGER, "encoder")]
     with AnyReader([output]) as reader:
         connections = [c for c in reader.connections if c.topic == names.topic(FINGER, "encoder")]
-        decoded = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=connections)]
+        decoded = [
+            reader.deserialize(raw, c.msgtype)
+            for c, _, raw in reader.messages(connections=connections)
+        ]
         counts = {c.topic: c.msgcount for c in reader.connections}
     assert [m.position for m in decoded] == encoder["position"].tolist()
-    assert [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in decoded] == stamp_ns(encoder).tolist()
-    assert {t: n for t, n in counts.items() if n} == {t: e.count for t, e in info.topics.items() if e.count}
+    assert [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in decoded] == stamp_ns(
+        encoder
+    ).tolist()
+    assert {t: n for t, n in counts.items() if n} == {
+        t: e.count for t, e in info.topics.items() if e.count
+    }
     with open(output / f"{output.name}_0.mcap", "rb") as stream:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
         assert reader.get_summary().statistics.message_count == info.message_count
@@ -141,4 +180,6 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(ros_domain_id: int
         for _, channel, _, message in reader.iter_decoded_messages(topics=list(sequenced)):
             by_topic.setdefault(channel.topic, []).append(message)
     for topic, name in sequenced.items():
-        assert np.array_equal([getattr(m, name) for m in by_topic[topic]], bag[topic][name], equal_nan=True), topic
+        assert np.array_equal(
+            [getattr(m, name) for m in by_topic[topic]], bag[topic][name], equal_nan=True
+        ), topic

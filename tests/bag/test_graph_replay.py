@@ -17,7 +17,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from graph_bags import REFERENCES, grasp_metrics, phase_stamps, replay_into_controller, start_node, stop
+from graph_bags import (
+    REFERENCES,
+    grasp_metrics,
+    phase_stamps,
+    replay_into_controller,
+    start_node,
+    stop,
+)
 
 from hems_ros.bag import BagWriter, iter_messages
 from hems_ros.bag.recording import RecorderProcess
@@ -30,21 +37,24 @@ from hems_ros.rosenv import child_environment
 @pytest.mark.parametrize("name", sorted(REFERENCES))
 def test_controller_reproduces_the_recorded_duty_stream(ros_domain_id: int, name: str) -> None:
     replayed, recorded = replay_into_controller(REFERENCES[name])
-    assert len(replayed) > 1400                        # every control step from ENABLED to the end
+    assert len(replayed) > 1400  # every control step from ENABLED to the end
     stamps, duty = np.array(replayed).T
     recorded_stamps, recorded_duty = np.array(recorded).T
-    assert np.array_equal(stamps, recorded_stamps)     # the same steps (measurement stamps)
+    assert np.array_equal(stamps, recorded_stamps)  # the same steps (measurement stamps)
     assert np.max(np.abs(duty - recorded_duty)) <= 1e-9
-    assert duty.max() == 100.0 and np.count_nonzero(duty) > 300   # the run heated and saturated
+    assert duty.max() == 100.0 and np.count_nonzero(duty) > 300  # the run heated and saturated
 
 
 def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000_000_000) -> Path:
-    """``topics`` of ``source`` copied into a new bag with log times shifted to begin at ``start_ns``."""
+    """``topics`` of ``source`` copied into a new bag with log times shifted to begin at
+    ``start_ns``."""
     messages = sorted(iter_messages(source, topics=topics), key=lambda m: m.log_time_ns)
     offset = messages[0].log_time_ns - start_ns
     with BagWriter(target) as writer:
         for m in messages:
-            channel = writer.add_topic(m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or [])
+            channel = writer.add_topic(
+                m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or []
+            )
             writer.write(channel, m.log_time_ns - offset, m.data)
     return target
 
@@ -58,10 +68,12 @@ def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000
 # run give 0.020-0.027 N (sd 10 %), so two runs differ by about 14 % (sd); 50 % is 3.5 sd.
 @pytest.mark.slow
 @pytest.mark.graph_realtime
-def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_domain_id: int, tmp_path: Path) -> None:
+def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(
+    ros_domain_id: int, tmp_path: Path
+) -> None:
     reference = REFERENCES["demo_grasp_index"]
     finger = reference.finger
-    plan = GraspPlan()   # what `hems demo` ran (its default phases)
+    plan = GraspPlan()  # what `hems demo` ran (its default phases)
     starts = phase_stamps(reference.path, finger)
     original = grasp_metrics(reference.path, finger, plan, starts)
 
@@ -69,32 +81,67 @@ def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(ros_do
     # actuation unit's simulation starts there; it catches up with a clock near 0 (as with
     # `hems up --sim-time`, which starts at 1 s) but not with wall-clock epoch times. So the
     # replayed streams are re-based to start at 1 s of simulated time.
-    inputs = rebased(reference.path, tmp_path / "inputs",
-                     [names.topic(finger, "setpoint"), names.SUPERVISOR_STATUS_TOPIC])
+    inputs = rebased(
+        reference.path,
+        tmp_path / "inputs",
+        [names.topic(finger, "setpoint"), names.SUPERVISOR_STATUS_TOPIC],
+    )
     sim_time = ("-p", "use_sim_time:=true")
     output = tmp_path / "replayed"
     with contextlib.ExitStack() as cleanup:  # every node stops whatever fails
         # No supervisor: the replayed status is the original run's; a live one would decide anew.
-        nodes = [start_node(executable, node, params, sim_time) for executable, node, params in (
-            ("actuation_unit", f"actuation_unit_{finger}", {"finger": finger}),
-            ("shoulder_module", "shoulder_module_index_middle", {"module": "index_middle"}),
-            ("finger_controller", f"finger_controller_{finger}", {"finger": finger}))]
+        nodes = [
+            start_node(executable, node, params, sim_time)
+            for executable, node, params in (
+                ("actuation_unit", f"actuation_unit_{finger}", {"finger": finger}),
+                ("shoulder_module", "shoulder_module_index_middle", {"module": "index_middle"}),
+                ("finger_controller", f"finger_controller_{finger}", {"finger": finger}),
+            )
+        ]
         for node in nodes:
             cleanup.callback(stop, node)
-        recorder = cleanup.enter_context(RecorderProcess(
-            output, topics=[names.topic(finger, s) for s in ("encoder", "wire_force", "duty", "controller_status")]
-            + [names.sim_topic(finger, "state")]))
-        recorder.wait_for_topics([names.topic(finger, "encoder"), names.topic(finger, "duty")], timeout=60)
+        recorder = cleanup.enter_context(
+            RecorderProcess(
+                output,
+                topics=[
+                    names.topic(finger, s)
+                    for s in ("encoder", "wire_force", "duty", "controller_status")
+                ]
+                + [names.sim_topic(finger, "state")],
+            )
+        )
+        recorder.wait_for_topics(
+            [names.topic(finger, "encoder"), names.topic(finger, "duty")], timeout=60
+        )
         replay = subprocess.run(
-            [sys.executable, "-m", "hems_ros.cli.main", "replay", str(inputs),
-             "--clock", "200", "--wait-subscribers", "30"],
-            env=child_environment(), capture_output=True, text=True, timeout=120)
+            [
+                sys.executable,
+                "-m",
+                "hems_ros.cli.main",
+                "replay",
+                str(inputs),
+                "--clock",
+                "200",
+                "--wait-subscribers",
+                "30",
+            ],
+            env=child_environment(),
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert replay.returncode == 0, replay.stderr
         assert all(node.poll() is None for node in nodes)
         info = recorder.stop()
     assert info.topics[names.topic(finger, "encoder")].count > 1500
     live = grasp_metrics(output, finger, plan, phase_stamps(output, finger))
     print(f"original {original}\nreplayed {live}")
-    for field in ("approach_rmse_mm", "position_rmse_mm", "hold_rmse_n", "peak_force_n", "energy_j"):
+    for field in (
+        "approach_rmse_mm",
+        "position_rmse_mm",
+        "hold_rmse_n",
+        "peak_force_n",
+        "energy_j",
+    ):
         assert getattr(live, field) == pytest.approx(getattr(original, field), rel=0.02), field
     assert live.force_rmse_n == pytest.approx(original.force_rmse_n, rel=0.5)

@@ -22,8 +22,21 @@ TOPICS = list(STREAMS) + [STATUS_TOPIC]
 
 
 def publish(count: int, rate: float, linger: float = 1.0) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, str(PUBLISHER_SCRIPT), "--count", str(count), "--rate", str(rate),
-                             "--linger", str(linger)], env=child_environment(), stdout=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [
+            sys.executable,
+            str(PUBLISHER_SCRIPT),
+            "--count",
+            str(count),
+            "--rate",
+            str(rate),
+            "--linger",
+            str(linger),
+        ],
+        env=child_environment(),
+        stdout=subprocess.PIPE,
+        text=True,
+    )
 
 
 def published_counts(publisher: subprocess.Popen) -> dict[str, int]:
@@ -59,7 +72,9 @@ def test_records_every_message_and_finishes_on_sigterm(ros_domain_id: int, tmp_p
     assert info.reports[0].complete and {t: e.count for t, e in info.topics.items()} == counts
     bag = load_bag(output)
     check_streams(bag, counts)
-    assert bag["/hems/supervisor/status"]["state_name"][0] == "ENABLED"   # latched, published before we joined
+    assert (
+        bag["/hems/supervisor/status"]["state_name"][0] == "ENABLED"
+    )  # latched, published before we joined
 
     from mcap.reader import make_reader
     from rosbags.highlevel import AnyReader
@@ -69,8 +84,14 @@ def test_records_every_message_and_finishes_on_sigterm(ros_domain_id: int, tmp_p
     assert summary.statistics.message_count == sum(counts.values())
     with AnyReader([output]) as reader:
         duty = [c for c in reader.connections if c.topic == "/hems/test/duty"]
-        values = [reader.deserialize(raw, c.msgtype).duty_percent for c, _, raw in reader.messages(connections=duty)]
-    assert values == [expected_values("/hems/test/duty", i)["duty_percent"] for i in range(counts["/hems/test/duty"])]
+        values = [
+            reader.deserialize(raw, c.msgtype).duty_percent
+            for c, _, raw in reader.messages(connections=duty)
+        ]
+    assert values == [
+        expected_values("/hems/test/duty", i)["duty_percent"]
+        for i in range(counts["/hems/test/duty"])
+    ]
 
 
 def test_sigkill_keeps_every_flushed_chunk(ros_domain_id: int, tmp_path: Path) -> None:
@@ -119,13 +140,16 @@ def test_recorder_names_a_folder_it_cannot_make(tmp_path: Path) -> None:
     recorder = RecorderProcess(tmp_path / "a_file" / "bag")
     with pytest.raises(RuntimeError, match="code 2") as info:
         recorder.wait(timeout=30)
-    assert f"Recorder: invalid configuration: [Errno 20] Not a directory: '{tmp_path / 'a_file' / 'bag'}'" \
-        in str(info.value)
+    assert (
+        f"Recorder: invalid configuration: [Errno 20] Not a directory: "
+        f"'{tmp_path / 'a_file' / 'bag'}'" in str(info.value)
+    )
     assert "Traceback" not in "\n".join(recorder.log)
 
 
 def test_stop_twice_gives_the_same_bag_and_an_error_leaving_the_block_stays_the_error(
-        ros_domain_id: int, tmp_path: Path) -> None:
+    ros_domain_id: int, tmp_path: Path
+) -> None:
     publisher = publish(count=1500, rate=500.0)
     try:
         with RecorderProcess(tmp_path / "twice", topics=list(STREAMS)) as recorder:
@@ -144,15 +168,23 @@ def test_stop_twice_gives_the_same_bag_and_an_error_leaving_the_block_stays_the_
         publisher.kill()
         publisher.wait()
     assert recorder.process.returncode == -9
-    assert any("stopping the recorder failed" in note and "code -9" in note for note in raised.value.__notes__)
+    assert any(
+        "stopping the recorder failed" in note and "code -9" in note
+        for note in raised.value.__notes__
+    )
 
 
 COMMAND_SCRIPT = Path(__file__).resolve().parent / "command_publisher.py"
 
 
 def command(*args: str) -> None:
-    result = subprocess.run([sys.executable, str(COMMAND_SCRIPT), *args], env=child_environment(),
-                            capture_output=True, text=True, timeout=60)
+    result = subprocess.run(
+        [sys.executable, str(COMMAND_SCRIPT), *args],
+        env=child_environment(),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert result.returncode == 0, result.stderr
 
 
@@ -179,7 +211,11 @@ def offered_reliability(folder: Path, topic: str) -> list[str]:
     import yaml
 
     meta = yaml.safe_load((folder / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    entry = next(t["topic_metadata"] for t in meta["topics_with_message_count"] if t["topic_metadata"]["name"] == topic)
+    entry = next(
+        t["topic_metadata"]
+        for t in meta["topics_with_message_count"]
+        if t["topic_metadata"]["name"] == topic
+    )
     return [q["reliability"] for q in entry["offered_qos_profiles"]]
 
 
@@ -188,7 +224,7 @@ def record_commands(output: Path, *args: str) -> tuple[RecorderProcess, object]:
     process with ``args`` runs; the recorder and its bag summary."""
     recorder = RecorderProcess(output, topics=["/hems/index/setpoint"], discovery_period=0.05)
     try:
-        recorder.wait_for_topics(["/hems/index/setpoint"])   # no publisher in the graph yet
+        recorder.wait_for_topics(["/hems/index/setpoint"])  # no publisher in the graph yet
         command(*args)
     finally:
         info = recorder.stop()
@@ -200,15 +236,25 @@ def recorded_values(output: Path) -> list[float]:
 
 
 def test_a_topic_without_publishers_is_subscribed_at_once_so_one_shot_commands_are_recorded(
-        listener, tmp_path: Path) -> None:
+    listener, tmp_path: Path
+) -> None:
     """`hems setpoint` and `ros2 topic pub --once` publish as soon as their writer has matched:
     a recorder that subscribed only once it saw that writer would have matched it after the
     sample was sent, and a volatile reader never gets a sample written before it matched.
     (The writer here stays until its heartbeat, 3 s, could repair a sample the recorder's
     reader dropped because its own side of the match came later.)"""
     # the listener and the recorder matched, then three samples at once
-    recorder, info = record_commands(tmp_path / "commands", "--value", "5", "--count", "3", "--subscribers", "2",
-                                     "--linger", "3.5")
+    recorder, info = record_commands(
+        tmp_path / "commands",
+        "--value",
+        "5",
+        "--count",
+        "3",
+        "--subscribers",
+        "2",
+        "--linger",
+        "3.5",
+    )
     assert any("before any publisher" in line for line in recorder.log)
     assert info.topics["/hems/index/setpoint"].count == 3
     assert recorded_values(tmp_path / "commands") == pytest.approx([0.005, 0.006, 0.007], abs=1e-12)
@@ -216,18 +262,33 @@ def test_a_topic_without_publishers_is_subscribed_at_once_so_one_shot_commands_a
     assert offered_reliability(tmp_path / "commands", "/hems/index/setpoint") == ["reliable"]
 
 
-def test_a_waiting_subscription_turns_best_effort_for_a_best_effort_publisher(listener, tmp_path: Path) -> None:
+def test_a_waiting_subscription_turns_best_effort_for_a_best_effort_publisher(
+    listener, tmp_path: Path
+) -> None:
     # a reliable reader never matches a best-effort writer (the listener never does): the
     # publisher waits for the recorder's new best-effort subscription
-    _, info = record_commands(tmp_path / "late_best_effort", "--best-effort", "--subscribers", "1", "--count", "20",
-                              "--value", "1")
+    _, info = record_commands(
+        tmp_path / "late_best_effort",
+        "--best-effort",
+        "--subscribers",
+        "1",
+        "--count",
+        "20",
+        "--value",
+        "1",
+    )
     assert info.topics["/hems/index/setpoint"].count == 20
-    assert recorded_values(tmp_path / "late_best_effort") == pytest.approx([(1 + k) * 1e-3 for k in range(20)],
-                                                                           abs=1e-12)
-    assert offered_reliability(tmp_path / "late_best_effort", "/hems/index/setpoint") == ["best_effort"]
+    assert recorded_values(tmp_path / "late_best_effort") == pytest.approx(
+        [(1 + k) * 1e-3 for k in range(20)], abs=1e-12
+    )
+    assert offered_reliability(tmp_path / "late_best_effort", "/hems/index/setpoint") == [
+        "best_effort"
+    ]
 
 
-def test_a_waiting_subscription_takes_a_latched_sample_sent_before_it_matched(listener, tmp_path: Path) -> None:
+def test_a_waiting_subscription_takes_a_latched_sample_sent_before_it_matched(
+    listener, tmp_path: Path
+) -> None:
     output = tmp_path / "late_latched"
     recorder = RecorderProcess(output, topics=["/hems/index/setpoint"], discovery_period=0.05)
     publisher = None
@@ -236,13 +297,27 @@ def test_a_waiting_subscription_takes_a_latched_sample_sent_before_it_matched(li
         # published at once, before anything can have matched; the writer keeps it for late
         # transient-local readers and stays until the recorder has one (discovery between
         # processes now and then takes seconds, so no fixed wait)
-        publisher = subprocess.Popen([sys.executable, str(COMMAND_SCRIPT), "--latched", "--subscribers", "0",
-                                      "--value", "7", "--linger", "60"], env=child_environment())
+        publisher = subprocess.Popen(
+            [
+                sys.executable,
+                str(COMMAND_SCRIPT),
+                "--latched",
+                "--subscribers",
+                "0",
+                "--value",
+                "7",
+                "--linger",
+                "60",
+            ],
+            env=child_environment(),
+        )
         deadline = time.monotonic() + 30.0
-        while not any("/hems/index/setpoint" in line and "transient_local" in line for line in recorder.log):
+        while not any(
+            "/hems/index/setpoint" in line and "transient_local" in line for line in recorder.log
+        ):
             assert time.monotonic() < deadline, "the recorder never subscribed transient local"
             time.sleep(0.05)
-        time.sleep(2.0)   # the writer's history reaches the new reader once they have matched
+        time.sleep(2.0)  # the writer's history reaches the new reader once they have matched
     finally:
         if publisher is not None:
             stop_process(publisher, 10.0)
@@ -251,7 +326,9 @@ def test_a_waiting_subscription_takes_a_latched_sample_sent_before_it_matched(li
     assert recorded_values(output) == pytest.approx([0.007], abs=1e-12)
 
 
-def test_a_recorder_stopped_while_it_subscribes_still_finishes_its_bag(ros_domain_id: int, tmp_path: Path) -> None:
+def test_a_recorder_stopped_while_it_subscribes_still_finishes_its_bag(
+    ros_domain_id: int, tmp_path: Path
+) -> None:
     # SIGTERM right after the first topic was reported subscribed: the recorder was still
     # subscribing in its constructor, whose next rcl call failed on the shut-down context, and
     # the bag was left at its 41-byte header (once in a full `make test` on a busy host)
@@ -267,7 +344,9 @@ def test_a_recorder_stopped_while_it_subscribes_still_finishes_its_bag(ros_domai
         publisher.wait()
 
 
-def test_a_recorder_ends_with_the_process_that_started_it(ros_domain_id: int, tmp_path: Path) -> None:
+def test_a_recorder_ends_with_the_process_that_started_it(
+    ros_domain_id: int, tmp_path: Path
+) -> None:
     # `hems step` died once in a Fast DDS fault; its recorder went on recording in the test
     # domain and the next tests met its readers. It now gets SIGTERM with its parent's death and
     # finishes the bag.
@@ -277,12 +356,15 @@ def test_a_recorder_ends_with_the_process_that_started_it(ros_domain_id: int, tm
     from hems_ros.bag import bag_info
 
     output = tmp_path / "orphan"
-    script = ("import sys, time\nfrom pathlib import Path\nfrom hems_ros.bag.recording import RecorderProcess\n"
-              f"r = RecorderProcess(Path({str(output)!r}), topics={TOPICS!r})\n"
-              f"r.wait_for_topics({TOPICS[:1]!r})\nprint(r.process.pid, flush=True)\ntime.sleep(120)\n")
+    script = (
+        "import sys, time\nfrom pathlib import Path\nfrom hems_ros.bag.recording import "
+        f"RecorderProcess\nr = RecorderProcess(Path({str(output)!r}), topics={TOPICS!r})\n"
+        f"r.wait_for_topics({TOPICS[:1]!r})\nprint(r.process.pid, flush=True)\ntime.sleep(120)\n"
+    )
     publisher = publish(count=3000, rate=500.0)
-    parent = subprocess.Popen([sys.executable, "-c", script], env=child_environment(), stdout=subprocess.PIPE,
-                              text=True)
+    parent = subprocess.Popen(
+        [sys.executable, "-c", script], env=child_environment(), stdout=subprocess.PIPE, text=True
+    )
     recorder_pid = None
     try:
         recorder_pid = int(parent.stdout.readline())
@@ -292,7 +374,7 @@ def test_a_recorder_ends_with_the_process_that_started_it(ros_domain_id: int, tm
         while os.path.exists(f"/proc/{recorder_pid}") and time.monotonic() < deadline:
             with open(f"/proc/{recorder_pid}/stat") as stat:
                 if stat.read().rsplit(") ", 1)[1].startswith("Z"):
-                    break   # exited; its parent is gone, so nobody has reaped it yet
+                    break  # exited; its parent is gone, so nobody has reaped it yet
             time.sleep(0.1)
         assert time.monotonic() < deadline, "the recorder outlived its parent"
     finally:
@@ -301,5 +383,5 @@ def test_a_recorder_ends_with_the_process_that_started_it(ros_domain_id: int, tm
         if parent.poll() is None:
             parent.kill()
         if recorder_pid is not None and os.path.exists(f"/proc/{recorder_pid}"):
-            os.kill(recorder_pid, signal.SIGKILL)   # outlived its parent: not left in the domain
+            os.kill(recorder_pid, signal.SIGKILL)  # outlived its parent: not left in the domain
     assert bag_info(output).reports[0].complete

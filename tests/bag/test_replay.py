@@ -23,16 +23,29 @@ def make_bag(folder: Path, count: int = 11) -> None:
     from hems_msgs.msg import DutyCommand, SupervisorStatus
 
     with BagWriter(folder) as writer:
-        duty = writer.add_topic("/hems/index/duty", "hems_msgs/msg/DutyCommand", [offered_qos(True, False, 1)])
-        status = writer.add_topic("/hems/supervisor/status", "hems_msgs/msg/SupervisorStatus",
-                                  [offered_qos(True, True, 1)])
-        writer.write(status, START_NS, serialize_message(SupervisorStatus(state=1, state_name="ENABLED")))
+        duty = writer.add_topic(
+            "/hems/index/duty", "hems_msgs/msg/DutyCommand", [offered_qos(True, False, 1)]
+        )
+        status = writer.add_topic(
+            "/hems/supervisor/status",
+            "hems_msgs/msg/SupervisorStatus",
+            [offered_qos(True, True, 1)],
+        )
+        writer.write(
+            status, START_NS, serialize_message(SupervisorStatus(state=1, state_name="ENABLED"))
+        )
         for i in range(count):
-            writer.write(duty, START_NS + i * STEP_NS, serialize_message(DutyCommand(duty_percent=2.5 * i, sequence=i)))
+            writer.write(
+                duty,
+                START_NS + i * STEP_NS,
+                serialize_message(DutyCommand(duty_percent=2.5 * i, sequence=i)),
+            )
 
 
 @pytest.mark.parametrize("rate", [1.0, 2.0])
-def test_replay_keeps_timing_remaps_and_publishes_clock(ros_domain_id: int, tmp_path: Path, rate: float) -> None:
+def test_replay_keeps_timing_remaps_and_publishes_clock(
+    ros_domain_id: int, tmp_path: Path, rate: float
+) -> None:
     import rclpy
     from hems_msgs.msg import DutyCommand, SupervisorStatus
     from rclpy.executors import SingleThreadedExecutor
@@ -46,18 +59,47 @@ def test_replay_keeps_timing_remaps_and_publishes_clock(ros_domain_id: int, tmp_
     arrivals: list[tuple[float, DutyCommand]] = []
     clocks: list[int] = []
     statuses: list[str] = []
-    node.create_subscription(DutyCommand, "/replayed/duty", lambda m: arrivals.append((time.monotonic(), m)), 100)
-    node.create_subscription(Clock, "/clock", lambda m: clocks.append(m.clock.sec * 10**9 + m.clock.nanosec), 100)
-    node.create_subscription(SupervisorStatus, "/hems/supervisor/status", lambda m: statuses.append(m.state_name),
-                             QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                                        durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    node.create_subscription(
+        DutyCommand, "/replayed/duty", lambda m: arrivals.append((time.monotonic(), m)), 100
+    )
+    node.create_subscription(
+        Clock, "/clock", lambda m: clocks.append(m.clock.sec * 10**9 + m.clock.nanosec), 100
+    )
+    node.create_subscription(
+        SupervisorStatus,
+        "/hems/supervisor/status",
+        lambda m: statuses.append(m.state_name),
+        QoSProfile(
+            depth=1,
+            reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL,
+        ),
+    )
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     replay = subprocess.Popen(
-        [sys.executable, "-m", "hems_ros.cli.main", "replay", str(tmp_path / "bag"), "--rate", str(rate),
-         "--remap", "/hems/index/duty:=/replayed/duty", "--clock", "50", "--start-delay", "0.5",
-         "--wait-subscribers", "20"],
-        env=child_environment(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            "-m",
+            "hems_ros.cli.main",
+            "replay",
+            str(tmp_path / "bag"),
+            "--rate",
+            str(rate),
+            "--remap",
+            "/hems/index/duty:=/replayed/duty",
+            "--clock",
+            "50",
+            "--start-delay",
+            "0.5",
+            "--wait-subscribers",
+            "20",
+        ],
+        env=child_environment(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 30
         while replay.poll() is None and time.monotonic() < deadline:
@@ -91,15 +133,30 @@ def test_remap_syntax() -> None:
 
 
 @pytest.mark.parametrize("signal_name", ["SIGTERM", "SIGINT"])
-def test_a_signal_stops_replay_cleanly(ros_domain_id: int, tmp_path: Path, signal_name: str) -> None:
+def test_a_signal_stops_replay_cleanly(
+    ros_domain_id: int, tmp_path: Path, signal_name: str
+) -> None:
     # a replay waiting for acknowledgements on a context the signal has shut down must not end
     # in a traceback
     import signal
 
-    make_bag(tmp_path / "bag", count=101)   # 10 s at 10 Hz
+    make_bag(tmp_path / "bag", count=101)  # 10 s at 10 Hz
     replay = subprocess.Popen(
-        [sys.executable, "-m", "hems_ros.cli.main", "replay", str(tmp_path / "bag"), "--loop", "--start-delay", "0"],
-        env=child_environment(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            "-m",
+            "hems_ros.cli.main",
+            "replay",
+            str(tmp_path / "bag"),
+            "--loop",
+            "--start-delay",
+            "0",
+        ],
+        env=child_environment(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         time.sleep(3.0)
         replay.send_signal(getattr(signal, signal_name))

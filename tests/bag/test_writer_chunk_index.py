@@ -23,7 +23,10 @@ def test_chunk_indexes_are_kept_written_and_the_bag_reads_per_topic(tmp_path):
                 stamp += 1
         writer.flush()
     assert len(writer._chunk_indexes) == 50
-    assert all(isinstance(index, _WrittenRecord) and len(index.data) < 600 for index in writer._chunk_indexes)
+    assert all(
+        isinstance(index, _WrittenRecord) and len(index.data) < 600
+        for index in writer._chunk_indexes
+    )
     writer.finish()
     bag = load_bag(tmp_path / "bag")
     assert bag.complete and sum(len(t) for t in bag.topics.values()) == 6000

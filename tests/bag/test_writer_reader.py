@@ -17,8 +17,15 @@ from hems_ros.codec.cdr import build_decoder
 FIELDS = {
     "/hems/index/wire_force": ["finger", "force", "saturated", "over_force", "sequence"],
     "/hems/index/encoder": ["finger", "counts", "position", "resolution", "sequence"],
-    "/hems/sim/index/state": ["duty_percent", "watchdog_tripped", "wire_temperature_c",
-                              "martensite_fraction", "stress", "tendon_force", "sequence"],
+    "/hems/sim/index/state": [
+        "duty_percent",
+        "watchdog_tripped",
+        "wire_temperature_c",
+        "martensite_fraction",
+        "stress",
+        "tendon_force",
+        "sequence",
+    ],
     "/hems/supervisor/status": ["state", "state_name"],
 }
 
@@ -36,30 +43,54 @@ def test_round_trip_values_and_times(bag_folder) -> None:
         for name in FIELDS.get(topic, []):
             assert list(data[name]) == [getattr(m, name) for m in written[topic]], (topic, name)
     wire = bag["/hems/index/wire_force"]
-    assert list(wire["header.frame_id"]) == [m.header.frame_id for m in written["/hems/index/wire_force"]]
-    assert np.allclose(wire.stamp, [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9
-                                    for m in written["/hems/index/wire_force"]])
+    assert list(wire["header.frame_id"]) == [
+        m.header.frame_id for m in written["/hems/index/wire_force"]
+    ]
+    assert np.allclose(
+        wire.stamp,
+        [
+            m.header.stamp.sec + m.header.stamp.nanosec * 1e-9
+            for m in written["/hems/index/wire_force"]
+        ],
+    )
     joints = bag["/hems/joint_states"]
-    assert [list(n) for n in joints["name"]] == [list(m.name) for m in written["/hems/joint_states"]]
-    assert all(np.array_equal(a, m.position) for a, m in zip(joints["position"], written["/hems/joint_states"]))
-    assert [list(v) for v in joints["velocity"]] == [list(m.velocity) for m in written["/hems/joint_states"]]
+    assert [list(n) for n in joints["name"]] == [
+        list(m.name) for m in written["/hems/joint_states"]
+    ]
+    assert all(
+        np.array_equal(a, m.position)
+        for a, m in zip(joints["position"], written["/hems/joint_states"])
+    )
+    assert [list(v) for v in joints["velocity"]] == [
+        list(m.velocity) for m in written["/hems/joint_states"]
+    ]
     status = bag["/hems/supervisor/status"]
-    assert [list(f) for f in status["faults"]] == [list(m.faults) for m in written["/hems/supervisor/status"]]
+    assert [list(f) for f in status["faults"]] == [
+        list(m.faults) for m in written["/hems/supervisor/status"]
+    ]
     diagnostics = bag["/diagnostics"]
     assert [[s["name"] for s in row] for row in diagnostics["status"]] == [
-        [s.name for s in m.status] for m in written["/diagnostics"]]
+        [s.name for s in m.status] for m in written["/diagnostics"]
+    ]
     assert diagnostics["status"][5][1]["values"] == [{"key": "n", "value": "5"}]
     records = bag["/hems/index/encoder"].records()
-    assert records["counts"][7] == -35 and records["time"][7] == pytest.approx(bag["/hems/index/encoder"].time[7])
+    assert records["counts"][7] == -35 and records["time"][7] == pytest.approx(
+        bag["/hems/index/encoder"].time[7]
+    )
 
 
 def test_topic_filter(bag_folder) -> None:
     folder, _ = bag_folder
     assert set(load_bag(folder, topics=["/diagnostics"]).topics) == {"/diagnostics"}
-    assert set(load_bag(folder, regex=r"/hems/index/.*").topics) == {"/hems/index/wire_force", "/hems/index/encoder"}
+    assert set(load_bag(folder, regex=r"/hems/index/.*").topics) == {
+        "/hems/index/wire_force",
+        "/hems/index/encoder",
+    }
     both = load_bag(folder, topics=["/diagnostics"], regex=r".*/encoder")
     assert set(both.topics) == {"/diagnostics", "/hems/index/encoder"}
-    assert {m.topic for m in iter_messages(folder, regex=r".*status")} == {"/hems/supervisor/status"}
+    assert {m.topic for m in iter_messages(folder, regex=r".*status")} == {
+        "/hems/supervisor/status"
+    }
 
 
 def test_vectorised_columns_equal_per_message_decoding(bag_folder) -> None:
@@ -68,7 +99,9 @@ def test_vectorised_columns_equal_per_message_decoding(bag_folder) -> None:
     for message in iter_messages(folder):
         by_type.setdefault(message.type, []).append(message.data)
     for type_name, datas in by_type.items():
-        decoder = build_decoder(type_name, msgdefs.parse_full_definition(type_name, msgdefs.full_definition(type_name)))
+        decoder = build_decoder(
+            type_name, msgdefs.parse_full_definition(type_name, msgdefs.full_definition(type_name))
+        )
         columns, index, errors = decode_columns(decoder, datas)
         assert not errors and list(index) == list(range(len(datas)))
         rows = [decoder.decode(d) for d in datas]
@@ -76,7 +109,10 @@ def test_vectorised_columns_equal_per_message_decoding(bag_folder) -> None:
             expected = [row[k] for row in rows]
             got = list(columns[column.name])
             if column.kind == "array":
-                assert all(np.array_equal(a, b) for a, b in zip(got, expected)), (type_name, column.name)
+                assert all(np.array_equal(a, b) for a, b in zip(got, expected)), (
+                    type_name,
+                    column.name,
+                )
             else:
                 assert got == expected, (type_name, column.name)
 
@@ -103,7 +139,9 @@ def test_rosbags_anyreader_decodes_equal_values(bag_folder) -> None:
             assert timestamp == log_time(list(TOPICS).index(topic), i)
             for name in FIELDS[topic]:
                 assert getattr(got, name) == getattr(sent, name)
-    for (_, got), sent in zip(seen["/hems/joint_states"], written["/hems/joint_states"], strict=True):
+    for (_, got), sent in zip(
+        seen["/hems/joint_states"], written["/hems/joint_states"], strict=True
+    ):
         if got is not None:
             assert list(got.name) == list(sent.name) and list(got.velocity) == list(sent.velocity)
 
@@ -133,13 +171,22 @@ def test_metadata_yaml_rosbag2_v9(bag_folder) -> None:
     folder, _ = bag_folder
     info = yaml.safe_load((folder / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert info["version"] == 9 and info["storage_identifier"] == "mcap"
-    assert info["relative_file_paths"] == ["sample_0.mcap"] and info["message_count"] == 300 * len(TOPICS)
+    assert info["relative_file_paths"] == ["sample_0.mcap"] and info["message_count"] == 300 * len(
+        TOPICS
+    )
     assert info["starting_time"]["nanoseconds_since_epoch"] == T0
-    counts = {t["topic_metadata"]["name"]: t["message_count"] for t in info["topics_with_message_count"]}
+    counts = {
+        t["topic_metadata"]["name"]: t["message_count"] for t in info["topics_with_message_count"]
+    }
     assert counts == {t: 300 for t in TOPICS}
-    wire = next(t["topic_metadata"] for t in info["topics_with_message_count"]
-                if t["topic_metadata"]["name"] == "/hems/index/wire_force")
-    assert wire["serialization_format"] == "cdr" and wire["type_description_hash"].startswith("RIHS01_")
+    wire = next(
+        t["topic_metadata"]
+        for t in info["topics_with_message_count"]
+        if t["topic_metadata"]["name"] == "/hems/index/wire_force"
+    )
+    assert wire["serialization_format"] == "cdr" and wire["type_description_hash"].startswith(
+        "RIHS01_"
+    )
     assert wire["offered_qos_profiles"][0]["reliability"] == "reliable"
     assert "&id" not in (folder / "metadata.yaml").read_text()
 
@@ -148,12 +195,22 @@ def test_full_definition_has_dependencies_in_rosbag2_format() -> None:
     text = msgdefs.full_definition("hems_msgs/msg/DutyCommand")
     assert text.startswith("# PWM duty command")
     sections = text.split("=" * 80 + "\n")
-    assert [s.splitlines()[0] for s in sections[1:]] == ["MSG: std_msgs/msg/Header", "MSG: builtin_interfaces/msg/Time"]
+    assert [s.splitlines()[0] for s in sections[1:]] == [
+        "MSG: std_msgs/msg/Header",
+        "MSG: builtin_interfaces/msg/Time",
+    ]
     types = msgdefs.parse_full_definition("hems_msgs/msg/DutyCommand", text)
     assert [f.name for f in types["hems_msgs/msg/DutyCommand"]] == [
-        "header", "finger", "duty_percent", "measurement_stamp", "sequence"]
+        "header",
+        "finger",
+        "duty_percent",
+        "measurement_stamp",
+        "sequence",
+    ]
     with pytest.raises(msgdefs.DefinitionError, match="lacks builtin_interfaces/msg/Time"):
-        msgdefs.parse_full_definition("hems_msgs/msg/DutyCommand", text.split("=" * 80 + "\nMSG: builtin")[0])
+        msgdefs.parse_full_definition(
+            "hems_msgs/msg/DutyCommand", text.split("=" * 80 + "\nMSG: builtin")[0]
+        )
 
 
 def test_writer_finishes_on_exception_and_refuses_a_used_folder(tmp_path: Path) -> None:
@@ -173,4 +230,6 @@ def test_writer_finishes_on_exception_and_refuses_a_used_folder(tmp_path: Path) 
 def test_other_compressions(tmp_path: Path, compression: str) -> None:
     written = write_bag(tmp_path / compression, count=50, compression=compression)
     bag = load_bag(tmp_path / compression)
-    assert list(bag["/hems/index/wire_force"]["force"]) == [m.force for m in written["/hems/index/wire_force"]]
+    assert list(bag["/hems/index/wire_force"]["force"]) == [
+        m.force for m in written["/hems/index/wire_force"]
+    ]

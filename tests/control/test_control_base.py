@@ -94,7 +94,10 @@ def test_default_gains_per_mode():
 
     assert mode_gains("bpid", "force") is FORCE_MODE_BPID
     assert mode_gains("bpid", "position") is TABLE_5_1["bpid"]
-    assert mode_gains("pid", "force") is TABLE_5_1["pid"] and mode_gains("pipd", "force") is TABLE_5_1["pipd"]
+    assert (
+        mode_gains("pid", "force") is TABLE_5_1["pid"]
+        and mode_gains("pipd", "force") is TABLE_5_1["pipd"]
+    )
 
 
 def test_a_switch_can_bring_the_new_modes_gains():
@@ -105,7 +108,7 @@ def test_a_switch_can_bring_the_new_modes_gains():
         before = switched.update(15 * UM, 10 * UM)
     switched.set_mode("force", 5.0, FORCE_MODE_BPID)
     assert switched.gains is FORCE_MODE_BPID
-    assert switched.update(5.0, 5.0) == pytest.approx(before)        # still bumpless
+    assert switched.update(5.0, 5.0) == pytest.approx(before)  # still bumpless
     fresh = make_controller("bpid", "force", FORCE_MODE_BPID)
     reference = [fresh.update(5.5, 5.0) for _ in range(5)]
     switched.reset()

@@ -24,7 +24,10 @@ def test_step_pair():
     assert (r[3499], r[3500], r[3999], r[4000]) == (0.0, 0.02, 0.02, 0.0)
     assert np.count_nonzero(r) == 1000
     assert [(s.start, s.after) for s in m.step_segments(r)] == [
-        (500, 0.02), (1000, 0.0), (3500, 0.02), (4000, 0.0)
+        (500, 0.02),
+        (1000, 0.0),
+        (3500, 0.02),
+        (4000, 0.0),
     ]
 
 
@@ -53,10 +56,19 @@ def test_ramp():
 
 def test_protocol_table():
     names = {
-        "ch5_sine_0.125", "ch5_sine_0.25", "ch5_sine_0.5", "ch5_step", "ch5_staircase",
-        "ch6_position_sine_0.125", "ch6_position_ramp", "ch6_position_step",
-        "ch6_position_staircase", "ch6_force_sine_0.125", "ch6_force_sine_0.25",
-        "ch6_force_step", "ch6_force_staircase",
+        "ch5_sine_0.125",
+        "ch5_sine_0.25",
+        "ch5_sine_0.5",
+        "ch5_step",
+        "ch5_staircase",
+        "ch6_position_sine_0.125",
+        "ch6_position_ramp",
+        "ch6_position_step",
+        "ch6_position_staircase",
+        "ch6_force_sine_0.125",
+        "ch6_force_sine_0.25",
+        "ch6_force_step",
+        "ch6_force_staircase",
     }
     assert set(ref.PROTOCOLS) == names
     for p in ref.PROTOCOLS.values():

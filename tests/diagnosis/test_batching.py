@@ -48,16 +48,18 @@ class Recorder:
 
 def _job(tag: int, calls: list[int], jitter: float = 0.0, seed: int = 0):
     """A job that asks ``calls[k]`` items in its k-th request and checks it got its own back."""
+
     def job(barrier: Barrier) -> list:
         rng = random.Random(seed * 100 + tag)
         got = []
         for k, n in enumerate(calls):
-            time.sleep(rng.uniform(0.0, jitter))        # threads reach the barrier in any order
+            time.sleep(rng.uniform(0.0, jitter))  # threads reach the barrier in any order
             items = [(tag, 10 * k + i) for i in range(n)]
             answer = barrier(items)
             assert answer == [(tag, x * x) for _, x in items]
             got.append(sum(x for _, x in answer))
         return tag, got
+
     return job
 
 
@@ -67,7 +69,11 @@ def test_every_round_holds_one_request_of_every_live_job() -> None:
     calls = {0: [2, 1, 3], 1: [1], 2: [3, 3], 3: []}
     out = _run(barrier, [_job(t, c, jitter=0.01) for t, c in calls.items()])
     # round 1: jobs 0, 1, 2; round 2: jobs 0 and 2 (1 is done); round 3: job 0
-    assert [[tag for tag, _ in b] for b in ev.batches] == [[0, 0, 1, 2, 2, 2], [0, 2, 2, 2], [0, 0, 0]]
+    assert [[tag for tag, _ in b] for b in ev.batches] == [
+        [0, 0, 1, 2, 2, 2],
+        [0, 2, 2, 2],
+        [0, 0, 0],
+    ]
     assert barrier.rounds == 3 and barrier.evaluated == 13
     assert out == [(0, [1, 100, 400 + 441 + 484]), (1, [0]), (2, [5, 100 + 121 + 144]), (3, [])]
 
@@ -75,7 +81,7 @@ def test_every_round_holds_one_request_of_every_live_job() -> None:
 def test_a_job_that_ends_lets_the_waiting_ones_go_on() -> None:
     def short(barrier: Barrier):
         barrier([(5, 1)])
-        time.sleep(0.2)         # the others wait in round 2 before it ends
+        time.sleep(0.2)  # the others wait in round 2 before it ends
         return "done"
 
     ev = Recorder()
@@ -106,7 +112,7 @@ def test_batches_do_not_depend_on_thread_scheduling(seed: int) -> None:
     reference = Recorder()
     expected = _run(Barrier(reference), [_job(t, c) for t, c in calls.items()])
     assert ev.batches == reference.batches and out == expected
-    assert [len(b) for b in ev.batches] == [12, 12, 6, 6]      # jobs 0-5, 0-5, 1 2 4 5, 2 5
+    assert [len(b) for b in ev.batches] == [12, 12, 6, 6]  # jobs 0-5, 0-5, 1 2 4 5, 2 5
 
 
 def test_an_evaluate_error_reaches_every_waiting_job() -> None:
@@ -150,7 +156,7 @@ def test_an_evaluate_error_fails_the_run() -> None:
 def test_a_job_that_raises_does_not_hold_up_the_others() -> None:
     def bad(barrier: Barrier):
         barrier([(9, 1)])
-        time.sleep(0.2)         # the others are waiting for it by now
+        time.sleep(0.2)  # the others are waiting for it by now
         raise KeyError("job 1 gave up")
 
     ev = Recorder()
@@ -164,6 +170,7 @@ def test_a_job_that_raises_does_not_hold_up_the_others() -> None:
             result = inner(b)
             finished.append(tag)
             return result
+
         return job
 
     with pytest.raises(KeyError, match="job 1 gave up"):

@@ -34,7 +34,7 @@ def test_keys_are_real_numeric_parameters(candidate: lib.Candidate) -> None:
         for key in (par.key, *par.follow):
             value = p.get(key)
             assert isinstance(value, float) and not isinstance(value, bool), key
-            p.replace({key: value})            # a key replace() accepts too
+            p.replace({key: value})  # a key replace() accepts too
         assert par.scale > 0 and par.lower < par.upper
         if par.log:
             assert par.lower > 0
@@ -54,9 +54,15 @@ def test_bounds_are_ordered_for_every_starting_model(name: str) -> None:
 
 @pytest.mark.parametrize("candidate", lib.RECALIBRATIONS, ids=lambda c: c.name)
 def test_recalibration_bounds_contain_table_4_1(candidate: lib.Candidate) -> None:
-    table41 = {"kinetics.as0_c": 88.0, "kinetics.ms0_c": 72.0, "kinetics.ca_pa_per_c": 6.89e6,
-               "kinetics.cm_pa_per_c": 6.89e6, "constitutive.max_recoverable_strain": 0.038,
-               "thermal.h0_w_m2_c": 37.67, "ambient_temperature_c": 22.0}
+    table41 = {
+        "kinetics.as0_c": 88.0,
+        "kinetics.ms0_c": 72.0,
+        "kinetics.ca_pa_per_c": 6.89e6,
+        "kinetics.cm_pa_per_c": 6.89e6,
+        "constitutive.max_recoverable_strain": 0.038,
+        "thermal.h0_w_m2_c": 37.67,
+        "ambient_temperature_c": 22.0,
+    }
     for par, (lo, hi) in zip(candidate.parameters, candidate.bounds(TABLE41)):
         assert TABLE41.get(par.key) == table41[par.key]
         assert lo < table41[par.key] < hi
@@ -64,16 +70,18 @@ def test_recalibration_bounds_contain_table_4_1(candidate: lib.Candidate) -> Non
 
 def test_bounds_that_depend_on_the_starting_model() -> None:
     damping = lib.BY_NAME["load_damping"]
-    assert damping.bounds(TABLE41) == [(65.0, 3000.0)]     # missing damping adds to the model's
+    assert damping.bounds(TABLE41) == [(65.0, 3000.0)]  # missing damping adds to the model's
     preload = lib.BY_NAME["preload_error"]
     assert preload.bounds(TABLE41) == [(2.0, 22.0)]
     assert preload.bounds(TABLE41.replace({"load.pretension_n": 4.0})) == [(0.0, 14.0)]
     warm = lib.BY_NAME["warm_start"]
     for base in (TABLE41, TABLE41.replace({"kinetics.as0_c": 70.0, "ambient_temperature_c": 30.0})):
-        (lo, hi), = warm.bounds(base)
+        ((lo, hi),) = warm.bounds(base)
         # a wire warmed to the upper bound must still start as martensite, 5 degC below As0
-        assert lo == 0.0 and base.ambient_temperature_c + hi == pytest.approx(base.kinetics.as0_c - 5.0)
-    (lo, hi), = warm.bounds(TABLE41.replace({"kinetics.as0_c": 150.0, "kinetics.af0_c": 160.0}))
+        assert lo == 0.0 and base.ambient_temperature_c + hi == pytest.approx(
+            base.kinetics.as0_c - 5.0
+        )
+    ((lo, hi),) = warm.bounds(TABLE41.replace({"kinetics.as0_c": 150.0, "kinetics.af0_c": 160.0}))
     assert hi == 80.0
 
 
@@ -81,8 +89,13 @@ def _trajectory(p: UnitParams) -> dict[str, np.ndarray]:
     duty = np.zeros(6000)
     duty[200:1700] = 100.0
     duty[3000:3400] = 60.0
-    res = simulate(p, 1e-3, duty=duty, record_every=10,
-                   channels=["slider_position_m", "wire_force_n", "wire_temperature_c"])
+    res = simulate(
+        p,
+        1e-3,
+        duty=duty,
+        record_every=10,
+        channels=["slider_position_m", "wire_force_n", "wire_temperature_c"],
+    )
     out = {c: res[c][0] for c in ("slider_position_m", "wire_force_n", "wire_temperature_c")}
     out["encoder"] = res.encoder_position_m[0]
     out["force_reading"] = res.force_reading_n[0]
@@ -97,20 +110,25 @@ def _same(a: UnitParams, b: UnitParams) -> bool:
 @pytest.mark.parametrize("name", ["table41", "ch6_hems_index"])
 def test_off_values_leave_the_physics_unchanged(name: str) -> None:
     base = load_params(name)
-    assert _trajectory(base)["slider_position_m"].max() > 5e-3     # the pulse moves the wire
+    assert _trajectory(base)["slider_position_m"].max() > 5e-3  # the pulse moves the wire
     pool = lib.applicable(base, ELECTRIC, BOTH)
     assert len(pool) == (16 if name == "table41" else 12)
     for c in pool:
         if c.name == "sheath_heat_sink":
-            continue      # no sheath value leaves a bare wire bare (below)
+            continue  # no sheath value leaves a bare wire bare (below)
         model = c.apply(base, c.off_values(base))
         assert _same(model, base), c.name
 
 
 def test_switched_effects_change_the_physics_away_from_their_off_values() -> None:
     # the control experiment of the test above: it can tell a change
-    changed = (("capstan_friction", [math.pi]), ("tendon_friction", [2.0]), ("load_damping", [800.0]),
-               ("encoder_gain", [1.1]), ("force_sensor_drift", [0.5, 0.0]))
+    changed = (
+        ("capstan_friction", [math.pi]),
+        ("tendon_friction", [2.0]),
+        ("load_damping", [800.0]),
+        ("encoder_gain", [1.1]),
+        ("force_sensor_drift", [0.5, 0.0]),
+    )
     for name, values in changed:
         c = lib.BY_NAME[name]
         assert not _same(c.apply(TABLE41, values), TABLE41), name
@@ -119,7 +137,13 @@ def test_switched_effects_change_the_physics_away_from_their_off_values() -> Non
 
 
 def test_space_off_is_where_the_candidate_does_nothing() -> None:
-    for name in ("capstan_friction", "tendon_friction", "spring_stiffening", "load_damping", "supply_sag"):
+    for name in (
+        "capstan_friction",
+        "tendon_friction",
+        "spring_stiffening",
+        "load_damping",
+        "supply_sag",
+    ):
         space = Space(TABLE41, (lib.BY_NAME[name],))
         assert space.off().tolist() == [0.0], name
     space = Space(TABLE41, (lib.BY_NAME["encoder_gain"],))
@@ -144,20 +168,22 @@ def test_apply_turns_on_the_switches_and_sets_the_values() -> None:
     m = lib.BY_NAME["sheath_heat_sink"].apply(TABLE41, [4.0, 2.0])
     assert m.sheath.enabled
     assert (m.sheath.heat_capacity_j_per_k, m.sheath.gap_resistance_k_per_w) == (4.0, 2.0)
-    assert m.sheath.helix_heat_capacity_j_per_k == 0.0                    # one node
+    assert m.sheath.helix_heat_capacity_j_per_k == 0.0  # one node
     m = lib.BY_NAME["force_sensor_drift"].apply(TABLE41, [1.0, 0.02])
     assert (m.force_sensor.offset_n, m.force_sensor.drift_n_per_s) == (1.0, 0.02)
-    assert TABLE41.force_sensor.offset_n == 0.0                           # the base is untouched
+    assert TABLE41.force_sensor.offset_n == 0.0  # the base is untouched
 
 
 def test_warm_start_upper_bound_keeps_a_martensite_start() -> None:
     warm = lib.BY_NAME["warm_start"]
     for name in SETS:
         base = load_params(name)
-        (_, hi), = warm.bounds(base)
+        ((_, hi),) = warm.bounds(base)
         assert base.ambient_temperature_c + hi < base.kinetics.as0_c
         # the warmest start the fit may try still simulates
-        res = simulate(warm.apply(base, [hi]), 1e-3, duty=np.zeros(10), channels=["wire_temperature_c"])
+        res = simulate(
+            warm.apply(base, [hi]), 1e-3, duty=np.zeros(10), channels=["wire_temperature_c"]
+        )
         assert res.wire_temperature_c[0, -1] < base.kinetics.as0_c
 
 
@@ -179,7 +205,12 @@ def test_applicable_filters_by_drive() -> None:
     thermal = _names(TABLE41, drives=frozenset({"temperature"}), channels=frozenset({"strain"}))
     # a bare wire heated from outside: no heat balance (convection, ambient, warm start), sheath,
     # transmission, load or supply to fit
-    assert thermal == ["heating_temperatures", "cooling_temperatures", "stress_slopes", "transformation_strain"]
+    assert thermal == [
+        "heating_temperatures",
+        "cooling_temperatures",
+        "stress_slopes",
+        "transformation_strain",
+    ]
     current = _names(TABLE41, drives=frozenset({"current"}))
     assert "supply_sag" not in current and "load_damping" in current and len(current) == 15
 
@@ -188,7 +219,9 @@ def test_applicable_skips_effects_the_starting_model_has() -> None:
     hems = load_params("ch6_hems_index")
     assert hems.sheath.enabled and hems.capstan.enabled and hems.glove_friction.enabled
     names = _names(hems)
-    assert not {"sheath_heat_sink", "capstan_friction", "tendon_friction", "convection"} & set(names)
+    assert not {"sheath_heat_sink", "capstan_friction", "tendon_friction", "convection"} & set(
+        names
+    )
     assert len(names) == 12
     warm = TABLE41.replace({"start.temperature_offset_c": 5.0})
     assert "warm_start" not in _names(warm)
@@ -196,8 +229,11 @@ def test_applicable_skips_effects_the_starting_model_has() -> None:
 
 def test_applicable_with_names_asked_for() -> None:
     # in library order whatever order the names come in
-    assert _names(TABLE41, names=["supply_sag", "ambient", "encoder_gain"]) == ["ambient", "supply_sag",
-                                                                              "encoder_gain"]
+    assert _names(TABLE41, names=["supply_sag", "ambient", "encoder_gain"]) == [
+        "ambient",
+        "supply_sag",
+        "encoder_gain",
+    ]
     force_only = frozenset({"wire_force"})
     assert _names(TABLE41, channels=force_only, names=["encoder_gain", "ambient"]) == ["ambient"]
     with pytest.raises(KeyError):
@@ -210,4 +246,4 @@ def test_describe_library_lists_every_candidate_with_its_bounds() -> None:
     assert "load_damping (effect): viscous damping of the load beyond the model's" in text
     assert "b 65..3000 N s/m" in text
     assert "As0 60..110 degC" in text
-    assert "dT_start 0..61 degC" in text           # As0 88 - 22 ambient - 5
+    assert "dT_start 0..61 degC" in text  # As0 88 - 22 ambient - 5

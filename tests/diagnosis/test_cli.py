@@ -27,12 +27,15 @@ TIMEOUT_S = 180
 
 def hems(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-    return subprocess.run([str(HEMS), *args], cwd=cwd, env=env, capture_output=True, text=True,
-                          timeout=TIMEOUT_S)
+    return subprocess.run(
+        [str(HEMS), *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=TIMEOUT_S
+    )
 
 
 def _write_run(path: Path, t: np.ndarray, duty: np.ndarray, x: np.ndarray, f: np.ndarray) -> Path:
-    lines = ["t,d,x,F"] + [f"{a:.4f},{b:g},{c * 1e3:.3f},{e:.2f}" for a, b, c, e in zip(t, duty, x, f)]
+    lines = ["t,d,x,F"] + [
+        f"{a:.4f},{b:g},{c * 1e3:.3f},{e:.2f}" for a, b, c, e in zip(t, duty, x, f)
+    ]
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -58,7 +61,9 @@ def folder(tmp_path_factory) -> Path:
         for m in iter_messages(REPO / "bags" / "ch5_step_index", topics=["/hems/sim/index/state"]):
             if m.topic not in writer.topics:
                 writer.add_topic(m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or [])
-            writer.write(writer.topics[m.topic].channel_id, m.log_time_ns, m.data, m.publish_time_ns)
+            writer.write(
+                writer.topics[m.topic].channel_id, m.log_time_ns, m.data, m.publish_time_ns
+            )
     (root / "bad_conditions.yaml").write_text("load: {pretension_n: [1, 2\n")
     (root / "bad_model.yaml").write_text("load:\n  stiffness_n_per_m: -5\n")
     (root / "list.yaml").write_text("- load\n- ambient\n")
@@ -75,7 +80,10 @@ def test_help_and_candidate_list(folder: Path) -> None:
     assert result.returncode == 0 and result.stderr == ""
     lines = result.stdout.splitlines()
     assert len(lines) == 3 * 16
-    assert lines[0] == "heating_temperatures (recalibration): austenite transformation temperatures As0, Af0"
+    assert (
+        lines[0]
+        == "heating_temperatures (recalibration): austenite transformation temperatures As0, Af0"
+    )
     assert "    b 65..3000 N s/m; changes transformation, cooling" in lines
 
 
@@ -85,48 +93,108 @@ def test_help_and_candidate_list(folder: Path) -> None:
 BAD = [
     ("missing file", ["absent.csv", "--columns", COLUMNS], "absent.csv: no such file or folder"),
     ("table without --columns", ["good.csv"], "good.csv: a table needs --columns"),
-    ("nan", ["nan.csv", "--columns", COLUMNS], "nan.csv: row 7, column x: 'nan' is not a finite number"),
-    ("bag of other topics", ["sim_bag"], "sim_bag: no finger has duty and encoder messages in the bag (read: "
-                                         "nothing)"),
-    ("model", ["good.csv", "--columns", COLUMNS, "--model", "nosuch"],
-     "--model nosuch: no parameter set named 'nosuch'"),
-    ("conditions yaml", ["good.csv", "--columns", COLUMNS, "--conditions", "bad_conditions.yaml"],
-     "--conditions bad_conditions.yaml: not valid YAML"),
+    (
+        "nan",
+        ["nan.csv", "--columns", COLUMNS],
+        "nan.csv: row 7, column x: 'nan' is not a finite number",
+    ),
+    (
+        "bag of other topics",
+        ["sim_bag"],
+        "sim_bag: no finger has duty and encoder messages in the bag (read: " "nothing)",
+    ),
+    (
+        "model",
+        ["good.csv", "--columns", COLUMNS, "--model", "nosuch"],
+        "--model nosuch: no parameter set named 'nosuch'",
+    ),
+    (
+        "conditions yaml",
+        ["good.csv", "--columns", COLUMNS, "--conditions", "bad_conditions.yaml"],
+        "--conditions bad_conditions.yaml: not valid YAML",
+    ),
 ]
 # the rest in this process, through the verb's own parser and run()
 MORE = [
     ("no run", [], "no RUN given"),
-    ("unknown column", ["good.csv", "--columns", "time=t,duty=d,displacement=zz"],
-     "column 'zz' (for displacement) is not in the header"),
-    ("unknown unit", ["good.csv", "--columns", "time=t,duty=d,displacement=x:furlong"],
-     "unknown unit 'furlong' for displacement (known: m, mm, um)"),
-    ("unknown quantity", ["good.csv", "--columns", "time=t,duty=d,speed=x"], "unknown quantity 'speed'"),
-    ("time backwards", ["backwards.csv", "--columns", COLUMNS],
-     "backwards.csv: row 12: time 0.08 s is not after row 11's 0.09 s"),
+    (
+        "unknown column",
+        ["good.csv", "--columns", "time=t,duty=d,displacement=zz"],
+        "column 'zz' (for displacement) is not in the header",
+    ),
+    (
+        "unknown unit",
+        ["good.csv", "--columns", "time=t,duty=d,displacement=x:furlong"],
+        "unknown unit 'furlong' for displacement (known: m, mm, um)",
+    ),
+    (
+        "unknown quantity",
+        ["good.csv", "--columns", "time=t,duty=d,speed=x"],
+        "unknown quantity 'speed'",
+    ),
+    (
+        "time backwards",
+        ["backwards.csv", "--columns", COLUMNS],
+        "backwards.csv: row 12: time 0.08 s is not after row 11's 0.09 s",
+    ),
     ("too short", ["short.csv", "--columns", COLUMNS], "short.csv: 10 samples are too few"),
     # two pulses (the count says 1: the first cycle is lost, see test_phases.py)
-    ("too few cycles", ["one_pulse.csv", "--columns", COLUMNS], "too short to hold data out: one_pulse "),
-    ("too few cycles, advice", ["one_pulse.csv", "--columns", COLUMNS],
-     "cycle(s); a run needs at least 3 actuation cycles, or give --heldout RUN"),
+    (
+        "too few cycles",
+        ["one_pulse.csv", "--columns", COLUMNS],
+        "too short to hold data out: one_pulse ",
+    ),
+    (
+        "too few cycles, advice",
+        ["one_pulse.csv", "--columns", COLUMNS],
+        "cycle(s); a run needs at least 3 actuation cycles, or give --heldout RUN",
+    ),
     ("empty bag", ["empty_bag"], "empty_bag: no finger has duty and encoder messages in the bag"),
-    ("model file", ["good.csv", "--columns", COLUMNS, "--model", "absent.yaml"],
-     "--model absent.yaml: no such file"),
-    ("model values", ["good.csv", "--columns", COLUMNS, "--model", "bad_model.yaml"],
-     "load.stiffness_n_per_m = -5.0: must be >= 0"),
-    ("candidates", ["good.csv", "--columns", COLUMNS, "--candidates", "load_damping,gremlins"],
-     "--candidates: unknown gremlins (known: heating_temperatures,"),
-    ("set malformed", ["good.csv", "--columns", COLUMNS, "--set", "load.pretension_n"],
-     "--set 'load.pretension_n': expected KEY=VALUE"),
-    ("set unknown", ["good.csv", "--columns", COLUMNS, "--set", "load.colour=red"],
-     "--set: replace: unknown parameter load.colour"),
-    ("set value", ["good.csv", "--columns", COLUMNS, "--set", "load.pretension_n=lots"],
-     "load.pretension_n = 'lots': must be a number"),
-    ("conditions missing", ["good.csv", "--columns", COLUMNS, "--conditions", "absent.yaml"],
-     "--conditions absent.yaml: No such file or directory"),
-    ("conditions not a mapping", ["good.csv", "--columns", COLUMNS, "--conditions", "list.yaml"],
-     "--conditions list.yaml: expected a mapping of parameter groups"),
-    ("heldout missing", ["good.csv", "--columns", COLUMNS, "--heldout", "absent.csv"],
-     "absent.csv: no such file or folder"),
+    (
+        "model file",
+        ["good.csv", "--columns", COLUMNS, "--model", "absent.yaml"],
+        "--model absent.yaml: no such file",
+    ),
+    (
+        "model values",
+        ["good.csv", "--columns", COLUMNS, "--model", "bad_model.yaml"],
+        "load.stiffness_n_per_m = -5.0: must be >= 0",
+    ),
+    (
+        "candidates",
+        ["good.csv", "--columns", COLUMNS, "--candidates", "load_damping,gremlins"],
+        "--candidates: unknown gremlins (known: heating_temperatures,",
+    ),
+    (
+        "set malformed",
+        ["good.csv", "--columns", COLUMNS, "--set", "load.pretension_n"],
+        "--set 'load.pretension_n': expected KEY=VALUE",
+    ),
+    (
+        "set unknown",
+        ["good.csv", "--columns", COLUMNS, "--set", "load.colour=red"],
+        "--set: replace: unknown parameter load.colour",
+    ),
+    (
+        "set value",
+        ["good.csv", "--columns", COLUMNS, "--set", "load.pretension_n=lots"],
+        "load.pretension_n = 'lots': must be a number",
+    ),
+    (
+        "conditions missing",
+        ["good.csv", "--columns", COLUMNS, "--conditions", "absent.yaml"],
+        "--conditions absent.yaml: No such file or directory",
+    ),
+    (
+        "conditions not a mapping",
+        ["good.csv", "--columns", COLUMNS, "--conditions", "list.yaml"],
+        "--conditions list.yaml: expected a mapping of parameter groups",
+    ),
+    (
+        "heldout missing",
+        ["good.csv", "--columns", COLUMNS, "--heldout", "absent.csv"],
+        "absent.csv: no such file or folder",
+    ),
 ]
 
 
@@ -142,12 +210,13 @@ def _assert_refused(folder: Path, name: str, code: int, out: str, err: str, mess
     assert message in lines[0]
     assert not (folder / _out(name)).exists()
     assert not (folder / "results").exists()
-    assert not list(folder.glob(".out_*"))             # no partial report either
+    assert not list(folder.glob(".out_*"))  # no partial report either
 
 
 @pytest.fixture(scope="module")
 def refused(folder: Path) -> dict[str, subprocess.CompletedProcess]:
     """Every bad case, two at a time (each process spends seconds importing)."""
+
     def one(case):
         name, args, _ = case
         return name, hems("diagnose", *args, "--quiet", "--out", _out(name), cwd=folder)
@@ -157,14 +226,17 @@ def refused(folder: Path) -> dict[str, subprocess.CompletedProcess]:
 
 
 @pytest.mark.parametrize("name, args, message", BAD, ids=[b[0] for b in BAD])
-def test_bad_input_exits_2_with_one_line(folder: Path, refused, name: str, args, message: str) -> None:
+def test_bad_input_exits_2_with_one_line(
+    folder: Path, refused, name: str, args, message: str
+) -> None:
     result = refused[name]
     _assert_refused(folder, name, result.returncode, result.stdout, result.stderr, message)
 
 
 @pytest.mark.parametrize("name, args, message", MORE, ids=[b[0] for b in MORE])
-def test_more_bad_input_exits_2_with_one_line(folder: Path, monkeypatch, capsys, name: str, args,
-                                              message: str) -> None:
+def test_more_bad_input_exits_2_with_one_line(
+    folder: Path, monkeypatch, capsys, name: str, args, message: str
+) -> None:
     parser = argparse.ArgumentParser(prog="hems")
     diagnose.register(parser.add_subparsers())
     monkeypatch.chdir(folder)
@@ -175,9 +247,13 @@ def test_more_bad_input_exits_2_with_one_line(folder: Path, monkeypatch, capsys,
 
 
 def test_out_that_is_not_a_report_is_refused(folder: Path) -> None:
-    result = hems("diagnose", "good.csv", "--columns", COLUMNS, "--quiet", "--out", "taken", cwd=folder)
+    result = hems(
+        "diagnose", "good.csv", "--columns", COLUMNS, "--quiet", "--out", "taken", cwd=folder
+    )
     assert result.returncode == 2
-    assert result.stderr == "hems diagnose: --out taken: exists and is not a diagnosis report folder\n"
+    assert (
+        result.stderr == "hems diagnose: --out taken: exists and is not a diagnosis report folder\n"
+    )
     assert [p.name for p in (folder / "taken").iterdir()] == ["notes.txt"]
     assert (folder / "taken" / "notes.txt").read_text() == "keep me\n"
 
@@ -185,13 +261,15 @@ def test_out_that_is_not_a_report_is_refused(folder: Path) -> None:
 @pytest.fixture(scope="module")
 def report(folder: Path) -> tuple[subprocess.CompletedProcess, Path]:
     out = folder / "report"
-    return hems("diagnose", "good.csv", "--columns", COLUMNS, "--quiet", "--out", str(out), cwd=folder), out
+    return hems(
+        "diagnose", "good.csv", "--columns", COLUMNS, "--quiet", "--out", str(out), cwd=folder
+    ), out
 
 
 def test_good_run_prints_one_summary_line(report) -> None:
     result, _ = report
     assert result.returncode == 0, result.stderr
-    assert result.stderr == ""                         # --quiet: no progress
+    assert result.stderr == ""  # --quiet: no progress
     lines = result.stdout.splitlines()
     assert len(lines) == 1
     assert lines[0].startswith("named: load_damping (b = 40")
@@ -201,21 +279,42 @@ def test_good_run_prints_one_summary_line(report) -> None:
 def test_good_run_writes_the_report_folder(report) -> None:
     _, out = report
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["candidate_ranking.png", "corrected.yaml", "overlay_1.png", "report.md",
-                     "residual_by_phase.png", "summary.json"]
+    assert names == [
+        "candidate_ranking.png",
+        "corrected.yaml",
+        "overlay_1.png",
+        "report.md",
+        "residual_by_phase.png",
+        "summary.json",
+    ]
     for png in ("candidate_ranking.png", "overlay_1.png", "residual_by_phase.png"):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(out.parent.glob(".report.partial-*"))
     summary = json.loads((out / "summary.json").read_text())
     assert {"verdict", "named", "recalibrated", "unexplained", "gap"} <= set(summary)
-    assert summary["verdict"] == "named" and summary["recalibrated"] == {} and summary["unexplained"] == []
+    assert (
+        summary["verdict"] == "named"
+        and summary["recalibrated"] == {}
+        and summary["unexplained"] == []
+    )
     (named,) = summary["named"]
     assert named["effect"] == "load_damping"
     b = named["parameters"]["load.damping_n_s_per_m"]
-    assert b["symbol"] == "b" and b["unit"] == "N s/m" and b["value"] == pytest.approx(400.0, rel=0.02)
+    assert (
+        b["symbol"] == "b" and b["unit"] == "N s/m" and b["value"] == pytest.approx(400.0, rel=0.02)
+    )
     gap = summary["gap"]
-    assert set(gap) == {"metric", "unit", "train_before", "train_after", "heldout_before", "heldout_after",
-                        "noise_floor", "heldout_beyond_noise_before", "heldout_beyond_noise_after"}
+    assert set(gap) == {
+        "metric",
+        "unit",
+        "train_before",
+        "train_after",
+        "heldout_before",
+        "heldout_after",
+        "noise_floor",
+        "heldout_beyond_noise_before",
+        "heldout_beyond_noise_after",
+    }
     assert gap["heldout_beyond_noise_after"] <= gap["heldout_after"] and gap["noise_floor"] > 0
     assert gap["metric"] == "position RMSE" and gap["unit"] == "mm"
     assert gap["heldout_before"] > 0.3 and gap["heldout_after"] < 0.005
@@ -223,8 +322,13 @@ def test_good_run_writes_the_report_folder(report) -> None:
     corrected = load_params(out / "corrected.yaml")
     assert corrected.name == "table41_corrected"
     assert corrected.load.damping_n_s_per_m == pytest.approx(b["si_value"], rel=1e-12)
-    assert corrected.replace({"load.damping_n_s_per_m": 65.0, "name": "table41",
-                              "description": load_params("table41").description}) == load_params("table41")
+    assert corrected.replace(
+        {
+            "load.damping_n_s_per_m": 65.0,
+            "name": "table41",
+            "description": load_params("table41").description,
+        }
+    ) == load_params("table41")
     text = (out / "report.md").read_text()
     assert text.startswith("# Diagnosis: table41 against the measurement\n")
     assert "| load.damping_n_s_per_m | 65 | 40" in text
@@ -236,8 +340,18 @@ def test_running_again_replaces_the_report(folder: Path, report) -> None:
     _, out = report
     before = json.loads((out / "summary.json").read_text())
     (out / "stale.txt").write_text("from the first run\n")
-    result = hems("diagnose", "good.csv", "--columns", COLUMNS, "--quiet", "--candidates", "encoder_gain",
-                  "--out", str(out), cwd=folder)
+    result = hems(
+        "diagnose",
+        "good.csv",
+        "--columns",
+        COLUMNS,
+        "--quiet",
+        "--candidates",
+        "encoder_gain",
+        "--out",
+        str(out),
+        cwd=folder,
+    )
     assert result.returncode == 0, result.stderr
     assert not (out / "stale.txt").exists()
     after = json.loads((out / "summary.json").read_text())

@@ -18,7 +18,11 @@ from hems_ros.physics.params import load_params
 BASE = load_params("table41")
 # (pulse s, current A): every row contracts the wire past the 4.5 mm cooled mark
 ROWS = [(1.4, 4.0), (1.6, 4.0), (2.0, 3.5), (2.5, 3.5), (1.2, 5.0), (3.0, 3.0)]
-SHEATH = {"sheath.enabled": True, "sheath.heat_capacity_j_per_k": 4.0, "sheath.gap_resistance_k_per_w": 2.0}
+SHEATH = {
+    "sheath.enabled": True,
+    "sheath.heat_capacity_j_per_k": 4.0,
+    "sheath.gap_resistance_k_per_w": 2.0,
+}
 
 
 def _table(truth, rows=ROWS, name: str = "pulses") -> FeatureRun:
@@ -49,18 +53,27 @@ def test_a_table_made_by_the_model_is_matched_by_it() -> None:
     truth = BASE.replace(SHEATH)
     data = features.prepare([_table(truth)], [])
     assert data.split.heldout[0].tolist() == [False, True, False, False, True, False]
-    assert data.channels == ["peak_displacement", "peak_force", "cooling_time"] and data.drives == {"current"}
+    assert data.channels == ["peak_displacement", "peak_force", "cooling_time"] and data.drives == {
+        "current"
+    }
     own, other = data.predict([truth, BASE])
     assert np.all(own.train == 0.0) and np.all(own.heldout == 0.0)
     assert own.train.size == 12 and own.heldout.size == 6
     # the sheath is a heat sink: the bare wire takes seconds longer to cool on every row
-    cooling = [o["cooling_time"] - t.figures["cooling_time"] for o, (_, t) in zip(other.outputs, data.tests)]
+    cooling = [
+        o["cooling_time"] - t.figures["cooling_time"]
+        for o, (_, t) in zip(other.outputs, data.tests)
+    ]
     assert min(cooling) > 2.0
     assert data.headline(other) == "cooling_time"
     rows = {r.group: r for r in localise.table(data, other)}
     unc = [features.uncertainty("cooling_time", t.figures["cooling_time"]) for _, t in data.tests]
-    assert rows["cooling_time"].cost == pytest.approx(np.mean((np.array(cooling) / unc) ** 2), rel=1e-12)
-    assert rows["cooling_time"].rms == pytest.approx(np.sqrt(np.mean(np.square(cooling))), rel=1e-12)
+    assert rows["cooling_time"].cost == pytest.approx(
+        np.mean((np.array(cooling) / unc) ** 2), rel=1e-12
+    )
+    assert rows["cooling_time"].rms == pytest.approx(
+        np.sqrt(np.mean(np.square(cooling))), rel=1e-12
+    )
     assert rows["cooling_time"].cost > 200 and rows["cooling_time"].unit == "s"
 
 
@@ -70,24 +83,36 @@ def test_a_hidden_sheath_is_recovered_from_pulse_figures() -> None:
     assert [c.name for c in d.search.final.structure] == ["sheath_heat_sink"]
     c_s, r_gap = d.search.final.values
     assert c_s == pytest.approx(4.0, rel=0.02) and r_gap == pytest.approx(2.0, rel=0.02)
-    assert d.gap.metric == "cooling_time" and d.gap.heldout_before > 1.0 and d.gap.heldout_after < 0.02
+    assert (
+        d.gap.metric == "cooling_time" and d.gap.heldout_before > 1.0 and d.gap.heldout_after < 0.02
+    )
     assert d.search.final.heldout < 1e-3
 
 
-@pytest.mark.parametrize("x, end, cooled, seconds", [
-    ([0, 1, 2, 3, 3, 2, 1, 0, 0], 3, 1.5, 3 * 0.5),      # first sample at or below 1.5 after the pulse
-    ([0, 1, 2, 3, 3, 2, 1.5, 0, 0], 3, 1.5, 3 * 0.5),    # "back" includes the cooled mark itself
-    ([0, 1, 1.4, 1.5, 1.2, 0], 3, 1.5, 0.0),             # never passed the mark: 0
-    ([0, 2, 3, 3, 3, 3], 2, 1.5, 4 * 0.5),               # never back: the rest of the window
-    ([0, 3, 1, 0, 0], 2, 1.5, 0.0),                      # back before the pulse ended
-])
+@pytest.mark.parametrize(
+    "x, end, cooled, seconds",
+    [
+        (
+            [0, 1, 2, 3, 3, 2, 1, 0, 0],
+            3,
+            1.5,
+            3 * 0.5,
+        ),  # first sample at or below 1.5 after the pulse
+        ([0, 1, 2, 3, 3, 2, 1.5, 0, 0], 3, 1.5, 3 * 0.5),  # "back" includes the cooled mark itself
+        ([0, 1, 1.4, 1.5, 1.2, 0], 3, 1.5, 0.0),  # never passed the mark: 0
+        ([0, 2, 3, 3, 3, 3], 2, 1.5, 4 * 0.5),  # never back: the rest of the window
+        ([0, 3, 1, 0, 0], 2, 1.5, 0.0),  # back before the pulse ended
+    ],
+)
 def test_cooling_time_rules(x, end: int, cooled: float, seconds: float) -> None:
-    assert features._cooling_time(np.array(x, dtype=float), end, 0.5, cooled) == pytest.approx(seconds)
+    assert features._cooling_time(np.array(x, dtype=float), end, 0.5, cooled) == pytest.approx(
+        seconds
+    )
 
 
 def test_figure_uncertainty_and_a_missing_figure() -> None:
-    assert features.uncertainty("peak_force", 20.0) == pytest.approx(1.0)           # 5 %
-    assert features.uncertainty("peak_force", 2.0) == 0.5                           # the 0.5 N floor
+    assert features.uncertainty("peak_force", 20.0) == pytest.approx(1.0)  # 5 %
+    assert features.uncertainty("peak_force", 2.0) == 0.5  # the 0.5 N floor
     assert features.uncertainty("cooling_time", -10.0) == pytest.approx(0.5)
     run = _table(BASE, ROWS[:3])
     data = features.prepare([run], [])
@@ -124,7 +149,7 @@ def test_closed_loop_rows_are_the_lockstep_figures(loops) -> None:
     # the two sets differ (the test could tell a set mixed up with the other)
     assert abs(figures[0]["overshoot"] - figures[1]["overshoot"]) > 0.1
     assert 4.0 < figures[0]["rmse"] < 7.0
-    assert figures[2] is figures[0]         # the same set runs once
+    assert figures[2] is figures[0]  # the same set runs once
 
 
 def test_closed_loop_rows_run_once_per_protocol_and_controller(monkeypatch) -> None:
@@ -133,17 +158,37 @@ def test_closed_loop_rows_run_once_per_protocol_and_controller(monkeypatch) -> N
     def fake(protocol, strategy, sets):
         calls.append((protocol, strategy, len(sets)))
         # figures in the dissertation's units (mm, s, W), one per set; pid leaves out ss_error
-        return [{"rmse": 2.0 + i, "overshoot": 0.5, "rise_time_s": 0.4, "apc_w": 12.0,
-                 **({} if strategy == "pid" else {"ss_error": 0.01})} for i in range(len(sets))]
+        return [
+            {
+                "rmse": 2.0 + i,
+                "overshoot": 0.5,
+                "rise_time_s": 0.4,
+                "apc_w": 12.0,
+                **({} if strategy == "pid" else {"ss_error": 0.01}),
+            }
+            for i in range(len(sets))
+        ]
 
     monkeypatch.setattr(features, "_loop_figures", fake)
-    rows = [("ch5_step", "bpid"), ("ch5_step", "pid"), ("ch5_step", "bpid"), ("ch5_sine_0.25", "bpid")]
-    tests = tuple(FeatureTest(f"r{i}", {"protocol": p, "controller": c}, {"rmse": 2e-3}) for i, (p, c) in
-                  enumerate(rows))
+    rows = [
+        ("ch5_step", "bpid"),
+        ("ch5_step", "pid"),
+        ("ch5_step", "bpid"),
+        ("ch5_sine_0.25", "bpid"),
+    ]
+    tests = tuple(
+        FeatureTest(f"r{i}", {"protocol": p, "controller": c}, {"rmse": 2e-3})
+        for i, (p, c) in enumerate(rows)
+    )
     data = features.prepare([FeatureRun("loop", "s", tests)], [])
     assert data.drives == {"duty"}
     figs = data._figures([BASE, BASE])
     assert calls == [("ch5_step", "bpid", 2), ("ch5_step", "pid", 2), ("ch5_sine_0.25", "bpid", 2)]
-    assert figs[1][0] == {"rmse": 3e-3, "overshoot": 0.5e-3, "ss_error": 0.01e-3, "rise_time": 0.4,
-                          "mean_power": 12.0}
+    assert figs[1][0] == {
+        "rmse": 3e-3,
+        "overshoot": 0.5e-3,
+        "ss_error": 0.01e-3,
+        "rise_time": 0.4,
+        "mean_power": 12.0,
+    }
     assert math.isnan(figs[0][1]["ss_error"]) and figs[0][1]["rmse"] == 2e-3

@@ -74,7 +74,9 @@ def test_a_truth_beyond_a_bound_is_a_finding_not_an_explanation() -> None:
 
 
 def test_coordinates_map_bounds_to_the_unit_interval() -> None:
-    lin = Coordinate(lib.BY_NAME["load_damping"], lib.BY_NAME["load_damping"].parameters[0], 65.0, 3000.0)
+    lin = Coordinate(
+        lib.BY_NAME["load_damping"], lib.BY_NAME["load_damping"].parameters[0], 65.0, 3000.0
+    )
     assert (lin.value(0.0), lin.value(1.0), lin.value(0.5)) == (65.0, 3000.0, 1532.5)
     sheath = lib.BY_NAME["sheath_heat_sink"]
     log = Coordinate(sheath, sheath.parameters[0], 0.2, 30.0)
@@ -102,7 +104,7 @@ def test_pinned_means_a_bound_away_from_where_the_candidate_is_absent() -> None:
     assert _pinned(friction, np.array([0.99])) == []
     gain = Space(BASE, (lib.BY_NAME["encoder_gain"],))
     assert _pinned(gain, np.array([0.0])) == ["encoder_gain: g_x at its lower bound 0.8"]
-    damping = Space(BASE, (lib.BY_NAME["load_damping"],))        # lower bound: the model's 65 N s/m
+    damping = Space(BASE, (lib.BY_NAME["load_damping"],))  # lower bound: the model's 65 N s/m
     assert _pinned(damping, np.array([0.0])) == []
 
 
@@ -115,8 +117,10 @@ def _fit(names: tuple[str, ...], train: float, heldout: float, pinned=()) -> Fit
 START = _fit((), 50.0, 40.0)
 
 
-@pytest.mark.parametrize("start_heldout, verdict", [(1.0, "none"), (1.2, "none"), (1.21, "unexplained"),
-                                                    (0.8, "none"), (40.0, "unexplained")])
+@pytest.mark.parametrize(
+    "start_heldout, verdict",
+    [(1.0, "none"), (1.2, "none"), (1.21, "unexplained"), (0.8, "none"), (40.0, "unexplained")],
+)
 def test_verdict_without_terms(start_heldout: float, verdict: str) -> None:
     start = _fit((), 50.0, start_heldout)
     assert _verdict(start, start, []) == verdict
@@ -124,7 +128,7 @@ def test_verdict_without_terms(start_heldout: float, verdict: str) -> None:
 
 def test_verdict_with_terms() -> None:
     # start 40: excess sqrt(39) = 6.24; explained when the final's excess is at most half of it
-    half = 1.0 + (0.5 * math.sqrt(39.0)) ** 2          # 10.75
+    half = 1.0 + (0.5 * math.sqrt(39.0)) ** 2  # 10.75
     damping = _fit(("load_damping",), 1.0, 1.0)
     assert _verdict(START, damping, [Step([damping], damping, [])]) == "named"
     worse = _fit(("load_damping",), 1.0, half + 0.01)
@@ -153,20 +157,26 @@ def test_better_needs_held_out_gain_training_share_material_bic_and_no_bound() -
     current = _fit((), 11.0, 5.0)
     good = _fit(("load_damping",), 1.0, 1.0)
     assert search._better(good, current, current)
-    assert not search._better(_fit(("load_damping",), 1.0, 4.95), current, current)    # held-out gain 0.05
-    assert not search._better(_fit(("load_damping",), 8.5, 1.0), current, current)     # 25 % of the 10 left
-    assert search._better(_fit(("load_damping",), 7.9, 1.0), current, current)         # 31 %
+    assert not search._better(
+        _fit(("load_damping",), 1.0, 4.95), current, current
+    )  # held-out gain 0.05
+    assert not search._better(
+        _fit(("load_damping",), 8.5, 1.0), current, current
+    )  # 25 % of the 10 left
+    assert search._better(_fit(("load_damping",), 7.9, 1.0), current, current)  # 31 %
     assert not search._better(_fit(("load_damping",), 1.0, 1.0, ["pinned"]), current, current)
     # BIC: one parameter costs ln(1000) = 6.9 against 1000 ln(train ratio)
     near = _fit(("load_damping",), 0.999 * 1.0, 0.8)
     flat = _fit((), 1.0, 1.0)
-    assert not search._better(near, flat, flat) and search._better(_fit(("load_damping",), 0.99, 0.8), flat, flat)
+    assert not search._better(near, flat, flat) and search._better(
+        _fit(("load_damping",), 0.99, 0.8), flat, flat
+    )
     # material: the starting model left an excess RMS of 99 noise floors (cost 9802); a second
     # term that takes the held-out cost from 101 (excess 10) to 50 (excess 7) removes 3 % of it
     start = _fit((), 9802.0, 9802.0)
     first = _fit(("supply_sag",), 100.0, 101.0)
     assert not search._better(_fit(("supply_sag", "spring_stiffening"), 40.0, 50.0), first, start)
-    assert search._better(_fit(("supply_sag", "spring_stiffening"), 40.0, 2.0), first, start)    # 9 %
+    assert search._better(_fit(("supply_sag", "spring_stiffening"), 40.0, 2.0), first, start)  # 9 %
 
 
 def _thermal_truth(start_c: float) -> TimeSeriesRun:
@@ -174,13 +184,29 @@ def _thermal_truth(start_c: float) -> TimeSeriesRun:
     one = np.r_[np.arange(start_c, 140.0), np.arange(140.0, start_c, -1.0)]
     temps = np.r_[np.tile(one, 3), start_c]
     t = np.arange(temps.size) * 1.0
-    shell = TimeSeriesRun("tc", "synthetic", "thermal_cycle", t, "temperature", temps, {"strain": t * 0},
-                          stress_pa=150e6)
+    shell = TimeSeriesRun(
+        "tc",
+        "synthetic",
+        "thermal_cycle",
+        t,
+        "temperature",
+        temps,
+        {"strain": t * 0},
+        stress_pa=150e6,
+    )
     truth = BASE.replace({"kinetics.as0_c": 92.0, "kinetics.af0_c": 102.0})
     strain = replay.replay(replay.plan(shell), [truth])["strain"][0]
     strain = strain + np.random.default_rng(0).normal(0.0, 2e-5, t.size)
-    return TimeSeriesRun("tc", "synthetic", "thermal_cycle", t, "temperature", temps, {"strain": strain},
-                         stress_pa=150e6)
+    return TimeSeriesRun(
+        "tc",
+        "synthetic",
+        "thermal_cycle",
+        t,
+        "temperature",
+        temps,
+        {"strain": strain},
+        stress_pa=150e6,
+    )
 
 
 def test_thermal_cycle_recalibrates_as0() -> None:
@@ -196,8 +222,13 @@ def test_thermal_cycle_starting_inside_the_as0_bounds() -> None:
 
 def test_a_partly_explained_run_does_not_say_no_candidate_helped() -> None:
     # 150 N s/m of damping (the candidate fits it) and a 0.3 mm encoder ripple (nothing fits it)
-    case = suite.Case("damped_ripple", "outside", (), {"load.damping_n_s_per_m": 150.0},
-                      distortion=lambda t, x, f: (x + 0.3e-3 * np.sin(2 * np.pi * x / 2e-3), f))
+    case = suite.Case(
+        "damped_ripple",
+        "outside",
+        (),
+        {"load.damping_n_s_per_m": 150.0},
+        distortion=lambda t, x, f: (x + 0.3e-3 * np.sin(2 * np.pi * x / 2e-3), f),
+    )
     d = diagnose([suite.measure(case, DUTY, "low", 0, BASE)], [], BASE, candidates=["load_damping"])
     assert d.verdict == "unexplained" and [n["effect"] for n in d.named()] == ["load_damping"]
     assert "not removed by any candidate" not in d.summary_line()

@@ -18,13 +18,23 @@ REPO = Path(__file__).resolve().parents[2]
 BAG = REPO / "bags" / "diagnose_index_damping"
 TRUTH = BAG / "physics.yaml"
 HIDDEN_DAMPING = 260.0
-SUMMARY = re.compile(r"^named: load_damping \(b = ([\d.]+) N s/m\); held-out position RMSE ([\d.e+-]+) mm -> "
-                     r"([\d.e+-]+) mm \(([+-]\d+) %\)$")
+SUMMARY = re.compile(
+    r"^named: load_damping \(b = ([\d.]+) N s/m\); held-out position RMSE ([\d.e+-]+) mm -> "
+    r"([\d.e+-]+) mm \(([+-]\d+) %\)$"
+)
 
 
 def diagnose(venv: Path, bag: Path, out: Path) -> subprocess.Popen:
-    command = [str(venv / "bin" / "hems"), "diagnose", str(bag), "--model", "ch6_hems_index",
-               "--out", str(out), "--quiet"]
+    command = [
+        str(venv / "bin" / "hems"),
+        "diagnose",
+        str(bag),
+        "--model",
+        "ch6_hems_index",
+        "--out",
+        str(out),
+        "--quiet",
+    ]
     return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -55,21 +65,33 @@ def assert_names_the_damping(summary_line: str, out: Path) -> dict:
 def test_the_truth_is_the_starting_model_with_four_times_the_damping() -> None:
     truth, model = load_params(TRUTH).to_dict(), load_params("ch6_hems_index").to_dict()
     assert "hidden truth of bags/diagnose_index_damping" in truth["description"].replace("\n", " ")
-    assert truth["load"]["damping_n_s_per_m"] == HIDDEN_DAMPING == 4 * model["load"]["damping_n_s_per_m"]
+    assert (
+        truth["load"]["damping_n_s_per_m"]
+        == HIDDEN_DAMPING
+        == 4 * model["load"]["damping_n_s_per_m"]
+    )
     truth["load"]["damping_n_s_per_m"] = model["load"]["damping_n_s_per_m"]
-    assert {k: v for k, v in truth.items() if k not in ("name", "description")} == \
-        {k: v for k, v in model.items() if k not in ("name", "description")}
+    assert {k: v for k, v in truth.items() if k not in ("name", "description")} == {
+        k: v for k, v in model.items() if k not in ("name", "description")
+    }
 
 
-def test_diagnose_names_the_hidden_damping_from_the_measured_topics(venv: Path, tmp_path: Path) -> None:
+def test_diagnose_names_the_hidden_damping_from_the_measured_topics(
+    venv: Path, tmp_path: Path
+) -> None:
     # the copy keeps the folder's name, so that both reports name the same run
-    stripped = copy_bag(BAG, tmp_path / "measured_only" / BAG.name,
-                        lambda m, _: not m.topic.startswith("/hems/sim/"))
+    stripped = copy_bag(
+        BAG,
+        tmp_path / "measured_only" / BAG.name,
+        lambda m, _: not m.topic.startswith("/hems/sim/"),
+    )
     assert [t for t in bag_info(BAG).topics if t.startswith("/hems/sim/")]
     assert not [t for t in bag_info(stripped).topics if t.startswith("/hems/sim/")]
     # both at once: the host has two cores
-    runs = {"bag": diagnose(venv, BAG, tmp_path / "r"),
-            "stripped": diagnose(venv, stripped, tmp_path / "s")}
+    runs = {
+        "bag": diagnose(venv, BAG, tmp_path / "r"),
+        "stripped": diagnose(venv, stripped, tmp_path / "s"),
+    }
     lines = {name: finished(process) for name, process in runs.items()}
     summary = assert_names_the_damping(lines["bag"], tmp_path / "r")
     # the simulation truth in the bag is not what the diagnosis found the damping with
@@ -83,22 +105,46 @@ def test_diagnose_names_the_hidden_damping_from_the_measured_topics(venv: Path, 
 # controller stall during a heating pulse moved the fitted damping by 9 % in a run here.
 @pytest.mark.slow
 @pytest.mark.graph_realtime
-def test_a_fresh_recording_is_diagnosed_the_same(venv: Path, ros_domain_id: int, tmp_path: Path) -> None:
+def test_a_fresh_recording_is_diagnosed_the_same(
+    venv: Path, ros_domain_id: int, tmp_path: Path
+) -> None:
     from hems_ros.client.step_figures import step_figures
 
     bag = tmp_path / "bag"
     # the committed bag's run with three cycles, the fewest the default held-out split takes
-    command = [str(venv / "bin" / "hems"), "step", "--physics-config", str(TRUTH), "--cycles", "3",
-               "--step-mm", "20", "--before-s", "1", "--step-s", "4", "--after-s", "5",
-               "--log-level", "warn", "--record", str(bag)]
+    command = [
+        str(venv / "bin" / "hems"),
+        "step",
+        "--physics-config",
+        str(TRUTH),
+        "--cycles",
+        "3",
+        "--step-mm",
+        "20",
+        "--before-s",
+        "1",
+        "--step-s",
+        "4",
+        "--after-s",
+        "5",
+        "--log-level",
+        "warn",
+        "--record",
+        str(bag),
+    ]
     result = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
     # three steps (runs of equal setpoints collapsed, as in tests/graph/test_step_cli.py)
     values = list(load_bag(bag, topics=["/hems/index/setpoint"])["/hems/index/setpoint"]["value"])
-    assert [v for i, v in enumerate(values) if i == 0 or v != values[i - 1]] == [0.0, 0.02] * 3 + [0.0]
+    assert [v for i, v in enumerate(values) if i == 0 or v != values[i - 1]] == [0.0, 0.02] * 3 + [
+        0.0
+    ]
     # the printed figures are the last step's
-    printed = re.search(r"step: index: rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), "
-                        r"steady_state_error_mm (-?[\d.]+)", result.stdout)
+    printed = re.search(
+        r"step: index: rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), "
+        r"steady_state_error_mm (-?[\d.]+)",
+        result.stdout,
+    )
     assert printed, result.stdout
     last_step = step_figures(bag, "index", 2.0)
     assert [float(v) for v in printed.groups()] == pytest.approx(list(last_step.values()), abs=5e-4)

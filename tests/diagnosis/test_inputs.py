@@ -26,40 +26,57 @@ BAGS = {name: REPO / "bags" / name for name in ("ch5_step_index", "demo_grasp_in
 
 # -- units -----------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("quantity, unit, value, si", [
-    ("displacement", "mm", 12.5, 0.0125),
-    ("displacement", "um", 250.0, 250e-6),
-    ("displacement", "µm", 250.0, 250e-6),
-    ("displacement", None, 0.02, 0.02),
-    ("stress", "MPa", 150.0, 1.5e8),
-    ("stress", "kPa", 2.0, 2000.0),
-    ("stress", "GPa", 0.07, 7e7),
-    ("temperature", "K", 373.15, 100.0),
-    ("temperature", "°C", 70.0, 70.0),
-    ("temperature", "C", 70.0, 70.0),
-    ("strain", "%", 4.0, 0.04),
-    ("strain", "fraction", 0.04, 0.04),
-    ("time", "ms", 250.0, 0.25),
-    ("time", "min", 1.5, 90.0),
-    ("duty", "1", 0.5, 50.0),
-    ("duty", "percent", 50.0, 50.0),
-    ("current", "mA", 350.0, 0.35),
-    ("voltage", "mV", 1200.0, 1.2),
-    ("force", "kN", 0.04, 40.0),
-    ("load_force", "mN", 500.0, 0.5),
-    ("pulse", "ms", 800.0, 0.8),
-    ("mean_power", "mW", 1500.0, 1.5),
-    ("rmse", "mm", 0.25, 2.5e-4),
-])
+
+@pytest.mark.parametrize(
+    "quantity, unit, value, si",
+    [
+        ("displacement", "mm", 12.5, 0.0125),
+        ("displacement", "um", 250.0, 250e-6),
+        ("displacement", "µm", 250.0, 250e-6),
+        ("displacement", None, 0.02, 0.02),
+        ("stress", "MPa", 150.0, 1.5e8),
+        ("stress", "kPa", 2.0, 2000.0),
+        ("stress", "GPa", 0.07, 7e7),
+        ("temperature", "K", 373.15, 100.0),
+        ("temperature", "°C", 70.0, 70.0),
+        ("temperature", "C", 70.0, 70.0),
+        ("strain", "%", 4.0, 0.04),
+        ("strain", "fraction", 0.04, 0.04),
+        ("time", "ms", 250.0, 0.25),
+        ("time", "min", 1.5, 90.0),
+        ("duty", "1", 0.5, 50.0),
+        ("duty", "percent", 50.0, 50.0),
+        ("current", "mA", 350.0, 0.35),
+        ("voltage", "mV", 1200.0, 1.2),
+        ("force", "kN", 0.04, 40.0),
+        ("load_force", "mN", 500.0, 0.5),
+        ("pulse", "ms", 800.0, 0.8),
+        ("mean_power", "mW", 1500.0, 1.5),
+        ("rmse", "mm", 0.25, 2.5e-4),
+    ],
+)
 def test_conversion_to_si(quantity: str, unit: str | None, value: float, si: float) -> None:
     assert units.to_si(quantity, unit, value) == pytest.approx(si, rel=1e-12)
-    assert units.to_si(quantity, unit, np.array([value, value])) == pytest.approx([si, si], rel=1e-12)
+    assert units.to_si(quantity, unit, np.array([value, value])) == pytest.approx(
+        [si, si], rel=1e-12
+    )
 
 
 def test_default_units_and_aliases() -> None:
-    assert [units.default_unit(q) for q in ("time", "duty", "current", "voltage", "temperature", "stress",
-                                            "wire_force", "displacement", "strain")] == \
-        ["s", "%", "A", "V", "degC", "Pa", "N", "m", "1"]
+    assert [
+        units.default_unit(q)
+        for q in (
+            "time",
+            "duty",
+            "current",
+            "voltage",
+            "temperature",
+            "stress",
+            "wire_force",
+            "displacement",
+            "strain",
+        )
+    ] == ["s", "%", "A", "V", "degC", "Pa", "N", "m", "1"]
     assert units.canonical("force") == "wire_force" and units.canonical("pulse") == "pulse_length"
     assert units.default_unit("protocol") is None
 
@@ -78,24 +95,35 @@ def test_unknown_unit_and_quantity() -> None:
 
 # -- column mapping --------------------------------------------------------------------------------
 
+
 def test_parse_columns() -> None:
     assert parse_columns("time=t:s,current=I:A,displacement=x:mm,force=F:N") == {
-        "time": ("t", "s"), "current": ("I", "A"), "displacement": ("x", "mm"), "wire_force": ("F", "N")}
+        "time": ("t", "s"),
+        "current": ("I", "A"),
+        "displacement": ("x", "mm"),
+        "wire_force": ("F", "N"),
+    }
     assert parse_columns(" time = #1 , strain=eps:% ,temperature=T") == {
-        "time": ("#1", "s"), "strain": ("eps", "%"), "temperature": ("T", "degC")}
+        "time": ("#1", "s"),
+        "strain": ("eps", "%"),
+        "temperature": ("T", "degC"),
+    }
 
 
-@pytest.mark.parametrize("spec, message", [
-    ("time=t,speed=v", "unknown quantity 'speed'"),
-    ("time=t,force=F,wire_force=G", "wire_force is mapped twice"),
-    ("time=t,displacement", "malformed column mapping 'displacement'"),
-    ("time=", "malformed column mapping 'time='"),
-    ("=t", "malformed column mapping '=t'"),
-    ("time=#0", "malformed column mapping 'time=#0'"),
-    ("time=#x", "malformed column mapping 'time=#x'"),
-    ("time=t:parsec", "unknown unit 'parsec' for time"),
-    ("", "no columns given"),
-])
+@pytest.mark.parametrize(
+    "spec, message",
+    [
+        ("time=t,speed=v", "unknown quantity 'speed'"),
+        ("time=t,force=F,wire_force=G", "wire_force is mapped twice"),
+        ("time=t,displacement", "malformed column mapping 'displacement'"),
+        ("time=", "malformed column mapping 'time='"),
+        ("=t", "malformed column mapping '=t'"),
+        ("time=#0", "malformed column mapping 'time=#0'"),
+        ("time=#x", "malformed column mapping 'time=#x'"),
+        ("time=t:parsec", "unknown unit 'parsec' for time"),
+        ("", "no columns given"),
+    ],
+)
 def test_parse_columns_errors(spec: str, message: str) -> None:
     with pytest.raises(DiagnosisInputError, match=message):
         parse_columns(spec)
@@ -103,7 +131,10 @@ def test_parse_columns_errors(spec: str, message: str) -> None:
 
 # -- tables ----------------------------------------------------------------------------------------
 
-def write(tmp_path: Path, name: str, header: str, rows, delimiter: str = ",", comments: str = "") -> Path:
+
+def write(
+    tmp_path: Path, name: str, header: str, rows, delimiter: str = ",", comments: str = ""
+) -> Path:
     path = tmp_path / name
     lines = [header] + [delimiter.join(str(v) for v in row) for row in rows]
     path.write_text(comments + "\n".join(lines) + "\n", encoding="utf-8")
@@ -128,25 +159,40 @@ def test_driven_csv(tmp_path: Path) -> None:
 
 
 def test_driven_whitespace_table_with_comments_and_index_columns(tmp_path: Path) -> None:
-    rows = [(1000.0 + 0.05 * k, 0.25 if k % 10 < 5 else 0.0, 4.0 - 0.01 * k, 60.0 + k) for k in range(30)]
-    path = write(tmp_path, "duty.txt", "time   duty  eps   temp", rows, delimiter="   ",
-                 comments="# bench run 3\n#  sampled at 20 Hz\n")
+    rows = [
+        (1000.0 + 0.05 * k, 0.25 if k % 10 < 5 else 0.0, 4.0 - 0.01 * k, 60.0 + k)
+        for k in range(30)
+    ]
+    path = write(
+        tmp_path,
+        "duty.txt",
+        "time   duty  eps   temp",
+        rows,
+        delimiter="   ",
+        comments="# bench run 3\n#  sampled at 20 Hz\n",
+    )
     run = load_table(path, "time=#1,duty=duty:fraction,strain=eps:%,temperature=#4", name="bench 3")
     assert run.name == "bench 3" and run.drive == "duty"
-    assert run.time[-1] == pytest.approx(1.45)                   # relative to the first row
+    assert run.time[-1] == pytest.approx(1.45)  # relative to the first row
     assert run.drive_values[:6] == pytest.approx([25, 25, 25, 25, 25, 0])
-    assert run.outputs["strain"][-1] == pytest.approx(-0.29e-2)   # change from the first row, elongation +
+    assert run.outputs["strain"][-1] == pytest.approx(
+        -0.29e-2
+    )  # change from the first row, elongation +
     assert run.outputs["temperature"][-1] == pytest.approx(89.0)
 
 
 def test_thermal_cycle_semicolon_decimal_comma_without_time(tmp_path: Path) -> None:
     temps = [300.15 + 2 * k for k in range(15)] + [328.15 - 2 * k for k in range(1, 15)]
-    rows = [(f"{t:.2f}".replace(".", ","), f"{4.0 - 0.1 * k:.2f}".replace(".", ","), "150,0")
-            for k, t in enumerate(temps)]
+    rows = [
+        (f"{t:.2f}".replace(".", ","), f"{4.0 - 0.1 * k:.2f}".replace(".", ","), "150,0")
+        for k, t in enumerate(temps)
+    ]
     path = write(tmp_path, "cycle.csv", "T;strain;sigma", rows, delimiter=";")
     run = load_table(path, "temperature=T:K,strain=strain:%,stress=sigma:MPa")
     assert (run.kind, run.drive) == ("thermal_cycle", "temperature")
-    assert run.drive_values[0] == pytest.approx(27.0) and run.drive_values[14] == pytest.approx(55.0)
+    assert run.drive_values[0] == pytest.approx(27.0) and run.drive_values[14] == pytest.approx(
+        55.0
+    )
     assert run.stress_pa == pytest.approx(1.5e8)
     assert run.time[:3] == pytest.approx([0.0, 2.0, 4.0]) and run.time[-1] == pytest.approx(56.0)
     assert run.outputs["strain"][-1] == pytest.approx(-2.8e-2)
@@ -160,20 +206,34 @@ def test_thermal_cycle_load_force_over_cross_section(tmp_path: Path) -> None:
     assert run.stress_pa == pytest.approx(30.0 / DEFAULT_CROSS_SECTION_M2)
     assert DEFAULT_CROSS_SECTION_M2 == pytest.approx(2.027e-7, rel=1e-3)
     assert run.outputs["position"][-1] == pytest.approx(2.4e-3) and run.time[-1] == 12.0
-    other = load_table(path, "time=t,temperature=T,displacement=x:mm,load_force=W:N", cross_section_m2=1e-7)
+    other = load_table(
+        path, "time=t,temperature=T,displacement=x:mm,load_force=W:N", cross_section_m2=1e-7
+    )
     assert other.stress_pa == pytest.approx(3e8)
 
 
 def test_feature_table_tab_separated(tmp_path: Path) -> None:
-    rows = [("short", 500, 2.0, 10.5, 1.8, 0.45), ("", 1000, 1.5, 14.0, 2.6, 0.5),
-            ("long", 2000, 1.0, 16.25, 3.9, 0.5)]
-    path = write(tmp_path, "table43.tsv", "name\tpulse ms\tI\tpeak\tcool\tcooled", rows, delimiter="\t")
-    run = load_table(path, "name=name,pulse=#2:ms,current=I,peak_displacement=peak:mm,cooling_time=cool,"
-                           "cooled_displacement=cooled:mm")
+    rows = [
+        ("short", 500, 2.0, 10.5, 1.8, 0.45),
+        ("", 1000, 1.5, 14.0, 2.6, 0.5),
+        ("long", 2000, 1.0, 16.25, 3.9, 0.5),
+    ]
+    path = write(
+        tmp_path, "table43.tsv", "name\tpulse ms\tI\tpeak\tcool\tcooled", rows, delimiter="\t"
+    )
+    run = load_table(
+        path,
+        "name=name,pulse=#2:ms,current=I,peak_displacement=peak:mm,cooling_time=cool,"
+        "cooled_displacement=cooled:mm",
+    )
     assert isinstance(run, FeatureRun) and len(run.tests) == 3
     assert [t.name for t in run.tests] == ["short", "row 3", "long"]
-    assert run.tests[0].conditions == pytest.approx({"pulse_s": 0.5, "current_a": 2.0, "cooled_m": 4.5e-4})
-    assert run.tests[2].figures == pytest.approx({"peak_displacement": 0.01625, "cooling_time": 3.9})
+    assert run.tests[0].conditions == pytest.approx(
+        {"pulse_s": 0.5, "current_a": 2.0, "cooled_m": 4.5e-4}
+    )
+    assert run.tests[2].figures == pytest.approx(
+        {"peak_displacement": 0.01625, "cooling_time": 3.9}
+    )
 
 
 def test_feature_table_closed_loop(tmp_path: Path) -> None:
@@ -201,7 +261,10 @@ def test_file_errors(tmp_path: Path) -> None:
     assert "no such file" in error_of(tmp_path / "absent.csv", DRIVEN)
     assert "cannot read it" in error_of(tmp_path, DRIVEN)
     (tmp_path / "empty.csv").write_text("")
-    assert error_of(tmp_path / "empty.csv", DRIVEN) == f"{tmp_path / 'empty.csv'}: empty (no header row)"
+    assert (
+        error_of(tmp_path / "empty.csv", DRIVEN)
+        == f"{tmp_path / 'empty.csv'}: empty (no header row)"
+    )
     (tmp_path / "comments.csv").write_text("# only\n# comments\n\n")
     assert "empty (no header row)" in error_of(tmp_path / "comments.csv", DRIVEN)
     (tmp_path / "header.csv").write_text("t,I,x\n")
@@ -214,14 +277,19 @@ def test_file_errors(tmp_path: Path) -> None:
 
 def test_mapping_errors(tmp_path: Path) -> None:
     path = write(tmp_path, "run.csv", "t,I,V,x", [(10 * k, 100, 1, 0.1 * k) for k in range(101)])
-    assert "column 'pos' (for displacement) is not in the header (columns: t, I, V, x)" in \
-        error_of(path, "time=t,current=I,displacement=pos")
-    assert "column #7 (for current) is beyond the header's 4 columns" in error_of(path, "time=t,current=#7,"
-                                                                                        "displacement=x")
-    assert error_of(path, "current=I,displacement=x") == \
-        f"{path}: no time column mapped: add time=<column>[:unit] to --columns"
-    assert "more than one input mapped (current, voltage)" in error_of(path, "time=t,current=I,voltage=V,"
-                                                                             "displacement=x")
+    assert "column 'pos' (for displacement) is not in the header (columns: t, I, V, x)" in error_of(
+        path, "time=t,current=I,displacement=pos"
+    )
+    assert "column #7 (for current) is beyond the header's 4 columns" in error_of(
+        path, "time=t,current=#7," "displacement=x"
+    )
+    assert (
+        error_of(path, "current=I,displacement=x")
+        == f"{path}: no time column mapped: add time=<column>[:unit] to --columns"
+    )
+    assert "more than one input mapped (current, voltage)" in error_of(
+        path, "time=t,current=I,voltage=V," "displacement=x"
+    )
     assert "no output column mapped" in error_of(path, "time=t,current=I")
     assert "no input column mapped" in error_of(path, "time=t,displacement=x")
     assert "stress cannot be mapped in a driven run" in error_of(path, DRIVEN + ",stress=V")
@@ -233,7 +301,7 @@ def test_mapping_errors(tmp_path: Path) -> None:
 @pytest.mark.parametrize("bad", ["nan", "inf", "-inf", "abc", ""])
 def test_non_finite_value_names_row_and_column(tmp_path: Path, bad: str) -> None:
     rows = driven_rows()
-    rows[15] = (rows[15][0], rows[15][1], bad, rows[15][3])    # file row 17: the header is row 1
+    rows[15] = (rows[15][0], rows[15][1], bad, rows[15][3])  # file row 17: the header is row 1
     path = write(tmp_path, "run.csv", "t,I,x,F", rows)
     assert error_of(path, DRIVEN) == f"{path}: row 17, column x: {bad!r} is not a finite number"
 
@@ -244,8 +312,9 @@ def test_time_must_increase_strictly(tmp_path: Path) -> None:
     path = write(tmp_path, "run.csv", "t,I,x,F", rows)
     assert "row 42: time 0.39 s is not after row 41's 0.39 s" in error_of(path, DRIVEN)
     rows[40] = (385,) + rows[40][1:]
-    assert "row 42: time 0.385 s is not after row 41's 0.39 s" in error_of(write(tmp_path, "b.csv", "t,I,x,F",
-                                                                                 rows), DRIVEN)
+    assert "row 42: time 0.385 s is not after row 41's 0.39 s" in error_of(
+        write(tmp_path, "b.csv", "t,I,x,F", rows), DRIVEN
+    )
 
 
 def test_runs_too_short(tmp_path: Path) -> None:
@@ -254,17 +323,25 @@ def test_runs_too_short(tmp_path: Path) -> None:
     brief = write(tmp_path, "brief.csv", "t,I,x", [(10 * k, 100, k) for k in range(60)])
     assert "the run lasts 0.59 s, too short" in error_of(brief, DRIVEN)
     one = write(tmp_path, "one.csv", "pulse,peak", [(1.0, 2.0)])
-    assert "only 1 test row, too few to compare" in error_of(one, "pulse=pulse,peak_displacement=peak")
+    assert "only 1 test row, too few to compare" in error_of(
+        one, "pulse=pulse,peak_displacement=peak"
+    )
 
 
 def test_drive_range(tmp_path: Path) -> None:
     rows = [(10 * k, 50, -0.5 if k == 30 else 1.0, k) for k in range(101)]
     rows[20] = (200, 120, 1.0, 20)
     path = write(tmp_path, "run.csv", "t,d,I,x", rows)
-    assert error_of(path, "time=t:ms,duty=d,displacement=x") == \
-        f"{path}: row 22, column d: duty 120 % is outside 0-100 %"
-    assert "row 32, column I: negative current -0.5 A" in error_of(path, "time=t:ms,current=I,displacement=x")
-    assert "row 32, column I: negative voltage -0.5 V" in error_of(path, "time=t:ms,voltage=I,displacement=x")
+    assert (
+        error_of(path, "time=t:ms,duty=d,displacement=x")
+        == f"{path}: row 22, column d: duty 120 % is outside 0-100 %"
+    )
+    assert "row 32, column I: negative current -0.5 A" in error_of(
+        path, "time=t:ms,current=I,displacement=x"
+    )
+    assert "row 32, column I: negative voltage -0.5 V" in error_of(
+        path, "time=t:ms,voltage=I,displacement=x"
+    )
 
 
 def test_thermal_cycle_errors(tmp_path: Path) -> None:
@@ -272,31 +349,51 @@ def test_thermal_cycle_errors(tmp_path: Path) -> None:
     path = write(tmp_path, "cycle.csv", "T,eps,sigma", rows)
     assert "the stress varies by" in error_of(path, "temperature=T,strain=eps:%,stress=sigma:MPa")
     assert "more than 2%" in error_of(path, "temperature=T,strain=eps:%,stress=sigma:MPa")
-    steady = write(tmp_path, "steady.csv", "T,eps,sigma", [(20.0 + k, 0.1 * k, 150.0 + (2.9 if k == 7 else 0))
-                                                          for k in range(25)])
-    assert load_table(steady, "temperature=T,strain=eps:%,stress=sigma:MPa").stress_pa == \
-        pytest.approx((150 * 25 + 2.9) / 25 * 1e6)
+    steady = write(
+        tmp_path,
+        "steady.csv",
+        "T,eps,sigma",
+        [(20.0 + k, 0.1 * k, 150.0 + (2.9 if k == 7 else 0)) for k in range(25)],
+    )
+    assert load_table(
+        steady, "temperature=T,strain=eps:%,stress=sigma:MPa"
+    ).stress_pa == pytest.approx((150 * 25 + 2.9) / 25 * 1e6)
     assert "exactly one load column" in error_of(path, "temperature=T,strain=eps:%")
     assert "a thermal cycle needs strain" in error_of(path, "temperature=T,stress=sigma:MPa")
-    flat = write(tmp_path, "flat.csv", "T,eps,sigma", [(20.0 + min(k, 10), 0.1 * k, 150.0)
-                                                      for k in range(25)])
-    assert "row 13: time 10 s is not after row 12's 10 s (without a time column, the cumulative " \
-           "temperature change must increase strictly)" in \
-        error_of(flat, "temperature=T,strain=eps,stress=sigma")
+    flat = write(
+        tmp_path,
+        "flat.csv",
+        "T,eps,sigma",
+        [(20.0 + min(k, 10), 0.1 * k, 150.0) for k in range(25)],
+    )
+    assert (
+        "row 13: time 10 s is not after row 12's 10 s (without a time column, the cumulative "
+        "temperature change must increase strictly)"
+        in error_of(flat, "temperature=T,strain=eps,stress=sigma")
+    )
 
 
 # -- bags ------------------------------------------------------------------------------------------
 
+
 def raw_streams(bag_path: Path) -> dict:
     """The index finger's encoder, duty and wire-force streams, decoded independently of bagload."""
-    bag = load_bag(bag_path, topics=["/hems/index/encoder", "/hems/index/duty", "/hems/index/wire_force"])
+    bag = load_bag(
+        bag_path, topics=["/hems/index/encoder", "/hems/index/duty", "/hems/index/wire_force"]
+    )
 
     def ns(data, prefix="header.stamp"):
         return data[f"{prefix}.sec"].astype(np.int64) * 10**9 + data[f"{prefix}.nanosec"]
 
     encoder, duty, force = (bag[f"/hems/index/{s}"] for s in ("encoder", "duty", "wire_force"))
-    return {"encoder": ns(encoder), "position": encoder["position"], "duty_at": ns(duty, "measurement_stamp"),
-            "duty": duty["duty_percent"], "force_at": ns(force), "force": force["force"]}
+    return {
+        "encoder": ns(encoder),
+        "position": encoder["position"],
+        "duty_at": ns(duty, "measurement_stamp"),
+        "duty": duty["duty_percent"],
+        "force_at": ns(force),
+        "force": force["force"],
+    }
 
 
 @pytest.fixture(scope="module")
@@ -304,22 +401,41 @@ def bag_runs() -> dict[str, TimeSeriesRun]:
     return {name: load_bag_runs(path) for name, path in BAGS.items()}
 
 
-@pytest.mark.parametrize("name, n_encoder, n_duty, n_force, outside, extra_forces", [
-    ("ch5_step_index", 1797, 1797, 1812, 0, 15),
-    ("demo_grasp_index", 1802, 1820, 1818, 18, 16),
-])
-def test_bag_runs_lengths(bag_runs, name: str, n_encoder: int, n_duty: int, n_force: int, outside: int,
-                          extra_forces: int) -> None:
+@pytest.mark.parametrize(
+    "name, n_encoder, n_duty, n_force, outside, extra_forces",
+    [
+        ("ch5_step_index", 1797, 1797, 1812, 0, 15),
+        ("demo_grasp_index", 1802, 1820, 1818, 18, 16),
+    ],
+)
+def test_bag_runs_lengths(
+    bag_runs, name: str, n_encoder: int, n_duty: int, n_force: int, outside: int, extra_forces: int
+) -> None:
     raw = raw_streams(BAGS[name])
-    assert (raw["encoder"].size, raw["duty"].size, raw["force"].size) == (n_encoder, n_duty, n_force)
+    assert (raw["encoder"].size, raw["duty"].size, raw["force"].size) == (
+        n_encoder,
+        n_duty,
+        n_force,
+    )
     [run] = bag_runs[name]
-    assert (run.name, run.source, run.kind, run.drive) == \
-        (f"{name}:index", f"{BAGS[name]}:index", "driven", "duty")
+    assert (run.name, run.source, run.kind, run.drive) == (
+        f"{name}:index",
+        f"{BAGS[name]}:index",
+        "driven",
+        "duty",
+    )
     # every encoder sample has its wire force (the sensor stamps the sample it measured)
     assert np.isin(raw["encoder"], raw["force_at"]).all()
-    assert run.n_samples == n_encoder == run.drive_values.size == run.outputs["position"].size == \
-        run.outputs["wire_force"].size
-    assert f"{extra_forces} wire forces without an encoder sample at their stamp dropped" in run.notes
+    assert (
+        run.n_samples
+        == n_encoder
+        == run.drive_values.size
+        == run.outputs["position"].size
+        == run.outputs["wire_force"].size
+    )
+    assert (
+        f"{extra_forces} wire forces without an encoder sample at their stamp dropped" in run.notes
+    )
     unanswered = f"{outside} duty commands answer no encoder sample of the bag"
     assert any(note.startswith(unanswered) for note in run.notes) == (outside > 0)
     assert np.array_equal(run.time, (raw["encoder"] - raw["encoder"][0]) * 1e-9)
@@ -333,7 +449,7 @@ def test_bag_run_alignment_and_values(bag_runs, name: str) -> None:
     [run] = bag_runs[name]
     sample = {stamp: k for k, stamp in enumerate(raw["encoder"])}
     answered = [(sample[s], d) for s, d in zip(raw["duty_at"], raw["duty"]) if s in sample]
-    assert len(answered) == raw["encoder"].size                # one duty per sample, stamps equal in ns
+    assert len(answered) == raw["encoder"].size  # one duty per sample, stamps equal in ns
     for k, duty in answered:
         assert run.drive_values[k] == duty
     assert run.drive_values.max() == 100.0 and np.count_nonzero(run.drive_values) > 300
@@ -348,21 +464,35 @@ def test_bag_run_alignment_and_values(bag_runs, name: str) -> None:
 
 def test_bag_setpoints_on_the_encoder_time_base(bag_runs) -> None:
     [step] = bag_runs["ch5_step_index"]
-    assert [(mode, value) for _, mode, value in step.setpoints] == [("position", 0.0), ("position", 0.02),
-                                                                    ("position", 0.0)]
+    assert [(mode, value) for _, mode, value in step.setpoints] == [
+        ("position", 0.0),
+        ("position", 0.02),
+        ("position", 0.0),
+    ]
     times = [t for t, _, _ in step.setpoints]
-    assert np.diff(times) == pytest.approx([2.0, 5.0], abs=0.01)    # 20 mm for 5 s after 2 s at 0
-    assert 0.0 < times[0] < step.duration_s and times[2] + 8.0 == pytest.approx(step.duration_s, abs=1.0)
+    assert np.diff(times) == pytest.approx([2.0, 5.0], abs=0.01)  # 20 mm for 5 s after 2 s at 0
+    assert 0.0 < times[0] < step.duration_s and times[2] + 8.0 == pytest.approx(
+        step.duration_s, abs=1.0
+    )
     [grasp] = bag_runs["demo_grasp_index"]
-    assert [(mode, value) for _, mode, value in grasp.setpoints] == [("position", 0.02), ("force", 10.0),
-                                                                     ("position", 0.0)]
+    assert [(mode, value) for _, mode, value in grasp.setpoints] == [
+        ("position", 0.02),
+        ("force", 10.0),
+        ("position", 0.0),
+    ]
     assert np.diff([t for t, _, _ in grasp.setpoints]) == pytest.approx([5.0, 6.0], abs=0.01)
 
 
 def test_no_simulation_topic_is_requested_or_read(monkeypatch: pytest.MonkeyPatch) -> None:
-    assert measured_topics(FINGERS) and not [t for t in measured_topics(FINGERS) if "/hems/sim/" in t]
-    assert measured_topics(["index"]) == ["/hems/index/duty", "/hems/index/encoder", "/hems/index/wire_force",
-                                          "/hems/index/setpoint"]
+    assert measured_topics(FINGERS) and not [
+        t for t in measured_topics(FINGERS) if "/hems/sim/" in t
+    ]
+    assert measured_topics(["index"]) == [
+        "/hems/index/duty",
+        "/hems/index/encoder",
+        "/hems/index/wire_force",
+        "/hems/index/setpoint",
+    ]
     requested, read = [], []
 
     def spy(path, topics=None, regex=None):
@@ -376,12 +506,21 @@ def test_no_simulation_topic_is_requested_or_read(monkeypatch: pytest.MonkeyPatc
         load_bag_runs(path)
     assert len(requested) == 2 and all(topics and regex is None for topics, regex in requested)
     assert not [t for topics, _ in requested for t in topics if t.startswith("/hems/sim/")]
-    assert set(read) == {"/hems/index/duty", "/hems/index/encoder", "/hems/index/wire_force",
-                         "/hems/index/setpoint"}
+    assert set(read) == {
+        "/hems/index/duty",
+        "/hems/index/encoder",
+        "/hems/index/wire_force",
+        "/hems/index/setpoint",
+    }
 
 
-def copy_bag(source: Path, target: Path, keep=lambda message, ordinal: True, rewrite=None,
-             delay=lambda message, ordinal: 0) -> Path:
+def copy_bag(
+    source: Path,
+    target: Path,
+    keep=lambda message, ordinal: True,
+    rewrite=None,
+    delay=lambda message, ordinal: 0,
+) -> Path:
     """``source`` copied message by message into ``target``: the messages for which
     ``keep(message, ordinal on its topic)`` holds, ``rewrite = (topic, data -> data)`` applied,
     logged ``delay(message, ordinal)`` ns later."""
@@ -391,16 +530,22 @@ def copy_bag(source: Path, target: Path, keep=lambda message, ordinal: True, rew
             ordinal = ordinals[m.topic] = ordinals.get(m.topic, -1) + 1
             if not keep(m, ordinal):
                 continue
-            if m.topic not in writer.topics:   # parsing the QoS of every message took seconds
+            if m.topic not in writer.topics:  # parsing the QoS of every message took seconds
                 writer.add_topic(m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or [])
             data = rewrite[1](m.data) if rewrite and m.topic == rewrite[0] else m.data
-            writer.write(writer.topics[m.topic].channel_id, m.log_time_ns + delay(m, ordinal), data,
-                         m.publish_time_ns)
+            writer.write(
+                writer.topics[m.topic].channel_id,
+                m.log_time_ns + delay(m, ordinal),
+                data,
+                m.publish_time_ns,
+            )
     return target
 
 
 @pytest.mark.parametrize("name", sorted(BAGS))
-def test_bag_without_simulation_topics_gives_identical_runs(bag_runs, tmp_path: Path, name: str) -> None:
+def test_bag_without_simulation_topics_gives_identical_runs(
+    bag_runs, tmp_path: Path, name: str
+) -> None:
     copy = copy_bag(BAGS[name], tmp_path / name, lambda m, _: not m.topic.startswith("/hems/sim/"))
     assert not [t for t in load_bag(copy).topics if "/sim/" in t]
     [original], [stripped] = bag_runs[name], load_bag_runs(copy)
@@ -419,60 +564,84 @@ def test_bag_without_simulation_topics_gives_identical_runs(bag_runs, tmp_path: 
 
 def test_setpoints_without_header_stamp_take_the_log_time(bag_runs, tmp_path: Path) -> None:
     # CDR: 4 bytes of encapsulation, then header.stamp (sec int32, nanosec uint32)
-    copy = copy_bag(BAGS["ch5_step_index"], tmp_path / "unstamped",
-                    rewrite=("/hems/index/setpoint", lambda data: data[:4] + bytes(8) + data[12:]))
+    copy = copy_bag(
+        BAGS["ch5_step_index"],
+        tmp_path / "unstamped",
+        rewrite=("/hems/index/setpoint", lambda data: data[:4] + bytes(8) + data[12:]),
+    )
     [run], [unstamped] = bag_runs["ch5_step_index"], load_bag_runs(copy)
     assert [s[1:] for s in unstamped.setpoints] == [s[1:] for s in run.setpoints]
     # the setpoint tool stamps when it publishes, the recorder logs on reception: under 5 ms apart
-    assert [s[0] for s in unstamped.setpoints] == pytest.approx([s[0] for s in run.setpoints], abs=0.005)
+    assert [s[0] for s in unstamped.setpoints] == pytest.approx(
+        [s[0] for s in run.setpoints], abs=0.005
+    )
     assert [s[0] for s in unstamped.setpoints] != [s[0] for s in run.setpoints]
 
 
 def test_duty_answering_near_a_sample_applies_from_it(bag_runs, tmp_path: Path) -> None:
     raw = raw_streams(BAGS["ch5_step_index"])
-    shift_ns = 2_000_000     # under half the 10 ms period
+    shift_ns = 2_000_000  # under half the 10 ms period
 
-    answered = iter(raw["duty_at"])    # in file order, as the copy meets the messages
+    answered = iter(raw["duty_at"])  # in file order, as the copy meets the messages
 
     def shifted(data: bytes) -> bytes:
         # measurement_stamp (sec int32, nanosec uint32) comes after the header's stamp
         at = int(next(answered))
         k = data.index(struct.pack("<iI", *divmod(at, 10**9)), 12)
-        return data[:k] + struct.pack("<iI", *divmod(at + shift_ns, 10**9)) + data[k + 8:]
+        return data[:k] + struct.pack("<iI", *divmod(at + shift_ns, 10**9)) + data[k + 8 :]
 
-    copy = copy_bag(BAGS["ch5_step_index"], tmp_path / "late_stamps", rewrite=("/hems/index/duty", shifted))
+    copy = copy_bag(
+        BAGS["ch5_step_index"], tmp_path / "late_stamps", rewrite=("/hems/index/duty", shifted)
+    )
     moved = raw_streams(copy)
     assert np.array_equal(moved["duty_at"], raw["duty_at"] + shift_ns)
     [run], [late] = bag_runs["ch5_step_index"], load_bag_runs(copy)
     assert np.array_equal(late.drive_values, run.drive_values)
-    assert any(note.startswith("1797 duty commands answer no encoder stamp exactly") for note in late.notes)
+    assert any(
+        note.startswith("1797 duty commands answer no encoder stamp exactly") for note in late.notes
+    )
 
 
 def test_watchdog_zeroes_the_duty_after_three_silent_periods(bag_runs, tmp_path: Path) -> None:
     [run] = bag_runs["ch5_step_index"]
     raw = raw_streams(BAGS["ch5_step_index"])
     # a stretch of 15 samples at nonzero duty; its duties 1-10 lost, as if the controller stalled
-    start = next(k for k in range(run.n_samples) if np.all(run.drive_values[k:k + 15] > 0))
-    lost = {int(np.flatnonzero(raw["duty_at"] == raw["encoder"][k])[0]) for k in range(start + 1, start + 11)}
-    copy = copy_bag(BAGS["ch5_step_index"], tmp_path / "stalled",
-                    lambda m, ordinal: not (m.topic == "/hems/index/duty" and ordinal in lost))
+    start = next(k for k in range(run.n_samples) if np.all(run.drive_values[k : k + 15] > 0))
+    lost = {
+        int(np.flatnonzero(raw["duty_at"] == raw["encoder"][k])[0])
+        for k in range(start + 1, start + 11)
+    }
+    copy = copy_bag(
+        BAGS["ch5_step_index"],
+        tmp_path / "stalled",
+        lambda m, ordinal: not (m.topic == "/hems/index/duty" and ordinal in lost),
+    )
     [stalled] = load_bag_runs(copy)
-    held, tripped = stalled.drive_values[start:start + 3], stalled.drive_values[start + 3:start + 11]
-    assert held == pytest.approx([run.drive_values[start]] * 3)      # 10 and 20 ms old: still applied
-    assert np.all(tripped == 0.0) and np.all(run.drive_values[start + 3:start + 11] > 0)
+    held, tripped = (
+        stalled.drive_values[start : start + 3],
+        stalled.drive_values[start + 3 : start + 11],
+    )
+    assert held == pytest.approx([run.drive_values[start]] * 3)  # 10 and 20 ms old: still applied
+    assert np.all(tripped == 0.0) and np.all(run.drive_values[start + 3 : start + 11] > 0)
     assert stalled.drive_values[start + 11] == run.drive_values[start + 11]
-    assert "watchdog: 8 samples more than 3 periods after the last duty command, at 0 %" in stalled.notes
+    assert (
+        "watchdog: 8 samples more than 3 periods after the last duty command, at 0 %"
+        in stalled.notes
+    )
 
 
 def test_missing_force_samples_are_dropped_and_leave_a_gap(bag_runs, tmp_path: Path) -> None:
     [run] = bag_runs["ch5_step_index"]
     raw = raw_streams(BAGS["ch5_step_index"])
     lost = {int(np.flatnonzero(raw["force_at"] == raw["encoder"][k])[0]) for k in (500, 501, 502)}
-    copy = copy_bag(BAGS["ch5_step_index"], tmp_path / "lossy",
-                    lambda m, ordinal: not (m.topic == "/hems/index/wire_force" and ordinal in lost))
+    copy = copy_bag(
+        BAGS["ch5_step_index"],
+        tmp_path / "lossy",
+        lambda m, ordinal: not (m.topic == "/hems/index/wire_force" and ordinal in lost),
+    )
     [lossy] = load_bag_runs(copy)
     assert lossy.n_samples == run.n_samples - 3
-    assert lossy.time[500] - lossy.time[499] == pytest.approx(0.04, abs=1e-6)   # the gap stays a gap
+    assert lossy.time[500] - lossy.time[499] == pytest.approx(0.04, abs=1e-6)  # the gap stays a gap
     assert np.array_equal(lossy.drive_values, np.delete(run.drive_values, [500, 501, 502]))
     assert "3 encoder samples without a wire force at their stamp dropped" in lossy.notes
     assert not np.isnan(lossy.outputs["wire_force"]).any()
@@ -482,20 +651,24 @@ def test_cut_bag_loads_as_far_as_it_goes(bag_runs, tmp_path: Path) -> None:
     [run] = bag_runs["ch5_step_index"]
     data = (BAGS["ch5_step_index"] / "ch5_step_index_0.mcap").read_bytes()
     (tmp_path / "cut").mkdir()
-    (tmp_path / "cut" / "cut_0.mcap").write_bytes(data[:len(data) * 6 // 10])
+    (tmp_path / "cut" / "cut_0.mcap").write_bytes(data[: len(data) * 6 // 10])
     [cut] = load_bag_runs(tmp_path / "cut")
     assert cut.name == "cut:index" and 100 < cut.n_samples < run.n_samples
-    assert any(note.startswith("bag cut or unfinished, loaded as far as it goes") for note in cut.notes)
+    assert any(
+        note.startswith("bag cut or unfinished, loaded as far as it goes") for note in cut.notes
+    )
     n = cut.n_samples
-    assert np.array_equal(cut.drive_values[:n - 1], run.drive_values[:n - 1])
+    assert np.array_equal(cut.drive_values[: n - 1], run.drive_values[: n - 1])
     assert np.array_equal(cut.outputs["position"], run.outputs["position"][:n])
 
 
 def test_bag_errors(tmp_path: Path) -> None:
     with pytest.raises(DiagnosisInputError) as caught:
         load_bag_runs(BAGS["ch5_step_index"], fingers=["index", "middle"])
-    assert str(caught.value) == (f"{BAGS['ch5_step_index']}: no /hems/middle/duty or /hems/middle/encoder "
-                                 f"messages in the bag (fingers with duty and encoder messages: index)")
+    assert str(caught.value) == (
+        f"{BAGS['ch5_step_index']}: no /hems/middle/duty or /hems/middle/encoder "
+        f"messages in the bag (fingers with duty and encoder messages: index)"
+    )
     only_index = load_bag_runs(BAGS["ch5_step_index"], fingers=["index"])
     assert [r.name for r in only_index] == ["ch5_step_index:index"]
     with pytest.raises(DiagnosisInputError, match="unknown finger 'pinky'"):
@@ -511,27 +684,38 @@ def test_bag_errors(tmp_path: Path) -> None:
         load_bag_runs(tmp_path / "absent")
     with BagWriter(tmp_path / "empty"):
         pass
-    with pytest.raises(DiagnosisInputError, match="no finger has duty and encoder messages in the bag"):
+    with pytest.raises(
+        DiagnosisInputError, match="no finger has duty and encoder messages in the bag"
+    ):
         load_bag_runs(tmp_path / "empty")
-    only_sim = copy_bag(BAGS["ch5_step_index"], tmp_path / "only_sim",
-                        lambda m, _: m.topic.startswith("/hems/sim"))
-    with pytest.raises(DiagnosisInputError,
-                       match=r"no finger has duty and encoder messages in the bag \(read: nothing\)"):
+    only_sim = copy_bag(
+        BAGS["ch5_step_index"], tmp_path / "only_sim", lambda m, _: m.topic.startswith("/hems/sim")
+    )
+    with pytest.raises(
+        DiagnosisInputError,
+        match=r"no finger has duty and encoder messages in the bag \(read: nothing\)",
+    ):
         load_bag_runs(only_sim)
 
 
 def test_short_bag_is_too_short(tmp_path: Path) -> None:
     # the first 60 encoder samples; the wire force has 15 samples before the encoder's first
     copy = copy_bag(BAGS["ch5_step_index"], tmp_path / "short", lambda m, ordinal: ordinal < 60)
-    with pytest.raises(DiagnosisInputError, match=r"short:index: the run lasts 0.44 s, too short to compare"):
+    with pytest.raises(
+        DiagnosisInputError, match=r"short:index: the run lasts 0.44 s, too short to compare"
+    ):
         load_bag_runs(copy)
 
 
 def test_the_loaders_import_no_rclpy() -> None:
-    code = ("import sys, hems_ros.diagnosis.units, hems_ros.diagnosis.csvload, hems_ros.diagnosis.bagload; "
-            "print(sorted(m for m in sys.modules if m.startswith(('rclpy', 'hems_ros.physics'))))")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
-                            check=True)
+    code = (
+        "import sys, hems_ros.diagnosis.units, hems_ros.diagnosis.csvload, "
+        "hems_ros.diagnosis.bagload; print(sorted(m for m in sys.modules if m.startswith(('rclpy', "
+        "'hems_ros.physics'))))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, check=True
+    )
     assert result.stdout.strip() == "[]"
 
 
@@ -541,24 +725,31 @@ def test_a_late_duty_command_applies_from_its_arrival(bag_runs, tmp_path: Path) 
     [run] = bag_runs["ch5_step_index"]
     times, levels = run.drive_steps
     on_samples = np.searchsorted(times, run.time + 1e-9, side="right") - 1
-    assert np.array_equal(levels[on_samples], run.drive_values)     # the committed bag: all on time
+    assert np.array_equal(levels[on_samples], run.drive_values)  # the committed bag: all on time
     k = next(k for k in range(100, run.n_samples) if run.drive_values[k] != run.drive_values[k - 1])
     raw = raw_streams(BAGS["ch5_step_index"])
     ordinal = int(np.flatnonzero(raw["duty_at"] == raw["encoder"][k])[0])
-    copy = copy_bag(BAGS["ch5_step_index"], tmp_path / "late",
-                    delay=lambda m, o: 15_000_000 if m.topic == "/hems/index/duty" and o == ordinal else 0)
+    copy = copy_bag(
+        BAGS["ch5_step_index"],
+        tmp_path / "late",
+        delay=lambda m, o: 15_000_000 if m.topic == "/hems/index/duty" and o == ordinal else 0,
+    )
     [late] = load_bag_runs(copy)
     t_late, v_late = late.drive_steps
     start = t_late[np.flatnonzero(v_late == run.drive_values[k])]
-    assert np.any(np.abs(start - run.time[k] - 0.015) < 0.003)     # from its arrival, ~15 ms on
-    assert not np.any(np.abs(start - run.time[k]) < 1e-9)            # not from its sample
-    assert any(n.startswith("1 duty commands reached the unit after the next sample") for n in late.notes)
+    assert np.any(np.abs(start - run.time[k] - 0.015) < 0.003)  # from its arrival, ~15 ms on
+    assert not np.any(np.abs(start - run.time[k]) < 1e-9)  # not from its sample
+    assert any(
+        n.startswith("1 duty commands reached the unit after the next sample") for n in late.notes
+    )
 
 
 def test_displacement_is_measured_from_the_lead_in_at_rest(tmp_path: Path) -> None:
     """A noisy displacement sensor: the zero is the mean of the rows before the drive comes on,
     not the first reading (one noise sample would shift the whole run)."""
-    rows = ["t,d,x"] + [f"{k * 0.01:.2f},0,{0.004 if k == 0 else (-0.001 if k % 2 else 0.001)}" for k in range(50)]
+    rows = ["t,d,x"] + [
+        f"{k * 0.01:.2f},0,{0.004 if k == 0 else (-0.001 if k % 2 else 0.001)}" for k in range(50)
+    ]
     rows += [f"{k * 0.01:.2f},100,{1.0 + 0.5 * (k - 50) * 0.01}" for k in range(50, 200)]
     path = tmp_path / "noisy.csv"
     path.write_text("\n".join(rows) + "\n")

@@ -16,8 +16,12 @@ from hems_ros.physics.params import load_params
 
 BASE = load_params("table41")
 CHANNELS = ["slider_position_m", "wire_force_n", "tendon_force_n", "wire_temperature_c"]
-OUTPUTS = {"position": "slider_position_m", "wire_force": "wire_force_n", "load_force": "tendon_force_n",
-           "temperature": "wire_temperature_c"}
+OUTPUTS = {
+    "position": "slider_position_m",
+    "wire_force": "wire_force_n",
+    "load_force": "tendon_force_n",
+    "temperature": "wire_temperature_c",
+}
 
 
 def _duty_per_sample(n: int, seed: int = 1) -> np.ndarray:
@@ -35,12 +39,19 @@ def _truth_run(time: np.ndarray, duty: np.ndarray, params=BASE, dt: float = 1e-3
     index = np.rint(time / dt).astype(int)
     per_step = np.zeros(index[-1])
     for k in range(time.size - 1):
-        per_step[index[k]:index[k + 1]] = duty[k]
+        per_step[index[k] : index[k + 1]] = duty[k]
     res = simulate(params, dt, duty=per_step, channels=CHANNELS)
     rest = params.load.static_force_n()
-    start = {"slider_position_m": 0.0, "wire_force_n": rest, "tendon_force_n": rest,
-             "wire_temperature_c": params.ambient_temperature_c}
-    outputs = {name: np.concatenate([[start[ch]], res[ch][0][index[1:] - 1]]) for name, ch in OUTPUTS.items()}
+    start = {
+        "slider_position_m": 0.0,
+        "wire_force_n": rest,
+        "tendon_force_n": rest,
+        "wire_temperature_c": params.ambient_temperature_c,
+    }
+    outputs = {
+        name: np.concatenate([[start[ch]], res[ch][0][index[1:] - 1]])
+        for name, ch in OUTPUTS.items()
+    }
     return TimeSeriesRun("truth", "synthetic", "driven", time, "duty", duty, outputs)
 
 
@@ -58,9 +69,9 @@ def test_regular_run_replays_its_truth_with_sample_zero_the_initial_state() -> N
     assert (p.dt, p.record_every, p.values.size) == (1e-3, 10, 3990)
     out = _assert_replays_truth(run)
     assert out["position"][0, 0] == 0.0
-    assert out["wire_force"][0, 0] == pytest.approx(12.0, abs=1e-9)    # the 12 N pretension
+    assert out["wire_force"][0, 0] == pytest.approx(12.0, abs=1e-9)  # the 12 N pretension
     assert out["temperature"][0, 0] == 22.0
-    assert out["position"][0].max() > 5e-3                           # the pulses moved the wire
+    assert out["position"][0].max() > 5e-3  # the pulses moved the wire
 
 
 def test_a_duty_applies_from_its_sample_to_the_next() -> None:
@@ -68,12 +79,14 @@ def test_a_duty_applies_from_its_sample_to_the_next() -> None:
     duty = np.zeros(40)
     duty[20] = 100.0
     time = np.arange(40) * 0.01
-    run = TimeSeriesRun("one", "synthetic", "driven", time, "duty", duty, {"temperature": np.zeros(40)})
+    run = TimeSeriesRun(
+        "one", "synthetic", "driven", time, "duty", duty, {"temperature": np.zeros(40)}
+    )
     temp = replay.replay(replay.plan(run), [BASE])["temperature"][0]
     assert np.all(temp[:21] == 22.0)
     # 10 ms at 4 A (the current limit) into a 0.985 J/K wire of about 4.2 ohm: about 0.7 K
     assert 0.3 < temp[21] - 22.0 < 1.2
-    assert np.all(np.diff(temp[21:]) < 0)          # cooling from then on
+    assert np.all(np.diff(temp[21:]) < 0)  # cooling from then on
 
 
 def test_a_step_function_input_applies_each_change_from_the_next_plant_step() -> None:
@@ -86,13 +99,19 @@ def test_a_step_function_input_applies_each_change_from_the_next_plant_step() ->
     np.testing.assert_array_equal(replay.plan(same).values, sampled)
     # a command that arrives 4.5 ms after a sample applies from the step 5 ms after it; before
     # the first command the unit is off
-    late = dataclasses.replace(run, drive_steps=(np.array([0.0345, 0.1, 0.2]), np.array([50.0, 80.0, 0.0])))
+    late = dataclasses.replace(
+        run, drive_steps=(np.array([0.0345, 0.1, 0.2]), np.array([50.0, 80.0, 0.0]))
+    )
     values = replay.plan(late).values
     assert np.all(values[:35] == 0.0) and np.all(values[35:100] == 50.0)
     assert np.all(values[100:200] == 80.0) and np.all(values[200:] == 0.0)
     early = dataclasses.replace(run, drive_steps=(np.array([0.5, 1.0]), np.array([30.0, 0.0])))
     values = replay.plan(early).values
-    assert np.all(values[:500] == 0.0) and np.all(values[500:1000] == 30.0) and np.all(values[1000:] == 0.0)
+    assert (
+        np.all(values[:500] == 0.0)
+        and np.all(values[500:1000] == 30.0)
+        and np.all(values[1000:] == 0.0)
+    )
 
 
 @pytest.mark.parametrize("steps", [[1, 2, 3, 5, 7, 10], [20, 40, 60]])
@@ -102,7 +121,7 @@ def test_irregular_dt_aligned_sampling_replays_its_truth(steps: list[int]) -> No
     time = np.concatenate([[0.0], np.cumsum(gaps)])
     run = _truth_run(time, _duty_per_sample(time.size))
     p = replay.plan(run)
-    assert p.dt == pytest.approx(1e-3, rel=1e-9)     # the smallest gap, to the rounding of the cumsum
+    assert p.dt == pytest.approx(1e-3, rel=1e-9)  # the smallest gap, to the rounding of the cumsum
     assert p.record_every == int(np.gcd.reduce(steps))
     assert p.records.size == time.size - 1
     _assert_replays_truth(run)
@@ -110,7 +129,9 @@ def test_irregular_dt_aligned_sampling_replays_its_truth(steps: list[int]) -> No
 
 def _sampled(time: np.ndarray) -> TimeSeriesRun:
     """A run with nothing but its sample instants."""
-    return TimeSeriesRun("sampled", "s", "driven", time, "duty", np.zeros(time.size), {"position": time * 0})
+    return TimeSeriesRun(
+        "sampled", "s", "driven", time, "duty", np.zeros(time.size), {"position": time * 0}
+    )
 
 
 def test_fast_sampling_shrinks_the_step_and_too_fast_is_refused() -> None:
@@ -141,12 +162,23 @@ def test_samples_off_the_millisecond_grid_are_read_at_their_own_instants() -> No
 def test_sets_differing_in_sensor_keys_share_one_simulation(monkeypatch) -> None:
     time = np.arange(300) * 0.01
     run = _truth_run(time, _duty_per_sample(300))
-    run = TimeSeriesRun("s", "s", "driven", time, "duty", run.drive_values,
-                        {k: run.outputs[k] for k in ("position", "wire_force")})
+    run = TimeSeriesRun(
+        "s",
+        "s",
+        "driven",
+        time,
+        "duty",
+        run.drive_values,
+        {k: run.outputs[k] for k in ("position", "wire_force")},
+    )
     damped = BASE.replace({"load.damping_n_s_per_m": 400.0})
-    sets = [BASE, BASE.replace({"encoder.gain": 1.1}), damped,
-            BASE.replace({"force_sensor.offset_n": 0.5, "force_sensor.drift_n_per_s": 0.02}),
-            damped.replace({"encoder.gain": 0.9})]
+    sets = [
+        BASE,
+        BASE.replace({"encoder.gain": 1.1}),
+        damped,
+        BASE.replace({"force_sensor.offset_n": 0.5, "force_sensor.drift_n_per_s": 0.02}),
+        damped.replace({"encoder.gain": 0.9}),
+    ]
     sizes = []
     real = replay.simulate
 
@@ -160,7 +192,7 @@ def test_sets_differing_in_sensor_keys_share_one_simulation(monkeypatch) -> None
     x, f = out["position"], out["wire_force"]
     np.testing.assert_allclose(x[0], run.outputs["position"], rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(x[1], 1.1 * x[0], rtol=1e-12, atol=0)
-    np.testing.assert_array_equal(f[1], f[0])                  # the gain is the encoder's only
+    np.testing.assert_array_equal(f[1], f[0])  # the gain is the encoder's only
     np.testing.assert_allclose(f[3], f[0] + 0.5 + 0.02 * time, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(x[3], x[0])
     np.testing.assert_allclose(x[4], 0.9 * x[2], rtol=1e-12, atol=0)
@@ -173,8 +205,16 @@ THERMAL_STRESS = 150e6
 
 def _thermal_run(temps: np.ndarray, spacing_s: float = 1.0) -> TimeSeriesRun:
     time = np.arange(temps.size) * spacing_s
-    return TimeSeriesRun("tc", "synthetic", "thermal_cycle", time, "temperature", temps,
-                         {"strain": np.zeros(temps.size), "temperature": temps}, stress_pa=THERMAL_STRESS)
+    return TimeSeriesRun(
+        "tc",
+        "synthetic",
+        "thermal_cycle",
+        time,
+        "temperature",
+        temps,
+        {"strain": np.zeros(temps.size), "temperature": temps},
+        stress_pa=THERMAL_STRESS,
+    )
 
 
 def test_thermal_cycle_replay_contracts_by_the_transformation_strain() -> None:
@@ -186,9 +226,17 @@ def test_thermal_cycle_replay_contracts_by_the_transformation_strain() -> None:
     strain = out["strain"][0]
     np.testing.assert_allclose(out["temperature"][0], temps, atol=1e-9)
     rig = replay.thermal_cycle_rig(BASE, THERMAL_STRESS)
-    assert rig.load.mass_kg * 9.81 / rig.wire.cross_section_m2 == pytest.approx(THERMAL_STRESS, rel=1e-12)
-    res = simulate(rig, p.dt, temperature=p.values, record_every=p.record_every, start_temperature_c=40.0,
-                   channels=["martensite_fraction"])
+    assert rig.load.mass_kg * 9.81 / rig.wire.cross_section_m2 == pytest.approx(
+        THERMAL_STRESS, rel=1e-12
+    )
+    res = simulate(
+        rig,
+        p.dt,
+        temperature=p.values,
+        record_every=p.record_every,
+        start_temperature_c=40.0,
+        channels=["martensite_fraction"],
+    )
     xi = np.concatenate([[1.0], res.martensite_fraction[0][p.records]])
     eps_l = BASE.constitutive.max_recoverable_strain
     # at constant stress d(eps) = eps_L d(xi) - alpha dT: the thermal part stays under 0.1 % here
@@ -198,7 +246,7 @@ def test_thermal_cycle_replay_contracts_by_the_transformation_strain() -> None:
     # half transformed mid-band, the band shifted by stress / C (21.8 degC at 150 MPa)
     top = int(temps.argmax())
     shift = THERMAL_STRESS / BASE.kinetics.ca_pa_per_c
-    heat_half = np.interp(0.5, xi[:top + 1][::-1], temps[:top + 1][::-1])
+    heat_half = np.interp(0.5, xi[: top + 1][::-1], temps[: top + 1][::-1])
     cool_half = np.interp(0.5, xi[top:], temps[top:])
     assert heat_half == pytest.approx((88.0 + 98.0) / 2 + shift, abs=2.0)
     assert cool_half == pytest.approx((72.0 + 62.0) / 2 + shift, abs=2.0)
@@ -208,11 +256,15 @@ def test_thermal_cycle_must_start_below_as0() -> None:
     as0 = BASE.kinetics.as0_c
     for start in (as0, as0 + 5.0):
         run = _thermal_run(np.linspace(start, start + 40.0, 41))
-        assert f"starts at {start:g} degC, at or above As0 = 88 degC" in replay.cannot_start(BASE, run)
+        assert f"starts at {start:g} degC, at or above As0 = 88 degC" in replay.cannot_start(
+            BASE, run
+        )
         # a set that cannot start the run has no outputs (a fit counts it out); the starting
         # model's is an input error (workflow.diagnose)
         assert np.isnan(replay.replay(replay.plan(run), [BASE])["strain"]).all()
-        with pytest.raises(DiagnosisInputError, match=f"starts at {start:g} degC, at or above As0 = 88 degC"):
+        with pytest.raises(
+            DiagnosisInputError, match=f"starts at {start:g} degC, at or above As0 = 88 degC"
+        ):
             diagnose([run], [], BASE)
     run = _thermal_run(np.linspace(as0 - 0.5, as0 + 40.0, 41))
     assert replay.cannot_start(BASE, run) is None and replay.start_temperature(run) == as0 - 0.5
@@ -225,9 +277,13 @@ def test_thermal_cycle_replay_ignores_heat_transfer_and_the_start_offset() -> No
     # the imposed temperature leaves convection, ambient and a warm start nothing to change,
     # although candidates.applicable still offers them for thermal cycles (see the report)
     run = _thermal_run(np.r_[np.arange(40.0, 140.0), np.arange(140.0, 39.0, -1.0)])
-    sets = [BASE, BASE.replace({"thermal.h0_w_m2_c": 55.0}), BASE.replace({"ambient_temperature_c": 35.0}),
-            BASE.replace({"start.temperature_offset_c": 30.0}),
-            BASE.replace({"constitutive.max_recoverable_strain": 0.045})]
+    sets = [
+        BASE,
+        BASE.replace({"thermal.h0_w_m2_c": 55.0}),
+        BASE.replace({"ambient_temperature_c": 35.0}),
+        BASE.replace({"start.temperature_offset_c": 30.0}),
+        BASE.replace({"constitutive.max_recoverable_strain": 0.045}),
+    ]
     strain = replay.replay(replay.plan(run), sets)["strain"]
     for row in strain[1:4]:
         np.testing.assert_array_equal(row, strain[0])

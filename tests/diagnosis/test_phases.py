@@ -15,8 +15,13 @@ PERIOD = 8.0
 STROKE = 10e-3
 # one actuation, seconds from the drive coming on: the wire warms for 0.4 s, contracts for
 # 0.6 s, is held until the drive goes off at 2 s, extends for 3 s and rests until the next
-PHASE_TIMES = ((HEATING, 0.0, 0.4), (TRANSFORMATION, 0.4, 1.0), (HOLD, 1.0, 2.0), (COOLING, 2.0, 5.0),
-               (REST, 5.0, PERIOD))
+PHASE_TIMES = (
+    (HEATING, 0.0, 0.4),
+    (TRANSFORMATION, 0.4, 1.0),
+    (HOLD, 1.0, 2.0),
+    (COOLING, 2.0, 5.0),
+    (REST, 5.0, PERIOD),
+)
 
 
 def _pulses(n: int, lead: float, floor: float = 0.0, duty_on: float = 100.0) -> TimeSeriesRun:
@@ -54,8 +59,13 @@ def test_pulse_run_phases_sit_where_they_were_made() -> None:
         assert np.all(labels == PHASES.index(name)), (name, np.bincount(labels, minlength=5))
     # each phase takes its share of the run to within the smoothing's 0.05 s per edge
     counts = np.bincount(seg.phase, minlength=5) * DT
-    expected = {HEATING: 5 * 0.4, TRANSFORMATION: 5 * 0.6, HOLD: 5 * 1.0, COOLING: 5 * 3.0,
-                REST: 5 * 3.0 + 0.5}
+    expected = {
+        HEATING: 5 * 0.4,
+        TRANSFORMATION: 5 * 0.6,
+        HOLD: 5 * 1.0,
+        COOLING: 5 * 3.0,
+        REST: 5 * 3.0 + 0.5,
+    }
     for name, seconds in expected.items():
         assert counts[PHASES.index(name)] == pytest.approx(seconds, abs=5 * 0.12), name
     assert seg.mask(HOLD).sum() == np.sum(seg.phase == PHASES.index(HOLD))
@@ -66,15 +76,21 @@ def test_cycles_hold_every_sample_and_split_at_the_drive_onsets() -> None:
     seg = phases.segment(run)
     assert seg.cycle.size == run.n_samples
     assert np.all(np.diff(seg.cycle) >= 0)
-    assert np.bincount(seg.cycle).tolist() == [900, 800, 800, 800]   # the lead-in belongs to the first
+    assert np.bincount(seg.cycle).tolist() == [
+        900,
+        800,
+        800,
+        800,
+    ]  # the lead-in belongs to the first
 
 
 def test_wire_that_never_returns_to_rest_falls_back_to_drive_only_cycles() -> None:
     # after the first actuation the wire stays above 40 % of its stroke: never near rest
     run = _pulses(5, lead=2.0, floor=0.4)
     seg = phases.segment(run)
-    near_rest_starts = phases._cycle_starts(run.time, run.drive_values > 0.5,
-                                            run.outputs["position"] <= 0.1 * STROKE, phases.MIN_OFF_S)
+    near_rest_starts = phases._cycle_starts(
+        run.time, run.drive_values > 0.5, run.outputs["position"] <= 0.1 * STROKE, phases.MIN_OFF_S
+    )
     assert len(near_rest_starts) == 1 < phases.MIN_CYCLES
     assert seg.n_cycles == 5
     assert _starts(run, seg) == [10.0, 18.0, 26.0, 34.0]
@@ -101,8 +117,16 @@ def test_a_short_lead_in_does_not_merge_the_first_two_cycles(lead: float, floor:
 
 def _thermal(temps: np.ndarray, strain: np.ndarray) -> TimeSeriesRun:
     t = np.arange(temps.size) * 1.0
-    return TimeSeriesRun("tc", "synthetic", "thermal_cycle", t, "temperature", temps, {"strain": strain},
-                         stress_pa=150e6)
+    return TimeSeriesRun(
+        "tc",
+        "synthetic",
+        "thermal_cycle",
+        t,
+        "temperature",
+        temps,
+        {"strain": strain},
+        stress_pa=150e6,
+    )
 
 
 def _three_cycles() -> tuple[np.ndarray, np.ndarray]:
@@ -110,7 +134,9 @@ def _three_cycles() -> tuple[np.ndarray, np.ndarray]:
     temps = np.r_[np.tile(one, 3), 40.0]
     # a transformation 105-120 degC on heating, 95-80 on cooling
     rising = np.r_[np.diff(temps) > 0, False]
-    xi = np.where(rising, np.clip((120.0 - temps) / 15.0, 0, 1), np.clip((95.0 - temps) / 15.0, 0, 1))
+    xi = np.where(
+        rising, np.clip((120.0 - temps) / 15.0, 0, 1), np.clip((95.0 - temps) / 15.0, 0, 1)
+    )
     # the cooling branch starts austenite, the heating branch martensite
     return temps, -0.04 * (1.0 - xi)
 
@@ -123,8 +149,10 @@ def test_thermal_cycles_split_at_temperature_minima() -> None:
     assert [int(k) for k in np.flatnonzero(np.diff(seg.cycle)) + 1] == [200, 400]
     assert np.all(temps[[200, 400]] == 40.0)
     heating = np.r_[np.diff(temps) > 0, False]
-    transforming = ((temps > 106) & (temps < 119) & heating) | ((temps > 81) & (temps < 94) & ~heating)
-    inner = (temps > 40.0) & (temps < 140.0)          # the turning points have no direction
+    transforming = ((temps > 106) & (temps < 119) & heating) | (
+        (temps > 81) & (temps < 94) & ~heating
+    )
+    inner = (temps > 40.0) & (temps < 140.0)  # the turning points have no direction
     quiet_heat = heating & inner & ((temps < 100) | (temps > 125))
     quiet_cool = ~heating & inner & ((temps < 75) | (temps > 100))
     assert np.all(seg.phase[transforming] == PHASES.index(TRANSFORMATION))
@@ -143,21 +171,35 @@ def test_thermal_cycles_of_a_noisy_thermometer() -> None:
     assert phases.segment(_thermal(noisy, strain)).n_cycles == 3
 
 
-@pytest.mark.parametrize("n, held", [(0, []), (2, []), (3, [1]), (4, [1]), (5, [1, 4]), (7, [1, 4]),
-                                     (8, [1, 4, 7]), (10, [1, 4, 7])])
+@pytest.mark.parametrize(
+    "n, held",
+    [
+        (0, []),
+        (2, []),
+        (3, [1]),
+        (4, [1]),
+        (5, [1, 4]),
+        (7, [1, 4]),
+        (8, [1, 4, 7]),
+        (10, [1, 4, 7]),
+    ],
+)
 def test_heldout_cycles(n: int, held: list[int]) -> None:
     assert phases.heldout_cycles(n) == held
 
 
 def test_motion_prefers_position_then_strain_then_force() -> None:
     t = np.arange(30) * DT
-    base = dict(name="m", source="s", kind="driven", time=t, drive="duty", drive_values=np.zeros(30))
+    base = dict(
+        name="m", source="s", kind="driven", time=t, drive="duty", drive_values=np.zeros(30)
+    )
     x, e, f = np.linspace(0, 1, 30), np.linspace(0, -2, 30), np.linspace(5, 6, 30)
+
     def motion(**outputs) -> np.ndarray:
         return phases.motion(TimeSeriesRun(**base, outputs=outputs))
 
     np.testing.assert_array_equal(motion(wire_force=f, strain=e, position=x), x)
-    np.testing.assert_array_equal(motion(wire_force=f, strain=e), -e)      # contraction positive
+    np.testing.assert_array_equal(motion(wire_force=f, strain=e), -e)  # contraction positive
     np.testing.assert_array_equal(motion(wire_force=f), f)
     with pytest.raises(ValueError, match="no output to segment"):
         motion()

@@ -25,11 +25,20 @@ def quick(tmp_path_factory):
 def test_the_quick_subset_gets_every_verdict_right(quick) -> None:
     _, result = quick
     assert len(result.outcomes) == len(suite_report.QUICK)
-    wrong = [(o.case.name, o.profile, o.noise, o.verdict, o.named) for o in result.outcomes if not o.right]
+    wrong = [
+        (o.case.name, o.profile, o.noise, o.verdict, o.named)
+        for o in result.outcomes
+        if not o.right
+    ]
     assert not wrong
     verdicts = {o.case.category: o.verdict for o in result.outcomes}
-    assert verdicts == {"single": "named", "parameter": "recalibrated", "null": "none", "outside": "unexplained",
-                        "pair": "named"}
+    assert verdicts == {
+        "single": "named",
+        "parameter": "recalibrated",
+        "null": "none",
+        "outside": "unexplained",
+        "pair": "named",
+    }
 
 
 def test_named_effects_cut_the_held_out_gap_and_recover_the_truth(quick) -> None:
@@ -85,7 +94,10 @@ def test_the_dissertation_tables_load_with_their_models(study) -> None:
     assert len(table.tests) >= 3 and model.name == study.model
     if study.key == "tables_3_2_3_3":
         assert [t.conditions["pulse_s"] for t in table.tests] == [1.0, 1.6, 2.2, 2.4, 2.6, 2.8]
-        assert table.tests[1].figures == pytest.approx({"peak_displacement": 15.25e-3, "peak_force": 57.06,
-                                                        "cooling_time": 2.36})
-        assert model.load.kind == "hanging_mass" and model.load.static_force_n() == pytest.approx(50.0)
+        assert table.tests[1].figures == pytest.approx(
+            {"peak_displacement": 15.25e-3, "peak_force": 57.06, "cooling_time": 2.36}
+        )
+        assert model.load.kind == "hanging_mass" and model.load.static_force_n() == pytest.approx(
+            50.0
+        )
         assert model.kinetics.cm_pa_per_c == 6.89e6 and not model.sheath.enabled

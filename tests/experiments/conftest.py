@@ -1,4 +1,5 @@
-"""Lockstep runs shared by the tests: chapter 5 (15 runs) and chapter 6 (8 runs) once per test run."""
+"""Lockstep runs shared by the tests: chapter 5 (15 runs) and chapter 6 (8 runs) once
+per test run."""
 
 from __future__ import annotations
 

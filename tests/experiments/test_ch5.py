@@ -74,7 +74,10 @@ def test_a_1e6_degc_change_moves_the_step_cells_by_a_few_per_cent(ch5_found, spr
     # the closed loop does amplify a difference that small
     assert 0.005 < spread["rmse"] < 2 * MARGIN
     assert 0.005 < spread["macsi"] < 2 * MARGIN
-    assert f"RMSE of the three controllers by up to {100 * spread['rmse']:.1f} %" in ch5_found["bpid_lowest_rmse"].evidence
+    assert (
+        f"RMSE of the three controllers by up to {100 * spread['rmse']:.1f} %"
+        in ch5_found["bpid_lowest_rmse"].evidence
+    )
 
 
 def test_rmse_within_factor_2_on_sine_0125_step_and_staircase(ch5_runs, ch5_found):
@@ -108,15 +111,22 @@ def test_iae_misses_are_documented_plant_differences(ch5_runs, ch5_found):
 
 def test_iae_misses_over_three_repetitions(ch5_runs, ch5_found):
     # The dissertation averaged three repetitions. With the ambient 0.1 degC lower and higher
-    # the sine cell's 2.03 is the worst of three (mean within 2); the staircase cell stays below 0.5.
-    rep = repeated_ratios(ch5_runs, load_params(CH5_PARAMS), "iae",
-                          [("ch5_sine_0.125", "bpid"), ("ch5_staircase", "pid")])
+    # the sine cell's 2.03 is the worst of three (mean within 2); the staircase cell
+    # stays below 0.5.
+    rep = repeated_ratios(
+        ch5_runs,
+        load_params(CH5_PARAMS),
+        "iae",
+        [("ch5_sine_0.125", "bpid"), ("ch5_staircase", "pid")],
+    )
     sine, stair = rep["ch5_sine_0.125", "bpid"], rep["ch5_staircase", "pid"]
     assert sine[1] == pytest.approx(ratios(ch5_runs, "iae")["ch5_sine_0.125", "bpid"])
     assert sine[1] > 2.0 and max(sine[0], sine[2]) < 1.8 and sine[3] < 2.0
     assert max(stair[:3]) < 0.5 and stair[3] == pytest.approx(0.459, abs=0.005)
-    assert f"sine_0.125/bpid {sine[0]:.2f}, {sine[1]:.2f}, {sine[2]:.2f} (mean {sine[3]:.2f})" in \
-        ch5_found["factor2_iae"].evidence
+    assert (
+        f"sine_0.125/bpid {sine[0]:.2f}, {sine[1]:.2f}, {sine[2]:.2f} (mean {sine[3]:.2f})"
+        in ch5_found["factor2_iae"].evidence
+    )
 
 
 def test_overshoot_is_not_the_derivative_filter(ch5_found):
@@ -139,7 +149,10 @@ def test_overshoot_is_not_table_5_1s_gains(ch5_found):
     # both far off the 0.05 mm steady-state error
     assert step["least"][0] < 0.05 < stair["least"][0]
     assert step["least"][1] > 0.15 and stair["least"][1] > 0.15
-    assert f"overshoot at least {step['holding'][0]:.3f} mm on the step" in ch5_found["bpid_overshoot"].evidence
+    assert (
+        f"overshoot at least {step['holding'][0]:.3f} mm on the step"
+        in ch5_found["bpid_overshoot"].evidence
+    )
 
 
 def test_overshoot_persists_at_the_dissertations_rise_speed(ch5_runs, ch5_found):

@@ -49,7 +49,12 @@ def test_force_steps_do_not_overshoot_with_other_noise_seeds(seed):
     prm = load_params(CH6_PARAMS).replace({"force_sensor.seed": seed})
     rest = rest_wire_tension(prm)
     for name in FORCE_STEPS:
-        assert run_protocol(force_protocol(name, rest), "bpid", prm, FORCE_MODE_BPID).metrics["overshoot"] <= 0.1
+        assert (
+            run_protocol(force_protocol(name, rest), "bpid", prm, FORCE_MODE_BPID).metrics[
+                "overshoot"
+            ]
+            <= 0.1
+        )
 
 
 @pytest.mark.parametrize("protocol", FORCE_STEPS)
@@ -80,20 +85,27 @@ def test_force_mode_duty_does_not_chatter(ch6_runs, protocol):
 
 def test_position_staircase_within_3x_table_6_1(ch6_runs):
     table = CH6_TABLES["position"][2]
-    assert ch6_runs["ch6_position_staircase"].metrics["rmse"] <= 3 * table["ch6_position_staircase"]["rmse"]
+    assert (
+        ch6_runs["ch6_position_staircase"].metrics["rmse"]
+        <= 3 * table["ch6_position_staircase"]["rmse"]
+    )
 
 
-@pytest.mark.parametrize("protocol", ["ch6_position_sine_0.125", "ch6_position_ramp", "ch6_position_step"])
+@pytest.mark.parametrize(
+    "protocol", ["ch6_position_sine_0.125", "ch6_position_ramp", "ch6_position_step"]
+)
 def test_position_rmse_misses_documented_as_saturated_actuator(ch6_runs, ch6_found, protocol):
     # Not reproduced (3x Table 6.1): the error is made at 0 % or 100 % duty.
     assert not ch6_found["position_rmse_3x"].reproduced
     split = authority_split(ch6_runs[protocol])
-    assert split["cooling_share"] + split["heating_share"] > 0.85   # step: 0.89
+    assert split["cooling_share"] + split["heating_share"] > 0.85  # step: 0.89
     # the dead time at full duty is the model's late transformation onset, bounded by energy
     assert "even with no heat loss" in ch6_found["position_rmse_3x"].evidence
 
 
-@pytest.mark.parametrize("protocol, floor_mm", [("ch6_position_ramp", 0.0666), ("ch6_position_sine_0.125", 0.2554)])
+@pytest.mark.parametrize(
+    "protocol, floor_mm", [("ch6_position_ramp", 0.0666), ("ch6_position_sine_0.125", 0.2554)]
+)
 def test_cold_wire_cannot_reach_3x_on_the_ascending_parts(ch6_runs, ch6_found, protocol, floor_mm):
     # An idealised cold wire with Table 4.1's band (80 W, no loss, no latent heat, 3.8 % stroke)
     # already stays more than 3x Table 6.1 behind; the model, with losses, does worse still.
@@ -102,18 +114,24 @@ def test_cold_wire_cannot_reach_3x_on_the_ascending_parts(ch6_runs, ch6_found, p
     assert floor["ratio"] > 3.0
     assert 0.7 < floor["catch_up_s"] < 0.9
     assert ch6_runs[protocol].metrics["rmse"] >= floor["rmse_mm"]
-    assert f"{floor['rmse_mm']:.3f} mm on the {protocol[13:]}" in ch6_found["position_rmse_3x"].evidence
+    assert (
+        f"{floor['rmse_mm']:.3f} mm on the {protocol[13:]}"
+        in ch6_found["position_rmse_3x"].evidence
+    )
 
 
 def test_cold_start_floor_falls_with_a_warm_wire():
-    # The floor is the start temperature's doing: a wire 18 K warmer at the start is not bound above 3x.
+    # The floor is the start temperature's doing: a wire 18 K warmer at the start is not
+    # bound above 3x.
     warm = load_params(COLD_WIRE_PARAMS).replace({"ambient_temperature_c": 40.0})
     assert cold_start_floor("ch6_position_ramp", warm)["ratio"] < 2.0
     assert cold_start_floor("ch6_position_sine_0.125", warm)["ratio"] < 1.2
 
 
 def test_cold_start_floor_refuses_plateau_protocols():
-    with pytest.raises(ValueError, match="ch6_position_step: the cold-start floor bounds ascending-part RMSE"):
+    with pytest.raises(
+        ValueError, match="ch6_position_step: the cold-start floor bounds ascending-part RMSE"
+    ):
         cold_start_floor("ch6_position_step")
 
 
@@ -130,7 +148,9 @@ def test_no_warm_start_brings_the_missed_references_within_3x(ch6_runs, ch6_foun
     assert warm[70.0]["ch6_position_ramp"] == pytest.approx(2.58, abs=0.05)
     assert warm[40.0]["ch6_position_step"] == pytest.approx(3.85, abs=0.1)
     cold = {p: ch6_runs[p].metrics["rmse"] / CH6_TABLES["position"][2][p]["rmse"] for p in missed}
-    assert cold["ch6_position_sine_0.125"] < min(row["ch6_position_sine_0.125"] for row in warm.values())
+    assert cold["ch6_position_sine_0.125"] < min(
+        row["ch6_position_sine_0.125"] for row in warm.values()
+    )
     evidence = ch6_found["position_rmse_3x"].evidence
     assert "no start temperature brings them all within 3x" in evidence
     assert "ramp 2.6x at 70 degC" in evidence

@@ -16,7 +16,19 @@ def test_docs_experiments_is_current(ch5_runs, ch6_runs, ch5_found, ch6_found):
     committed = (DOCS / "experiments.md").read_text()
     figures = [DOCS / name for name in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", committed)]
     assert len(figures) == 13 and all(f.is_file() for f in figures), figures
-    generated = docs_page(ch5_runs, ch6_runs, list(ch5_found.values()), list(ch6_found.values()), figures)
-    diff = "\n".join(difflib.unified_diff(committed.splitlines(), generated.splitlines(), "committed", "generated",
-                                          lineterm="", n=0))
-    assert generated == committed, "docs/experiments.md is stale; run `hems experiment all --docs docs`:\n" + diff[:3000]
+    generated = docs_page(
+        ch5_runs, ch6_runs, list(ch5_found.values()), list(ch6_found.values()), figures
+    )
+    diff = "\n".join(
+        difflib.unified_diff(
+            committed.splitlines(),
+            generated.splitlines(),
+            "committed",
+            "generated",
+            lineterm="",
+            n=0,
+        )
+    )
+    assert generated == committed, (
+        "docs/experiments.md is stale; run `hems experiment all --docs docs`:\n" + diff[:3000]
+    )

@@ -42,11 +42,26 @@ def test_run_protocol_returns_arrays_and_metrics():
     run = run_protocol("ch6_position_step", "bpid", "ch6_hems_index")
     n = run.time.size
     assert n == 7000 and run.fault is None
-    for a in (run.reference, run.measurement, run.duty, run.position_m, run.wire_force_n, run.power_w):
+    for a in (
+        run.reference,
+        run.measurement,
+        run.duty,
+        run.position_m,
+        run.wire_force_n,
+        run.power_w,
+    ):
         assert a.shape == (n,)
     assert run.reference.max() == pytest.approx(0.027)
     assert ((run.duty >= 0) & (run.duty <= 100)).all()
-    assert set(run.metrics) >= {"rmse", "iae", "macsi", "apc_w", "rise_time_s", "overshoot", "ss_error"}
+    assert set(run.metrics) >= {
+        "rmse",
+        "iae",
+        "macsi",
+        "apc_w",
+        "rise_time_s",
+        "overshoot",
+        "ss_error",
+    }
     assert all(math.isfinite(run.metrics[k]) for k in ("rmse", "iae", "macsi", "apc_w"))
 
 

@@ -44,15 +44,30 @@ def matrix_graph(ros_domain_id):
                 with observer.lock:
                     target.append(item)
 
-            node.create_subscription(DriveReading, names.topic(FINGER, "drive"),
-                                     lambda m: keep(observer.drive, (now(), m.duty_percent)), qos.SENSOR)
-            node.create_subscription(ActuatorState, names.sim_topic(FINGER, "state"),
-                                     lambda m: keep(observer.truth_c, (now(), m.wire_temperature_c)), qos.SENSOR)
-            node.create_subscription(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC,
-                                     lambda m: keep(observer.supervisor, (now(), m.state_name, tuple(m.faults))),
-                                     qos.STATUS)
-            node.create_subscription(ControllerStatus, names.topic(FINGER, "controller_status"),
-                                     lambda m: keep(observer.status, (now(), m)), qos.CONTROLLER_STATUS)
+            node.create_subscription(
+                DriveReading,
+                names.topic(FINGER, "drive"),
+                lambda m: keep(observer.drive, (now(), m.duty_percent)),
+                qos.SENSOR,
+            )
+            node.create_subscription(
+                ActuatorState,
+                names.sim_topic(FINGER, "state"),
+                lambda m: keep(observer.truth_c, (now(), m.wire_temperature_c)),
+                qos.SENSOR,
+            )
+            node.create_subscription(
+                SupervisorStatus,
+                names.SUPERVISOR_STATUS_TOPIC,
+                lambda m: keep(observer.supervisor, (now(), m.state_name, tuple(m.faults))),
+                qos.STATUS,
+            )
+            node.create_subscription(
+                ControllerStatus,
+                names.topic(FINGER, "controller_status"),
+                lambda m: keep(observer.status, (now(), m)),
+                qos.CONTROLLER_STATUS,
+            )
             executor = SingleThreadedExecutor(context=context)
             executor.add_node(node)
             spinner = threading.Thread(target=executor.spin, daemon=True)
@@ -75,7 +90,12 @@ def pytest_sessionfinish(session, exitstatus):
     text = path.read_text() if path.exists() else f"{BEGIN}\n{END}\n"
     table = render(ROWS)
     if BEGIN in text and END in text:
-        text = re.sub(re.escape(BEGIN) + ".*?" + re.escape(END), lambda _: f"{BEGIN}\n{table}{END}", text, flags=re.S)
+        text = re.sub(
+            re.escape(BEGIN) + ".*?" + re.escape(END),
+            lambda _: f"{BEGIN}\n{table}{END}",
+            text,
+            flags=re.S,
+        )
     else:
         text += f"\n{BEGIN}\n{table}{END}\n"
     path.write_text(text)

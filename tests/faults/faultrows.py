@@ -17,10 +17,10 @@ ROWS: list["Row"] = []
 class Row:
     node: str
     fault: str
-    zero_duty_ms: float | None      # from the injection until no heating (None: it never stopped)
-    fault_ms: float | None          # until the supervisor's FAULT (None: no FAULT)
+    zero_duty_ms: float | None  # from the injection until no heating (None: it never stopped)
+    fault_ms: float | None  # until the supervisor's FAULT (None: no FAULT)
     message: str
-    peak_c: float                   # the wire's peak temperature from the injection (simulation truth)
+    peak_c: float  # the wire's peak temperature from the injection (simulation truth)
     recovered: str
     expected: str
 
@@ -29,16 +29,19 @@ class Row:
 class Observer:
     """What the graph shows, with the monotonic time the test process received it."""
 
-    drive: list[tuple[float, float]] = field(default_factory=list)          # (t, applied duty %)
+    drive: list[tuple[float, float]] = field(default_factory=list)  # (t, applied duty %)
     supervisor: list[tuple[float, str, tuple]] = field(default_factory=list)  # (t, state, faults)
     status: list[tuple[float, object]] = field(default_factory=list)
-    truth_c: list[tuple[float, float]] = field(default_factory=list)         # (t, wire degC)
+    truth_c: list[tuple[float, float]] = field(default_factory=list)  # (t, wire degC)
     lock: threading.Lock = field(default_factory=threading.Lock)
 
     def since(self, t0: float) -> tuple[list, list, list]:
         with self.lock:
-            return ([d for d in self.drive if d[0] >= t0], [s for s in self.supervisor if s[0] >= t0],
-                    [s for s in self.status if s[0] >= t0])
+            return (
+                [d for d in self.drive if d[0] >= t0],
+                [s for s in self.supervisor if s[0] >= t0],
+                [s for s in self.status if s[0] >= t0],
+            )
 
 
 def _ms(value: float | None) -> str:
@@ -46,15 +49,23 @@ def _ms(value: float | None) -> str:
 
 
 def render(rows: list[Row]) -> str:
-    lines = ["| node | fault | zero duty, ms | FAULT, ms | supervisor's message | wire peak, degC | recovery "
-             "| expected |", "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "| node | fault | zero duty, ms | FAULT, ms | supervisor's message | wire peak, degC | "
+        "recovery | expected |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
-        lines.append(f"| {r.node} | {r.fault} | {_ms(r.zero_duty_ms)} | {_ms(r.fault_ms)} | {r.message or '-'} | "
-                     f"{'-' if math.isnan(r.peak_c) else f'{r.peak_c:.0f}'} | {r.recovered} | {r.expected} |")
+        lines.append(
+            f"| {r.node} | {r.fault} | {_ms(r.zero_duty_ms)} | {_ms(r.fault_ms)} | "
+            f"{r.message or '-'} | {'-' if math.isnan(r.peak_c) else f'{r.peak_c:.0f}'} | "
+            f"{r.recovered} | {r.expected} |"
+        )
     return "\n".join(lines) + "\n"
 
 
-def zero_duty_after(drive: list[tuple[float, float]], t0: float, end: float, quiet_s: float = 0.2) -> float | None:
+def zero_duty_after(
+    drive: list[tuple[float, float]], t0: float, end: float, quiet_s: float = 0.2
+) -> float | None:
     """ms from ``t0`` until the unit reports 0 % and keeps it for ``quiet_s`` (or to ``end``);
     0 when the unit reports nothing after ``t0`` (a dead unit heats nothing); None if the wire
     was never let go."""

@@ -35,7 +35,7 @@ OBSERVE_S = 2.5
 # never shows reached, until the wire-temperature estimate cuts it (thermal protection).
 PROVOKE = {"stuck_encoder": ("position", HOLD_M + 0.008), "stuck_force": ("force", 10.0)}
 PROVOKE_S = 25.0
-LIMIT_C = 170.0     # the supervisor's over-temperature limit; the controllers cut at 150 degC
+LIMIT_C = 170.0  # the supervisor's over-temperature limit; the controllers cut at 150 degC
 UNIT, MODULE = f"actuation_unit_{FINGER}", "shoulder_module_index_middle"
 CONTROLLER, SUPERVISOR = f"finger_controller_{FINGER}", "supervisor"
 
@@ -49,8 +49,16 @@ def _set(client, node: str, name: str, value: str) -> float:
     service = client.node.create_client(SetParameters, f"/hems/{node}/set_parameters")
     assert service.wait_for_service(timeout_sec=30.0), f"{node} has no parameter service"
     sent = time.monotonic()
-    future = service.call_async(SetParameters.Request(parameters=[Parameter(
-        name=name, value=ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value))]))
+    future = service.call_async(
+        SetParameters.Request(
+            parameters=[
+                Parameter(
+                    name=name,
+                    value=ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value),
+                )
+            ]
+        )
+    )
     rclpy.spin_until_future_complete(client.node, future, timeout_sec=10.0)
     assert future.result() is not None and future.result().results[0].successful
     client.node.destroy_client(service)
@@ -88,10 +96,14 @@ def _reached(observer, t0: float, timeout: float = 15.0) -> str:
         time.sleep(0.1)
     _, supervisor, statuses = observer.since(t0)
     last = statuses[-1][1] if statuses else None
-    return (f"supervisor {supervisor[-1][1:] if supervisor else 'silent'}; controller "
-            + ("silent" if last is None else f"active={last.active} setpoint={last.setpoint} "
-               f"measurement={last.measurement} duty={last.duty_percent} "
-               f"fault={last.fault!r} thermal_limited={last.thermal_limited} wire={last.wire_temperature_c:.0f} degC"))
+    return f"supervisor {supervisor[-1][1:] if supervisor else 'silent'}; controller " + (
+        "silent"
+        if last is None
+        else f"active={last.active} setpoint={last.setpoint} "
+        f"measurement={last.measurement} duty={last.duty_percent} "
+        f"fault={last.fault!r} thermal_limited={last.thermal_limited} "
+        f"wire={last.wire_temperature_c:.0f} degC"
+    )
 
 
 def _flood(topic: str, kind: str, count: int = 20000) -> None:
@@ -106,7 +118,8 @@ pub = node.create_publisher({kind}, "{topic}", qos.SENSOR)
 import time
 time.sleep(1.0)
 message = {kind}(finger="{FINGER}")
-for field, value in {{"mode": "position", "value": {HOLD_M}, "duty_percent": 0.0, "force": 10.0}}.items():
+fields = {{"mode": "position", "value": {HOLD_M}, "duty_percent": 0.0, "force": 10.0}}
+for field, value in fields.items():
     if hasattr(message, field):
         setattr(message, field, value)
 for _ in range({count}):
@@ -140,9 +153,27 @@ SCENARIOS = [
     (UNIT, "SIGSTOP 1 s", ("signal", UNIT, "SIGSTOP"), 50, "lost"),
     (SUPERVISOR, "SIGKILL", ("signal", SUPERVISOR, "SIGKILL"), 50, None),
     (SUPERVISOR, "SIGSTOP 1 s", ("signal", SUPERVISOR, "SIGSTOP"), 50, None),
-    (CONTROLLER, "setpoint flood (20,000)", ("flood", names.topic(FINGER, "setpoint"), "FingerSetpoint"), None, None),
-    (UNIT, "duty flood (20,000 x 0 %)", ("flood", names.topic(FINGER, "duty"), "DutyCommand"), None, None),
-    (MODULE, "tension flood (20,000)", ("flood", names.sim_topic(FINGER, "wire_tension"), "WireForce"), None, None),
+    (
+        CONTROLLER,
+        "setpoint flood (20,000)",
+        ("flood", names.topic(FINGER, "setpoint"), "FingerSetpoint"),
+        None,
+        None,
+    ),
+    (
+        UNIT,
+        "duty flood (20,000 x 0 %)",
+        ("flood", names.topic(FINGER, "duty"), "DutyCommand"),
+        None,
+        None,
+    ),
+    (
+        MODULE,
+        "tension flood (20,000)",
+        ("flood", names.sim_topic(FINGER, "wire_tension"), "WireForce"),
+        None,
+        None,
+    ),
     (UNIT, "stuck encoder, then +8 mm", ("param", UNIT, "stuck_encoder"), None, None),
     (UNIT, "encoder jump (+5 mm)", ("param", UNIT, "encoder_jump"), 200, "encoder jump"),
     (UNIT, "NaN encoder", ("param", UNIT, "nan_encoder"), 200, "nan"),
@@ -153,8 +184,11 @@ SCENARIOS = [
 ]
 
 
-@pytest.mark.parametrize("node, fault, inject, zero_limit_ms, fault_words", SCENARIOS,
-                         ids=[f"{s[0]}-{s[1]}" for s in SCENARIOS])
+@pytest.mark.parametrize(
+    "node, fault, inject, zero_limit_ms, fault_words",
+    SCENARIOS,
+    ids=[f"{s[0]}-{s[1]}" for s in SCENARIOS],
+)
 def test_fault(matrix_graph, node, fault, inject, zero_limit_ms, fault_words):
     graph, client, observer = matrix_graph
     _healthy(graph, client)
@@ -187,7 +221,7 @@ def test_fault(matrix_graph, node, fault, inject, zero_limit_ms, fault_words):
         graph.restart(inject[1])
     if kind == "param":
         _set(client, inject[1], "sensor_fault", "")
-        client.spin_for(0.5)    # the repaired sensor's readings reach the supervisor before reset
+        client.spin_for(0.5)  # the repaired sensor's readings reach the supervisor before reset
     if inject[2] in PROVOKE:
         client.call("disable")
         _cooled(observer)
@@ -195,14 +229,17 @@ def test_fault(matrix_graph, node, fault, inject, zero_limit_ms, fault_words):
     _healthy(graph, client)
     stuck = _reached(observer, t1)
     recovered = "NOT RECOVERED" if stuck else "restart, reset, enable, setpoint reached"
-    expected = ((f"zero duty within {zero_limit_ms} ms" if zero_limit_ms is not None else "duty as commanded")
-                + (f", FAULT naming {FINGER}: {fault_words}" if fault_words else ", no FAULT"))
+    expected = (
+        f"zero duty within {zero_limit_ms} ms" if zero_limit_ms is not None else "duty as commanded"
+    ) + (f", FAULT naming {FINGER}: {fault_words}" if fault_words else ", no FAULT")
     if inject[2] in PROVOKE:
-        expected = (f"wire below {LIMIT_C:g} degC: thermal cut-off, or FAULT naming {FINGER}: over-travel "
-                    f"or over-temperature")
+        expected = (
+            f"wire below {LIMIT_C:g} degC: thermal cut-off, or FAULT naming {FINGER}: over-travel "
+            f"or over-temperature"
+        )
     ROWS.append(Row(node, fault, zero_ms, fault_ms, message, peak_c, recovered, expected))
     assert not stuck, stuck
-    assert not peak_c >= LIMIT_C, peak_c     # NaN: a killed unit reports nothing more
+    assert not peak_c >= LIMIT_C, peak_c  # NaN: a killed unit reports nothing more
     if zero_limit_ms is not None:
         assert zero_ms is not None and zero_ms <= zero_limit_ms, (zero_ms, message)
     if inject[2] in PROVOKE:

@@ -18,16 +18,36 @@ import pytest
 from hems_ros.rosenv import child_environment
 
 
-@pytest.mark.parametrize("signal_name, code, message", [
-    ("SIGTERM", 143, "hems setpoint: stopped by SIGTERM"),
-    ("SIGINT", 130, "hems setpoint: interrupted"),
-])
-def test_a_waiting_verb_stops_cleanly(ros_domain_id: int, signal_name: str, code: int, message: str) -> None:
-    verb = subprocess.Popen([sys.executable, "-m", "hems_ros.cli.main", "setpoint", "index", "10", "--unit", "mm",
-                             "--timeout", "60"], env=child_environment(), stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+@pytest.mark.parametrize(
+    "signal_name, code, message",
+    [
+        ("SIGTERM", 143, "hems setpoint: stopped by SIGTERM"),
+        ("SIGINT", 130, "hems setpoint: interrupted"),
+    ],
+)
+def test_a_waiting_verb_stops_cleanly(
+    ros_domain_id: int, signal_name: str, code: int, message: str
+) -> None:
+    verb = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "hems_ros.cli.main",
+            "setpoint",
+            "index",
+            "10",
+            "--unit",
+            "mm",
+            "--timeout",
+            "60",
+        ],
+        env=child_environment(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
-        time.sleep(5.0)   # imports, rclpy init, then spinning while it waits for a subscriber
+        time.sleep(5.0)  # imports, rclpy init, then spinning while it waits for a subscriber
         assert verb.poll() is None
         verb.send_signal(getattr(signal, signal_name))
         _, err = verb.communicate(timeout=20)

@@ -12,8 +12,19 @@ REPO = Path(__file__).resolve().parents[2]
 # import name -> distribution name, where they differ
 DISTRIBUTION = {"yaml": "pyyaml", "mcap_ros2": "mcap-ros2-support"}
 # provided by the ROS installation (package.xml exec_depend), not by PyPI requirements
-ROS = {"rclpy", "rosidl_runtime_py", "builtin_interfaces", "std_msgs", "sensor_msgs", "diagnostic_msgs",
-       "std_srvs", "rosgraph_msgs", "rcl_interfaces", "ament_index_python", "hems_msgs"}
+ROS = {
+    "rclpy",
+    "rosidl_runtime_py",
+    "builtin_interfaces",
+    "std_msgs",
+    "sensor_msgs",
+    "diagnostic_msgs",
+    "std_srvs",
+    "rosgraph_msgs",
+    "rcl_interfaces",
+    "ament_index_python",
+    "hems_msgs",
+}
 TEST_ONLY = {"pytest", "hypothesis", "rosbags", "mcap-ros2-support", "ruff", "mypy"}
 
 
@@ -35,8 +46,11 @@ def _install_requires() -> set[str]:
 
 
 def test_every_third_party_import_is_a_declared_runtime_dependency() -> None:
-    third_party = {n for n in _imported_top_levels()
-                   if n not in sys.stdlib_module_names and n not in ROS and n != "hems_ros"}
+    third_party = {
+        n
+        for n in _imported_top_levels()
+        if n not in sys.stdlib_module_names and n not in ROS and n != "hems_ros"
+    }
     declared = _install_requires()
     missing = sorted(n for n in third_party if DISTRIBUTION.get(n, n) not in declared)
     assert not missing, f"imported by hems_ros but not in setup.py install_requires: {missing}"
@@ -44,4 +58,6 @@ def test_every_third_party_import_is_a_declared_runtime_dependency() -> None:
     package_xml = (REPO / "package.xml").read_text()
     for name in third_party:
         key = DISTRIBUTION.get(name, name).replace("pyyaml", "yaml")
-        assert re.search(rf"<exec_depend>python3-{re.escape(key)}(-pip)?</exec_depend>", package_xml), name
+        assert re.search(
+            rf"<exec_depend>python3-{re.escape(key)}(-pip)?</exec_depend>", package_xml
+        ), name

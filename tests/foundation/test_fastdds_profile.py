@@ -29,12 +29,15 @@ WRITER = textwrap.dedent(f"""
                 if not comm.read().startswith("dds.ev"):
                     continue
             with open(f"/proc/self/task/{{tid}}/status") as status:
-                total += sum(int(line.split()[1]) for line in status if line.startswith("voluntary_ctxt"))
+                total += sum(
+                    int(line.split()[1]) for line in status if line.startswith("voluntary_ctxt")
+                )
         return total
 
     rclpy.init()
     node = rclpy.create_node("profile_writer")
-    publisher = node.create_publisher(Int32, "/hems_test/profile", QoSProfile(depth={SAMPLES}, reliability=ReliabilityPolicy.RELIABLE))
+    qos = QoSProfile(depth={SAMPLES}, reliability=ReliabilityPolicy.RELIABLE)
+    publisher = node.create_publisher(Int32, "/hems_test/profile", qos)
     deadline = time.monotonic() + 20
     while publisher.get_subscription_count() < 1 and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -58,10 +61,19 @@ def event_thread_switches(env: dict[str, str]) -> tuple[int, str]:
     node = rclpy.create_node("profile_reader")
     received = []
     # both histories hold every sample: a busy moment of either process then loses none
-    node.create_subscription(Int32, "/hems_test/profile", received.append,
-                             QoSProfile(depth=SAMPLES, reliability=ReliabilityPolicy.RELIABLE))
-    writer = subprocess.Popen([sys.executable, "-c", WRITER], env=env, text=True,
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    node.create_subscription(
+        Int32,
+        "/hems_test/profile",
+        received.append,
+        QoSProfile(depth=SAMPLES, reliability=ReliabilityPolicy.RELIABLE),
+    )
+    writer = subprocess.Popen(
+        [sys.executable, "-c", WRITER],
+        env=env,
+        text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     try:
         deadline = time.monotonic() + 40
         while writer.poll() is None and time.monotonic() < deadline:
@@ -71,8 +83,9 @@ def event_thread_switches(env: dict[str, str]) -> tuple[int, str]:
         writer.kill()
         node.destroy_node()
         rclpy.shutdown()
-    assert [m.data for m in received] == list(range(SAMPLES)), \
-        f"reader got {len(received)} of {SAMPLES}; writer said {err}"
+    assert [m.data for m in received] == list(
+        range(SAMPLES)
+    ), f"reader got {len(received)} of {SAMPLES}; writer said {err}"
     line = next(line for line in out.splitlines() if line.startswith("SWITCHES"))
     return int(line.split()[1]), err
 

@@ -9,8 +9,17 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 CORE = ("physics", "control", "diagnosis", "experiments", "bag", "codec", "reports")
-ROS = ("rclpy", "hems_msgs", "std_msgs", "sensor_msgs", "diagnostic_msgs", "std_srvs", "rosgraph_msgs",
-       "rcl_interfaces", "builtin_interfaces")
+ROS = (
+    "rclpy",
+    "hems_msgs",
+    "std_msgs",
+    "sensor_msgs",
+    "diagnostic_msgs",
+    "std_srvs",
+    "rosgraph_msgs",
+    "rcl_interfaces",
+    "builtin_interfaces",
+)
 
 
 def _imports(path: Path) -> set[str]:
@@ -29,7 +38,9 @@ def _is_verb(name: str) -> bool:
 
 
 def _offenders(paths, bad) -> list[str]:
-    return sorted(f"{p.relative_to(REPO)}: {name}" for p in paths for name in _imports(p) if bad(name))
+    return sorted(
+        f"{p.relative_to(REPO)}: {name}" for p in paths for name in _imports(p) if bad(name)
+    )
 
 
 def test_the_core_imports_no_ros() -> None:
@@ -38,10 +49,13 @@ def test_the_core_imports_no_ros() -> None:
 
 
 def test_library_code_imports_no_verb() -> None:
-    paths = [p for p in (REPO / "hems_ros").rglob("*.py") if "cli" not in p.relative_to(REPO / "hems_ros").parts]
-    allowed = {"hems_ros/executables.py"}   # the console-script table names the verbs' entry point
-    assert not [o for o in _offenders(paths, _is_verb)
-                if o.split(":")[0] not in allowed]
+    paths = [
+        p
+        for p in (REPO / "hems_ros").rglob("*.py")
+        if "cli" not in p.relative_to(REPO / "hems_ros").parts
+    ]
+    allowed = {"hems_ros/executables.py"}  # the console-script table names the verbs' entry point
+    assert not [o for o in _offenders(paths, _is_verb) if o.split(":")[0] not in allowed]
 
 
 def test_benchmarks_use_the_client_package_not_the_verbs() -> None:
@@ -50,12 +64,19 @@ def test_benchmarks_use_the_client_package_not_the_verbs() -> None:
 
 
 # the tests of the verbs themselves: argument parsing, formatting, the verb run in-process
-VERB_TESTS = {"tests/bag/test_replay.py", "tests/diagnosis/test_cli.py", "tests/foundation/test_cli_help.py",
-              "tests/fuzz/test_fuzz_inputs.py", "tests/graph/test_status_client.py"}
+VERB_TESTS = {
+    "tests/bag/test_replay.py",
+    "tests/diagnosis/test_cli.py",
+    "tests/foundation/test_cli_help.py",
+    "tests/fuzz/test_fuzz_inputs.py",
+    "tests/graph/test_status_client.py",
+}
 
 
 def test_tests_use_the_client_package_except_the_tests_of_the_verbs() -> None:
-    paths = [p for p in (REPO / "tests").rglob("*.py") if str(p.relative_to(REPO)) not in VERB_TESTS]
+    paths = [
+        p for p in (REPO / "tests").rglob("*.py") if str(p.relative_to(REPO)) not in VERB_TESTS
+    ]
     assert not _offenders(paths, _is_verb)
 
 
@@ -65,6 +86,11 @@ def test_of_the_nodes_only_the_recorder_imports_the_bag_package() -> None:
 
 
 def test_reports_sit_above_the_analyses() -> None:
-    paths = [p for layer in ("physics", "control", "diagnosis", "experiments", "graph")
-             for p in (REPO / "hems_ros" / layer).rglob("*.py")]
-    assert not _offenders(paths, lambda n: n == "hems_ros.reports" or n.startswith("hems_ros.reports."))
+    paths = [
+        p
+        for layer in ("physics", "control", "diagnosis", "experiments", "graph")
+        for p in (REPO / "hems_ros" / layer).rglob("*.py")
+    ]
+    assert not _offenders(
+        paths, lambda n: n == "hems_ros.reports" or n.startswith("hems_ros.reports.")
+    )

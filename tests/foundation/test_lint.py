@@ -1,5 +1,6 @@
-"""ruff (ruff.toml: pyflakes, pycodestyle, import order, bugbear) holds over the code, and mypy
-(mypy.ini) over the plain-Python core and the client."""
+"""ruff (ruff.toml: pyflakes, pycodestyle with lines of at most 100 characters, import order,
+bugbear, and its formatter's layout) holds over the code, and mypy (mypy.ini) over the
+plain-Python core, the codec and the client."""
 
 from __future__ import annotations
 
@@ -12,13 +13,35 @@ REPO = Path(__file__).resolve().parents[2]
 
 def test_ruff_finds_nothing() -> None:
     ruff = Path(sys.executable).with_name("ruff")
-    done = subprocess.run([str(ruff), "check", "--no-cache", "hems_ros", "tests", "benchmarks", "tools"],
-                          cwd=REPO, capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [str(ruff), "check", "--no-cache", "hems_ros", "tests", "benchmarks", "tools"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-1000:]
+
+
+def test_the_code_keeps_the_formatters_layout() -> None:
+    ruff = Path(sys.executable).with_name("ruff")
+    done = subprocess.run(
+        [str(ruff), "format", "--check", "--no-cache", "hems_ros", "tests", "benchmarks", "tools"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-1000:]
 
 
 def test_mypy_finds_nothing_in_the_core_and_the_client() -> None:
-    """mypy.ini names the packages: physics, control, graph, bag, client."""
-    done = subprocess.run([sys.executable, "-m", "mypy", "--no-incremental"], cwd=REPO, capture_output=True,
-                          text=True, timeout=600)
+    """mypy.ini names the packages: physics, control, graph, bag, codec, client."""
+    done = subprocess.run(
+        [sys.executable, "-m", "mypy", "--no-incremental"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-1000:]

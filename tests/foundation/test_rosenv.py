@@ -29,7 +29,10 @@ def test_fast_dds_reads_the_project_profiles_unless_the_user_named_a_file():
     path = apply_network_defaults({})[PROFILES_VARIABLE]
     assert path.endswith("config/fastdds_profiles.xml")
     assert "<nack_supression_duration>" in open(path).read()
-    assert apply_network_defaults({PROFILES_VARIABLE: "/tmp/mine.xml"})[PROFILES_VARIABLE] == "/tmp/mine.xml"
+    assert (
+        apply_network_defaults({PROFILES_VARIABLE: "/tmp/mine.xml"})[PROFILES_VARIABLE]
+        == "/tmp/mine.xml"
+    )
 
 
 def test_a_reserved_domain_is_not_given_twice_until_released() -> None:

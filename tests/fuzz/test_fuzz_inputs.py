@@ -26,13 +26,27 @@ from hems_ros.physics import ActuationUnit, load_params
 REPO = Path(__file__).resolve().parents[2]
 BAG = REPO / "bags" / "ch5_step_index" / "ch5_step_index_0.mcap"
 COUNTS: dict[str, int] = {}
+
+
 def fuzz(examples: int) -> settings:
     """Settings of a fuzz test: ``examples`` inputs, the same ones every run (derandomized)."""
-    return settings(max_examples=examples, deadline=None, derandomize=True, database=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+    return settings(
+        max_examples=examples,
+        deadline=None,
+        derandomize=True,
+        database=None,
+        suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+    )
 
-anything = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**12, 10**12),
-                     st.just(float("nan")), st.just(float("inf")), st.just(-1e308), st.just(1e308))
+
+anything = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-(10**12), 10**12),
+    st.just(float("nan")),
+    st.just(float("inf")),
+    st.just(-1e308),
+    st.just(1e308),
+)
 modes = st.one_of(st.sampled_from(["position", "force"]), st.text(max_size=12))
 
 
@@ -48,7 +62,7 @@ def test_setpoint_validation_accepts_only_finite_values_in_range(mode, value):
     try:
         setpoint = validate(mode, value, limits)
     except SetpointError as error:
-        assert str(error)          # a message that says why
+        assert str(error)  # a message that says why
         return
     assert setpoint.mode in ("position", "force") and math.isfinite(setpoint.value)
     top = limits.max_position_m if setpoint.mode == "position" else limits.max_force_n
@@ -73,7 +87,9 @@ def controller():
 
 @fuzz(2500)
 @given(mode=modes, value=anything)
-def test_a_fuzzed_setpoint_changes_nothing_unless_valid_and_heats_nothing_while_not_enabled(controller, mode, value):
+def test_a_fuzzed_setpoint_changes_nothing_unless_valid_and_heats_nothing_while_not_enabled(
+    controller, mode, value
+):
     from hems_msgs.msg import FingerSetpoint
 
     _count("controller setpoints")
@@ -93,7 +109,7 @@ def test_a_fuzzed_setpoint_changes_nothing_unless_valid_and_heats_nothing_while_
     controller.wire_position, controller.wire_force = 0.0, 4.0
     controller.encoder_stamp = controller.force_stamp = (1, 0)
     controller.control((1, 0))
-    assert controller.duty == 0.0          # not ENABLED: nothing heats, whatever came in
+    assert controller.duty == 0.0  # not ENABLED: nothing heats, whatever came in
 
 
 @fuzz(2000)
@@ -119,9 +135,22 @@ UNIT_PARAMS = load_params("ch6_hems_index")
 
 
 @fuzz(300)
-@given(name=st.sampled_from(["physics_dt_s", "tick_period_s", "control_period_s", "supervisor_timeout_s",
-                             "latency_window_s", "encoder_period_s", "physics_config", "finger", "sensor_fault"]),
-       value=st.one_of(anything, st.text(max_size=10), st.booleans()))
+@given(
+    name=st.sampled_from(
+        [
+            "physics_dt_s",
+            "tick_period_s",
+            "control_period_s",
+            "supervisor_timeout_s",
+            "latency_window_s",
+            "encoder_period_s",
+            "physics_config",
+            "finger",
+            "sensor_fault",
+        ]
+    ),
+    value=st.one_of(anything, st.text(max_size=10), st.booleans()),
+)
 def test_a_fuzzed_node_parameter_stops_start_up_with_a_message_or_is_taken(name, value):
     import rclpy
     from rclpy.context import Context
@@ -134,7 +163,9 @@ def test_a_fuzzed_node_parameter_stops_start_up_with_a_message_or_is_taken(name,
     rclpy.init(context=context)
     try:
         try:
-            node = ActuationUnitNode(context=context, parameter_overrides=[Parameter(name, value=value)])
+            node = ActuationUnitNode(
+                context=context, parameter_overrides=[Parameter(name, value=value)]
+            )
         except (ValueError, TypeError, rclpy.exceptions.ParameterException) as error:
             assert str(error)
             return
@@ -144,11 +175,43 @@ def test_a_fuzzed_node_parameter_stops_start_up_with_a_message_or_is_taken(name,
 
 
 @fuzz(1500)
-@given(argv=st.lists(st.one_of(st.sampled_from(["up", "setpoint", "status", "grasp", "step", "diagnose", "tune",
-                                                "record", "replay", "--rate", "--timeout", "--unit", "--mode",
-                                                "index", "all", "mm", "nan", "-1", "1e9", "--fingers", "--force",
-                                                "--columns", "--model", "--help-not", "--composed"]),
-                               st.text(max_size=8)), max_size=6))
+@given(
+    argv=st.lists(
+        st.one_of(
+            st.sampled_from(
+                [
+                    "up",
+                    "setpoint",
+                    "status",
+                    "grasp",
+                    "step",
+                    "diagnose",
+                    "tune",
+                    "record",
+                    "replay",
+                    "--rate",
+                    "--timeout",
+                    "--unit",
+                    "--mode",
+                    "index",
+                    "all",
+                    "mm",
+                    "nan",
+                    "-1",
+                    "1e9",
+                    "--fingers",
+                    "--force",
+                    "--columns",
+                    "--model",
+                    "--help-not",
+                    "--composed",
+                ]
+            ),
+            st.text(max_size=8),
+        ),
+        max_size=6,
+    )
+)
 def test_fuzzed_hems_arguments_parse_or_exit_2(argv):
     _count("hems arguments")
     try:
@@ -169,9 +232,14 @@ PARSER = _parser()
 
 
 @fuzz(800)
-@given(cut=st.integers(0, 4000), flips=st.lists(st.tuples(st.integers(0, 10**6), st.integers(0, 255)), max_size=8),
-       noise=st.binary(max_size=64))
-def test_a_damaged_bag_loads_as_far_as_it_goes_or_says_what_is_wrong(tmp_path_factory, cut, flips, noise):
+@given(
+    cut=st.integers(0, 4000),
+    flips=st.lists(st.tuples(st.integers(0, 10**6), st.integers(0, 255)), max_size=8),
+    noise=st.binary(max_size=64),
+)
+def test_a_damaged_bag_loads_as_far_as_it_goes_or_says_what_is_wrong(
+    tmp_path_factory, cut, flips, noise
+):
     _count("bag files")
     data = bytearray(BAG_BYTES[: max(0, len(BAG_BYTES) - cut * 97)])
     for at, byte in flips:
@@ -194,9 +262,12 @@ BAG_BYTES = BAG.read_bytes()
 
 
 @fuzz(1500)
-@given(text=st.lists(st.sampled_from(list("0123456789.,;-+eE \t\n#txdF:") + ["nan", "inf", "NaN"]),
-                    max_size=120).map("".join),
-       header=st.sampled_from(["t,d,x,F", "t;d;x;F", "t d x F", "t,d,x", "", "a,b,c,d"]))
+@given(
+    text=st.lists(
+        st.sampled_from(list("0123456789.,;-+eE \t\n#txdF:") + ["nan", "inf", "NaN"]), max_size=120
+    ).map("".join),
+    header=st.sampled_from(["t,d,x,F", "t;d;x;F", "t d x F", "t,d,x", "", "a,b,c,d"]),
+)
 def test_a_fuzzed_table_loads_or_says_what_is_wrong(tmp_path_factory, text, header):
     _count("table files")
     path = tmp_path_factory.mktemp("csv") / "run.csv"
@@ -223,4 +294,3 @@ def test_more_than_ten_thousand_inputs_were_fuzzed():
     if len(COUNTS) < 7:
         pytest.skip("counts the inputs of the whole module: run it whole")
     assert sum(COUNTS.values()) >= 10_000, COUNTS
-

@@ -23,6 +23,10 @@ def graph(venv):
         client.spin_for(2.0)
         # a node left running by another test of this run shares the domain and would
         # answer the same samples (a second controller's duty wins every other period)
-        seen = [f"{ns.rstrip('/')}/{name}" for name, ns in client.node.get_node_names_and_namespaces()]
-        assert not {n for n in seen if seen.count(n) > 1}, f"nodes twice in the test domain: {sorted(seen)}"
+        seen = [
+            f"{ns.rstrip('/')}/{name}" for name, ns in client.node.get_node_names_and_namespaces()
+        ]
+        assert not {
+            n for n in seen if seen.count(n) > 1
+        }, f"nodes twice in the test domain: {sorted(seen)}"
         yield running, client

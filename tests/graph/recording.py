@@ -19,6 +19,7 @@ class Recorder:
         def store(message, topic=topic):
             with self.lock:
                 self.messages[topic].append((time.time(), message))
+
         self.client.node.create_subscription(msg_type, topic, store, qos)
 
     def since(self, topic: str, t0: float) -> list:

@@ -16,12 +16,17 @@ pytestmark = pytest.mark.slow
 
 @pytest.mark.parametrize("after_s, group", [(1.0, True), (3.0, True), (12.0, True), (12.0, False)])
 def test_a_signal_stops_hems_up_without_a_traceback(venv, after_s, group):
-    up = subprocess.Popen([str(venv / "bin" / "hems"), "up", "--log-level", "warn"], stdout=subprocess.PIPE,
-                          stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    up = subprocess.Popen(
+        [str(venv / "bin" / "hems"), "up", "--log-level", "warn"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
+    )
     try:
         time.sleep(after_s)
         if group:
-            os.killpg(up.pid, signal.SIGINT)          # what a terminal's Ctrl-C sends
+            os.killpg(up.pid, signal.SIGINT)  # what a terminal's Ctrl-C sends
         else:
             up.send_signal(signal.SIGTERM)
         out, _ = up.communicate(timeout=60)

@@ -20,9 +20,22 @@ BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_graph_joins.
 
 def test_ten_joins_per_layout_fault_nothing_and_every_setpoint_is_reached(tmp_path):
     out = tmp_path / "joins.json"
-    done = subprocess.run([sys.executable, str(BENCH), "--joins", "10", "--layouts", "separate,composed",
-                           "--json", str(out)], env=child_environment(), capture_output=True, text=True,
-                          timeout=900)
+    done = subprocess.run(
+        [
+            sys.executable,
+            str(BENCH),
+            "--joins",
+            "10",
+            "--layouts",
+            "separate,composed",
+            "--json",
+            str(out),
+        ],
+        env=child_environment(),
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     results = json.loads(out.read_text())
     for layout in ("separate", "composed"):

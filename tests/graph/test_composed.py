@@ -41,8 +41,10 @@ def test_composed_graph_tracks_a_step_and_stops_on_ctrl_c(ros_domain_id: int) ->
             t0 = time.time()
             assert client.send_setpoint(FINGER, "position", 0.020)
             rec.spin(4.5)
-            samples = [(from_msg(m.header.stamp) - t0, transmission.tendon_position(m.position))
-                       for _, m in rec.since(names.topic(FINGER, "encoder"), t0)]
+            samples = [
+                (from_msg(m.header.stamp) - t0, transmission.tendon_position(m.position))
+                for _, m in rec.since(names.topic(FINGER, "encoder"), t0)
+            ]
             states = [m.state_name for _, m in rec.since(names.SUPERVISOR_STATUS_TOPIC, t0 - 10)]
         assert not graph.exited(), graph.exited()
         t = np.array([s[0] for s in samples])
@@ -50,7 +52,9 @@ def test_composed_graph_tracks_a_step_and_stops_on_ctrl_c(ros_domain_id: int) ->
         assert len(x) > 400, f"only {len(x)} encoder samples in 4.5 s (100 Hz expected)"
         assert "FAULT" not in states, states
         late = t >= 3.0
-        assert np.all(np.abs(x[late] - 0.020) <= 1e-4), f"{1e3 * x[late].min():.3f}-{1e3 * x[late].max():.3f} mm"
+        assert np.all(
+            np.abs(x[late] - 0.020) <= 1e-4
+        ), f"{1e3 * x[late].min():.3f}-{1e3 * x[late].max():.3f} mm"
         assert x.max() <= 0.020 + 1e-4, f"overshoot to {1e3 * x.max():.3f} mm"
 
         process = graph.processes["composed"]

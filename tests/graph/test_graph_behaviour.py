@@ -15,7 +15,14 @@ import time
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
-from hems_msgs.msg import ActuatorState, ControllerStatus, DutyCommand, EncoderReading, SupervisorStatus, WireForce
+from hems_msgs.msg import (
+    ActuatorState,
+    ControllerStatus,
+    DutyCommand,
+    EncoderReading,
+    SupervisorStatus,
+    WireForce,
+)
 from recording import Recorder
 
 from hems_ros.graph import names, transmission
@@ -33,7 +40,9 @@ def rec(graph):
     recorder = Recorder(client)
     recorder.listen(EncoderReading, names.topic(FINGER, "encoder"), qos.SENSOR)
     recorder.listen(WireForce, names.topic(FINGER, "wire_force"), qos.SENSOR)
-    recorder.listen(ControllerStatus, names.topic(FINGER, "controller_status"), qos.CONTROLLER_STATUS)
+    recorder.listen(
+        ControllerStatus, names.topic(FINGER, "controller_status"), qos.CONTROLLER_STATUS
+    )
     recorder.listen(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
     recorder.listen(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
     recorder.listen(DutyCommand, names.topic(FINGER, "duty"), qos.COMMAND)
@@ -49,12 +58,12 @@ def leaves_the_graph_unlatched_and_cool(graph, rec):
     not fail the tests after it: restart, disable, reset, bring the index wire back to rest."""
     yield
     running, client = graph
-    for name in running.exited():   # a killed controller the test did not get to restart
+    for name in running.exited():  # a killed controller the test did not get to restart
         running.restart(name)
     client.call("disable")
     deadline = time.monotonic() + 60
     while not client.call("reset")[0] and time.monotonic() < deadline:
-        rec.spin(1.0)   # a restarted node's streams are not back yet
+        rec.spin(1.0)  # a restarted node's streams are not back yet
     cool_down(client, rec)
 
 
@@ -72,10 +81,16 @@ def command_timing(before: dict[str, str], after: dict[str, str]) -> str:
     or missing duty commands. Counts between two diagnostics a second apart at most."""
     if not before or not after:
         return "unit diagnostics missing"
-    counts = {key: int(after[key]) - int(before[key]) for key in ("late_commands", "missed_control_periods")}
-    return (f"unit during the step: {counts['late_commands']} late duty commands, "
-            f"{counts['missed_control_periods']} missed periods; latency over the last minute "
-            f"p99 {float(after['latency_p99_s']) * 1e3:.1f} ms, max {float(after['latency_max_s']) * 1e3:.1f} ms")
+    counts = {
+        key: int(after[key]) - int(before[key])
+        for key in ("late_commands", "missed_control_periods")
+    }
+    return (
+        f"unit during the step: {counts['late_commands']} late duty commands, "
+        f"{counts['missed_control_periods']} missed periods; latency over the last minute "
+        f"p99 {float(after['latency_p99_s']) * 1e3:.1f} ms, max "
+        f"{float(after['latency_max_s']) * 1e3:.1f} ms"
+    )
 
 
 def heating_gaps(rec, t0: float, until_s: float) -> str:
@@ -93,13 +108,20 @@ def heating_gaps(rec, t0: float, until_s: float) -> str:
     if started is None:
         return "no heating duty command recorded"
     zeros = [round(t, 3) for t, duty in duties if started < t < until_s and duty == 0.0]
-    states = [(round(from_msg(m.header.stamp) - t0, 3), m.duty_percent, m.watchdog_tripped)
-              for _, m in rec.since(names.sim_topic(FINGER, "state"), t0)]
-    gaps = [(t, duty, tripped) for t, duty, tripped in states
-            if started + 0.02 < t < until_s and (tripped or duty == 0.0)]
-    return (f"{publishers} publisher(s) of {topic}; heating from {started:.3f} s; "
-            f"0 % duty commands before {until_s:.2f} s at {zeros}; "
-            f"unit states (s, duty %, watchdog) with 0 % or a trip: {gaps}")
+    states = [
+        (round(from_msg(m.header.stamp) - t0, 3), m.duty_percent, m.watchdog_tripped)
+        for _, m in rec.since(names.sim_topic(FINGER, "state"), t0)
+    ]
+    gaps = [
+        (t, duty, tripped)
+        for t, duty, tripped in states
+        if started + 0.02 < t < until_s and (tripped or duty == 0.0)
+    ]
+    return (
+        f"{publishers} publisher(s) of {topic}; heating from {started:.3f} s; "
+        f"0 % duty commands before {until_s:.2f} s at {zeros}; "
+        f"unit states (s, duty %, watchdog) with 0 % or a trip: {gaps}"
+    )
 
 
 def enable(client) -> None:
@@ -146,26 +168,36 @@ def test_index_position_step_settles_without_overshoot_and_matches_lockstep(grap
     assert client.send_setpoint(FINGER, "position", 0.020)
     rec.spin(4.5)
     timing = command_timing(before, unit_diagnostics(rec))
-    samples = [(from_msg(m.header.stamp), transmission.tendon_position(m.position))
-               for _, m in rec.since(names.topic(FINGER, "encoder"), t0)]
+    samples = [
+        (from_msg(m.header.stamp), transmission.tendon_position(m.position))
+        for _, m in rec.since(names.topic(FINGER, "encoder"), t0)
+    ]
     t = np.array([s[0] for s in samples]) - t0
     x = np.array([s[1] for s in samples])
     assert len(x) > 350, f"only {len(x)} encoder samples in 4.5 s"
     late = t >= 3.0
     status = rec.since(names.SUPERVISOR_STATUS_TOPIC, t0 - 5)
-    assert x.max() > 0.0, f"no motion; supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-2:]]}"
+    assert (
+        x.max() > 0.0
+    ), f"no motion; supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-2:]]}"
     assert np.all(np.abs(x[late] - 0.020) <= 1e-4), (
         f"tendon {1e3 * x[late].min():.3f}-{1e3 * x[late].max():.3f} mm after 3 s; "
-        f"supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-1:]]}; {timing}")
-    assert x.max() <= 0.020 + 1e-4, (f"overshoot to {1e3 * x.max():.3f} mm; {timing}; "
-                                     f"{heating_gaps(rec, t0, float(t[np.argmax(x >= 0.010)]))}")
+        f"supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-1:]]}; {timing}"
+    )
+    assert x.max() <= 0.020 + 1e-4, (
+        f"overshoot to {1e3 * x.max():.3f} mm; {timing}; "
+        f"{heating_gaps(rec, t0, float(t[np.argmax(x >= 0.010)]))}"
+    )
 
     window = (t >= 0) & (t < 4.0)
     rmse_graph = math.sqrt(np.mean((x[window] - 0.020) ** 2))
     measured, *_ = simulate_loop(np.full(400, 0.010), "bpid", "position", "ch6_hems_index")
-    rmse_lockstep = math.sqrt(np.mean((transmission.tendon_position(np.asarray(measured)) - 0.020) ** 2))
-    assert abs(rmse_graph - rmse_lockstep) <= 0.05 * rmse_lockstep, (
-        f"RMSE graph {1e3 * rmse_graph:.3f} mm vs lockstep {1e3 * rmse_lockstep:.3f} mm")
+    rmse_lockstep = math.sqrt(
+        np.mean((transmission.tendon_position(np.asarray(measured)) - 0.020) ** 2)
+    )
+    assert (
+        abs(rmse_graph - rmse_lockstep) <= 0.05 * rmse_lockstep
+    ), f"RMSE graph {1e3 * rmse_graph:.3f} mm vs lockstep {1e3 * rmse_lockstep:.3f} mm"
     client.call("disable")
     cool_down(client, rec)
 
@@ -176,19 +208,23 @@ def test_index_force_mode_holds_10_newtons(graph, rec):
     t0 = time.time()
     assert client.send_setpoint(FINGER, "force", 10.0)
     rec.spin(7.0)
-    readings = [(t - t0, transmission.tendon_force(m.force)) for t, m in rec.since(names.topic(FINGER, "wire_force"), t0)]
+    readings = [
+        (t - t0, transmission.tendon_force(m.force))
+        for t, m in rec.since(names.topic(FINGER, "wire_force"), t0)
+    ]
     hold = np.array([f for t, f in readings if 4.0 <= t <= 7.0])
     assert len(hold) > 200
     status = rec.since(names.SUPERVISOR_STATUS_TOPIC, t0 - 5)
     assert np.all(np.abs(hold - 10.0) <= 0.2), (
         f"tendon force {hold.min():.3f}-{hold.max():.3f} N while holding; "
-        f"supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-1:]]}")
+        f"supervisor: {[(m.state_name, list(m.faults)) for _, m in status[-1:]]}"
+    )
 
 
 def test_estop_zeroes_every_duty_within_30ms_and_latches(graph, rec):
     _, client = graph
     enable(client)
-    for finger in names.FINGERS:    # every unit heating when the estop comes
+    for finger in names.FINGERS:  # every unit heating when the estop comes
         assert client.send_setpoint(finger, "position", 0.015)
 
     def latest_duty(finger: str) -> float:
@@ -197,19 +233,25 @@ def test_estop_zeroes_every_duty_within_30ms_and_latches(graph, rec):
 
     deadline = time.monotonic() + 5
     while not all(latest_duty(f) > 0.0 for f in names.FINGERS):
-        assert time.monotonic() < deadline, f"not every unit heating: {[latest_duty(f) for f in names.FINGERS]}"
+        assert (
+            time.monotonic() < deadline
+        ), f"not every unit heating: {[latest_duty(f) for f in names.FINGERS]}"
         rec.spin(0.02)
     t_call = time.time()
     ok, message = client.call("estop")
     assert ok, message
     rec.spin(1.0)
     for finger in names.FINGERS:
-        stamped = [(from_msg(m.header.stamp), m.duty_percent) for _, m in rec.since(names.sim_topic(finger, "state"),
-                                                                                   t_call - 0.2)]
+        stamped = [
+            (from_msg(m.header.stamp), m.duty_percent)
+            for _, m in rec.since(names.sim_topic(finger, "state"), t_call - 0.2)
+        ]
         before = [duty for stamp, duty in stamped if stamp < t_call]
         assert before and before[-1] > 0.0, f"{finger}: not heating when the estop was called"
         first_zero = next(stamp for stamp, duty in stamped if stamp >= t_call and duty == 0.0)
-        assert first_zero - t_call <= 0.030, f"{finger}: duty 0 only {1e3 * (first_zero - t_call):.1f} ms after estop"
+        assert (
+            first_zero - t_call <= 0.030
+        ), f"{finger}: duty 0 only {1e3 * (first_zero - t_call):.1f} ms after estop"
     assert client.send_setpoint(FINGER, "position", 0.030)
     rec.spin(1.0)
     after = [m for _, m in rec.since(names.sim_topic(FINGER, "state"), t_call + 0.05)]
@@ -232,8 +274,11 @@ def test_killed_controller_zeroes_its_duty_and_faults_the_supervisor_then_recove
     t_kill = time.time()
     os.kill(running.processes[name].pid, signal.SIGKILL)
     rec.spin(1.0)
-    tripped = [from_msg(m.header.stamp) for _, m in rec.since(names.sim_topic(FINGER, "state"), t_kill)
-               if m.watchdog_tripped and m.duty_percent == 0.0]
+    tripped = [
+        from_msg(m.header.stamp)
+        for _, m in rec.since(names.sim_topic(FINGER, "state"), t_kill)
+        if m.watchdog_tripped and m.duty_percent == 0.0
+    ]
     assert tripped, "no watchdog trip after the controller was killed"
     assert tripped[0] - t_kill <= 0.050, f"duty 0 after {1e3 * (tripped[0] - t_kill):.1f} ms"
     statuses = [m for _, m in rec.since(names.SUPERVISOR_STATUS_TOPIC, t_kill)]
@@ -266,8 +311,13 @@ def test_bad_setpoints_by_topic_are_rejected_and_change_nothing(graph, rec):
             break
     before = rec.since(names.topic(FINGER, "controller_status"), time.time() - 0.3)[-1][1]
     t0 = time.time()
-    for mode, value in (("position", math.nan), ("position", -1.0), ("position", 1e9), ("force", math.inf),
-                        ("grip", 0.01)):
+    for mode, value in (
+        ("position", math.nan),
+        ("position", -1.0),
+        ("position", 1e9),
+        ("force", math.inf),
+        ("grip", 0.01),
+    ):
         assert client.send_setpoint(FINGER, mode, value)
     rec.spin(1.0)
     after = rec.since(names.topic(FINGER, "controller_status"), time.time() - 0.3)[-1][1]
@@ -280,21 +330,24 @@ def test_bad_setpoints_by_topic_are_rejected_and_change_nothing(graph, rec):
     client.call("disable")
 
 
-@pytest.mark.parametrize("argv, reason", [
-    (["index", "nan"], "not finite"),
-    (["index", "-1", "--unit", "mm"], "outside the tendon stroke"),
-    (["index", "1e9"], "outside the tendon stroke"),
-    (["pinky", "0.01"], "unknown finger 'pinky'"),
-    (["index", "0.01", "--mode", "grip"], "invalid choice: 'grip'"),
-])
+@pytest.mark.parametrize(
+    "argv, reason",
+    [
+        (["index", "nan"], "not finite"),
+        (["index", "-1", "--unit", "mm"], "outside the tendon stroke"),
+        (["index", "1e9"], "outside the tendon stroke"),
+        (["pinky", "0.01"], "unknown finger 'pinky'"),
+        (["index", "0.01", "--mode", "grip"], "invalid choice: 'grip'"),
+    ],
+)
 def test_bad_setpoints_by_cli_are_rejected_with_a_message(graph, venv, argv, reason):
     running, _ = graph
-    result = subprocess.run([str(venv / "bin" / "hems"), "setpoint", *argv],
-                            capture_output=True, text=True, timeout=60)
+    result = subprocess.run(
+        [str(venv / "bin" / "hems"), "setpoint", *argv], capture_output=True, text=True, timeout=60
+    )
     assert result.returncode == 2
     assert reason in result.stderr
     assert running.exited() == {}
-
 
 
 def test_grasp_that_enables_after_joining_is_a_valid_run(graph, venv, tmp_path):
@@ -303,12 +356,20 @@ def test_grasp_that_enables_after_joining_is_a_valid_run(graph, venv, tmp_path):
     # is DISABLED, enables, runs the grasp and disables.
     running, client = graph
     client.call("disable")
-    result = subprocess.run([str(venv / "bin" / "hems"), "grasp", "--enable", "--plot", str(tmp_path / "grasp.png")],
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [str(venv / "bin" / "hems"), "grasp", "--enable", "--plot", str(tmp_path / "grasp.png")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
     lines = result.stdout.splitlines()
     assert "grasp: ENABLED" in lines and "grasp: DISABLED" in lines
-    rows = {line.split()[0]: line.split() for line in lines if line.split() and line.split()[0] in names.FINGERS}
+    rows = {
+        line.split()[0]: line.split()
+        for line in lines
+        if line.split() and line.split()[0] in names.FINGERS
+    }
     assert set(rows) == set(names.FINGERS)
     # peak tendon force, N: 10.02-10.10 from a cold wire (README, demo); the index wire, still
     # warm from the tests before, moves sooner and peaked at 10.61 and 10.71 N in two runs

@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 
 from hems_ros.graph import names
-from hems_ros.graph.grasp import FingerSummary, FingerTrace, GraspPlan, PhaseTracker, summarize, tracking_report
+from hems_ros.graph.grasp import (
+    FingerSummary,
+    FingerTrace,
+    GraspPlan,
+    PhaseTracker,
+    summarize,
+    tracking_report,
+)
 from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
 from hems_ros.graph.supervisor_logic import STREAMS, MonitorLimits, State, SupervisorLogic
 from hems_ros.graph.unit_driver import UnitDriver
@@ -14,13 +21,16 @@ from hems_ros.launcher import Graph, GraphOptions
 from hems_ros.physics import ActuationUnit, load_params
 
 
-@pytest.mark.parametrize("mode, value, reason", [
-    ("position", math.nan, "not a finite number"),
-    ("position", -1.0, "outside the tendon stroke 0-0.054 m"),
-    ("position", 1e9, "outside the tendon stroke"),
-    ("force", 25.5, "outside the tendon force range 0-25 N"),
-    ("grip", 0.01, "unknown mode 'grip'"),
-])
+@pytest.mark.parametrize(
+    "mode, value, reason",
+    [
+        ("position", math.nan, "not a finite number"),
+        ("position", -1.0, "outside the tendon stroke 0-0.054 m"),
+        ("position", 1e9, "outside the tendon stroke"),
+        ("force", 25.5, "outside the tendon force range 0-25 N"),
+        ("grip", 0.01, "unknown mode 'grip'"),
+    ],
+)
 def test_invalid_setpoints_are_rejected_with_the_reason(mode, value, reason):
     with pytest.raises(SetpointError, match=reason):
         validate(mode, value, SetpointLimits())
@@ -103,12 +113,12 @@ def test_a_sensor_gap_shorter_than_a_loss_is_counted_not_latched():
     logic = SupervisorLogic(("index",))
     _ready(logic, 1.0)
     logic.request("enable", 1.0)
-    for now in (1.02, 1.04, 1.06, 1.08, 1.10, 1.12):      # 120 ms without a new encoder reading
+    for now in (1.02, 1.04, 1.06, 1.08, 1.10, 1.12):  # 120 ms without a new encoder reading
         _report(logic, "index", now, encoder_moved=False)
         logic.check_streams(now)
-    _report(logic, "index", 1.14)                          # back
+    _report(logic, "index", 1.14)  # back
     _report(logic, "index", 1.16)
-    _report(logic, "index", 1.30, encoder_moved=False)     # 140 ms: a second gap
+    _report(logic, "index", 1.30, encoder_moved=False)  # 140 ms: a second gap
     _report(logic, "index", 1.34)
     assert logic.state == State.ENABLED and not logic.faults
     count, longest = logic.gaps()[("index", "encoder")]
@@ -119,7 +129,7 @@ def test_a_silent_controller_is_its_heartbeat_fault_not_its_sensors():
     logic = SupervisorLogic(("index",), MonitorLimits(heartbeat_timeout_s=0.2))
     _ready(logic, 0.0)
     logic.request("enable", 0.0)
-    for k in range(1, 20):      # no report for 190 ms: the sensors cannot be judged
+    for k in range(1, 20):  # no report for 190 ms: the sensors cannot be judged
         logic.check_streams(0.01 * k)
     assert logic.state == State.ENABLED
     # the controller was only late: its next report carries fresh readings
@@ -145,43 +155,58 @@ def test_a_late_check_does_not_blame_the_streams():
 def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
     """A unit whose duty reader has not matched its controller's writer yet shows a tripped
     watchdog; enabling it then latched FAULT some 100 ms later."""
-    logic = SupervisorLogic(("index", "middle"), MonitorLimits(watchdog_hold_s=0.5, heartbeat_timeout_s=0.2))
+    logic = SupervisorLogic(
+        ("index", "middle"), MonitorLimits(watchdog_hold_s=0.5, heartbeat_timeout_s=0.2)
+    )
     _streams_seen(logic, 1.0, ("encoder", "wire_force", "heartbeat"))
     logic.saw("unit state", "index", 1.0)
     logic.watchdog("index", False, 1.0)
     ok, message = logic.request("enable", 1.0)
     assert not ok and message == "cannot enable: middle: no unit state yet"
     logic.saw("unit state", "middle", 1.01)
-    logic.watchdog("middle", True, 1.01)       # no command since the unit started
+    logic.watchdog("middle", True, 1.01)  # no command since the unit started
     ok, message = logic.request("enable", 1.01)
-    assert not ok and message == "cannot enable: middle: no duty commands reach the unit (its watchdog is tripped)"
+    assert (
+        not ok
+        and message
+        == "cannot enable: middle: no duty commands reach the unit (its watchdog is tripped)"
+    )
     logic.watchdog("middle", False, 1.02)
-    logic.watchdog("index", True, 1.02)         # late commands: not held for watchdog_hold_s yet
+    logic.watchdog("index", True, 1.02)  # late commands: not held for watchdog_hold_s yet
     _streams_seen(logic, 1.19)
     assert logic.request("enable", 1.2) == (True, "ENABLED")
     logic.request("disable", 1.21)
     _streams_seen(logic, 1.52)
-    ok, message = logic.request("enable", 1.53)       # held past 500 ms now: the commands do not arrive
-    assert not ok and message == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)"
+    ok, message = logic.request("enable", 1.53)  # held past 500 ms now: the commands do not arrive
+    assert (
+        not ok
+        and message
+        == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)"
+    )
     logic.watchdog("index", False, 1.54)
-    ok, message = logic.request("enable", 1.8)   # the 20 Hz state reports stopped 280 ms ago
+    ok, message = logic.request("enable", 1.8)  # the 20 Hz state reports stopped 280 ms ago
     assert "index: unit state stale" in message and "middle: unit state stale" in message
 
 
-@pytest.mark.parametrize("component, consequence", [("unit", "it does not heat"),
-                                                    ("controller", "it sends 0 % duty")])
-def test_a_unit_or_controller_that_has_not_taken_enabled_faults_after_the_grace(component, consequence):
+@pytest.mark.parametrize(
+    "component, consequence", [("unit", "it does not heat"), ("controller", "it sends 0 % duty")]
+)
+def test_a_unit_or_controller_that_has_not_taken_enabled_faults_after_the_grace(
+    component, consequence
+):
     logic = SupervisorLogic(("index", "ring"), MonitorLimits(enable_grace_s=0.5))
     _ready(logic, 1.0)
-    logic.sees_enabled("ring", component, False, 0.9)    # before enabling: nothing to take yet
+    logic.sees_enabled("ring", component, False, 0.9)  # before enabling: nothing to take yet
     logic.request("enable", 1.0)
-    for k in range(1, 27):              # reports every 20 ms; the grace runs from the first after enabling
+    for k in range(1, 27):  # reports every 20 ms; the grace runs from the first after enabling
         now = 1.0 + 0.02 * k
-        logic.sees_enabled("index", component, k > 2, now)   # took it after 60 ms
+        logic.sees_enabled("index", component, k > 2, now)  # took it after 60 ms
         logic.sees_enabled("ring", component, False, now)
         assert logic.state == (State.ENABLED if k < 26 else State.FAULT), now
     assert [(f.finger, f.kind) for f in logic.faults] == [("ring", f"{component} not enabled")]
-    assert str(logic.faults[0]) == f"ring: {component} has not taken ENABLED for 500 ms: {consequence}"
+    assert (
+        str(logic.faults[0]) == f"ring: {component} has not taken ENABLED for 500 ms: {consequence}"
+    )
 
 
 def test_a_brief_lapse_of_the_enabled_view_and_a_new_enable_start_the_grace_again():
@@ -192,9 +217,11 @@ def test_a_brief_lapse_of_the_enabled_view_and_a_new_enable_start_the_grace_agai
     logic.request("disable", 0.45)
     _ready(logic, 1.0)
     logic.request("enable", 1.0)
-    logic.sees_enabled("index", "unit", False, 1.4)      # 1.0 s after the first no, 0.4 s into this ENABLED
+    logic.sees_enabled(
+        "index", "unit", False, 1.4
+    )  # 1.0 s after the first no, 0.4 s into this ENABLED
     logic.sees_enabled("index", "unit", True, 1.45)
-    logic.sees_enabled("index", "unit", False, 1.6)     # a lapse (a stalled unit lost its permission)
+    logic.sees_enabled("index", "unit", False, 1.6)  # a lapse (a stalled unit lost its permission)
     logic.sees_enabled("index", "unit", False, 2.0)
     assert logic.state == State.ENABLED
     logic.sees_enabled("index", "unit", False, 2.1)
@@ -219,15 +246,15 @@ def test_watchdog_flag_faults_only_when_held_while_enabled():
     logic.watchdog("index", True, 1.01)
     logic.watchdog("index", False, 1.03)
     logic.watchdog("index", True, 1.05)
-    logic.watchdog("index", True, 1.14)    # a controller held up 90 ms by a busy host
+    logic.watchdog("index", True, 1.14)  # a controller held up 90 ms by a busy host
     logic.watchdog("index", False, 1.15)
     logic.watchdog("index", True, 1.2)
-    logic.watchdog("index", True, 1.41)    # a lost duty sample's repair: 210 ms
+    logic.watchdog("index", True, 1.41)  # a lost duty sample's repair: 210 ms
     logic.watchdog("index", False, 1.42)
     logic.watchdog("index", True, 1.5)
     logic.watchdog("index", True, 1.99)
     assert logic.state == State.ENABLED
-    logic.watchdog("index", True, 2.01)     # held past 500 ms: the commands do not arrive
+    logic.watchdog("index", True, 2.01)  # held past 500 ms: the commands do not arrive
     assert logic.state == State.FAULT and logic.faults[0].kind == "watchdog"
     assert str(logic.faults[0]) == "index: duty watchdog tripped for 510 ms: no duty commands"
 
@@ -252,13 +279,17 @@ def test_unit_driver_watchdog_permission_and_bad_commands_end_at_zero_duty():
 
 
 def test_unit_driver_publishes_one_sample_per_encoder_period_at_1khz_physics():
-    driver = UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=5.0, require_permission=False)
+    driver = UnitDriver(
+        ActuationUnit(load_params("ch6_hems_index")), start_time_s=5.0, require_permission=False
+    )
     samples = driver.advance(5.1)
     assert [round(s.time_s - 5.0, 6) for s in samples] == [round(0.01 * k, 6) for k in range(1, 11)]
     assert driver.unit.time == pytest.approx(0.1)
 
 
-def _driven(arrival_delay_s: float, stamp_offset_s: float | None = 0.0, permit_at_s: float = 5.0) -> UnitDriver:
+def _driven(
+    arrival_delay_s: float, stamp_offset_s: float | None = 0.0, permit_at_s: float = 5.0
+) -> UnitDriver:
     """A driver heated by 60 % answers to the samples at 5.01, 5.02, ... each arriving
     ``arrival_delay_s`` after its sample and stamped ``stamp_offset_s`` off it (None: no stamp)."""
     driver = UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=5.0)
@@ -267,8 +298,11 @@ def _driven(arrival_delay_s: float, stamp_offset_s: float | None = 0.0, permit_a
         sample_s = 5.0 + 0.01 * k
         driver.advance(sample_s + arrival_delay_s)
         driver.permit_heating(True, max(permit_at_s, sample_s + arrival_delay_s))
-        driver.command(60.0, sample_s + arrival_delay_s,
-                       None if stamp_offset_s is None else sample_s + stamp_offset_s)
+        driver.command(
+            60.0,
+            sample_s + arrival_delay_s,
+            None if stamp_offset_s is None else sample_s + stamp_offset_s,
+        )
         driver.advance(sample_s + arrival_delay_s)
     driver.advance(5.35)
     return driver
@@ -276,10 +310,10 @@ def _driven(arrival_delay_s: float, stamp_offset_s: float | None = 0.0, permit_a
 
 def test_a_duty_answering_the_latest_sample_takes_effect_at_that_sample():
     on_time = _driven(0.0)
-    for delay in (0.0012, 0.0037, 0.0099):   # transport delays within one control period
+    for delay in (0.0012, 0.0037, 0.0099):  # transport delays within one control period
         delayed = _driven(delay)
         assert delayed.unit.state == on_time.unit.state
-        assert delayed.last_result == on_time.last_result    # the same sensor noise draws too
+        assert delayed.last_result == on_time.last_result  # the same sensor noise draws too
         assert delayed.late_commands == 0 and delayed.missed_periods == 0
     assert on_time.unit.state["energy_joule_j"] > 1.0
 
@@ -297,15 +331,25 @@ def test_a_driver_stepping_from_sample_to_sample_copies_no_state():
         def snapshot():
             copies[name] = copies.get(name, 0) + 1
             return copy()
+
         unit.snapshot = snapshot
         return driver
 
-    at_ticks, between = (counted(UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=5.0,
-                                            require_permission=False), name) for name in ("ticks", "between"))
+    at_ticks, between = (
+        counted(
+            UnitDriver(
+                ActuationUnit(load_params("ch6_hems_index")),
+                start_time_s=5.0,
+                require_permission=False,
+            ),
+            name,
+        )
+        for name in ("ticks", "between")
+    )
     for k in range(1, 31):
         sample_s = 5.0 + 0.01 * k
         at_ticks.advance(sample_s)
-        at_ticks.command(60.0, sample_s + 0.004, sample_s)        # taken at the next tick
+        at_ticks.command(60.0, sample_s + 0.004, sample_s)  # taken at the next tick
         between.advance(sample_s + 0.004)
         between.command(60.0, sample_s + 0.004, sample_s)
     for driver in (at_ticks, between):
@@ -316,7 +360,7 @@ def test_a_driver_stepping_from_sample_to_sample_copies_no_state():
 
 
 def test_a_late_duty_takes_effect_on_arrival_and_is_counted():
-    late = _driven(0.003, stamp_offset_s=-0.01)     # answers the sample before the latest one
+    late = _driven(0.003, stamp_offset_s=-0.01)  # answers the sample before the latest one
     assert late.late_commands == 30
     assert late.unit.state == _driven(0.003, stamp_offset_s=None).unit.state
     assert late.unit.state != _driven(0.0).unit.state
@@ -332,7 +376,7 @@ def test_rewinding_to_a_sample_never_heats_before_the_supervisor_allowed_it():
     for t in (5.011, 5.012, 5.013, 5.014, 5.015, 5.016):
         driver.advance(t)
         joule_at[round(t, 3)] = driver.unit.state["energy_joule_j"]
-    assert joule_at[5.011] == joule_at[5.013] == 0.0         # rewound to 5.01 but not yet allowed
+    assert joule_at[5.011] == joule_at[5.013] == 0.0  # rewound to 5.01 but not yet allowed
     assert joule_at[5.015] > joule_at[5.014] > 0.0
 
 
@@ -345,8 +389,8 @@ def test_all_sixteen_nodes_are_named():
 
 def test_grasp_phases_start_at_the_sample_that_first_used_each_setpoint():
     tracker = PhaseTracker()
-    tracker.feed("position", 0.0, True, 0.99, 0.0)     # before the grasp
-    tracker.feed("position", 0.02, False, 1.00, 0.0)   # not enabled: no step taken
+    tracker.feed("position", 0.0, True, 0.99, 0.0)  # before the grasp
+    tracker.feed("position", 0.02, False, 1.00, 0.0)  # not enabled: no step taken
     tracker.feed("position", 0.02, True, 1.01, 1.009)
     tracker.feed("position", 0.02, True, 1.02, 1.019)
     tracker.feed("force", 10.0, True, 1.03, 1.029)
@@ -357,35 +401,44 @@ def test_grasp_phases_start_at_the_sample_that_first_used_each_setpoint():
 def test_grasp_summary_numbers():
     plan = GraspPlan(approach_s=2.0, hold_s=2.0, release_s=1.0, settle_window_s=0.5)
     t = np.round(np.arange(0.0, 5.0, 0.01), 2)
-    position = np.where(t < 1.0, 0.0, plan.approach_m)              # reaches the target after 1 s
-    force = np.where(t < 2.5, 5.0, plan.force_n + 0.1)              # 0.1 N high once built up
+    position = np.where(t < 1.0, 0.0, plan.approach_m)  # reaches the target after 1 s
+    force = np.where(t < 2.5, 5.0, plan.force_n + 0.1)  # 0.1 N high once built up
     # the unit's accumulator, read between samples: 7 J at the start (0 s), 45 J at the end (5 s)
-    trace = FingerTrace(list(t), list(position), list(force), [-0.5, 4.5, 5.5], [3.0, 43.0, 47.0], [], [])
+    trace = FingerTrace(
+        list(t), list(position), list(force), [-0.5, 4.5, 5.5], [3.0, 43.0, 47.0], [], []
+    )
     summary = summarize("index", trace, plan, [0.0, 2.0, 4.0])
     assert summary.approach_rmse_mm == pytest.approx(1e3 * plan.approach_m * math.sqrt(0.5))
     assert summary.position_rmse_mm == 0.0
     assert summary.hold_rmse_n == pytest.approx(math.sqrt((0.5 * 25.0 + 1.5 * 0.01) / 2.0))
     assert summary.force_rmse_n == pytest.approx(0.1)
-    assert summary.peak_force_n == pytest.approx(10.1) and summary.energy_j == pytest.approx(45.0 - 7.0)
+    assert summary.peak_force_n == pytest.approx(10.1) and summary.energy_j == pytest.approx(
+        45.0 - 7.0
+    )
     cut_short = FingerTrace(list(t), list(position), list(force), [0.5, 4.5], [5.0, 43.0], [], [])
     assert math.isnan(summarize("index", cut_short, plan, [0.0, 2.0, 4.0]).energy_j)
-
 
 
 def test_a_finger_that_did_not_follow_makes_the_grasp_invalid():
     plan = GraspPlan()
     good = FingerSummary("index", 0.06, 0.02, 10.1, 299.0, 10.0, 1.3)
     # the demo once reported this as a valid run: the ring unit never heated, nothing faulted
-    still = FingerSummary("ring", 1e3 * plan.approach_m, plan.force_n - 2.0, 2.04, 0.0, 1e3 * plan.approach_m, 8.0)
+    still = FingerSummary(
+        "ring", 1e3 * plan.approach_m, plan.force_n - 2.0, 2.04, 0.0, 1e3 * plan.approach_m, 8.0
+    )
     weak = FingerSummary("middle", 0.06, 0.3 * plan.force_n, 7.0, 250.0, 10.0, 3.5)
     assert tracking_report([good], plan, ["index"]) is None
     assert tracking_report([good, still, weak], plan, ["index", "ring", "middle"]) == (
-        f"fingers did not follow their setpoints: ring approach error {1e3 * plan.approach_m:.2f} mm; "
-        f"middle hold error {0.3 * plan.force_n:.2f} N")
+        f"fingers did not follow their setpoints: ring approach error {1e3 * plan.approach_m:.2f} "
+        f"mm; middle hold error {0.3 * plan.force_n:.2f} N"
+    )
     assert tracking_report([good], plan, ["index", "little"]) == (
-        "fingers did not follow their setpoints: little has no summary (its controller did not run every phase)")
+        "fingers did not follow their setpoints: little has no summary (its controller did not run "
+        "every phase)"
+    )
     nan = FingerSummary("index", math.nan, math.nan, math.nan, 0.0, math.nan, math.nan)
     assert "index approach error nan mm" in tracking_report([nan], plan, ["index"])
+
 
 def test_latency_window_holds_the_commands_of_its_last_seconds():
     # 1 s at 10 ms per command: 100 latencies; start-up stalls older than that drop out
@@ -398,7 +451,7 @@ def test_latency_window_holds_the_commands_of_its_last_seconds():
 def test_latency_percentiles_are_the_ranked_window_values():
     driver = UnitDriver(ActuationUnit(), 0.0)
     assert all(math.isnan(v) for v in driver.latency_percentiles())
-    values = [((7919 * k) % 1000) * 1e-5 for k in range(1000)]   # 0 .. 9.99 ms, shuffled
+    values = [((7919 * k) % 1000) * 1e-5 for k in range(1000)]  # 0 .. 9.99 ms, shuffled
     driver.latencies_s.extend(values)
     assert driver.latency_percentiles() == (500e-5, 990e-5, 999e-5)
 
@@ -413,8 +466,10 @@ def test_extra_ros_args_reach_every_node_separate_or_composed():
 
 def test_only_the_separate_processes_leave_their_parameter_services_out_and_only_when_asked():
     def flagged(**options) -> list[bool]:
-        return ["--no-parameter-services" in cmd[:cmd.index("--ros-args")]
-                for cmd in Graph(GraphOptions(**options)).commands().values()]
+        return [
+            "--no-parameter-services" in cmd[: cmd.index("--ros-args")]
+            for cmd in Graph(GraphOptions(**options)).commands().values()
+        ]
 
     assert flagged() == [False] * 16
     assert flagged(parameter_services=False) == [True] * 16
@@ -435,12 +490,19 @@ def test_a_graph_that_does_not_come_up_names_the_nodes_that_exited():
 
     graph = Graph(GraphOptions())
     sleeper = "import time; print('ready', flush=True); time.sleep(30)"
-    graph.processes = {"running": subprocess.Popen([sys.executable, "-c", sleeper], stdout=subprocess.PIPE, text=True),
-                       "crashed": subprocess.Popen([sys.executable, "-c", "raise SystemExit(3)"])}
+    graph.processes = {
+        "running": subprocess.Popen(
+            [sys.executable, "-c", sleeper], stdout=subprocess.PIPE, text=True
+        ),
+        "crashed": subprocess.Popen([sys.executable, "-c", "raise SystemExit(3)"]),
+    }
     try:
         assert graph.processes["running"].stdout.readline() == "ready\n"
         graph.processes["crashed"].wait(10)
-        assert graph.with_exits("little: no encoder yet") == "little: no encoder yet (exited: crashed with code 3)"
+        assert (
+            graph.with_exits("little: no encoder yet")
+            == "little: no encoder yet (exited: crashed with code 3)"
+        )
     finally:
         graph.stop()
         graph.processes["running"].stdout.close()
@@ -457,7 +519,7 @@ def test_cadence_fires_every_nth_tick_despite_jitter():
     from hems_ros.graph.cadence import Cadence
 
     every5 = Cadence(0.05, 0.01)
-    ticks = [k * 0.01 + (0.0004 if k % 3 else -0.0004) for k in range(100)]   # jitter both ways
+    ticks = [k * 0.01 + (0.0004 if k % 3 else -0.0004) for k in range(100)]  # jitter both ways
     fired = [k for k, t in zip(range(100), ticks) if every5.due(t)]
     assert fired == list(range(0, 100, 5))
     every_tick = Cadence(0.005, 0.01)
@@ -473,8 +535,11 @@ def test_units_of_one_shoulder_module_tick_together_and_modules_a_third_apart():
         off = (now + tick_delay(finger, 0.01, now) - phase) % 0.01
         return min(off, 0.01 - off)
 
-    for fingers, phase in ((("thumb_flexion", "thumb_abduction"), 0.0), (("index", "middle"), 0.01 / 3),
-                           (("ring", "little"), 0.02 / 3)):
+    for fingers, phase in (
+        (("thumb_flexion", "thumb_abduction"), 0.0),
+        (("index", "middle"), 0.01 / 3),
+        (("ring", "little"), 0.02 / 3),
+    ):
         assert all(phase_off(f, phase) < 1e-6 for f in fingers)
     assert all(0.0 <= tick_delay(f, 0.01, now) < 0.01 for f in names.FINGERS)
 
@@ -488,8 +553,14 @@ def test_skipping_the_integration_a_rewinding_command_undoes_changes_no_bit():
 
     rng = random.Random(7)
     start = 1_795_000_000.123
-    full, lean = (UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=start,
-                             require_permission=False) for _ in range(2))
+    full, lean = (
+        UnitDriver(
+            ActuationUnit(load_params("ch6_hems_index")),
+            start_time_s=start,
+            require_permission=False,
+        )
+        for _ in range(2)
+    )
     now, skipped, kept = start, 0, 0
     for _ in range(600):
         now += 0.01 + rng.uniform(-0.002, 0.002)
@@ -510,7 +581,10 @@ def test_skipping_the_integration_a_rewinding_command_undoes_changes_no_bit():
         assert full.got == lean.got
         assert np.array_equal(full.unit._s, lean.unit._s) and full.unit.steps == lean.unit.steps
         assert (full.applied_duty, full.late_commands, full.rejected_commands) == (
-            lean.applied_duty, lean.late_commands, lean.rejected_commands)
+            lean.applied_duty,
+            lean.late_commands,
+            lean.rejected_commands,
+        )
     assert skipped > 50 and kept > 200
 
 
@@ -520,7 +594,7 @@ def test_a_reading_that_jumps_or_is_not_a_number_is_a_failed_sensor():
     logic.request("enable", 1.0)
     # 5 mm in 20 ms of the unit's stamps (250 mm/s): a slipped encoder, whatever the host did
     logic.encoder("index", 0.010, 1.02, stamp_s=100.00)
-    logic.encoder("index", 0.011, 1.30, stamp_s=100.02)       # 50 mm/s, late to arrive: a motion
+    logic.encoder("index", 0.011, 1.30, stamp_s=100.02)  # 50 mm/s, late to arrive: a motion
     assert not logic.faults
     logic.encoder("index", 0.016, 1.31, stamp_s=100.04)
     logic.wire_force("middle", float("nan"), 1.32)

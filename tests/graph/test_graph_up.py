@@ -24,8 +24,12 @@ def children_of(pid: int) -> set[int]:
 
 
 def test_up_then_ctrl_c_leaves_no_process_after_3_seconds(venv):
-    up = subprocess.Popen([str(venv / "bin" / "hems"), "up", "--log-level", "warn"],
-                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    up = subprocess.Popen(
+        [str(venv / "bin" / "hems"), "up", "--log-level", "warn"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     children: set[int] = set()
     while time.monotonic() < deadline and len(children) < 16:
@@ -36,7 +40,9 @@ def test_up_then_ctrl_c_leaves_no_process_after_3_seconds(venv):
     started = time.monotonic()
     up.send_signal(signal.SIGINT)
     up.wait(10)
-    while any(os.path.exists(f"/proc/{pid}") for pid in children) and time.monotonic() - started < 10:
+    while (
+        any(os.path.exists(f"/proc/{pid}") for pid in children) and time.monotonic() - started < 10
+    ):
         time.sleep(0.02)
     elapsed = time.monotonic() - started
     left = [pid for pid in children if os.path.exists(f"/proc/{pid}")]

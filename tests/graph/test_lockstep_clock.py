@@ -26,7 +26,7 @@ def test_a_step_waits_for_encoder_force_and_answer_of_every_finger():
     assert clock.try_advance(0.001) is None and clock.waiting_for() == ["index", "middle"]
     clock.duty("index", 1.01)
     _answer_all(clock, ("middle",), 1.01)
-    clock.force("middle", 1.0)     # middle's module has not relayed its sample yet
+    clock.force("middle", 1.0)  # middle's module has not relayed its sample yet
     assert clock.waiting_for() == ["middle"]
     clock.force("middle", 1.01)
     assert clock.try_advance(0.002) == pytest.approx(1.02)
@@ -40,7 +40,7 @@ def test_the_rate_caps_the_pace_and_a_slow_graph_sets_it():
     assert clock.try_advance(10.0049) is None
     assert clock.try_advance(10.0051) == pytest.approx(1.01)
     _answer_all(clock, ("index",), 1.01)
-    assert clock.try_advance(12.0) == pytest.approx(1.02)     # behind: at once
+    assert clock.try_advance(12.0) == pytest.approx(1.02)  # behind: at once
 
 
 def test_the_supervisor_may_lag_by_its_limit_only():
@@ -50,7 +50,7 @@ def test_the_supervisor_may_lag_by_its_limit_only():
         _answer_all(clock, ("index",), clock.now_s)
         if clock.try_advance(0.0) is None:
             break
-    assert clock.now_s == pytest.approx(1.21)     # at 1.2 a status of 1.0 was still recent enough
+    assert clock.now_s == pytest.approx(1.21)  # at 1.2 a status of 1.0 was still recent enough
     assert clock.waiting_for() == ["supervisor"]
     clock.supervisor(1.1)
     assert clock.try_advance(0.0) == pytest.approx(1.22)
@@ -61,7 +61,7 @@ def test_a_finger_that_stops_answering_is_left_out_after_the_stall_and_rejoins()
     _answer_all(clock, ("index", "middle"), 1.0)
     assert clock.try_advance(0.0) is not None
     _answer_all(clock, ("index",), 1.01)
-    clock.encoder("middle", 1.01)               # middle's controller is gone
+    clock.encoder("middle", 1.01)  # middle's controller is gone
     assert clock.try_advance(0.1) is None
     assert clock.try_advance(0.7) == pytest.approx(1.02)
     assert clock.stalls == 1 and clock.joined == ["index"]

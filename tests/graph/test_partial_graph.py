@@ -38,8 +38,19 @@ def one_finger_graph(ros_domain_id):
 
 
 def _grasp(venv, tmp_path, *extra):
-    return subprocess.run([str(venv / "bin" / "hems"), "grasp", "--enable", "--plot", str(tmp_path / "grasp.png"),
-                           *extra], capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [
+            str(venv / "bin" / "hems"),
+            "grasp",
+            "--enable",
+            "--plot",
+            str(tmp_path / "grasp.png"),
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_grasp_names_missing_controllers_before_it_enables(one_finger_graph, venv, tmp_path):
@@ -67,7 +78,7 @@ def test_grasp_on_the_graphs_fingers_enables_runs_and_disables(one_finger_graph,
     assert "grasp: ENABLED" in lines and "grasp: DISABLED" in lines
     rows = [line.split() for line in lines if line.split() and line.split()[0] in names.FINGERS]
     assert [row[0] for row in rows] == [FINGER]
-    assert 9.9 < float(rows[0][5]) < 10.3   # peak tendon force, N (10 N hold)
+    assert 9.9 < float(rows[0][5]) < 10.3  # peak tendon force, N (10 N hold)
     snap = client.snapshot(fingers=(FINGER,), seconds=0.5)
     assert snap.supervisor.state_name != "ENABLED"
     assert graph.exited() == {}
@@ -76,36 +87,57 @@ def test_grasp_on_the_graphs_fingers_enables_runs_and_disables(one_finger_graph,
 def test_setpoint_all_waits_once_for_the_missing_controllers(one_finger_graph, venv):
     graph, _ = one_finger_graph
     started = time.monotonic()
-    result = subprocess.run([str(venv / "bin" / "hems"), "setpoint", "all", "0", "--unit", "mm", "--timeout", "3"],
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [str(venv / "bin" / "hems"), "setpoint", "all", "0", "--unit", "mm", "--timeout", "3"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     elapsed = time.monotonic() - started
     assert result.returncode == 1, result.stdout + result.stderr
     assert f"{FINGER}: position setpoint 0 m: in force (controller status)" in result.stdout
     for finger in names.FINGERS:
         if finger != FINGER:
-            assert f"{finger}: position setpoint 0 m: no finger_controller subscribed to /hems/{finger}/setpoint" \
-                in result.stderr
-    assert elapsed < 12.0   # 3 s for all five missing ones, not 15 s
+            assert (
+                f"{finger}: position setpoint 0 m: no finger_controller subscribed to "
+                f"/hems/{finger}/setpoint" in result.stderr
+            )
+    assert elapsed < 12.0  # 3 s for all five missing ones, not 15 s
     assert graph.exited() == {}
 
 
 @pytest.mark.parametrize("signal_name", ["SIGTERM", "SIGINT"])
-def test_a_grasp_that_enabled_the_graph_disables_it_when_stopped(one_finger_graph, venv, tmp_path, signal_name):
+def test_a_grasp_that_enabled_the_graph_disables_it_when_stopped(
+    one_finger_graph, venv, tmp_path, signal_name
+):
     # rclpy's handler takes the process's ROS context with the signal; a tool that could not
     # disable the graph then would leave it ENABLED, the finger heating to its last setpoint
     graph, client = one_finger_graph
-    grasp = subprocess.Popen([str(venv / "bin" / "hems"), "grasp", "--enable", "--fingers", FINGER,
-                              "--plot", str(tmp_path / "grasp.png")], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    grasp = subprocess.Popen(
+        [
+            str(venv / "bin" / "hems"),
+            "grasp",
+            "--enable",
+            "--fingers",
+            FINGER,
+            "--plot",
+            str(tmp_path / "grasp.png"),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     try:
         os.set_blocking(grasp.stdout.fileno(), False)
         seen, deadline = b"", time.monotonic() + 60
-        while b"grasp: approach" not in seen and grasp.poll() is None and time.monotonic() < deadline:
+        while (
+            b"grasp: approach" not in seen and grasp.poll() is None and time.monotonic() < deadline
+        ):
             try:
                 seen += os.read(grasp.stdout.fileno(), 65536)
             except BlockingIOError:
                 time.sleep(0.1)
         assert b"grasp: approach" in seen, seen
-        time.sleep(1.0)   # heating
+        time.sleep(1.0)  # heating
         grasp.send_signal(getattr(signal, signal_name))
         os.set_blocking(grasp.stdout.fileno(), True)
         rest, err = grasp.communicate(timeout=60)
@@ -124,9 +156,16 @@ def test_a_grasp_that_enabled_the_graph_disables_it_when_stopped(one_finger_grap
 def test_a_setpoint_on_a_graph_not_enabled_says_nothing_heats(one_finger_graph, venv):
     graph, client = one_finger_graph
     client.call("disable")
-    result = subprocess.run([str(venv / "bin" / "hems"), "setpoint", FINGER, "5", "--unit", "mm", "--timeout", "5"],
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [str(venv / "bin" / "hems"), "setpoint", FINGER, "5", "--unit", "mm", "--timeout", "5"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 1, result.stdout + result.stderr
     assert f"{FINGER}: position setpoint 0.005 m: in force (controller status)" in result.stdout
-    assert "the supervisor is DISABLED: nothing heats until it is ENABLED (hems enable)" in result.stderr
+    assert (
+        "the supervisor is DISABLED: nothing heats until it is ENABLED (hems enable)"
+        in result.stderr
+    )
     assert graph.exited() == {}

@@ -49,11 +49,34 @@ def _step(venv, tmp_path, *options: str) -> tuple[float, float, float]:
     import subprocess
 
     folder = tmp_path / "_".join(o.strip("-") for o in options)
-    result = subprocess.run([str(venv / "bin" / "hems"), "step", "--sim-time", "--fingers", FINGER, *options,
-                             "--log-level", "warn", "--before-s", "1", "--step-s", "3", "--after-s", "1",
-                             "--record", str(folder)], capture_output=True, text=True, timeout=400)
+    result = subprocess.run(
+        [
+            str(venv / "bin" / "hems"),
+            "step",
+            "--sim-time",
+            "--fingers",
+            FINGER,
+            *options,
+            "--log-level",
+            "warn",
+            "--before-s",
+            "1",
+            "--step-s",
+            "3",
+            "--after-s",
+            "1",
+            "--record",
+            str(folder),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=400,
+    )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
-    printed = re.search(r"rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), steady_state_error_mm (-?[\d.]+)", result.stdout)
+    printed = re.search(
+        r"rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), steady_state_error_mm (-?[\d.]+)",
+        result.stdout,
+    )
     assert printed, result.stdout
     # the controller held the step for at least the 3 s of the graph's clock the figures cover
     from hems_ros.bag import load_bag
@@ -66,13 +89,17 @@ def _step(venv, tmp_path, *options: str) -> tuple[float, float, float]:
     return tuple(map(float, printed.groups()))
 
 
-def test_a_step_on_sim_time_gives_the_same_figures_at_any_rate_and_layout(venv, ros_domain_id, tmp_path):
+def test_a_step_on_sim_time_gives_the_same_figures_at_any_rate_and_layout(
+    venv, ros_domain_id, tmp_path
+):
     # The lockstep clock moves on only when the unit, the shoulder module and the controller
     # have answered the current sample: a plain clock at 4x once gave 0.73 and 0.40 mm of
     # overshoot where 1x gave 0.06, as the nodes fell behind it.
-    runs = {"composed, max": _step(venv, tmp_path, "--composed", "--rate", "max"),
-            "separate, 4x": _step(venv, tmp_path, "--rate", "4"),
-            "composed, 1x": _step(venv, tmp_path, "--composed", "--rate", "1")}
+    runs = {
+        "composed, max": _step(venv, tmp_path, "--composed", "--rate", "max"),
+        "separate, 4x": _step(venv, tmp_path, "--rate", "4"),
+        "composed, 1x": _step(venv, tmp_path, "--composed", "--rate", "1"),
+    }
     print(runs)
     rmse, overshoot, ss_error = runs["composed, 1x"]
     assert 5.0 < rmse < 15.0 and 0.0 <= overshoot < 0.2 and abs(ss_error) < 0.1

@@ -11,8 +11,11 @@ from hems_ros.processes import stop_process
 def test_snapshot_waits_for_the_supervisor_beyond_its_listen_time(venv, ros_domain_id):
     from hems_ros.client.graph_client import GraphClient
 
-    supervisor = subprocess.Popen([str(venv / "bin" / "python"), "-m", "hems_ros.nodes.supervisor"],
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    supervisor = subprocess.Popen(
+        [str(venv / "bin" / "python"), "-m", "hems_ros.nodes.supervisor"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         with GraphClient("hems_status_test") as client:
             start = time.monotonic()
@@ -32,10 +35,17 @@ def test_status_rows_name_a_unit_or_controller_that_has_not_taken_enabled():
     from hems_ros.cli.commands import format_status
     from hems_ros.client.graph_client import Snapshot
 
-    snap = Snapshot(controllers={f: ControllerStatus(finger=f, mode="position", active=f != "middle")
-                                 for f in ("index", "middle", "ring")},
-                    states={f: ActuatorState(finger=f, heating_allowed=f != "ring") for f in ("index", "middle", "ring")},
-                    supervisor=SupervisorStatus(state=SupervisorStatus.ENABLED, state_name="ENABLED"))
+    snap = Snapshot(
+        controllers={
+            f: ControllerStatus(finger=f, mode="position", active=f != "middle")
+            for f in ("index", "middle", "ring")
+        },
+        states={
+            f: ActuatorState(finger=f, heating_allowed=f != "ring")
+            for f in ("index", "middle", "ring")
+        },
+        supervisor=SupervisorStatus(state=SupervisorStatus.ENABLED, state_name="ENABLED"),
+    )
     rows = {line.split()[0]: line for line in format_status(snap).splitlines()}
     assert rows["index"].endswith("  -")
     assert rows["middle"].endswith("  controller inactive")
@@ -50,8 +60,10 @@ def test_a_finger_heard_without_its_state_or_force_keeps_the_snapshot_listening_
     from hems_ros.cli.commands import format_status
     from hems_ros.client.graph_client import Snapshot
 
-    snap = Snapshot(controllers={"index": ControllerStatus(finger="index", mode="force", setpoint=10.0)},
-                    supervisor=SupervisorStatus(state=SupervisorStatus.ENABLED, state_name="ENABLED"))
+    snap = Snapshot(
+        controllers={"index": ControllerStatus(finger="index", mode="force", setpoint=10.0)},
+        supervisor=SupervisorStatus(state=SupervisorStatus.ENABLED, state_name="ENABLED"),
+    )
     assert snap.incomplete()
     row = next(line for line in format_status(snap).splitlines() if line.startswith("index"))
     # was "nan nan": no state or force message had arrived within the listen

@@ -16,16 +16,36 @@ def test_step_records_a_step_and_prints_its_figures(venv, ros_domain_id, tmp_pat
     from hems_ros.client.step_figures import step_figures
 
     bag = tmp_path / "step"
-    result = subprocess.run([str(venv / "bin" / "hems"), "step", "--composed", "--log-level", "warn",
-                             "--before-s", "1", "--step-s", "4", "--after-s", "2", "--record", str(bag)],
-                            capture_output=True, text=True, timeout=180)
+    result = subprocess.run(
+        [
+            str(venv / "bin" / "hems"),
+            "step",
+            "--composed",
+            "--log-level",
+            "warn",
+            "--before-s",
+            "1",
+            "--step-s",
+            "4",
+            "--after-s",
+            "2",
+            "--record",
+            str(bag),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
-    printed = re.search(r"step: index: rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), steady_state_error_mm (-?[\d.]+)",
-                        result.stdout)
+    printed = re.search(
+        r"step: index: rmse_mm ([\d.]+), overshoot_mm (-?[\d.]+), steady_state_error_mm (-?[\d.]+)",
+        result.stdout,
+    )
     assert printed, result.stdout
     figures = step_figures(bag, "index", 2.0, step_s=4.0)
     assert [float(v) for v in printed.groups()] == pytest.approx(
-        [figures["rmse_mm"], figures["overshoot_mm"], figures["steady_state_error_mm"]], abs=5e-4)
+        [figures["rmse_mm"], figures["overshoot_mm"], figures["steady_state_error_mm"]], abs=5e-4
+    )
     # the index unit with Table 5.1's gains: 0.060 mm overshoot and steady-state error by hand
     assert 0.0 <= figures["overshoot_mm"] < 0.2
     assert abs(figures["steady_state_error_mm"]) < 0.1

@@ -20,7 +20,9 @@ def _truth() -> UnitDriver:
     return driver
 
 
-def _run(seconds: float, duty_of, guard: ThermalGuard | None = None, truth: UnitDriver | None = None):
+def _run(
+    seconds: float, duty_of, guard: ThermalGuard | None = None, truth: UnitDriver | None = None
+):
     """Drive the truth at ``duty_of(k)`` per 10 ms sample (0 while the guard holds it); the
     truth's peak temperature and the largest |estimate - truth|."""
     truth = truth or _truth()
@@ -41,8 +43,8 @@ def test_the_estimate_follows_the_wire_through_heating_holding_and_cooling():
     guard = ThermalGuard(PARAMS, cut_c=500.0, resume_c=490.0, period_s=PERIOD)
     # 2 s at full duty, 3 s at 30 %, 5 s off
     peak, worst = _run(10.0, lambda k: 100.0 if k < 200 else (30.0 if k < 500 else 0.0), guard)
-    assert peak > 100.0          # the wire transformed: not a trivial run
-    assert worst < 0.5           # degC: the board's readings carry the heat the wire took
+    assert peak > 100.0  # the wire transformed: not a trivial run
+    assert worst < 0.5  # degC: the board's readings carry the heat the wire took
 
 
 def test_a_wire_a_stuck_encoder_keeps_heating_is_held_below_the_cut_off():
@@ -51,25 +53,32 @@ def test_a_wire_a_stuck_encoder_keeps_heating_is_held_below_the_cut_off():
     assert unguarded > 200.0
     guard = ThermalGuard(PARAMS, cut_c=150.0, resume_c=140.0, period_s=PERIOD)
     guarded, _ = _run(10.0, lambda k: 100.0, guard)
-    assert 145.0 < guarded < 152.0     # it heats to the cut-off, one sample of overshoot at most
+    assert 145.0 < guarded < 152.0  # it heats to the cut-off, one sample of overshoot at most
     assert guard.limited or guard.estimate_c > 140.0
 
 
 def test_the_resistance_pulls_a_model_that_drifted_towards_the_wire():
     """A model 15 degC off in ambient: on heating, the measured resistance moves its estimate
     towards the wire's temperature (eqs. 4.3-4.5), each reading within MAX_CORRECTION_K."""
-    truth = UnitDriver(ActuationUnit(PARAMS.replace({"ambient_temperature_c": 37.0})), start_time_s=0.0,
-                       require_permission=False)
+    truth = UnitDriver(
+        ActuationUnit(PARAMS.replace({"ambient_temperature_c": 37.0})),
+        start_time_s=0.0,
+        require_permission=False,
+    )
     drifted = ThermalGuard(PARAMS, cut_c=500.0, resume_c=490.0, period_s=PERIOD)
     off = []
-    for k in range(50):                              # 0.5 s at 20 %: martensite, warming
+    for k in range(50):  # 0.5 s at 20 %: martensite, warming
         truth.command(20.0, k * PERIOD)
         [sample] = truth.advance((k + 1) * PERIOD)
         estimate = drifted.reading(sample.duty_percent, sample.on_current_a, sample.on_voltage_v)
-        off.append((truth.unit.state["wire_temperature_c"] - drifted.model.state["wire_temperature_c"],
-                    truth.unit.state["wire_temperature_c"] - estimate))
+        off.append(
+            (
+                truth.unit.state["wire_temperature_c"] - drifted.model.state["wire_temperature_c"],
+                truth.unit.state["wire_temperature_c"] - estimate,
+            )
+        )
     model_error, corrected_error = off[-1]
-    assert model_error > 14.0                        # the model alone is as far off as its ambient
+    assert model_error > 14.0  # the model alone is as far off as its ambient
     assert abs(corrected_error) < 0.3 * model_error  # the wire's own resistance says where it is
 
 

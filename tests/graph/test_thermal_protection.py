@@ -24,8 +24,14 @@ def _set_fault(node, fault: str) -> None:
 
     client = node.create_client(SetParameters, f"/hems/actuation_unit_{FINGER}/set_parameters")
     assert client.wait_for_service(timeout_sec=30.0)
-    request = SetParameters.Request(parameters=[Parameter(
-        name="sensor_fault", value=ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=fault))])
+    request = SetParameters.Request(
+        parameters=[
+            Parameter(
+                name="sensor_fault",
+                value=ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=fault),
+            )
+        ]
+    )
     future = client.call_async(request)
     rclpy.spin_until_future_complete(node, future, timeout_sec=10.0)
     assert future.result() is not None and future.result().results[0].successful
@@ -46,10 +52,18 @@ def test_a_stuck_encoder_cannot_overheat_the_wire(ros_domain_id):
         with GraphClient("hems_test_thermal") as client:
             assert not client.fingers_without_readers((FINGER,), timeout=60.0)
             truth, statuses = [], []
-            client.node.create_subscription(ActuatorState, names.sim_topic(FINGER, "state"),
-                                            lambda m: truth.append(m.wire_temperature_c), qos.SENSOR)
-            client.node.create_subscription(ControllerStatus, names.topic(FINGER, "controller_status"),
-                                            statuses.append, qos.CONTROLLER_STATUS)
+            client.node.create_subscription(
+                ActuatorState,
+                names.sim_topic(FINGER, "state"),
+                lambda m: truth.append(m.wire_temperature_c),
+                qos.SENSOR,
+            )
+            client.node.create_subscription(
+                ControllerStatus,
+                names.topic(FINGER, "controller_status"),
+                statuses.append,
+                qos.CONTROLLER_STATUS,
+            )
             ok, message = client.enable_when_ready(timeout=60.0)
             assert ok, message
             _set_fault(client.node, "stuck_encoder")
@@ -62,8 +76,8 @@ def test_a_stuck_encoder_cannot_overheat_the_wire(ros_domain_id):
             client.call("disable")
     finally:
         graph.stop()
-    assert max(truth) < 153.0, max(truth)                       # truth: never past the cut-off
-    assert max(truth) > 140.0                                    # it did heat up to it
+    assert max(truth) < 153.0, max(truth)  # truth: never past the cut-off
+    assert max(truth) > 140.0  # it did heat up to it
     assert any(s.thermal_limited for s in statuses)
     estimates = [s.wire_temperature_c for s in statuses if s.thermal_limited]
     assert min(estimates) >= 140.0 and max(estimates) < 153.0

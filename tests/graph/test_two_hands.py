@@ -20,7 +20,9 @@ TARGET_MM = 12.0
 
 
 def _hems(venv, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess:
-    return subprocess.run([str(venv / "bin" / "hems"), *args], capture_output=True, text=True, timeout=timeout)
+    return subprocess.run(
+        [str(venv / "bin" / "hems"), *args], capture_output=True, text=True, timeout=timeout
+    )
 
 
 def _snapshot(namespace: str):
@@ -28,21 +30,27 @@ def _snapshot(namespace: str):
 
     with GraphClient("hems_test_two_hands", namespace=namespace) as client:
         assert not client.fingers_without_readers((FINGER,), timeout=60.0)
-        return client.snapshot(fingers=(FINGER,), seconds=1.0, supervisor_wait_s=30.0), client.node.get_topic_names_and_types()
+        return client.snapshot(
+            fingers=(FINGER,), seconds=1.0, supervisor_wait_s=30.0
+        ), client.node.get_topic_names_and_types()
 
 
 def test_verbs_with_a_namespace_move_one_hand_and_leave_the_other_untouched(ros_domain_id, venv):
     from hems_ros.launcher import Graph, GraphOptions
 
     left = Graph(GraphOptions(fingers=(FINGER,), namespace="/left", log_level="warn"))
-    right = Graph(GraphOptions(fingers=(FINGER,), namespace="/right", composed=True, log_level="warn"))
+    right = Graph(
+        GraphOptions(fingers=(FINGER,), namespace="/right", composed=True, log_level="warn")
+    )
     left.start()
     right.start()
     try:
         before, _ = _snapshot("/right")
         enabled = _hems(venv, "enable", "--namespace", "left", "--timeout", "60")
         assert enabled.returncode == 0, enabled.stdout + enabled.stderr
-        moved = _hems(venv, "setpoint", FINGER, str(TARGET_MM), "--unit", "mm", "--namespace", "left")
+        moved = _hems(
+            venv, "setpoint", FINGER, str(TARGET_MM), "--unit", "mm", "--namespace", "left"
+        )
         assert moved.returncode == 0, moved.stdout + moved.stderr
         deadline = time.monotonic() + 20.0
         while True:
@@ -56,16 +64,25 @@ def test_verbs_with_a_namespace_move_one_hand_and_leave_the_other_untouched(ros_
 
         after, topics = _snapshot("/right")
         assert after.supervisor.state_name == "IDLE"
-        assert after.controllers[FINGER].setpoint == 0.0 and after.controllers[FINGER].duty_percent == 0.0
-        assert after.states[FINGER].electrical_energy == before.states[FINGER].electrical_energy == 0.0
+        assert (
+            after.controllers[FINGER].setpoint == 0.0
+            and after.controllers[FINGER].duty_percent == 0.0
+        )
+        assert (
+            after.states[FINGER].electrical_energy == before.states[FINGER].electrical_energy == 0.0
+        )
         assert abs(after.states[FINGER].tendon_position) < 1e-4
         status = _hems(venv, "status", "--namespace", "right")
-        assert status.returncode == 0 and "supervisor: IDLE" in status.stdout, status.stdout + status.stderr
+        assert status.returncode == 0 and "supervisor: IDLE" in status.stdout, (
+            status.stdout + status.stderr
+        )
 
         topic_names = {name for name, _ in topics}
         assert names.topic(FINGER, "encoder", "/left") in topic_names
         assert names.topic(FINGER, "encoder", "/right") in topic_names
-        assert not [name for name in topic_names if name.startswith(names.NAMESPACE + "/")], topic_names
+        assert not [
+            name for name in topic_names if name.startswith(names.NAMESPACE + "/")
+        ], topic_names
     finally:
         left.stop()
         right.stop()
@@ -74,4 +91,6 @@ def test_verbs_with_a_namespace_move_one_hand_and_leave_the_other_untouched(ros_
 def test_a_bad_namespace_is_refused_before_anything_starts(venv):
     result = _hems(venv, "status", "--namespace", "2nd-hand")
     assert result.returncode == 2
-    assert "namespace '2nd-hand': expected tokens of letters, digits and underscores" in result.stderr
+    assert (
+        "namespace '2nd-hand': expected tokens of letters, digits and underscores" in result.stderr
+    )

@@ -38,7 +38,9 @@ def _links() -> str:
 
 
 def _namespaces() -> str:
-    return subprocess.run(["ip", "netns", "list"], capture_output=True, text=True, check=True).stdout
+    return subprocess.run(
+        ["ip", "netns", "list"], capture_output=True, text=True, check=True
+    ).stdout
 
 
 @pytest.fixture
@@ -78,12 +80,20 @@ def _run(ns: dict[str, str], split: bool) -> dict:
             side = side_of[name]
             peer = ADDRESS["b" if side == "a" else "a"]
             env = child_environment({"ROS_STATIC_PEERS": peer if split else ""})
-            processes.append(subprocess.Popen(["ip", "netns", "exec", ns[side], *command], env=env,
-                                              process_group=0))
+            processes.append(
+                subprocess.Popen(
+                    ["ip", "netns", "exec", ns[side], *command], env=env, process_group=0
+                )
+            )
         client_side = side_of["supervisor"]
         env = child_environment({"ROS_STATIC_PEERS": ADDRESS["a"] if split else ""})
-        done = subprocess.run(["ip", "netns", "exec", ns[client_side], sys.executable, str(CLIENT)],
-                              env=env, capture_output=True, text=True, timeout=180)
+        done = subprocess.run(
+            ["ip", "netns", "exec", ns[client_side], sys.executable, str(CLIENT)],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=180,
+        )
         assert done.returncode == 0, done.stdout + done.stderr[-2000:]
         return json.loads(done.stdout.strip().splitlines()[-1])
     finally:
@@ -94,10 +104,12 @@ def test_step_and_estop_across_two_namespaces(namespaces):
     one = _run(namespaces, split=False)
     two = _run(namespaces, split=True)
     added_ms = 1e3 * (two["latency_p50_s"] - one["latency_p50_s"])
-    print(f"duty-command latency p50: {1e3 * one['latency_p50_s']:.2f} ms in one namespace, "
-          f"{1e3 * two['latency_p50_s']:.2f} ms across the link (added {added_ms:+.2f} ms); "
-          f"p99 {1e3 * one['latency_p99_s']:.2f} / {1e3 * two['latency_p99_s']:.2f} ms; e-stop to zero duty "
-          f"{1e3 * two['estop_zero_duty_s']:.0f} ms across")
+    print(
+        f"duty-command latency p50: {1e3 * one['latency_p50_s']:.2f} ms in one namespace, "
+        f"{1e3 * two['latency_p50_s']:.2f} ms across the link (added {added_ms:+.2f} ms); "
+        f"p99 {1e3 * one['latency_p99_s']:.2f} / {1e3 * two['latency_p99_s']:.2f} ms; e-stop to "
+        f"zero duty {1e3 * two['estop_zero_duty_s']:.0f} ms across"
+    )
     for run in (one, two):
         assert run["setpoint_taken"] and run["reached_s"] is not None, run
         assert run["heated_before_estop"] and not run["heated_after"], run

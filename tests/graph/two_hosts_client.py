@@ -28,25 +28,47 @@ def main() -> int:
         def on_diagnostics(message: DiagnosticArray) -> None:
             for entry in message.status:
                 if entry.hardware_id == f"actuation_unit_{FINGER}":
-                    latency.update({kv.key: float(kv.value) for kv in entry.values if kv.key.startswith("latency_p")})
+                    latency.update(
+                        {
+                            kv.key: float(kv.value)
+                            for kv in entry.values
+                            if kv.key.startswith("latency_p")
+                        }
+                    )
 
-        client.node.create_subscription(ControllerStatus, names.topic(FINGER, "controller_status"),
-                                        status.append, qos.CONTROLLER_STATUS)
-        client.node.create_subscription(DriveReading, names.topic(FINGER, "drive"),
-                                        lambda m: drive.append((time.monotonic(), m.duty_percent)), qos.SENSOR)
+        client.node.create_subscription(
+            ControllerStatus,
+            names.topic(FINGER, "controller_status"),
+            status.append,
+            qos.CONTROLLER_STATUS,
+        )
+        client.node.create_subscription(
+            DriveReading,
+            names.topic(FINGER, "drive"),
+            lambda m: drive.append((time.monotonic(), m.duty_percent)),
+            qos.SENSOR,
+        )
         client.node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 10)
         ok, message = client.enable_when_ready(90.0, reset=True, retry_s=1.0)
         out["enabled"] = message
         if not ok:
             print(json.dumps(out))
             return 1
-        out["setpoint_taken"] = bool(client.send_setpoint(FINGER, "position", TARGET_M, confirm_s=10.0).confirmed)
+        out["setpoint_taken"] = bool(
+            client.send_setpoint(FINGER, "position", TARGET_M, confirm_s=10.0).confirmed
+        )
         start = time.monotonic()
-        while time.monotonic() - start < 20.0 and not (status and abs(status[-1].measurement - TARGET_M) < 0.5e-3):
+        while time.monotonic() - start < 20.0 and not (
+            status and abs(status[-1].measurement - TARGET_M) < 0.5e-3
+        ):
             client.spin_for(0.1)
-        out["reached_s"] = time.monotonic() - start if status and abs(status[-1].measurement - TARGET_M) < 0.5e-3 else None
+        out["reached_s"] = (
+            time.monotonic() - start
+            if status and abs(status[-1].measurement - TARGET_M) < 0.5e-3
+            else None
+        )
         latency.clear()
-        client.spin_for(2.5)    # a fresh /diagnostics (1 Hz) from the hold
+        client.spin_for(2.5)  # a fresh /diagnostics (1 Hz) from the hold
         out["latency_p50_s"] = latency.get("latency_p50_s")
         out["latency_p99_s"] = latency.get("latency_p99_s")
         heated_before = any(duty > 0 for _, duty in drive[-20:])

@@ -14,7 +14,9 @@ def context(ros_domain_id):
     context = Context()
     rclpy.init(context=context)
     yield context
-    rclpy.try_shutdown(context=context)  # a test that spins on a thread shuts it down to stop the loop
+    rclpy.try_shutdown(
+        context=context
+    )  # a test that spins on a thread shuts it down to stop the loop
 
 
 @pytest.fixture
@@ -73,7 +75,9 @@ def live_supervisor(other_participant):
     from hems_ros.nodes import qos
 
     def make(unit):
-        publisher = other_participant.create_publisher(SupervisorStatus, "/hems/supervisor/status", qos.STATUS)
+        publisher = other_participant.create_publisher(
+            SupervisorStatus, "/hems/supervisor/status", qos.STATUS
+        )
         _wait_alive(unit.supervisor_watch)
         unit.driver.supervisor_alive = True
         return other_participant, publisher
@@ -89,7 +93,10 @@ def one_round(context):
 
     def run(node) -> None:
         rounds = iter([True])
-        lean_spin.loop(context, lambda: (list(node.subscriptions), list(node.timers), []),
-                       keep_going=lambda: next(rounds, False))
+        lean_spin.loop(
+            context,
+            lambda: (list(node.subscriptions), list(node.timers), []),
+            keep_going=lambda: next(rounds, False),
+        )
 
     return run

@@ -15,7 +15,7 @@ def test_duty_is_zero_while_the_other_sensor_lags_and_back_when_it_returns(conte
     from hems_ros.nodes.finger_controller import FingerControllerNode
 
     node = FingerControllerNode(context=context)
-    node.peers_in_this_process({"shoulder_module"})    # the stamps below stand in for its readings
+    node.peers_in_this_process({"shoulder_module"})  # the stamps below stand in for its readings
     try:
         node.enabled = True
         node.setpoint = Setpoint("position", 0.02)
@@ -23,16 +23,16 @@ def test_duty_is_zero_while_the_other_sensor_lags_and_back_when_it_returns(conte
         t0 = 1000.0
         node.force_stamp = _stamp(t0)
         node.encoder_stamp = _stamp(t0 + 0.05)
-        node.control(node.encoder_stamp)           # 50 ms behind: fresh enough, the loop heats
+        node.control(node.encoder_stamp)  # 50 ms behind: fresh enough, the loop heats
         assert node.duty == 100.0
         node.encoder_stamp = _stamp(t0 + 0.11)
-        node.control(node.encoder_stamp)           # 110 ms behind (unit clock): 0 %
+        node.control(node.encoder_stamp)  # 110 ms behind (unit clock): 0 %
         assert node.duty == 0.0
-        node.force_stamp = _stamp(t0 + 0.11)       # the sensor is back
+        node.force_stamp = _stamp(t0 + 0.11)  # the sensor is back
         node.encoder_stamp = _stamp(t0 + 0.12)
         node.control(node.encoder_stamp)
         assert node.duty == 100.0
-        node.force_stamp = (0, 0)                  # never a force reading: no heating either
+        node.force_stamp = (0, 0)  # never a force reading: no heating either
         node.control(_stamp(t0 + 0.13))
         assert node.duty == 0.0
     finally:
@@ -51,7 +51,7 @@ def test_in_force_mode_the_encoder_is_the_other_sensor(context):
         node.wire_position, node.wire_force = 0.0, 4.0
         node.encoder_stamp = _stamp(2000.0)
         node.force_stamp = _stamp(2000.2)
-        node.control(node.force_stamp)             # encoder 200 ms behind the force feedback
+        node.control(node.force_stamp)  # encoder 200 ms behind the force feedback
         assert node.duty == 0.0
         node.encoder_stamp = _stamp(2000.2)
         node.control(node.force_stamp)
@@ -60,7 +60,9 @@ def test_in_force_mode_the_encoder_is_the_other_sensor(context):
         node.destroy_node()
 
 
-def test_a_force_sensor_whose_module_stopped_stops_a_position_loop_within_its_lease(context, other_participant, wait_alive):
+def test_a_force_sensor_whose_module_stopped_stops_a_position_loop_within_its_lease(
+    context, other_participant, wait_alive
+):
     """The controller watches the liveliness of the wire-force writer (qos.WIRE_FORCE): a
     module that stops or dies is seen within the lease, before its last readings lag."""
     import time
@@ -73,7 +75,9 @@ def test_a_force_sensor_whose_module_stopped_stops_a_position_loop_within_its_le
 
     node = FingerControllerNode(context=context)
     try:
-        writer = other_participant.create_publisher(WireForce, "/hems/index/wire_force", qos.WIRE_FORCE)
+        writer = other_participant.create_publisher(
+            WireForce, "/hems/index/wire_force", qos.WIRE_FORCE
+        )
         wait_alive(node.force_watch)
         node.enabled = True
         node.setpoint = Setpoint("position", 0.02)
@@ -86,7 +90,7 @@ def test_a_force_sensor_whose_module_stopped_stops_a_position_loop_within_its_le
         while node.force_watch.alive():
             assert time.monotonic() < deadline, "the controller still sees a module that left"
             time.sleep(0.005)
-        node.control(node.encoder_stamp)          # the same fresh stamps: only the liveliness says no
+        node.control(node.encoder_stamp)  # the same fresh stamps: only the liveliness says no
         assert node.duty == 0.0
         assert node.force_watch.losses == 1
     finally:

@@ -40,19 +40,21 @@ def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context, 
         assert node.setpoint.mode == "position" and node.status_every == 2
         publisher = matched_publisher(helper, WireForce, "/hems/index/wire_force", qos.WIRE_FORCE)
         node.wire_position = 0.0
-        node.control((0, 0))   # the first step reports at once (a new status key)
+        node.control((0, 0))  # the first step reports at once (a new status key)
         publisher.publish(WireForce(finger="index", force=7.5))
         time.sleep(0.05)
-        node.control((0, 0))   # no status at this step: the force stays queued
+        node.control((0, 0))  # no status at this step: the force stays queued
         assert node.wire_force is None
-        node.control((0, 0))   # the second step since the last status sends one, with the force
+        node.control((0, 0))  # the second step since the last status sends one, with the force
         assert node.wire_force == 7.5
     finally:
         helper.destroy_node()
         node.destroy_node()
 
 
-def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_status(context, matched_publisher):
+def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_status(
+    context, matched_publisher
+):
     import rclpy
     from hems_msgs.msg import SupervisorStatus
 
@@ -62,27 +64,30 @@ def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_statu
     node = FingerControllerNode(context=context)
     helper = rclpy.create_node("supervisor_stand_in", context=context)
     try:
-        assert node.supervisor_sub in node.polled   # never wakes the controller
-        publisher = matched_publisher(helper, SupervisorStatus, "/hems/supervisor/status", qos.STATUS)
+        assert node.supervisor_sub in node.polled  # never wakes the controller
+        publisher = matched_publisher(
+            helper, SupervisorStatus, "/hems/supervisor/status", qos.STATUS
+        )
         node.wire_position = 0.0
-        node.control((0, 0))   # reports the new key: the next status is due two steps on
+        node.control((0, 0))  # reports the new key: the next status is due two steps on
         publisher.publish(SupervisorStatus(state=SupervisorStatus.ENABLED))
         time.sleep(0.05)
         node.control((0, 0))
         assert not node.enabled
-        node.control((0, 0))   # a status step: taken before the duty is computed
+        node.control((0, 0))  # a status step: taken before the duty is computed
         assert node.enabled and node.status_sequence >= 2
         publisher.publish(SupervisorStatus(state=SupervisorStatus.ESTOP))
         time.sleep(0.05)
-        node.on_idle()         # with no feedback the idle status takes it
+        node.on_idle()  # with no feedback the idle status takes it
         assert not node.enabled and node.duty == 0.0
     finally:
         helper.destroy_node()
         node.destroy_node()
 
 
-def test_after_a_pause_the_controller_reports_the_queued_encoder_reading_not_the_old_one(context, matched_publisher,
-                                                                                        one_round):
+def test_after_a_pause_the_controller_reports_the_queued_encoder_reading_not_the_old_one(
+    context, matched_publisher, one_round
+):
     # A controller process not scheduled for longer than the idle period wakes with its idle
     # timer ready and encoder readings queued; an idle status sent first repeated the reading
     # from before the pause, which the supervisor took for a stale encoder (FAULT).
@@ -104,7 +109,9 @@ def test_after_a_pause_the_controller_reports_the_queued_encoder_reading_not_the
     node.publish_status = recording_status
     try:
         publisher = matched_publisher(helper, EncoderReading, "/hems/index/encoder", qos.SENSOR)
-        reading = EncoderReading(finger="index", counts=10, position=1e-5, resolution=1e-6, sequence=1)
+        reading = EncoderReading(
+            finger="index", counts=10, position=1e-5, resolution=1e-6, sequence=1
+        )
         reading.header.stamp.sec = 1
         publisher.publish(reading)
         time.sleep(0.05)
@@ -112,7 +119,7 @@ def test_after_a_pause_the_controller_reports_the_queued_encoder_reading_not_the
         assert node.encoder_stamp == (1, 0)
         reading.header.stamp.sec, reading.sequence = 2, 2
         publisher.publish(reading)
-        time.sleep(0.15)   # longer than the 0.1 s idle period
+        time.sleep(0.15)  # longer than the 0.1 s idle period
         assert node.idle_timer.is_ready()
         reported.clear()
         one_round(node)

@@ -22,7 +22,12 @@ def test_the_controller_status_is_offered_best_effort_and_a_best_effort_reader_g
     executor.add_node(helper)
     received = []
     try:
-        helper.create_subscription(ControllerStatus, "/hems/index/controller_status", received.append, qos.CONTROLLER_STATUS)
+        helper.create_subscription(
+            ControllerStatus,
+            "/hems/index/controller_status",
+            received.append,
+            qos.CONTROLLER_STATUS,
+        )
         deadline = time.monotonic() + 10.0
         while not (offered := helper.get_publishers_info_by_topic("/hems/index/controller_status")):
             assert time.monotonic() < deadline, "the controller's status writer was not discovered"

@@ -66,7 +66,9 @@ def answer(executor, call):
     return None
 
 
-def test_lean_spin_runs_timers_subscriptions_and_services_and_stops_on_shutdown(ros_domain_id: int) -> None:
+def test_lean_spin_runs_timers_subscriptions_and_services_and_stops_on_shutdown(
+    ros_domain_id: int,
+) -> None:
     from std_msgs.msg import Int32
     from std_srvs.srv import Trigger
 
@@ -78,7 +80,9 @@ def test_lean_spin_runs_timers_subscriptions_and_services_and_stops_on_shutdown(
 
     def build(node) -> None:
         node.create_timer(0.01, lambda: ticks.append(time.monotonic()))
-        node.create_subscription(Int32, "/lean_spin_test/numbers", lambda m: received.append(m.data), 10)
+        node.create_subscription(
+            Int32, "/lean_spin_test/numbers", lambda m: received.append(m.data), 10
+        )
         node.create_service(Trigger, "/lean_spin_test/count", count)
 
     with spun("lean_spin_test", build) as (node, peer, executor, stopped):
@@ -97,10 +101,10 @@ def test_lean_spin_runs_timers_subscriptions_and_services_and_stops_on_shutdown(
         assert response is not None and response.message == "5 received"
         assert received == [0, 1, 2, 3, 4]
         deadline = time.monotonic() + 10
-        while len(ticks) <= 10 and time.monotonic() < deadline:   # all of that can take under 30 ms
+        while len(ticks) <= 10 and time.monotonic() < deadline:  # all of that can take under 30 ms
             time.sleep(0.01)
         spacing = sorted(b - a for a, b in zip(ticks, ticks[1:]))
-        assert len(ticks) > 10 and 0.008 < spacing[len(spacing) // 2] < 0.012   # the 10 ms timer
+        assert len(ticks) > 10 and 0.008 < spacing[len(spacing) // 2] < 0.012  # the 10 ms timer
     assert stopped == [True]
 
 
@@ -144,7 +148,9 @@ def test_lean_spin_serves_the_parameter_services(ros_domain_id: int) -> None:
         assert node.get_parameter("gain").value == 0.8
 
 
-def test_a_queued_message_runs_before_a_timer_ready_at_the_same_wake_up(context, matched_publisher, one_round) -> None:
+def test_a_queued_message_runs_before_a_timer_ready_at_the_same_wake_up(
+    context, matched_publisher, one_round
+) -> None:
     import rclpy
     from std_msgs.msg import Int32
 
@@ -155,10 +161,12 @@ def test_a_queued_message_runs_before_a_timer_ready_at_the_same_wake_up(context,
     helper = rclpy.create_node("lean_spin_order_sender", context=context)
     try:
         node.create_timer(0.05, lambda: order.append("timer"))
-        node.create_subscription(Int32, "/lean_spin_order/numbers", lambda m: order.append(f"message {m.data}"), 10)
+        node.create_subscription(
+            Int32, "/lean_spin_order/numbers", lambda m: order.append(f"message {m.data}"), 10
+        )
         publisher = matched_publisher(helper, Int32, "/lean_spin_order/numbers", 10)
         publisher.publish(Int32(data=1))
-        time.sleep(0.2)    # the node is not spun: the timer expires while the message waits
+        time.sleep(0.2)  # the node is not spun: the timer expires while the message waits
         one_round(node)
         assert order == ["message 1", "timer"]
     finally:

@@ -27,8 +27,12 @@ def thread_policies(pid: int) -> dict[str, int]:
 
 
 def test_a_node_process_defers_its_middleware_threads_only(ros_domain_id):
-    process = subprocess.Popen(executable_path("shoulder_module") + ["--ros-args", "--log-level", "warn"],
-                               env=child_environment(), stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        executable_path("shoulder_module") + ["--ros-args", "--log-level", "warn"],
+        env=child_environment(),
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 30.0
         while True:
@@ -39,7 +43,9 @@ def test_a_node_process_defers_its_middleware_threads_only(ros_domain_id):
                 break
             assert time.monotonic() < deadline, f"thread policies after 30 s: {policies}"
             time.sleep(0.2)
-        assert any(k.startswith("dds.shm.") for k in middleware) and any(k.startswith("dds.ev.") for k in middleware)
+        assert any(k.startswith("dds.shm.") for k in middleware) and any(
+            k.startswith("dds.ev.") for k in middleware
+        )
         assert policies[f"main/{process.pid}"] == os.SCHED_OTHER
     finally:
         process.send_signal(signal.SIGINT)

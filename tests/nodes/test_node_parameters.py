@@ -11,18 +11,40 @@ import subprocess
 import pytest
 
 
-@pytest.mark.parametrize("executable, override, message", [
-    ("actuation_unit", "finger:=pinky", "parameter 'finger' = 'pinky': must be one of"),
-    ("actuation_unit", "physics_dt_s:=-0.001", "parameter 'physics_dt_s' = -0.001: must be a finite number > 0"),
-    ("actuation_unit", "physics_dt_s:=1", "parameter 'physics_dt_s': wrong type"),
-    ("actuation_unit", "physics_config:=no_such_set", "parameter 'physics_config' = 'no_such_set'"),
-    ("finger_controller", "strategy:=fuzzy", "parameter 'strategy' = 'fuzzy': must be one of"),
-    ("shoulder_module", "module:=foot", "parameter 'module' = 'foot': must be one of"),
-    ("supervisor", "stale_s:=0.0", "parameter 'stale_s' = 0.0"),
-])
+@pytest.mark.parametrize(
+    "executable, override, message",
+    [
+        ("actuation_unit", "finger:=pinky", "parameter 'finger' = 'pinky': must be one of"),
+        (
+            "actuation_unit",
+            "physics_dt_s:=-0.001",
+            "parameter 'physics_dt_s' = -0.001: must be a finite number > 0",
+        ),
+        ("actuation_unit", "physics_dt_s:=1", "parameter 'physics_dt_s': wrong type"),
+        (
+            "actuation_unit",
+            "physics_config:=no_such_set",
+            "parameter 'physics_config' = 'no_such_set'",
+        ),
+        ("finger_controller", "strategy:=fuzzy", "parameter 'strategy' = 'fuzzy': must be one of"),
+        ("shoulder_module", "module:=foot", "parameter 'module' = 'foot': must be one of"),
+        ("supervisor", "stale_s:=0.0", "parameter 'stale_s' = 0.0"),
+    ],
+)
 def test_bad_parameter_stops_the_node_naming_it(venv, ros_domain_id, executable, override, message):
-    result = subprocess.run([str(venv / "bin" / "python"), "-m", f"hems_ros.nodes.{executable}",
-                             "--ros-args", "-p", override], capture_output=True, text=True, timeout=60)
+    result = subprocess.run(
+        [
+            str(venv / "bin" / "python"),
+            "-m",
+            f"hems_ros.nodes.{executable}",
+            "--ros-args",
+            "-p",
+            override,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert result.returncode == 2, result.stderr[-2000:]
     assert message in result.stderr
     assert "Traceback" not in result.stderr

@@ -13,7 +13,9 @@ import pytest
 class StandInController:
     """Takes /hems/index/setpoint like a finger_controller and reports it in its status at 50 Hz."""
 
-    def __init__(self, context, drop_first: bool = False, reject: bool = False, status: bool = True) -> None:
+    def __init__(
+        self, context, drop_first: bool = False, reject: bool = False, status: bool = True
+    ) -> None:
         import rclpy
         from hems_msgs.msg import ControllerStatus, FingerSetpoint
         from rclpy.executors import SingleThreadedExecutor
@@ -24,13 +26,25 @@ class StandInController:
         self.mode, self.setpoint, self.rejected, self.last_rejection = "position", 0.0, 0, ""
         self._drop_first, self._reject = drop_first, reject
         self.node = rclpy.create_node("controller_stand_in", context=context)
-        self.node.create_subscription(FingerSetpoint, "/hems/index/setpoint", self.on_setpoint, qos.COMMAND)
+        self.node.create_subscription(
+            FingerSetpoint, "/hems/index/setpoint", self.on_setpoint, qos.COMMAND
+        )
         if status:
-            publisher = self.node.create_publisher(ControllerStatus, "/hems/index/controller_status",
-                                                   qos.CONTROLLER_STATUS)
-            self.node.create_timer(0.02, lambda: publisher.publish(ControllerStatus(
-                finger="index", mode=self.mode, setpoint=self.setpoint, rejected_setpoints=self.rejected,
-                last_rejection=self.last_rejection)))
+            publisher = self.node.create_publisher(
+                ControllerStatus, "/hems/index/controller_status", qos.CONTROLLER_STATUS
+            )
+            self.node.create_timer(
+                0.02,
+                lambda: publisher.publish(
+                    ControllerStatus(
+                        finger="index",
+                        mode=self.mode,
+                        setpoint=self.setpoint,
+                        rejected_setpoints=self.rejected,
+                        last_rejection=self.last_rejection,
+                    )
+                ),
+            )
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
@@ -39,7 +53,7 @@ class StandInController:
     def on_setpoint(self, message) -> None:
         self.received += 1
         if self._drop_first and self.received == 1:
-            return                      # as a reader that had not matched the writer yet
+            return  # as a reader that had not matched the writer yet
         if self._reject:
             self.rejected += 1
             self.last_rejection = "outside this controller's limits"
@@ -88,7 +102,7 @@ def test_without_a_status_the_setpoint_is_not_called_in_force(client, stand_in):
     result = client.send_setpoint("index", "force", 3.0, confirm_s=1.0)
     assert not result and result.sent and result.confirmed is False
     assert result.message == "sent, but not in force after 1 s (no controller status received)"
-    assert stand_in.received >= 3          # sent again every RESEND_S while unconfirmed
+    assert stand_in.received >= 3  # sent again every RESEND_S while unconfirmed
     assert stand_in.setpoint == 3.0
 
 

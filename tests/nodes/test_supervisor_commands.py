@@ -17,20 +17,32 @@ def test_enable_judges_the_reports_received_since_the_last_check(context, matche
     from hems_ros.nodes.clock_time import to_msg
     from hems_ros.nodes.supervisor import SupervisorNode
 
-    supervisor = SupervisorNode(context=context, parameter_overrides=[Parameter("fingers", value=["index"])])
+    supervisor = SupervisorNode(
+        context=context, parameter_overrides=[Parameter("fingers", value=["index"])]
+    )
     helper = rclpy.create_node("controller_reports", context=context)
     try:
-        publisher = matched_publisher(helper, ControllerStatus, "/hems/index/controller_status", qos.CONTROLLER_STATUS)
+        publisher = matched_publisher(
+            helper, ControllerStatus, "/hems/index/controller_status", qos.CONTROLLER_STATUS
+        )
         unit = matched_publisher(helper, ActuatorState, "/hems/sim/index/state", qos.SENSOR)
         # a controller's report with fresh readings and the unit's state, queued while no
         # check runs (the node is not spun, so its 20 ms check never takes them)
         now = to_msg(time.time())
-        publisher.publish(ControllerStatus(finger="index", mode="position", wire_position=0.001, wire_force=4.0,
-                                           encoder_stamp=now, force_stamp=now))
+        publisher.publish(
+            ControllerStatus(
+                finger="index",
+                mode="position",
+                wire_position=0.001,
+                wire_force=4.0,
+                encoder_stamp=now,
+                force_stamp=now,
+            )
+        )
         state = ActuatorState(finger="index", watchdog_tripped=False)
         state.header.stamp = now
         assert publisher.wait_for_all_acked(Duration(seconds=5))
-        for _ in range(3):   # best effort: nothing acknowledges it, so it goes more than once
+        for _ in range(3):  # best effort: nothing acknowledges it, so it goes more than once
             unit.publish(state)
             time.sleep(0.03)
         response = supervisor.on_command("enable", Trigger.Response())
@@ -39,7 +51,6 @@ def test_enable_judges_the_reports_received_since_the_last_check(context, matche
     finally:
         helper.destroy_node()
         supervisor.destroy_node()
-
 
 
 def test_the_check_runs_on_the_clock_grid_between_the_module_pairs_ticks(context):

@@ -10,7 +10,11 @@ import pytest
 
 
 def _remapped(*rules: str) -> dict:
-    return {"cli_args": ["--ros-args", *(arg for rule in rules for arg in ("-r", rule))]} if rules else {}
+    return (
+        {"cli_args": ["--ros-args", *(arg for rule in rules for arg in ("-r", rule))]}
+        if rules
+        else {}
+    )
 
 
 @pytest.fixture
@@ -29,15 +33,22 @@ def one_finger(context):
     nodes, threads = [], []
 
     def make(unit_remaps=(), controller_remaps=()):
-        supervisor = SupervisorNode(context=context, parameter_overrides=[Parameter("fingers", value=["index"])])
-        nodes.extend([
-            ActuationUnitNode(context=context, **_remapped(*unit_remaps)),
-            ShoulderModuleNode(context=context),
-            FingerControllerNode(context=context, **_remapped(*controller_remaps)),
-            supervisor])
+        supervisor = SupervisorNode(
+            context=context, parameter_overrides=[Parameter("fingers", value=["index"])]
+        )
+        nodes.extend(
+            [
+                ActuationUnitNode(context=context, **_remapped(*unit_remaps)),
+                ShoulderModuleNode(context=context),
+                FingerControllerNode(context=context, **_remapped(*controller_remaps)),
+                supervisor,
+            ]
+        )
         for node in nodes:
             if hasattr(node, "peers_in_this_process"):
-                node.peers_in_this_process({"actuation_unit", "shoulder_module", "finger_controller", "supervisor"})
+                node.peers_in_this_process(
+                    {"actuation_unit", "shoulder_module", "finger_controller", "supervisor"}
+                )
 
         def spin():
             try:
@@ -88,7 +99,10 @@ def test_enable_is_refused_while_the_units_watchdog_sees_no_duty_commands(one_fi
     supervisor = one_finger(controller_remaps=["/hems/index/duty:=/hems/index/duty_nowhere"])
     with GraphClient("enable_gate") as client:
         answers = _enable_answers(client, 10.0)
-        assert answers[-1] == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)", answers
+        assert (
+            answers[-1]
+            == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)"
+        ), answers
         assert supervisor.logic.state.name == "IDLE"
 
 
@@ -97,7 +111,9 @@ def test_a_unit_that_has_not_taken_enabled_faults_within_the_grace(one_finger):
     clear, enable accepted) but never the permission to heat."""
     from hems_ros.client.graph_client import GraphClient
 
-    supervisor = one_finger(unit_remaps=["/hems/supervisor/status:=/hems/supervisor/status_nowhere"])
+    supervisor = one_finger(
+        unit_remaps=["/hems/supervisor/status:=/hems/supervisor/status_nowhere"]
+    )
     with GraphClient("enable_gate") as client:
         answers = _enable_answers(client, 10.0)
         assert answers[-1] == "ENABLED", answers
@@ -106,7 +122,9 @@ def test_a_unit_that_has_not_taken_enabled_faults_within_the_grace(one_finger):
         assert status.faults[0].startswith("index: unit has not taken ENABLED for "), status.faults
         assert status.faults[0].endswith(" ms: it does not heat")
         held_ms = float(status.faults[0].split(" for ")[1].split(" ms")[0])
-        assert 500 <= held_ms < 1500   # judged on the 20 Hz unit states, as the supervisor takes them
+        assert (
+            500 <= held_ms < 1500
+        )  # judged on the 20 Hz unit states, as the supervisor takes them
     assert supervisor.logic.faults[0].kind == "unit not enabled"
 
 

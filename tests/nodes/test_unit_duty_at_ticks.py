@@ -16,8 +16,13 @@ def unit(context, use_sim_time: bool = False, require_supervisor: bool = False):
 
     from hems_ros.nodes.actuation_unit import ActuationUnitNode
 
-    return ActuationUnitNode(context=context, parameter_overrides=[
-        Parameter("require_supervisor", value=require_supervisor), Parameter("use_sim_time", value=use_sim_time)])
+    return ActuationUnitNode(
+        context=context,
+        parameter_overrides=[
+            Parameter("require_supervisor", value=require_supervisor),
+            Parameter("use_sim_time", value=use_sim_time),
+        ],
+    )
 
 
 def tick_just_after_a_sample(node) -> float:
@@ -44,7 +49,9 @@ def test_duty_commands_wake_the_unit_only_on_sim_time(context):
             node.destroy_node()
 
 
-def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sample(context, matched_publisher):
+def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sample(
+    context, matched_publisher
+):
     import rclpy
     from builtin_interfaces.msg import Time
     from hems_msgs.msg import DutyCommand
@@ -57,8 +64,11 @@ def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sa
         publisher = matched_publisher(helper, DutyCommand, "/hems/index/duty", qos.COMMAND)
         sample_s = tick_just_after_a_sample(node)
         sec, nanosec = stamp(sample_s)
-        publisher.publish(DutyCommand(finger="index", duty_percent=35.0,
-                                      measurement_stamp=Time(sec=sec, nanosec=nanosec)))
+        publisher.publish(
+            DutyCommand(
+                finger="index", duty_percent=35.0, measurement_stamp=Time(sec=sec, nanosec=nanosec)
+            )
+        )
         sent_s = time.time()
         # the unit takes it at a tick that comes well after the command arrived
         time.sleep(0.006)
@@ -89,8 +99,9 @@ def test_units_tick_at_their_shoulder_modules_phase_on_wall_clock_time(context):
         node.destroy_node()
 
 
-def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(context, matched_publisher,
-                                                                          live_supervisor):
+def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(
+    context, matched_publisher, live_supervisor
+):
     """An ESTOP stops the heating when it comes: a command that came earlier still heats from
     the sample it answers up to the ESTOP, not only until the unit's previous tick."""
     import rclpy
@@ -107,10 +118,13 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
         live_supervisor(node)
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         sample_s = tick_just_after_a_sample(node)
-        energy_at_sample = node.driver.last_result.energy_joule_j   # the tick stopped at the sample
+        energy_at_sample = node.driver.last_result.energy_joule_j  # the tick stopped at the sample
         sec, nanosec = stamp(sample_s)
-        publisher.publish(DutyCommand(finger="index", duty_percent=100.0,
-                                      measurement_stamp=Time(sec=sec, nanosec=nanosec)))
+        publisher.publish(
+            DutyCommand(
+                finger="index", duty_percent=100.0, measurement_stamp=Time(sec=sec, nanosec=nanosec)
+            )
+        )
         # in the unit's queue before the ESTOP comes, however loaded the host
         assert publisher.wait_for_all_acked(Duration(seconds=5))
         time.sleep(max(0.0, sample_s + 0.004 - time.time()))
@@ -120,7 +134,8 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(contex
         time.sleep(0.011)
         node.on_tick()
         heated = node.driver.last_result.energy_joule_j - energy_at_sample
-        # 100 % duty is 4 A into about 4.2 ohm (dissertation chapter 3): about 67 W from the sample to the ESTOP
+        # 100 % duty is 4 A into about 4.2 ohm (dissertation chapter 3): about 67 W from the sample
+        # to the ESTOP
         heating_s = estop_s - sample_s
         assert heating_s >= 0.003
         assert heated == pytest.approx(67.0 * heating_s, rel=0.25)
@@ -148,7 +163,7 @@ def test_a_repeated_enabled_status_only_moves_the_permission_on(context, live_su
         assert node.driver.time_s == integrated_s
         assert node.driver.permission_s > granted_s + 0.03
         assert node.driver.permitted_since_s == pytest.approx(granted_s)
-        node.driver.permission_s -= 1.0     # as if the heartbeats had stopped: lapsed
+        node.driver.permission_s -= 1.0  # as if the heartbeats had stopped: lapsed
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         assert node.driver.time_s > integrated_s
         assert node.driver.heating_allowed(node.driver.time_s)
@@ -156,7 +171,9 @@ def test_a_repeated_enabled_status_only_moves_the_permission_on(context, live_su
         node.destroy_node()
 
 
-def test_a_supervisor_that_is_no_longer_alive_stops_the_heating_until_it_is_again(context, live_supervisor):
+def test_a_supervisor_that_is_no_longer_alive_stops_the_heating_until_it_is_again(
+    context, live_supervisor
+):
     """The supervisor's liveliness (its middleware's, lease qos.SUPERVISOR_LEASE_S) gates the
     heating at every tick; the permission itself stays, so a supervisor that comes back
     within its status timeout lets the unit heat again without a new ENABLED."""

@@ -3,7 +3,7 @@ running, and a unit treats an unreadable duty command as a rejected one (0 % dut
 
 from __future__ import annotations
 
-GARBAGE = b"\x00\x01\x00\x00\x05\x00"   # CDR header, then a truncated message
+GARBAGE = b"\x00\x01\x00\x00\x05\x00"  # CDR header, then a truncated message
 
 
 def deliver(node, topic: str, data: bytes) -> None:
@@ -23,7 +23,10 @@ def test_unit_rejects_an_unreadable_duty_and_keeps_running(context, capfd):
         assert node.driver.applied_duty == 0.0
     finally:
         node.destroy_node()
-    assert "unreadable message on /hems/index/duty dropped: hems_msgs/msg/DutyCommand" in capfd.readouterr().err
+    assert (
+        "unreadable message on /hems/index/duty dropped: hems_msgs/msg/DutyCommand"
+        in capfd.readouterr().err
+    )
 
 
 def test_controller_module_and_supervisor_drop_unreadable_messages(context, capfd):
@@ -37,7 +40,11 @@ def test_controller_module_and_supervisor_drop_unreadable_messages(context, capf
     try:
         deliver(controller, "/hems/index/encoder", GARBAGE)
         deliver(controller, "/hems/index/wire_force", GARBAGE)
-        assert controller.wire_position is None and controller.wire_force is None and controller.sequence == 0
+        assert (
+            controller.wire_position is None
+            and controller.wire_force is None
+            and controller.sequence == 0
+        )
         deliver(module, "/hems/sim/index/wire_tension", GARBAGE)
         assert module.sequences["index"] == 0
         deliver(supervisor, "/hems/index/controller_status", GARBAGE)
@@ -47,6 +54,11 @@ def test_controller_module_and_supervisor_drop_unreadable_messages(context, capf
         for node in (controller, module, supervisor):
             node.destroy_node()
     err = capfd.readouterr().err
-    for topic in ("/hems/index/encoder", "/hems/index/wire_force", "/hems/sim/index/wire_tension",
-                  "/hems/index/controller_status", "/hems/sim/index/state"):
+    for topic in (
+        "/hems/index/encoder",
+        "/hems/index/wire_force",
+        "/hems/sim/index/wire_tension",
+        "/hems/index/controller_status",
+        "/hems/sim/index/state",
+    ):
         assert f"unreadable message on {topic} dropped" in err, topic

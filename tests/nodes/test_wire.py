@@ -30,7 +30,10 @@ def _filled(msg_type, text: str):
         elif kind in ("uint32", "int64"):
             setattr(message, name, 1000 * number + 7)
         elif kind == "builtin_interfaces/Time":
-            getattr(message, name).sec, getattr(message, name).nanosec = number, 999_999_000 + number
+            getattr(message, name).sec, getattr(message, name).nanosec = (
+                number,
+                999_999_000 + number,
+            )
     return message
 
 
@@ -56,8 +59,16 @@ def test_codec_reads_and_writes_what_rclpy_does(msg_type, text):
 
 def test_encoder_reading_fields_are_named_by_their_path():
     fields = codec(DutyCommand).fields._fields
-    assert fields == ("header_stamp_sec", "header_stamp_nanosec", "header_frame_id", "finger", "duty_percent",
-                      "measurement_stamp_sec", "measurement_stamp_nanosec", "sequence")
+    assert fields == (
+        "header_stamp_sec",
+        "header_stamp_nanosec",
+        "header_frame_id",
+        "finger",
+        "duty_percent",
+        "measurement_stamp_sec",
+        "measurement_stamp_nanosec",
+        "sequence",
+    )
 
 
 def test_encode_names_the_type_and_the_bad_value():

@@ -23,11 +23,16 @@ def test_step_and_batch_agree(name):
     unit = ActuationUnit(p, dt=1e-3)
     steps = [unit.step(duty=d) for d in duty]
     pairs = {
-        "wire_temperature_c": "wire_temperature_c", "martensite_fraction": "martensite_fraction",
-        "stress_pa": "stress_pa", "slider_position_m": "slider_position_m",
-        "sheath_temperature_c": "sheath_temperature_c", "resistance_ohm": "resistance_ohm",
-        "wire_force_n": "wire_force_n", "tendon_force_n": "tendon_force_n",
-        "current_a": "current_a", "electrical_power_w": "electrical_power_w",
+        "wire_temperature_c": "wire_temperature_c",
+        "martensite_fraction": "martensite_fraction",
+        "stress_pa": "stress_pa",
+        "slider_position_m": "slider_position_m",
+        "sheath_temperature_c": "sheath_temperature_c",
+        "resistance_ohm": "resistance_ohm",
+        "wire_force_n": "wire_force_n",
+        "tendon_force_n": "tendon_force_n",
+        "current_a": "current_a",
+        "electrical_power_w": "electrical_power_w",
         "energy_joule_j": "energy_joule_j",
     }
     for batch_name, step_name in pairs.items():
@@ -58,7 +63,9 @@ def test_vectorised_blocks_match_set_by_set_runs_bit_for_bit():
     # run alone (kernel.step set by set); pulses of rising length drive reversals, nested
     # minor loops and loop closures, over the three load kinds of the named sets
     names = ("sheathed_calibrated", "ch6_hems_index", "table41")
-    sets = [load_params(names[i % 3]).replace({"kinetics.as0_c": 84.0 + 0.2 * i}) for i in range(40)]
+    sets = [
+        load_params(names[i % 3]).replace({"kinetics.as0_c": 84.0 + 0.2 * i}) for i in range(40)
+    ]
     t = np.arange(12000) * 1e-3
     duty = np.where((t % 2.0) < 0.3 + 0.1 * np.floor(t / 2.0), 80.0, 0.0)
     many = simulate(sets, 1e-3, duty=duty, record_every=3)
@@ -73,7 +80,9 @@ def test_without_energy_channels_the_blocks_agree_to_rounding():
     # no energy channel recorded: the blocks skip the accumulators, and LLVM may then fuse a
     # multiply-add differently, so the agreement with step is to rounding, not to the bit
     names = ("sheathed_calibrated", "ch6_hems_index", "table41")
-    sets = [load_params(names[i % 3]).replace({"kinetics.as0_c": 84.0 + 0.2 * i}) for i in range(40)]
+    sets = [
+        load_params(names[i % 3]).replace({"kinetics.as0_c": 84.0 + 0.2 * i}) for i in range(40)
+    ]
     t = np.arange(12000) * 1e-3
     duty = np.where((t % 2.0) < 0.3 + 0.1 * np.floor(t / 2.0), 80.0, 0.0)
     lean = ["wire_temperature_c", "martensite_fraction", "slider_position_m", "wire_force_n"]
@@ -81,7 +90,10 @@ def test_without_energy_channels_the_blocks_agree_to_rounding():
     for i, p in enumerate(sets):
         one = simulate(p, 1e-3, duty=duty, record_every=3, channels=lean)
         for name in lean:
-            assert np.max(np.abs(many[name][i] - one[name][0])) <= 1e-12 * np.ptp(one[name][0]), (i, name)
+            assert np.max(np.abs(many[name][i] - one[name][0])) <= 1e-12 * np.ptp(one[name][0]), (
+                i,
+                name,
+            )
 
 
 def test_one_newton_step_per_step_keeps_first_order_accuracy_through_minor_loops():
@@ -89,28 +101,47 @@ def test_one_newton_step_per_step_keeps_first_order_accuracy_through_minor_loops
     # leaves a second-order residual, which must not build up over many minor loops: at 1 ms
     # the trajectory stays as close to a 0.1 ms run as the time discretisation allows
     rng = np.random.default_rng(1)
-    duty, k, on = np.zeros(3000), 0, True     # 30 s of 100 Hz decisions: 50-490 ms bursts, pauses to 1 s
+    duty, k, on = (
+        np.zeros(3000),
+        0,
+        True,
+    )  # 30 s of 100 Hz decisions: 50-490 ms bursts, pauses to 1 s
     while k < duty.size:
         n = int(rng.integers(5, 50 if on else 100))
-        duty[k:k + n] = 100.0 if on else 0.0
+        duty[k : k + n] = 100.0 if on else 0.0
         k, on = k + n, not on
     p = load_params("sheathed_calibrated")
-    coarse = simulate(p, 1e-3, duty=np.repeat(duty, 10), channels=["slider_position_m", "martensite_fraction"])
-    fine = simulate(p, 1e-4, duty=np.repeat(duty, 100), record_every=10,
-                    channels=["slider_position_m", "martensite_fraction"])
+    coarse = simulate(
+        p, 1e-3, duty=np.repeat(duty, 10), channels=["slider_position_m", "martensite_fraction"]
+    )
+    fine = simulate(
+        p,
+        1e-4,
+        duty=np.repeat(duty, 100),
+        record_every=10,
+        channels=["slider_position_m", "martensite_fraction"],
+    )
     x, x_fine = coarse.slider_position_m[0], fine.slider_position_m[0]
     stroke = np.ptp(x_fine)
     assert stroke > 0.02
-    assert np.max(np.abs(x - x_fine)) <= 2e-3 * stroke          # measured 9.2e-4
+    assert np.max(np.abs(x - x_fine)) <= 2e-3 * stroke  # measured 9.2e-4
     assert np.sqrt(np.mean((x - x_fine) ** 2)) <= 3e-4 * stroke  # measured 1.3e-4
-    assert np.max(np.abs(coarse.martensite_fraction[0] - fine.martensite_fraction[0])) <= 1e-3  # 5.0e-4
+    assert (
+        np.max(np.abs(coarse.martensite_fraction[0] - fine.martensite_fraction[0])) <= 1e-3
+    )  # 5.0e-4
 
 
 def test_each_set_of_a_block_gets_its_own_drive_row():
     p = load_params("sheathed_calibrated")
     amps = np.linspace(2.0, 4.0, 40)
     cur = np.where(np.arange(3000) < 1500, 1.0, 0.0)[None, :] * amps[:, None]
-    many = simulate([p] * 40, 1e-3, current=cur, record_every=10, channels=["wire_temperature_c", "energy_joule_j"])
+    many = simulate(
+        [p] * 40,
+        1e-3,
+        current=cur,
+        record_every=10,
+        channels=["wire_temperature_c", "energy_joule_j"],
+    )
     for i in (0, 17, 39):
         one = simulate(p, 1e-3, current=cur[i], record_every=10, channels=["wire_temperature_c"])
         assert np.array_equal(many.wire_temperature_c[i], one.wire_temperature_c[0])
@@ -126,12 +157,14 @@ def test_a_failing_set_in_a_block_is_named():
 
 
 def test_sensors_quantise_and_flag_saturation():
-    p = load_params("sheathed_calibrated")   # 50 N preload on a 0-50 N sensor
+    p = load_params("sheathed_calibrated")  # 50 N preload on a 0-50 N sensor
     r = ActuationUnit(p).step(current=0.0)
     assert isinstance(r.encoder_counts, int)
     assert r.encoder_position_m == r.encoder_counts * 1e-6
     assert r.force_saturated and r.force_reading_n in (0.0, 50.0)
-    q = ActuationUnit(p.replace({"force_sensor.range_max_n": 100.0, "force_sensor.noise_std_n": 0.0})).step(current=0.0)
+    q = ActuationUnit(
+        p.replace({"force_sensor.range_max_n": 100.0, "force_sensor.noise_std_n": 0.0})
+    ).step(current=0.0)
     assert not q.force_saturated and q.force_reading_n == pytest.approx(50.0, abs=0.005)
     assert round(q.force_reading_n / 0.01) * 0.01 == pytest.approx(q.force_reading_n)
 
@@ -203,17 +236,24 @@ def test_reset_and_state():
         u.step(current=4.0)
     assert u.state["wire_temperature_c"] > 40 and u.time == pytest.approx(0.5)
     u.reset()
-    assert u.time == 0.0 and u.state["wire_temperature_c"] == 22.0 and u.state["martensite_fraction"] == 1.0
+    assert (
+        u.time == 0.0
+        and u.state["wire_temperature_c"] == 22.0
+        and u.state["martensite_fraction"] == 1.0
+    )
 
 
-@pytest.mark.parametrize("kwargs, pattern", [
-    ({"duty": math.nan}, "must be finite"),
-    ({"current": math.inf}, "must be finite"),
-    ({"duty": 100.5}, "within 0-100"),
-    ({"duty": -1.0}, "within 0-100"),
-    ({}, "exactly one"),
-    ({"duty": 10.0, "current": 1.0}, "exactly one"),
-])
+@pytest.mark.parametrize(
+    "kwargs, pattern",
+    [
+        ({"duty": math.nan}, "must be finite"),
+        ({"current": math.inf}, "must be finite"),
+        ({"duty": 100.5}, "within 0-100"),
+        ({"duty": -1.0}, "within 0-100"),
+        ({}, "exactly one"),
+        ({"duty": 10.0, "current": 1.0}, "exactly one"),
+    ],
+)
 def test_step_rejects_bad_drive(kwargs, pattern):
     with pytest.raises(ValueError, match=pattern):
         ActuationUnit().step(**kwargs)

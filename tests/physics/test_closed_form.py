@@ -1,4 +1,5 @@
-"""Closed-form facts of the dissertation: h(T), Churchill-Chu, Table 3.1 resistances, capstan, resistance."""
+"""Closed-form facts of the dissertation: h(T), Churchill-Chu, Table 3.1 resistances,
+capstan, resistance."""
 
 import math
 
@@ -11,7 +12,9 @@ from hems_ros.physics.params import UnitParams, load_params
 
 def test_h_at_22_degc():
     p = UnitParams().thermal
-    assert heat.convection_coefficient(22.0, p.h0_w_m2_c, p.h2_w_m2_c3) == pytest.approx(42.51, abs=0.005)
+    assert heat.convection_coefficient(22.0, p.h0_w_m2_c, p.h2_w_m2_c3) == pytest.approx(
+        42.51, abs=0.005
+    )
 
 
 def test_churchill_chu_at_appendix_conditions():
@@ -43,8 +46,17 @@ def test_cold_resistance_near_measured():
     e = p.electrical
     sig = 12.0 / p.wire.cross_section_m2
     rho = electrical.mixture_resistivity(
-        1.0, electrical.phase_resistivity(e.rho0_martensite_ohm_m, e.t0_martensite_c, e.drho_dt_martensite_ohm_m_per_c,
-                                          e.drho_dsigma_martensite_ohm_m_per_pa, 22.0, sig), 0.0)
+        1.0,
+        electrical.phase_resistivity(
+            e.rho0_martensite_ohm_m,
+            e.t0_martensite_c,
+            e.drho_dt_martensite_ohm_m_per_c,
+            e.drho_dsigma_martensite_ohm_m_per_pa,
+            22.0,
+            sig,
+        ),
+        0.0,
+    )
     r = electrical.wire_resistance(rho, p.wire.length_m, 1.0 / p.wire.cross_section_m2)
     assert 4.0 < r < 4.5  # chapter 3: mean 4.17 ohm over a pulse
 

@@ -14,6 +14,8 @@ print(kernel._cache_checked)
 
 
 def test_importing_the_kernel_leaves_its_cache_alone_until_the_first_pack():
-    done = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-c", SCRIPT], capture_output=True, text=True, timeout=120
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["False", "True"]

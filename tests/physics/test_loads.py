@@ -13,9 +13,9 @@ def test_contraction_is_positive_displacement():
     p = load_params("table41")
     res = simulate(p, DT, current=scenarios.pulse_train(1.8, 2.0, DT))
     x, xi = res.slider_position_m[0], res.martensite_fraction[0]
-    assert xi[-1] < 0.5 and x[-1] > 10e-3          # austenite: the wire shortened, x > 0
+    assert xi[-1] < 0.5 and x[-1] > 10e-3  # austenite: the wire shortened, x > 0
     assert res.strain[0, -1] == pytest.approx(x[-1] / 0.9)
-    assert res.wire_force_n[0, -1] > 12.0           # the spring is stretched by the contraction
+    assert res.wire_force_n[0, -1] > 12.0  # the spring is stretched by the contraction
 
 
 def test_massless_spring_force_balance_is_algebraic():
@@ -27,8 +27,14 @@ def test_massless_spring_force_balance_is_algebraic():
 
 def test_hanging_mass_rests_in_balance_and_stays_stable():
     for mass in (0.05, 3.0, 10.0):
-        p = load_params("table41").replace({"load.kind": "hanging_mass", "load.mass_kg": mass,
-                                            "load.pretension_n": 0.0, "load.stiffness_n_per_m": 0.0})
+        p = load_params("table41").replace(
+            {
+                "load.kind": "hanging_mass",
+                "load.mass_kg": mass,
+                "load.pretension_n": 0.0,
+                "load.stiffness_n_per_m": 0.0,
+            }
+        )
         res = simulate(p, DT, current=scenarios.pulse_train(2.0, 20.0, DT))
         v, fw = res.slider_velocity_m_s[0], res.wire_force_n[0]
         assert np.all(np.isfinite(res.slider_position_m))
@@ -42,8 +48,9 @@ def test_hanging_mass_rests_in_balance_and_stays_stable():
 
 
 def test_pulley_doubles_displacement_and_halves_force():
-    p = load_params("ch6_hems_index").replace({"capstan.enabled": False, "glove_friction.enabled": False,
-                                                "load.damping_n_s_per_m": 0.0})
+    p = load_params("ch6_hems_index").replace(
+        {"capstan.enabled": False, "glove_friction.enabled": False, "load.damping_n_s_per_m": 0.0}
+    )
     res = simulate(p, DT, duty=np.where(np.arange(3000) < 2000, 100.0, 0.0))
     assert np.allclose(res.tendon_position_m[0], 2 * res.slider_position_m[0])
     assert np.allclose(res.tendon_force_n[0], res.wire_force_n[0] / 2, atol=1e-6)

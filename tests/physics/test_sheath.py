@@ -42,8 +42,8 @@ def test_table_32_33_sweep():
     resp = sweep()
     x = np.array([r.max_displacement_m for r in resp]) * 1e3
     ref = np.array([scenarios.TABLE_32_33[r.pulse_s][1] for r in resp])
-    assert np.all(np.diff(x) > 0)                       # rises with pulse length
-    assert x[-1] - x[-2] < 0.1 * (x[-1] - x[1])         # and saturates
+    assert np.all(np.diff(x) > 0)  # rises with pulse length
+    assert x[-1] - x[-2] < 0.1 * (x[-1] - x[1])  # and saturates
     long = np.array([r.pulse_s >= 1.6 for r in resp])
     assert np.all(np.abs(x[long] / ref[long] - 1) <= 0.25)
     assert all(np.isfinite(r.cooling_time_s) for r, lg in zip(resp, long) if lg)
