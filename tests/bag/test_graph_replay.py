@@ -23,13 +23,13 @@ from graph_bags import (
     phase_stamps,
     replay_into_controller,
     start_node,
-    stop,
 )
 
 from hems_ros.bag import BagWriter, iter_messages
 from hems_ros.bag.recording import RecorderProcess
 from hems_ros.graph import names
 from hems_ros.graph.grasp import GraspPlan
+from hems_ros.processes import stop_process
 from hems_ros.rosenv import child_environment
 
 
@@ -99,7 +99,7 @@ def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(
             )
         ]
         for node in nodes:
-            cleanup.callback(stop, node)
+            cleanup.callback(stop_process, node, 10.0)
         recorder = cleanup.enter_context(
             RecorderProcess(
                 output,
