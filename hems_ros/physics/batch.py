@@ -23,7 +23,7 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from hems_ros.physics import kernel, sensors
-from hems_ros.physics.electrical import DRIVE_NAMES
+from hems_ros.physics.electrical import DRIVE_NAMES, select_drive
 from hems_ros.physics.params import UnitParams
 
 CHANNELS = kernel.STATE_NAMES + kernel.OUT_NAMES
@@ -135,19 +135,7 @@ def simulate(
         raise TypeError("params must be a UnitParams or a non-empty sequence of UnitParams")
     if not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt = {dt!r}: must be a finite step > 0 s")
-    given = [
-        (k, v)
-        for k, v in (
-            ("duty", duty),
-            ("current", current),
-            ("voltage", voltage),
-            ("temperature", temperature),
-        )
-        if v is not None
-    ]
-    if len(given) != 1:
-        raise ValueError("give exactly one of duty, current, voltage, temperature arrays")
-    kind, values = given[0]
+    kind, values = select_drive(duty, current, voltage, temperature)
     drives = _drive_array(kind, values, len(plist))
     if not (isinstance(record_every, (int, np.integer)) and record_every >= 1):
         raise ValueError(f"record_every = {record_every!r}: must be an integer >= 1")

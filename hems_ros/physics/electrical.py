@@ -72,3 +72,28 @@ def voltage_source(voltage_v, resistance):
     """Constant voltage across the wire: I = V/R, P = V^2/R (grows as R falls: runaway)."""
     i = voltage_v / resistance
     return i, voltage_v * i
+
+
+def select_drive(
+    duty: float | None,
+    current: float | None,
+    voltage: float | None,
+    temperature: float | None = None,
+):
+    """(kind name, value) of the one drive given; ValueError unless exactly one is given."""
+    given = [
+        (k, v)
+        for k, v in (
+            ("duty", duty),
+            ("current", current),
+            ("voltage", voltage),
+            ("temperature", temperature),
+        )
+        if v is not None
+    ]
+    if len(given) != 1:
+        raise ValueError(
+            "give exactly one of duty, current, voltage, temperature "
+            f"(got {', '.join(k for k, _ in given) or 'none'})"
+        )
+    return given[0]

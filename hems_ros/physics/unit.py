@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hems_ros.physics import kernel, sensors
-from hems_ros.physics.electrical import DRIVE_NAMES
+from hems_ros.physics.electrical import DRIVE_NAMES, select_drive
 from hems_ros.physics.params import UnitParams
 
 
@@ -61,31 +61,6 @@ def check_drive(kind: str, value: float) -> None:
         raise ValueError(
             f"duty = {value!r} %: must be within 0-100 % (the controller clamps, not the plant)"
         )
-
-
-def select_drive(
-    duty: float | None,
-    current: float | None,
-    voltage: float | None,
-    temperature: float | None = None,
-):
-    """(kind name, value) of the one drive given; ValueError unless exactly one is given."""
-    given = [
-        (k, v)
-        for k, v in (
-            ("duty", duty),
-            ("current", current),
-            ("voltage", voltage),
-            ("temperature", temperature),
-        )
-        if v is not None
-    ]
-    if len(given) != 1:
-        raise ValueError(
-            "give exactly one of duty, current, voltage, temperature "
-            f"(got {', '.join(k for k, _ in given) or 'none'})"
-        )
-    return given[0]
 
 
 class ActuationUnit:
