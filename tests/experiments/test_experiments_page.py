@@ -3,13 +3,11 @@ their wording shows here until `hems experiment all --docs docs` is run again.""
 
 from __future__ import annotations
 
-import difflib
 import re
-from pathlib import Path
+
+from committed_pages import DOCS, assert_page_current
 
 from hems_ros.reports.experiments import docs_page
-
-DOCS = Path(__file__).resolve().parents[2] / "docs"
 
 
 def test_docs_experiments_is_current(ch5_runs, ch6_runs, ch5_found, ch6_found):
@@ -19,16 +17,4 @@ def test_docs_experiments_is_current(ch5_runs, ch6_runs, ch5_found, ch6_found):
     generated = docs_page(
         ch5_runs, ch6_runs, list(ch5_found.values()), list(ch6_found.values()), figures
     )
-    diff = "\n".join(
-        difflib.unified_diff(
-            committed.splitlines(),
-            generated.splitlines(),
-            "committed",
-            "generated",
-            lineterm="",
-            n=0,
-        )
-    )
-    assert generated == committed, (
-        "docs/experiments.md is stale; run `hems experiment all --docs docs`:\n" + diff[:3000]
-    )
+    assert_page_current("experiments.md", generated, "hems experiment all --docs docs")
