@@ -121,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
             cycle = ((0.0, args.before_s), (args.step_mm * 1e-3, args.step_s), (0.0, args.after_s))
             for value, seconds in cycle * args.cycles:
                 print(f"step: position {value * 1e3:g} mm for {seconds:g} s", flush=True)
+                in_force = []
                 for finger in options.fingers:
                     result = client.send_setpoint(
                         finger, "position", value, confirm_s=SETPOINT_CONFIRM_S
@@ -131,7 +132,10 @@ def run(args: argparse.Namespace) -> int:
                             file=sys.stderr,
                         )
                         return 1
-                client.spin_graph_time(seconds)
+                    in_force.append(result.in_force_s)
+                # each phase lasts its length from the sample its setpoint acted from
+                since = max(in_force) if None not in in_force else None
+                client.spin_graph_time(seconds, since_s=since)
             state = client.snapshot(options.fingers, 0.3).supervisor
             client.call("disable")
             client.spin_for(0.3)

@@ -21,6 +21,7 @@ from std_srvs.srv import Trigger
 
 from hems_ros.graph import names
 from hems_ros.nodes import qos
+from hems_ros.nodes.clock_time import from_msg
 
 RETRY_S = 2.0  # a service call unanswered this long is sent again
 CLOCK_STALL_S = 5.0  # /clock standing still this long (wall) means the graph's clock is gone
@@ -48,11 +49,14 @@ def checked(call, *args, **kwargs):
 @dataclass
 class SetpointResult:
     """What became of a setpoint: ``sent`` to a subscribed controller, ``confirmed`` by its
-    status (None when not checked), and a line for the user. True when sent and not refuted."""
+    status (None when not checked), and a line for the user. True when sent and not refuted.
+    ``in_force_s``: the stamp (graph time, s) of the feedback sample of the status that showed
+    it, at or after the sample the controller took it at."""
 
     sent: bool
     confirmed: bool | None
     message: str
+    in_force_s: float | None = None
 
     def __bool__(self) -> bool:
         return self.sent and self.confirmed is not False
@@ -117,15 +121,19 @@ class GraphClient:
                 timeout_sec=max(0.0, min(0.05, deadline - time.monotonic())),
             )
 
-    def spin_graph_time(self, seconds: float, stall_s: float = CLOCK_STALL_S) -> None:
+    def spin_graph_time(
+        self, seconds: float, stall_s: float = CLOCK_STALL_S, since_s: float | None = None
+    ) -> None:
         """Spin for ``seconds`` of the graph's time: wall seconds, or on sim time seconds of
-        /clock (with ``--rate R`` a phase of a run lasts what it says in simulated time).
-        RuntimeError when /clock stands still for ``stall_s`` wall seconds."""
+        /clock (with ``--rate R`` a phase of a run lasts what it says in simulated time),
+        counted from ``since_s`` (graph time, s) when given: this client's /clock can lag the
+        sample a controller took a setpoint at. RuntimeError when /clock stands still for
+        ``stall_s`` wall seconds."""
         if not self.sim_time:
             self.spin_for(seconds)
             return
         clock = self.node.get_clock()
-        start = None
+        start = None if since_s is None else round(since_s * 1e9)
         last, moved = clock.now().nanoseconds, time.monotonic()
         while True:
             now = clock.now().nanoseconds
@@ -257,7 +265,10 @@ class GraphClient:
                 if status.mode == mode and math.isclose(
                     status.setpoint, value, rel_tol=1e-9, abs_tol=1e-12
                 ):
-                    return SetpointResult(True, True, "in force (controller status)")
+                    stamp = status.encoder_stamp if mode == "position" else status.force_stamp
+                    return SetpointResult(
+                        True, True, "in force (controller status)", from_msg(stamp)
+                    )
                 if rejected is None:
                     rejected = status.rejected_setpoints
                 elif status.rejected_setpoints > rejected:
