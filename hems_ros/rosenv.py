@@ -69,7 +69,7 @@ PRIVATE_DOMAIN_IDS = range(11, 101)
 def reserve_domain_id(start: int | None = None) -> tuple[int, IO[str]]:
     """A ROS domain id no other reserving process on this machine holds, and its lock.
 
-    Test sessions and benchmarks each start whole graphs; two of them in one domain would
+    Test runs and benchmarks each start whole graphs; two of them in one domain would
     answer each other's samples. The id is held (an exclusive lock on
     ``/tmp/hems-ros-domain-<id>.lock``) until the returned file is closed or the process ends.
     """
