@@ -49,6 +49,7 @@ class RawMessage:
     publish_time_ns: int
     data: bytes
     offered_qos_profiles: str
+    definition: str = ""  # the schema stored with the message, as the writer knew its type
 
 
 @dataclass
@@ -277,6 +278,7 @@ def iter_messages(
                 publish_time,
                 data,
                 channel.metadata.get("offered_qos_profiles", ""),
+                schema.data.decode(errors="replace") if schema else "",
             )
         if reports is not None:
             reports.append(scan.report)

@@ -15,12 +15,16 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
+from typing import TYPE_CHECKING
 
 import yaml
 from mcap.data_stream import RecordBuilder
 from mcap.writer import CompressionType, Writer
 
 from hems_ros.codec import msgdefs
+
+if TYPE_CHECKING:
+    from hems_ros.bag.reader import RawMessage
 
 METADATA_VERSION = 9
 PROFILE = "ros2"
@@ -196,6 +200,24 @@ class BagWriter:
             self._start_ns = log_time_ns
         if log_time_ns > self._end_ns:
             self._end_ns = log_time_ns
+
+    def write_copy(self, message: RawMessage, log_time_ns: int | None = None) -> None:
+        """Append ``message`` read from another bag (``iter_messages``) on its topic, with the
+        schema and offered QoS it was stored with, so that a bag recorded with an older
+        definition of a type stays decodable; ``log_time_ns`` replaces its log time."""
+        if message.topic not in self._topics:
+            self.add_topic(
+                message.topic,
+                message.type,
+                yaml.safe_load(message.offered_qos_profiles) or [],
+                message.definition or None,
+            )
+        self.write(
+            self._topics[message.topic].channel_id,
+            message.log_time_ns if log_time_ns is None else log_time_ns,
+            message.data,
+            message.publish_time_ns,
+        )
 
     def flush(self) -> None:
         """Close the open chunk and hand everything written so far to the operating system."""

@@ -63,8 +63,8 @@ def register(subparsers) -> None:
         "--timeout",
         type=positive,
         default=5.0,
-        help="seconds to wait for the controller to subscribe, and again for its status "
-        "to show the setpoint (default 5)",
+        help="seconds to wait for the controller to subscribe, for its status to show the "
+        "setpoint, and for the supervisor's status (default 5)",
     )
     add_namespace_argument(parser)
     parser.set_defaults(func=run_setpoint)
@@ -129,6 +129,7 @@ def run_setpoint(args: argparse.Namespace) -> int:
 
     unit = "m" if mode == "position" else "N"
     with GraphClient(namespace=args.namespace) as client:
+        client.watch_supervisor()
         # one wait for every controller: on a graph brought up with fewer fingers, "all" would
         # otherwise wait --timeout for each missing one in turn
         missing = client.fingers_without_readers(fingers, timeout=args.timeout)
@@ -142,7 +143,7 @@ def run_setpoint(args: argparse.Namespace) -> int:
             )
             for f in fingers
         }
-        supervisor = client.supervisor_status()
+        supervisor = client.supervisor_status(timeout=args.timeout)
     for finger, result in results.items():
         line = f"{finger}: {mode} setpoint {value:g} {unit}: {result.message}"
         print(line, file=sys.stdout if result else sys.stderr)

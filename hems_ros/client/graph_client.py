@@ -101,6 +101,8 @@ class GraphClient:
         self._service_clients: dict[str, object] = {}
         self._status_subs: dict[str, object] = {}
         self._statuses: dict[str, ControllerStatus] = {}
+        self._supervisor_sub: object | None = None
+        self._supervisor: SupervisorStatus | None = None
 
     def close(self) -> None:
         self.node.destroy_node()
@@ -286,18 +288,27 @@ class GraphClient:
         )
         return SetpointResult(True, False, f"sent, but not in force after {confirm_s:g} s ({seen})")
 
-    def supervisor_status(self, timeout: float = 2.0) -> SupervisorStatus | None:
+    def watch_supervisor(self) -> None:
+        """Start listening to the supervisor's status now, so that discovery runs while the
+        client does other work; :meth:`supervisor_status` then rarely waits."""
+        if self._supervisor_sub is None:
+            self._supervisor_sub = self.node.create_subscription(
+                SupervisorStatus,
+                names.supervisor_status_topic(self.namespace),
+                lambda m: setattr(self, "_supervisor", m),
+                qos.STATUS,
+            )
+
+    def supervisor_status(self, timeout: float = 5.0) -> SupervisorStatus | None:
         """The supervisor's latest status (transient local: the last one comes at once to a
-        new reader), or None when none comes within ``timeout`` s."""
-        got: list = []
-        sub = self.node.create_subscription(
-            SupervisorStatus, names.supervisor_status_topic(self.namespace), got.append, qos.STATUS
-        )
+        new reader), or None when none has come within ``timeout`` s. The reader stays for
+        the client's life; a new one is matched only after DDS discovery, which on a busy
+        host can take seconds."""
+        self.watch_supervisor()
         deadline = time.monotonic() + timeout
-        while not got and time.monotonic() < deadline:
+        while self._supervisor is None and time.monotonic() < deadline:
             checked(rclpy.spin_once, self.node, timeout_sec=0.02)
-        self.node.destroy_subscription(sub)
-        return got[-1] if got else None
+        return self._supervisor
 
     def _setpoint_publisher(self, finger: str):
         publisher = self._setpoint_pubs.get(finger)

@@ -16,7 +16,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from graph_bags import (
     REFERENCES,
     grasp_metrics,
@@ -52,10 +51,7 @@ def rebased(source: Path, target: Path, topics: list[str], start_ns: int = 1_000
     offset = messages[0].log_time_ns - start_ns
     with BagWriter(target) as writer:
         for m in messages:
-            channel = writer.add_topic(
-                m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or []
-            )
-            writer.write(channel, m.log_time_ns - offset, m.data)
+            writer.write_copy(m, m.log_time_ns - offset)
     return target
 
 

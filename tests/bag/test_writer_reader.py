@@ -233,3 +233,27 @@ def test_other_compressions(tmp_path: Path, compression: str) -> None:
     assert list(bag["/hems/index/wire_force"]["force"]) == [
         m.force for m in written["/hems/index/wire_force"]
     ]
+
+
+def test_a_copied_message_keeps_the_definition_it_was_recorded_with(tmp_path: Path) -> None:
+    """The committed step bag holds ControllerStatus as it was before its last fields were
+    added: a copy made with write_copy decodes to the same values (under the installed
+    definition no message of it would decode)."""
+    import warnings
+
+    source = Path(__file__).resolve().parents[2] / "bags" / "ch5_step_index"
+    topic = "/hems/index/controller_status"
+    messages = list(iter_messages(source, topics=[topic]))
+    assert messages[0].definition != msgdefs.full_definition(messages[0].type)
+    with BagWriter(tmp_path / "copy") as writer:
+        for m in messages:
+            writer.write_copy(m, m.log_time_ns + 5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        original = load_bag(source, topics=[topic]).topics[topic]
+        copy = load_bag(tmp_path / "copy").topics[topic]
+    assert len(copy.log_time_ns) == len(messages) > 100
+    assert np.array_equal(copy.log_time_ns, original.log_time_ns + 5)
+    assert copy.fields.keys() == original.fields.keys()
+    for name, column in original.fields.items():
+        np.testing.assert_array_equal(copy.fields[name], column, err_msg=name)  # NaN == NaN

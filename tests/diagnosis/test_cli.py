@@ -12,7 +12,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
 from hems_ros.bag import BagWriter, iter_messages
 from hems_ros.cli import diagnose
@@ -59,11 +58,7 @@ def folder(tmp_path_factory) -> Path:
     # a bag of the simulation's truth only: no measured topic in it
     with BagWriter(root / "sim_bag") as writer:
         for m in iter_messages(REPO / "bags" / "ch5_step_index", topics=["/hems/sim/index/state"]):
-            if m.topic not in writer.topics:
-                writer.add_topic(m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or [])
-            writer.write(
-                writer.topics[m.topic].channel_id, m.log_time_ns, m.data, m.publish_time_ns
-            )
+            writer.write_copy(m)
     (root / "bad_conditions.yaml").write_text("load: {pretension_n: [1, 2\n")
     (root / "bad_model.yaml").write_text("load:\n  stiffness_n_per_m: -5\n")
     (root / "list.yaml").write_text("- load\n- ambient\n")

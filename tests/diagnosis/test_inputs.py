@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
 from hems_ros.bag import BagWriter, iter_messages, load_bag
 from hems_ros.diagnosis import bagload, units
@@ -530,15 +529,9 @@ def copy_bag(
             ordinal = ordinals[m.topic] = ordinals.get(m.topic, -1) + 1
             if not keep(m, ordinal):
                 continue
-            if m.topic not in writer.topics:  # parsing the QoS of every message took seconds
-                writer.add_topic(m.topic, m.type, yaml.safe_load(m.offered_qos_profiles) or [])
-            data = rewrite[1](m.data) if rewrite and m.topic == rewrite[0] else m.data
-            writer.write(
-                writer.topics[m.topic].channel_id,
-                m.log_time_ns + delay(m, ordinal),
-                data,
-                m.publish_time_ns,
-            )
+            if rewrite and m.topic == rewrite[0]:
+                m = dataclasses.replace(m, data=rewrite[1](m.data))
+            writer.write_copy(m, m.log_time_ns + delay(m, ordinal))
     return target
 
 

@@ -68,20 +68,6 @@ def one_finger(context):
         node.destroy_node()
 
 
-def _enable_answers(client, seconds: float) -> list[str]:
-    """The supervisor's answers to enable, asked every 0.3 s until it accepts, or refuses for
-    no stream still coming up ("no ... yet", "stale"), or ``seconds`` pass."""
-    answers = []
-    deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline:
-        ok, message = client.call("enable", timeout=5.0)
-        answers.append(message)
-        if ok or not ("yet" in message or "stale" in message):
-            break
-        client.spin_for(0.3)
-    return answers
-
-
 def _supervisor_state(client, seconds: float, until: str | None = None):
     """The supervisor's status after ``seconds``, or as soon as its state is ``until``."""
     deadline = time.monotonic() + seconds
@@ -98,11 +84,15 @@ def test_enable_is_refused_while_the_units_watchdog_sees_no_duty_commands(one_fi
 
     supervisor = one_finger(controller_remaps=["/hems/index/duty:=/hems/index/duty_nowhere"])
     with GraphClient("enable_gate") as client:
-        answers = _enable_answers(client, 10.0)
+        # every refusal is asked again until the window ends, as `hems enable` does: the
+        # unit's watchdog is also tripped for a healthy finger until discovery has matched
+        # the controller's duty writer with the unit
+        ok, message = client.enable_when_ready(timeout=6.0, retry_s=0.3)
+        assert not ok
         assert (
-            answers[-1]
+            message
             == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)"
-        ), answers
+        )
         assert supervisor.logic.state.name == "IDLE"
 
 
@@ -115,8 +105,9 @@ def test_a_unit_that_has_not_taken_enabled_faults_within_the_grace(one_finger):
         unit_remaps=["/hems/supervisor/status:=/hems/supervisor/status_nowhere"]
     )
     with GraphClient("enable_gate") as client:
-        answers = _enable_answers(client, 10.0)
-        assert answers[-1] == "ENABLED", answers
+        ok, message = client.enable_when_ready(timeout=20.0, retry_s=0.3)
+        assert ok, message
+        assert message == "ENABLED"
         status = _supervisor_state(client, 10.0, until="FAULT")
         assert status.state_name == "FAULT"
         assert status.faults[0].startswith("index: unit has not taken ENABLED for "), status.faults
@@ -133,7 +124,8 @@ def test_a_healthy_finger_is_enabled_and_stays_enabled(one_finger):
 
     one_finger()
     with GraphClient("enable_gate") as client:
-        answers = _enable_answers(client, 10.0)
-        assert answers[-1] == "ENABLED", answers
+        ok, message = client.enable_when_ready(timeout=20.0, retry_s=0.3)
+        assert ok, message
+        assert message == "ENABLED"
         status = _supervisor_state(client, 1.0)
         assert status.state_name == "ENABLED", status.faults
