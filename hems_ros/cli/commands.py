@@ -7,6 +7,7 @@ import math
 import sys
 
 from hems_ros.cli.numbers import add_namespace_argument, positive
+from hems_ros.client import DISCOVERY_S
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
 
@@ -62,9 +63,9 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--timeout",
         type=positive,
-        default=5.0,
+        default=DISCOVERY_S,
         help="seconds to wait for the controller to subscribe, for its status to show the "
-        "setpoint, and for the supervisor's status (default 5)",
+        f"setpoint, and for the supervisor's status (default {DISCOVERY_S:g})",
     )
     add_namespace_argument(parser)
     parser.set_defaults(func=run_setpoint)

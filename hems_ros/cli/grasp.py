@@ -192,7 +192,7 @@ class GraspListener:
 def require_controllers(client, fingers) -> None:
     """RuntimeError naming the fingers whose controller is not running, before any setpoint
     is sent: found only when its turn came, a missing controller would stop the grasp after
-    5 s per finger, while the fingers before it were already heating."""
+    one discovery wait per finger, while the fingers before it were already heating."""
     missing = client.fingers_without_readers(fingers)
     if missing:
         raise RuntimeError(

@@ -19,6 +19,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 
+from hems_ros.client import DISCOVERY_S
 from hems_ros.graph import names
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import from_msg
@@ -226,7 +227,7 @@ class GraphClient:
         finger: str,
         mode: str,
         value: float,
-        timeout: float = 5.0,
+        timeout: float = DISCOVERY_S,
         confirm_s: float | None = None,
     ) -> SetpointResult:
         """Publish one setpoint once the finger's controller is subscribed (``timeout`` s).
@@ -299,7 +300,7 @@ class GraphClient:
                 qos.STATUS,
             )
 
-    def supervisor_status(self, timeout: float = 5.0) -> SupervisorStatus | None:
+    def supervisor_status(self, timeout: float = DISCOVERY_S) -> SupervisorStatus | None:
         """The supervisor's latest status (transient local: the last one comes at once to a
         new reader), or None when none has come within ``timeout`` s. The reader stays for
         the client's life; a new one is matched only after DDS discovery, which on a busy
@@ -319,7 +320,9 @@ class GraphClient:
             self._setpoint_pubs[finger] = publisher
         return publisher
 
-    def fingers_without_readers(self, fingers, readers: int = 1, timeout: float = 5.0) -> list[str]:
+    def fingers_without_readers(
+        self, fingers, readers: int = 1, timeout: float = DISCOVERY_S
+    ) -> list[str]:
         """The ``fingers`` whose setpoint writer in this client has matched fewer than
         ``readers`` readers (the finger's controller, a recorder) after ``timeout`` s, all
         waited for at once, so that a run needing them all says so before anything heats. Only
@@ -347,7 +350,7 @@ class GraphClient:
             )
 
     def snapshot(
-        self, fingers=names.FINGERS, seconds: float = 0.5, supervisor_wait_s: float = 5.0
+        self, fingers=names.FINGERS, seconds: float = 0.5, supervisor_wait_s: float = DISCOVERY_S
     ) -> Snapshot:
         """Listen for ``seconds``, and up to ``supervisor_wait_s`` longer while the snapshot is
         :meth:`Snapshot.incomplete`: DDS discovery between a new process and the graph now and

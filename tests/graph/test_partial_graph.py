@@ -61,8 +61,8 @@ def test_grasp_names_missing_controllers_before_it_enables(one_finger_graph, ven
     others = [f for f in names.FINGERS if f != FINGER]
     assert f"grasp: no finger_controller for {', '.join(others)}" in result.stderr
     assert "hems up --fingers" in result.stderr
-    # one wait for all of them (5 s), not one per finger while the first ones heat
-    assert time.monotonic() - started < 20.0
+    # one discovery wait for all of them (10 s), not one per finger while the first ones heat
+    assert time.monotonic() - started < 30.0
     assert "ENABLED" not in result.stdout and "approach" not in result.stdout
     snap = client.snapshot(fingers=(FINGER,), seconds=0.5)
     assert snap.supervisor is not None and snap.supervisor.state_name != "ENABLED"
@@ -88,7 +88,7 @@ def test_setpoint_all_waits_once_for_the_missing_controllers(one_finger_graph, v
     graph, _ = one_finger_graph
     started = time.monotonic()
     result = subprocess.run(
-        [str(venv / "bin" / "hems"), "setpoint", "all", "0", "--unit", "mm", "--timeout", "3"],
+        [str(venv / "bin" / "hems"), "setpoint", "all", "0", "--unit", "mm", "--timeout", "8"],
         capture_output=True,
         text=True,
         timeout=120,
@@ -102,7 +102,7 @@ def test_setpoint_all_waits_once_for_the_missing_controllers(one_finger_graph, v
                 f"{finger}: position setpoint 0 m: no finger_controller subscribed to "
                 f"/hems/{finger}/setpoint" in result.stderr
             )
-    assert elapsed < 12.0  # 3 s for all five missing ones, not 15 s
+    assert elapsed < 20.0  # 8 s for all five missing ones, not 40 s
     assert graph.exited() == {}
 
 
