@@ -9,6 +9,7 @@ nodes wake a few hundred times a second, and these handlers were most of that co
 
 from __future__ import annotations
 
+import functools
 import time
 
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
@@ -20,8 +21,29 @@ from hems_ros.nodes.wire import codec
 
 
 class LeanNode(Node):
+    def __init_subclass__(cls, **kwargs) -> None:
+        """A node whose ``__init__`` raises (an invalid parameter) is destroyed before the
+        error leaves it: left to the garbage collector, its handle was finalized at any later
+        moment, once inside Fast DDS while another node's participant was busy, and hung."""
+        super().__init_subclass__(**kwargs)
+        init = cls.__init__
+
+        @functools.wraps(init)
+        def init_or_destroy(self, *args, **kwargs) -> None:
+            try:
+                init(self, *args, **kwargs)
+            except BaseException:
+                if getattr(self, "_LeanNode__created", False):
+                    # the subclass's destroy_node expects what its __init__ did not get to
+                    Node.destroy_node(self)
+                    self.__created = False
+                raise
+
+        cls.__init__ = init_or_destroy  # type: ignore[method-assign]
+
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
+        self.__created = True
         self._unreadable_logged: dict[str, float] = {}
         self.polled: frozenset = frozenset()
 
