@@ -51,8 +51,9 @@ def checked(call, *args, **kwargs):
 class SetpointResult:
     """What became of a setpoint: ``sent`` to a subscribed controller, ``confirmed`` by its
     status (None when not checked), and a line for the user. True when sent and not refuted.
-    ``in_force_s``: the stamp (graph time, s) of the feedback sample of the status that showed
-    it, at or after the sample the controller took it at."""
+    ``in_force_s``: graph time (s) from which the setpoint acts: the later of the status's
+    feedback sample and its own stamp (a status published on the change, as the controller
+    took the setpoint, still carries the sample before)."""
 
     sent: bool
     confirmed: bool | None
@@ -268,10 +269,10 @@ class GraphClient:
                 if status.mode == mode and math.isclose(
                     status.setpoint, value, rel_tol=1e-9, abs_tol=1e-12
                 ):
-                    stamp = status.encoder_stamp if mode == "position" else status.force_stamp
-                    return SetpointResult(
-                        True, True, "in force (controller status)", from_msg(stamp)
-                    )
+                    feedback = status.encoder_stamp if mode == "position" else status.force_stamp
+                    # the status sent at once on the change carries the sample before it
+                    acted_from = max(from_msg(feedback), from_msg(status.header.stamp))
+                    return SetpointResult(True, True, "in force (controller status)", acted_from)
                 if rejected is None:
                     rejected = status.rejected_setpoints
                 elif status.rejected_setpoints > rejected:

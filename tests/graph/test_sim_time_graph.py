@@ -78,14 +78,16 @@ def _step(venv, tmp_path, *options: str) -> tuple[float, float, float]:
         result.stdout,
     )
     assert printed, result.stdout
-    # the controller held the step for at least the 3 s of the graph's clock the figures cover
+    # the controller held the step for the 3 s of the graph's clock the figures cover; a
+    # record's stamp is the controller's clock when it took the setpoint, which can still be a
+    # control period (10 ms) behind the tool's /clock that timed the phase
     from hems_ros.bag import load_bag
 
     records = load_bag(folder, topics=["/hems/index/commands"])["/hems/index/commands"]
     taken = records.stamp[records["accepted"]]
     values = records["value"][records["accepted"]]
     rise = np.flatnonzero(values == 0.02)[-1]
-    assert taken[rise + 1] - taken[rise] >= 3.0 - 1e-3
+    assert taken[rise + 1] - taken[rise] >= 3.0 - 0.01 - 1e-3
     return tuple(map(float, printed.groups()))
 
 
