@@ -36,6 +36,7 @@ COMPRESSIONS = {
     "none": CompressionType.NONE,
 }
 INFINITE = {"sec": 9223372036, "nsec": 854775807}  # rosbag2's spelling of an unset duration
+INFINITE_NS = INFINITE["sec"] * 1_000_000_000 + INFINITE["nsec"]
 
 
 class _PlainDumper(yaml.SafeDumper):
@@ -49,8 +50,16 @@ def _dump(data: object) -> str:
     return yaml.dump(data, Dumper=_PlainDumper, sort_keys=False)
 
 
-def offered_qos(reliable: bool = True, transient_local: bool = False, depth: int = 0) -> dict:
-    """One offered QoS profile as rosbag2 (metadata version 9) writes it."""
+def offered_qos(
+    reliable: bool = True, transient_local: bool = False, depth: int = 0, lease_ns: int = 0
+) -> dict:
+    """One offered QoS profile as rosbag2 (metadata version 9) writes it; ``lease_ns``: the
+    liveliness lease, 0 for none (infinite)."""
+    lease = (
+        {"sec": lease_ns // 1_000_000_000, "nsec": lease_ns % 1_000_000_000}
+        if 0 < lease_ns < INFINITE_NS
+        else dict(INFINITE)
+    )
     return {
         "history": "keep_last" if depth else "unknown",
         "depth": depth,
@@ -59,7 +68,7 @@ def offered_qos(reliable: bool = True, transient_local: bool = False, depth: int
         "deadline": dict(INFINITE),
         "lifespan": dict(INFINITE),
         "liveliness": "automatic",
-        "liveliness_lease_duration": dict(INFINITE),
+        "liveliness_lease_duration": lease,
         "avoid_ros_namespace_conventions": False,
     }
 

@@ -93,7 +93,10 @@ def parse_remaps(items: Iterable[str]) -> dict[str, str]:
 
 
 def replay_qos(offered: str, depth: int = 100):
-    """Reliable / transient local only if every recorded publisher offered it."""
+    """Reliable / transient local only if every recorded publisher offered it; the shortest
+    liveliness lease if every one offered a lease (a reader that asks for a lease, as the
+    controllers and units do of the supervisor's status, matches no writer without one)."""
+    from rclpy.duration import Duration
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     try:
@@ -105,11 +108,26 @@ def replay_qos(offered: str, depth: int = 100):
     latched = bool(profiles) and all(
         str(p.get("durability")) in ("transient_local", "1") for p in profiles
     )
-    return QoSProfile(
+    leases = [_lease_ns(p.get("liveliness_lease_duration")) for p in profiles]
+    qos = QoSProfile(
         depth=depth,
         reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
         durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
     )
+    if leases and all(leases):
+        qos.liveliness_lease_duration = Duration(nanoseconds=min(leases))
+    return qos
+
+
+def _lease_ns(duration) -> int:
+    """A recorded lease in ns; 0 when absent, unreadable or infinite."""
+    from hems_ros.bag.writer import INFINITE_NS
+
+    try:
+        ns = int(duration["sec"]) * 1_000_000_000 + int(duration["nsec"])
+    except (TypeError, KeyError, ValueError):
+        return 0
+    return ns if 0 < ns < INFINITE_NS else 0
 
 
 def replay(

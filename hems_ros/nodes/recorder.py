@@ -90,6 +90,7 @@ def subscription_qos(publishers: list, depth: int) -> tuple[QoSProfile, list[dic
             p.qos_profile.reliability == ReliabilityPolicy.RELIABLE,
             p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL,
             p.qos_profile.depth,
+            p.qos_profile.liveliness_lease_duration.nanoseconds,
         )
         for p in publishers
     ]

@@ -132,6 +132,24 @@ def test_remap_syntax() -> None:
         parse_remaps(["/a=/b"])
 
 
+def test_replay_offers_the_recorded_liveliness_lease() -> None:
+    """A reader asking for a lease (the units and controllers of the supervisor's status)
+    matches only a writer that offers one at most as long."""
+    import yaml
+
+    from hems_ros.cli.replay import replay_qos
+
+    def lease_ns(*profiles: dict) -> int:
+        return replay_qos(yaml.safe_dump(list(profiles))).liveliness_lease_duration.nanoseconds
+
+    leased = offered_qos(True, True, 1, 30_000_000)
+    assert lease_ns(leased) == 30_000_000
+    assert lease_ns(leased, offered_qos(True, True, 1, 5_000_000)) == 5_000_000
+    assert lease_ns(leased, offered_qos(True, True, 1)) == 0  # one publisher offered none
+    assert lease_ns(offered_qos()) == 0
+    assert replay_qos("").liveliness_lease_duration.nanoseconds == 0
+
+
 @pytest.mark.parametrize("signal_name", ["SIGTERM", "SIGINT"])
 def test_a_signal_stops_replay_cleanly(
     ros_domain_id: int, tmp_path: Path, signal_name: str
