@@ -56,30 +56,37 @@ class MemoryLog:
         return out
 
 
-def sequence_losses(sequence: np.ndarray) -> tuple[int, int]:
+def sequence_losses(sequence: np.ndarray, counted: np.ndarray | None = None) -> tuple[int, int]:
     """(messages missing between consecutive sequence numbers, restarts): a step of 3 lost
-    two; a step back (a publisher that started again) starts a new count."""
+    two; a step back (a publisher that started again) starts a new count. ``counted``: per
+    message, whether a step ending at it counts (default all)."""
     if len(sequence) < 2:
         return 0, 0
     step = np.diff(sequence.astype(np.int64))
+    if counted is not None:
+        step = step[np.asarray(counted)[1:]]
     return int(np.sum(step[step > 1] - 1)), int(np.sum(step <= 0))
 
 
-def bag_losses(bag) -> dict[str, int]:
-    """Messages lost per recorded topic that numbers its messages (a ``sequence`` field);
-    topics several publishers share (commands) are left out."""
+def bag_losses(bag, since_ns: int = 0, until_ns: int | None = None) -> dict[str, int]:
+    """Messages lost per recorded topic that numbers its messages (a ``sequence`` field),
+    in the steps to messages logged in [``since_ns``, ``until_ns``); topics several
+    publishers share (commands) are left out."""
     losses = {}
     for topic, data in bag.topics.items():
         if "sequence" not in data.fields or topic.endswith("/commands"):
             continue
-        losses[topic] = sequence_losses(np.asarray(data["sequence"]))[0]
+        logged = np.asarray(data.log_time_ns)
+        counted = (logged >= since_ns) & (logged < (until_ns if until_ns is not None else np.inf))
+        losses[topic] = sequence_losses(np.asarray(data["sequence"]), counted)[0]
     return losses
 
 
-def missed_periods(bag, finger: str) -> tuple[int, int]:
+def missed_periods(bag, finger: str, since_ns: int = 0) -> tuple[int, int]:
     """(encoder samples with no duty command answering them, encoder samples) of ``finger``,
-    between the first and the last sample a recorded duty command answers: a controller
-    answers every sample it receives, so an unanswered one is a control period missed."""
+    between the first and the last sample a recorded duty command answers, and stamped at or
+    after ``since_ns``: a controller answers every sample it receives, so an unanswered one is
+    a control period missed."""
     encoder, duty = names.topic(finger, "encoder"), names.topic(finger, "duty")
     if encoder not in bag or duty not in bag or len(bag[duty]) == 0:
         return 0, 0
@@ -89,7 +96,7 @@ def missed_periods(bag, finger: str) -> tuple[int, int]:
     answered = bag[duty]["measurement_stamp.sec"].astype(np.int64) * 1_000_000_000 + bag[duty][
         "measurement_stamp.nanosec"
     ].astype(np.int64)
-    within = samples[(samples >= answered.min()) & (samples <= answered.max())]
+    within = samples[(samples >= max(answered.min(), since_ns)) & (samples <= answered.max())]
     return int(np.sum(~np.isin(within, answered))), len(within)
 
 
@@ -101,8 +108,10 @@ class SoakResult:
     faults: list[str]
     memory: dict[str, tuple[int, int, float]]
     losses: dict[str, int]
-    missed: dict[str, tuple[int, int]]
+    missed: dict[str, tuple[int, int]]  # after the warm-up
     bag: str
+    missed_in_warmup: tuple[int, int] = (0, 0)  # start-up and warm-up, all fingers (no limit)
+    lost_in_warmup: int = 0  # messages lost in the bag in start-up and warm-up (no limit)
 
     @property
     def lost(self) -> int:
@@ -151,9 +160,12 @@ class SoakResult:
             "| measure | value | limit |",
             "|---|---|---|",
             f"| faults | {len(self.faults)} | 0 |",
-            f"| messages lost in the bag (sequence gaps) | {self.lost} | 0 |",
-            f"| control periods missed | {missed} of {total} ({100 * self.missed_fraction:.3f} %) "
-            f"| < {100 * MAX_MISSED_PERIODS:g} % |",
+            f"| messages lost in the bag after warm-up (sequence gaps) | {self.lost} | 0 |",
+            f"| messages lost in the bag in start-up and warm-up | {self.lost_in_warmup} | - |",
+            f"| control periods missed after warm-up | {missed} of {total} "
+            f"({100 * self.missed_fraction:.3f} %) | < {100 * MAX_MISSED_PERIODS:g} % |",
+            f"| control periods missed in start-up and warm-up | {self.missed_in_warmup[0]} of "
+            f"{self.missed_in_warmup[1]} | - |",
             f"| worst resident-memory growth after warm-up | {100 * self.worst_growth[1]:+.1f} % "
             f"({self.worst_growth[0]}) | < {100 * MAX_MEMORY_GROWTH:g} % |",
             "",

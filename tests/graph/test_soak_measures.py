@@ -40,6 +40,11 @@ def test_bag_losses_leave_out_shared_topics_and_unnumbered_ones():
         [],
     )
     assert soak.bag_losses(bag) == {"/hems/index/encoder": 1}
+    # the step to the third message (logged at 2 ns) lost one: after a warm-up to 2 ns, not
+    # before it
+    assert soak.bag_losses(bag, since_ns=2) == {"/hems/index/encoder": 1}
+    assert soak.bag_losses(bag, since_ns=3) == {"/hems/index/encoder": 0}
+    assert soak.bag_losses(bag, until_ns=2) == {"/hems/index/encoder": 0}
 
 
 def test_missed_periods_are_encoder_samples_no_duty_answered():
@@ -65,6 +70,8 @@ def test_missed_periods_are_encoder_samples_no_duty_answered():
     # samples before the first and after the last answer are outside the controlled span
     assert soak.missed_periods(bag, "index") == (2, 8)
     assert soak.missed_periods(bag, "middle") == (0, 0)
+    # after a warm-up ending at 105 s: 107 only, of 105-108
+    assert soak.missed_periods(bag, "index", since_ns=105 * 10**9) == (1, 4)
 
 
 def test_memory_growth_is_judged_after_the_warm_up_on_the_last_quarter():
@@ -82,7 +89,9 @@ def test_a_result_fails_on_each_limit_it_breaks():
         1.0, 3, 2, [], {"unit": (100, 104, 0.04)}, {"/e": 0}, {"index": (4, 1000)}, "b"
     )
     assert result.failures() == []
-    assert "0.400 %" in result.markdown()
+    assert "| control periods missed after warm-up | 4 of 1000 (0.400 %) |" in result.markdown()
+    assert "| control periods missed in start-up and warm-up | 0 of 0 | - |" in result.markdown()
+    assert "| messages lost in the bag after warm-up (sequence gaps) | 0 | 0 |" in result.markdown()
     result.memory["supervisor"] = (100, 106, 0.06)
     result.losses["/e"] = 2
     result.faults.append("index: encoder lost")
