@@ -35,13 +35,15 @@ def pytest_unconfigure(config: pytest.Config) -> None:
         _domain_lock.close()  # releases the domain for the next run
 
 
-@pytest.fixture(scope="session")
+# "package" scope: the folders hold no __init__.py, so one instance serves this folder
+# and every folder below it, the whole test run
+@pytest.fixture(scope="package")
 def ros_domain_id() -> int:
     """The DDS domain this test run owns (also in ``os.environ['ROS_DOMAIN_ID']``)."""
     return int(os.environ["ROS_DOMAIN_ID"])
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def venv() -> Path:
     if not (VENV / "bin" / "python").exists():
         pytest.fail(f"{VENV} is missing: run `make setup`")

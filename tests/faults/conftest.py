@@ -82,7 +82,8 @@ def matrix_graph(ros_domain_id):
         graph.stop()
 
 
-def pytest_sessionfinish(session, exitstatus):
+def pytest_unconfigure() -> None:
+    """Writes the fault table once the run is over (make test-faults sets the page)."""
     page = os.environ.get("HEMS_RELIABILITY_PAGE")
     if not page or not ROWS:
         return
