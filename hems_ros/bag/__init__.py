@@ -20,7 +20,7 @@ from hems_ros.bag.reader import (
     load_bag,
 )
 from hems_ros.bag.selection import DEFAULT_RECORD_REGEX, TopicSelection
-from hems_ros.bag.writer import BagSummary, BagWriter, offered_qos
+from hems_ros.bag.writer import BagSummary, BagWriter, offered_lease_ns, offered_qos
 
 __all__ = [
     "DEFAULT_RECORD_REGEX",
@@ -38,5 +38,6 @@ __all__ = [
     "bag_info",
     "iter_messages",
     "load_bag",
+    "offered_lease_ns",
     "offered_qos",
 ]

@@ -73,6 +73,17 @@ def offered_qos(
     }
 
 
+def offered_lease_ns(profile: dict) -> int:
+    """The liveliness lease an offered QoS profile (as :func:`offered_qos` writes it) names,
+    ns; 0 when it names none, an infinite one, or one that cannot be read."""
+    try:
+        duration = profile["liveliness_lease_duration"]
+        ns = int(duration["sec"]) * 1_000_000_000 + int(duration["nsec"])
+    except (TypeError, KeyError, ValueError):
+        return 0
+    return ns if 0 < ns < INFINITE_NS else 0
+
+
 @dataclass
 class TopicRecord:
     topic: str

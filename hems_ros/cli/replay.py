@@ -99,6 +99,8 @@ def replay_qos(offered: str, depth: int = 100):
     from rclpy.duration import Duration
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
+    from hems_ros.bag import offered_lease_ns
+
     try:
         profiles = yaml.safe_load(offered) if offered else []
     except yaml.YAMLError:
@@ -108,7 +110,7 @@ def replay_qos(offered: str, depth: int = 100):
     latched = bool(profiles) and all(
         str(p.get("durability")) in ("transient_local", "1") for p in profiles
     )
-    leases = [_lease_ns(p.get("liveliness_lease_duration")) for p in profiles]
+    leases = [offered_lease_ns(p) for p in profiles]
     qos = QoSProfile(
         depth=depth,
         reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
@@ -117,17 +119,6 @@ def replay_qos(offered: str, depth: int = 100):
     if leases and all(leases):
         qos.liveliness_lease_duration = Duration(nanoseconds=min(leases))
     return qos
-
-
-def _lease_ns(duration) -> int:
-    """A recorded lease in ns; 0 when absent, unreadable or infinite."""
-    from hems_ros.bag.writer import INFINITE_NS
-
-    try:
-        ns = int(duration["sec"]) * 1_000_000_000 + int(duration["nsec"])
-    except (TypeError, KeyError, ValueError):
-        return 0
-    return ns if 0 < ns < INFINITE_NS else 0
 
 
 def replay(

@@ -224,6 +224,7 @@ def run(args: argparse.Namespace) -> int:
     # periods and loses samples the steady graph does not: judged, like memory, after the
     # warm-up, and reported apart
     warmed_ns = run_.started_ns + round(60e9 * args.warmup_minutes)
+    early = [soak.missed_periods(bag, f, until_ns=warmed_ns) for f in options.fingers]
     result = soak.SoakResult(
         minutes=args.minutes,
         grasps=run_.grasps,
@@ -233,7 +234,7 @@ def run(args: argparse.Namespace) -> int:
         losses=soak.bag_losses(bag, since_ns=warmed_ns),
         missed={finger: soak.missed_periods(bag, finger, warmed_ns) for finger in options.fingers},
         bag=str(folder),
-        missed_in_warmup=_missed_before(bag, options.fingers, warmed_ns),
+        missed_in_warmup=(sum(m for m, _ in early), sum(n for _, n in early)),
         lost_in_warmup=sum(soak.bag_losses(bag, until_ns=warmed_ns).values()),
     )
     text = result.markdown()
@@ -244,13 +245,3 @@ def run(args: argparse.Namespace) -> int:
     for failure in failures:
         print(f"hems soak: {failure}", file=sys.stderr)
     return 1 if failures else 0
-
-
-def _missed_before(bag, fingers, until_ns: int) -> tuple[int, int]:
-    """Missed control periods and samples of all ``fingers`` before ``until_ns``."""
-    totals = [soak.missed_periods(bag, f) for f in fingers]
-    after = [soak.missed_periods(bag, f, until_ns) for f in fingers]
-    return (
-        sum(m for m, _ in totals) - sum(m for m, _ in after),
-        sum(n for _, n in totals) - sum(n for _, n in after),
-    )

@@ -82,11 +82,13 @@ def bag_losses(bag, since_ns: int = 0, until_ns: int | None = None) -> dict[str,
     return losses
 
 
-def missed_periods(bag, finger: str, since_ns: int = 0) -> tuple[int, int]:
+def missed_periods(
+    bag, finger: str, since_ns: int = 0, until_ns: int | None = None
+) -> tuple[int, int]:
     """(encoder samples with no duty command answering them, encoder samples) of ``finger``,
-    between the first and the last sample a recorded duty command answers, and stamped at or
-    after ``since_ns``: a controller answers every sample it receives, so an unanswered one is
-    a control period missed."""
+    between the first and the last sample a recorded duty command answers, and stamped in
+    [``since_ns``, ``until_ns``): a controller answers every sample it receives, so an
+    unanswered one is a control period missed."""
     encoder, duty = names.topic(finger, "encoder"), names.topic(finger, "duty")
     if encoder not in bag or duty not in bag or len(bag[duty]) == 0:
         return 0, 0
@@ -96,7 +98,8 @@ def missed_periods(bag, finger: str, since_ns: int = 0) -> tuple[int, int]:
     answered = bag[duty]["measurement_stamp.sec"].astype(np.int64) * 1_000_000_000 + bag[duty][
         "measurement_stamp.nanosec"
     ].astype(np.int64)
-    within = samples[(samples >= max(answered.min(), since_ns)) & (samples <= answered.max())]
+    last = answered.max() if until_ns is None else min(answered.max(), until_ns - 1)
+    within = samples[(samples >= max(answered.min(), since_ns)) & (samples <= last)]
     return int(np.sum(~np.isin(within, answered))), len(within)
 
 

@@ -72,6 +72,8 @@ def test_missed_periods_are_encoder_samples_no_duty_answered():
     assert soak.missed_periods(bag, "middle") == (0, 0)
     # after a warm-up ending at 105 s: 107 only, of 105-108
     assert soak.missed_periods(bag, "index", since_ns=105 * 10**9) == (1, 4)
+    # and before it: 103 of 101-104
+    assert soak.missed_periods(bag, "index", until_ns=105 * 10**9) == (1, 4)
 
 
 def test_memory_growth_is_judged_after_the_warm_up_on_the_last_quarter():
