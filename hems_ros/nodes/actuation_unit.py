@@ -226,8 +226,11 @@ class ActuationUnitNode(LeanNode):
             self.on_supervisor,
             qos.STATUS,
         )
-        # a stopped or killed supervisor stops the heating within its lease, not its status timeout
-        self.supervisor_watch: LivelinessWatch | None = LivelinessWatch(supervisor)
+        # a stopped or killed supervisor stops the heating within its lease, not its status
+        # timeout; one in this process cannot stop while the unit runs
+        self.supervisor_watch = (
+            None if "supervisor" in self.in_process_with else LivelinessWatch(supervisor)
+        )
         self.state_cadence = Cadence(p["state_period_s"], p["tick_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
@@ -412,15 +415,6 @@ class ActuationUnitNode(LeanNode):
                 )
             )
         )
-
-    def peers_in_this_process(self, executables: set[str]) -> None:
-        """Node kinds running in this process (composed). A supervisor here cannot stop while
-        the unit runs, and the middleware asserts no liveliness to readers of its own
-        participant: its liveliness is not watched."""
-        if "supervisor" in executables and self.supervisor_watch is not None:
-            self.supervisor_watch.destroy()
-            self.supervisor_watch = None
-            self.driver.supervisor_alive = True
 
     def destroy_node(self) -> None:
         if self.supervisor_watch is not None:

@@ -242,8 +242,13 @@ class FingerControllerNode(LeanNode):
                 qos.WIRE_FORCE,
             ),
         }
-        # a stopped or killed shoulder module stops a position loop within the lease
-        self.force_watch: LivelinessWatch | None = LivelinessWatch(self.feedback["force"])
+        # a stopped or killed shoulder module stops a position loop within the lease; one in
+        # this process cannot stop while the controller runs
+        self.force_watch = (
+            None
+            if "shoulder_module" in self.in_process_with
+            else LivelinessWatch(self.feedback["force"])
+        )
         self.supervisor_sub = self.create_subscription(
             SupervisorStatus,
             names.supervisor_status_topic(self.graph_ns),
@@ -368,13 +373,6 @@ class FingerControllerNode(LeanNode):
         if self.setpoint.mode == "position":
             return transmission.wire_position(self.setpoint.value, self.ratio)
         return transmission.wire_force(self.setpoint.value, self.ratio)
-
-    def peers_in_this_process(self, executables: set[str]) -> None:
-        """Node kinds running in this process (composed): a shoulder module here cannot stop
-        while the controller runs, and its liveliness is not asserted to this participant."""
-        if "shoulder_module" in executables and self.force_watch is not None:
-            self.force_watch.destroy()
-            self.force_watch = None
 
     def destroy_node(self) -> None:
         if self.force_watch is not None:

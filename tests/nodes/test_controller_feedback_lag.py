@@ -14,8 +14,8 @@ def test_duty_is_zero_while_the_other_sensor_lags_and_back_when_it_returns(conte
     from hems_ros.graph.setpoints import Setpoint
     from hems_ros.nodes.finger_controller import FingerControllerNode
 
-    node = FingerControllerNode(context=context)
-    node.peers_in_this_process({"shoulder_module"})  # the stamps below stand in for its readings
+    # the stamps below stand in for the module's readings: its liveliness is not watched
+    node = FingerControllerNode(context=context, in_process_with=frozenset({"shoulder_module"}))
     try:
         node.enabled = True
         node.setpoint = Setpoint("position", 0.02)
