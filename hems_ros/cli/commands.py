@@ -7,6 +7,7 @@ import math
 import sys
 
 from hems_ros.cli.numbers import add_namespace_argument, positive
+from hems_ros.cli.waiting import READY_TIMEOUT_S, WaitingLine
 from hems_ros.client import DISCOVERY_S
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
@@ -15,12 +16,24 @@ UNITS = {"mm": ("position", 1e-3), "m": ("position", 1.0), "N": ("force", 1.0)}
 
 
 def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "enable",
+        help="allow heating: supervisor to ENABLED, once the graph is ready",
+        description="Wait until the graph is ready (every finger's encoder, wire force, unit "
+        "state and controller heartbeat present, and every unit getting its controller's "
+        "commands; one progress line says what is missing), then switch the supervisor to "
+        "ENABLED. Right after `hems up &` it waits for the graph to come up. Exit code 1 if "
+        "the graph is not ready or the supervisor refuses within --timeout.",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=positive,
+        default=READY_TIMEOUT_S,
+        help=f"seconds to wait for the graph and the supervisor (default {READY_TIMEOUT_S:g})",
+    )
+    add_namespace_argument(parser)
+    parser.set_defaults(func=run_enable)
     for command, text in (
-        (
-            "enable",
-            "allow heating: supervisor to ENABLED (needs every stream alive and every unit getting "
-            "its controller's commands)",
-        ),
         ("disable", "stop heating: supervisor to DISABLED"),
         ("estop", "emergency stop: every duty to 0, latched until reset"),
         ("reset", "clear a latched FAULT or ESTOP (refused while a fault persists)"),
@@ -81,6 +94,17 @@ def register(subparsers) -> None:
     )
     add_namespace_argument(parser)
     parser.set_defaults(func=run_status)
+
+
+def run_enable(args: argparse.Namespace) -> int:
+    from hems_ros.client.graph_client import GraphClient
+
+    line = WaitingLine("enable")
+    with GraphClient(namespace=args.namespace) as client:
+        ok, message = client.enable_when_ready(args.timeout, retry_s=0.5, progress=line)
+    line.end()
+    print(f"enable: {message}", file=sys.stdout if ok else sys.stderr)
+    return 0 if ok else 1
 
 
 def run_trigger(command: str, args: argparse.Namespace) -> int:

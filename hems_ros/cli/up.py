@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import signal
+import subprocess
 import sys
 import time
 from datetime import datetime
@@ -12,6 +13,7 @@ from pathlib import Path
 from hems_ros.cli.numbers import add_namespace_argument, positive, positive_or_max
 from hems_ros.graph import names
 from hems_ros.launcher import Graph, GraphOptions, default_params_file
+from hems_ros.rosenv import child_environment, die_with_parent
 
 
 def rate_text(rate: float) -> str:
@@ -161,6 +163,19 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
+def readiness_watcher(options: GraphOptions, started: float) -> subprocess.Popen:
+    """`hems wait` in a process of its own: it prints one line when every stream is present
+    (or what is missing after a minute) and leaves the domain; this process stays free of
+    rclpy, whose signal handling would take Ctrl-C from the graph's shutdown."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "hems_ros.cli.main", "wait", "--prefix", "hems up", "--no-progress"]
+        + ["--since", repr(started), "--namespace", options.namespace],
+        env=child_environment(),
+        preexec_fn=die_with_parent,
+        process_group=0,
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     try:
         options = graph_options(args)
@@ -175,8 +190,10 @@ def run(args: argparse.Namespace) -> int:
 
     signal.signal(signal.SIGINT, request_stop)
     signal.signal(signal.SIGTERM, request_stop)
+    started = time.monotonic()
     graph = Graph(options)
     graph.start()
+    watcher = readiness_watcher(options, started)
     recorder = None
     if record is not None:
         from hems_ros.bag.recording import RecorderProcess
@@ -190,7 +207,6 @@ def run(args: argparse.Namespace) -> int:
         f"{f', sim time x{rate_text(options.rate)}' if options.sim_time else ''}); Ctrl-C to stop",
         flush=True,
     )
-    started = time.monotonic()
     reported: set[str] = set()
     recorded = True
     try:
@@ -205,6 +221,8 @@ def run(args: argparse.Namespace) -> int:
                 break
             time.sleep(0.05)
     finally:
+        if watcher.poll() is None:
+            watcher.terminate()
         if recorder is not None:  # first, so that the bag ends with the graph still running
             recorded = stop_recorder("hems up", recorder)
         t0 = time.monotonic()

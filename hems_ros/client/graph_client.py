@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
 from hems_msgs.msg import (
     ActuatorState,
     ControllerStatus,
@@ -202,15 +204,63 @@ class GraphClient:
                     f"{names.service(command, self.namespace)} did not answer within {timeout:g} s",
                 )
 
+    def wait_until_ready(
+        self, timeout: float, progress: Callable[[list[str] | None], None] | None = None
+    ) -> list[str] | None:
+        """Wait until the supervisor reports the graph ready on /diagnostics (every stream
+        that ``enable`` needs is present) or ``timeout`` s have passed; returns what is still
+        missing ([] once ready), or None when no supervisor reported at all.
+
+        ``progress(missing)`` is called whenever what is missing changes (None: no supervisor
+        heard yet). The client's own discovery of the graph comes first: a new process can
+        take seconds to match the supervisor's writer (:data:`DISCOVERY_S`)."""
+        name = names.diagnostic_name(self.namespace, "supervisor")
+        latest: dict[str, list[str]] = {}
+
+        def on_diagnostics(array: DiagnosticArray) -> None:
+            for status in array.status:
+                if status.name == name:
+                    latest["missing"] = [kv.value for kv in status.values if kv.key == "not ready"]
+
+        subscription = self.node.create_subscription(
+            DiagnosticArray, names.DIAGNOSTICS_TOPIC, on_diagnostics, 10
+        )
+        deadline = time.monotonic() + timeout
+        shown: list[str] | None | bool = False  # nothing shown yet
+        try:
+            while True:
+                missing = latest.get("missing")
+                if progress is not None and missing != shown:
+                    progress(missing)
+                    shown = missing
+                if missing == [] or time.monotonic() >= deadline:
+                    return missing
+                checked(rclpy.spin_once, self.node, timeout_sec=0.05)
+        finally:
+            self.node.destroy_subscription(subscription)
+
     def enable_when_ready(
-        self, timeout: float, reset: bool = False, retry_s: float = 2.0
+        self,
+        timeout: float,
+        reset: bool = False,
+        retry_s: float = 2.0,
+        progress: Callable[[list[str] | None], None] | None = None,
     ) -> tuple[bool, str]:
-        """Call ``enable`` until the supervisor accepts it (it refuses while streams are still
-        coming up) or ``timeout`` s have passed; (success, last message).
+        """Wait until the graph is ready (:meth:`wait_until_ready`, ``progress`` as there),
+        then call ``enable`` until the supervisor accepts it (a stream can lapse between the
+        two) or ``timeout`` s have passed in all; (success, last message).
 
         ``reset`` unlatches a fault first on every try (a start-up hiccup may have latched one).
         """
         deadline = time.monotonic() + timeout
+        missing = self.wait_until_ready(timeout, progress)
+        if missing is None:
+            return False, (
+                f"no supervisor reported within {timeout:g} s "
+                f"(is the graph up in {self.namespace}?)"
+            )
+        if missing:
+            return False, f"the graph was not ready after {timeout:g} s: " + "; ".join(missing)
         ok, message = False, "no answer"
         while time.monotonic() < deadline:
             if reset:

@@ -89,6 +89,11 @@ JOINT_STATES_TOPIC = joint_states_topic()
 DIAGNOSTICS_TOPIC = "/diagnostics"
 
 
+def diagnostic_name(namespace: str, *parts: str) -> str:
+    """Name of a node's status on /diagnostics: "hems/supervisor", "left/actuation_unit/index"."""
+    return "/".join((namespace.strip("/"), *parts))
+
+
 def node_names() -> list[tuple[str, str, dict[str, str]]]:
     """(executable, node name, parameters) of the 16 nodes of the full graph."""
     nodes = [("actuation_unit", f"actuation_unit_{f}", {"finger": f}) for f in FINGERS]

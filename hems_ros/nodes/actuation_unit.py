@@ -212,7 +212,7 @@ class ActuationUnitNode(LeanNode):
             DutyCommand,
             names.topic(self.finger, "duty", self.graph_ns),
             self.on_duty,
-            qos.COMMAND,
+            qos.DUTY,
             on_unreadable=self.on_unreadable_duty,
         )
         # lockstep: answers are taken at the steps, each as if received at its sample
@@ -445,7 +445,7 @@ class ActuationUnitNode(LeanNode):
         }
         status = DiagnosticStatus(
             level=DiagnosticStatus.WARN if d.watchdog_tripped else DiagnosticStatus.OK,
-            name=f"hems/actuation_unit/{self.finger}",
+            name=names.diagnostic_name(self.graph_ns, "actuation_unit", self.finger),
             hardware_id=f"actuation_unit_{self.finger}",
             message="duty watchdog tripped: duty 0" if d.watchdog_tripped else "running",
             values=[KeyValue(key=k, value=str(v)) for k, v in values.items()],

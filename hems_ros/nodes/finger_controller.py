@@ -64,7 +64,6 @@ from hems_ros.graph.thermal_guard import ThermalGuard
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import now_ns, stamp_now
 from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.liveliness import LivelinessWatch
 from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, non_negative, one_of, positive
 from hems_ros.nodes.runner import run_node
 from hems_ros.nodes.wire import codec, stamp_ns
@@ -129,10 +128,11 @@ PARAMETERS = [
     ),
     Spec(
         "feedback_lag_s",
-        0.1,
+        0.035,
         "0 % duty while the other mode's readings (force in position mode, encoder in "
         "force mode) are older than this against the feedback's, on the unit's stamps, s: without "
-        "them over-force and over-travel cannot be seen",
+        "them over-force and over-travel cannot be seen; a shoulder module that stops stops a "
+        "position loop within four samples (40 ms)",
         PERIOD_LIMIT,
         True,
     ),
@@ -211,7 +211,7 @@ class FingerControllerNode(LeanNode):
         self._steps_since_status = 0
         self._reported: tuple | None = None
         self.duty_pub = self.create_publisher(
-            DutyCommand, names.topic(self.finger, "duty", self.graph_ns), qos.COMMAND
+            DutyCommand, names.topic(self.finger, "duty", self.graph_ns), qos.DUTY
         )
         self.status_pub = self.create_publisher(
             ControllerStatus,
@@ -239,16 +239,9 @@ class FingerControllerNode(LeanNode):
                 WireForce,
                 names.topic(self.finger, "wire_force", self.graph_ns),
                 self.on_force,
-                qos.WIRE_FORCE,
+                qos.SENSOR,
             ),
         }
-        # a stopped or killed shoulder module stops a position loop within the lease; one in
-        # this process cannot stop while the controller runs
-        self.force_watch = (
-            None
-            if "shoulder_module" in self.in_process_with
-            else LivelinessWatch(self.feedback["force"])
-        )
         self.supervisor_sub = self.create_subscription(
             SupervisorStatus,
             names.supervisor_status_topic(self.graph_ns),
@@ -374,11 +367,6 @@ class FingerControllerNode(LeanNode):
             return transmission.wire_position(self.setpoint.value, self.ratio)
         return transmission.wire_force(self.setpoint.value, self.ratio)
 
-    def destroy_node(self) -> None:
-        if self.force_watch is not None:
-            self.force_watch.destroy()
-        super().destroy_node()
-
     def on_idle(self) -> None:
         self.drain(self.supervisor_sub)
         self.publish_status()
@@ -425,12 +413,6 @@ class FingerControllerNode(LeanNode):
         reading = self.wire_force if self.setpoint.mode == "position" else self.wire_position
         if reading is None or not math.isfinite(reading):
             return False  # a failed sensor says nothing about over-force or over-travel
-        if (
-            self.setpoint.mode == "position"
-            and self.force_watch is not None
-            and not self.force_watch.alive()
-        ):
-            return False  # its module stopped: the readings it sent last are going stale
         if lag_ns(measurement_stamp, other) > self.feedback_lag_ns:
             self.drain(self._other_feedback())  # polled at the statuses: take what came meanwhile
             other = self.force_stamp if self.setpoint.mode == "position" else self.encoder_stamp

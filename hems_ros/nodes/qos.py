@@ -1,5 +1,5 @@
-"""QoS of the graph: sensor streams best effort, commands reliable, supervisor status transient
-local; the controller status (heartbeat) as the sensor streams."""
+"""QoS of the graph: sensor streams and duty commands best effort, setpoints reliable, supervisor
+status transient local; the controller status (heartbeat) as the sensor streams."""
 
 from rclpy.duration import Duration
 from rclpy.qos import (
@@ -29,16 +29,12 @@ STATUS = QoSProfile(
     liveliness=LivelinessPolicy.AUTOMATIC,
     liveliness_lease_duration=Duration(seconds=SUPERVISOR_LEASE_S),
 )
-# The shoulder modules' force readings: the controllers watch their writers' liveliness as the
-# units watch the supervisor's (a position loop must not heat blind to over-force).
-WIRE_FORCE_LEASE_S = 0.03
-WIRE_FORCE = QoSProfile(
-    depth=10,
-    history=HistoryPolicy.KEEP_LAST,
-    reliability=ReliabilityPolicy.BEST_EFFORT,
-    liveliness=LivelinessPolicy.AUTOMATIC,
-    liveliness_lease_duration=Duration(seconds=WIRE_FORCE_LEASE_S),
-)
+# Duty commands: each supersedes the last within one control period, and the unit's watchdog
+# stops the heating after three periods without one, so a lost command needs no repair. A
+# reliable writer kept each in a history and traded heartbeats and acknowledgements with the
+# unit and the recorder for nothing (docs/design.md). A reliable writer (a test's, a tool's)
+# still matches the units' best-effort readers.
+DUTY = SENSOR
 # Writer and every reader of /hems/<finger>/controller_status take this (a reliable reader does
 # not match the best-effort writer). Best effort: each status supersedes the last within 20 ms,
 # and a reliable reader held every later status back behind a lost one until the writer's next

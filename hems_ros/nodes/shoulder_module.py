@@ -90,7 +90,7 @@ class ShoulderModuleNode(LeanNode):
         self.frozen: dict[str, tuple[float, bool]] = {}
         for index, finger in enumerate(names.MODULES[p["module"]]):
             self.publishers_[finger] = self.create_publisher(
-                WireForce, names.topic(finger, "wire_force", self.graph_ns), qos.WIRE_FORCE
+                WireForce, names.topic(finger, "wire_force", self.graph_ns), qos.SENSOR
             )
             self.sequences[finger] = 0
             self.rngs[finger] = sensors.noise_generator(p["seed"] + index)

@@ -122,7 +122,7 @@ class SimClockNode(LeanNode):
                     DutyCommand,
                     names.topic(finger, "duty", self.graph_ns),
                     lambda m, f=finger: self._answer(f, m),
-                    qos.COMMAND,
+                    qos.DUTY,
                 )
             self.create_subscription(
                 SupervisorStatus,

@@ -12,7 +12,9 @@ Publishes   /hems/supervisor/status  hems_msgs/SupervisorStatus  reliable, trans
                                                                 service call
             /hems/joint_states       sensor_msgs/JointState      reliable: tendon position (m) and
                                                                  tendon force (N, as effort)
-            /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz
+            /diagnostics             diagnostic_msgs/DiagnosticArray  1 Hz, and at once when
+                                     the graph becomes ready (key "ready": every stream
+                                     enable needs is present; "not ready": what is missing)
 
 Monitors: lost encoder or force streams and unit state reports (no new reading for lost_s,
 default 400 ms; shorter gaps over stale_s, 50 ms, are counted in /diagnostics), controller
@@ -218,6 +220,7 @@ class SupervisorNode(LeanNode):
             self.check,
         )
         self.status_cadence = Cadence(p["status_period_s"], p["check_period_s"])
+        self.ready = False  # every stream present, as enable needs them (judged with the status)
         self.joints_cadence = Cadence(p["joint_states_period_s"], p["check_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
         self.publish_status()
@@ -289,6 +292,7 @@ class SupervisorNode(LeanNode):
         self.logic.check_streams(now)
         if self.status_cadence.due(now):
             self.publish_status()
+            self.judge_readiness(now)
         else:
             self.publish_if_changed()
         if self.joints_cadence.due(now):
@@ -330,6 +334,16 @@ class SupervisorNode(LeanNode):
         joints.header.stamp = stamp_now(self)
         self.joints_pub.publish(joints)
 
+    def judge_readiness(self, now: float) -> None:
+        """Publish the diagnostics at once when the graph becomes ready (every stream present):
+        `hems up` and `hems enable` wait for that, not for the next 1 Hz ones. A stream that
+        lapses for a moment on a busy host waits for those (they name it)."""
+        ready = not self.logic.missing_streams(now)
+        if ready and not self.ready:
+            self.get_logger().info("ready: every stream present")
+            self.publish_diagnostics()
+        self.ready = ready
+
     def publish_diagnostics(self) -> None:
         state = self.logic.state
         level = {State.FAULT: DiagnosticStatus.ERROR, State.ESTOP: DiagnosticStatus.ERROR}.get(
@@ -338,10 +352,11 @@ class SupervisorNode(LeanNode):
         missing = self.logic.missing_streams(seconds(self))
         status = DiagnosticStatus(
             level=level,
-            name="hems/supervisor",
+            name=names.diagnostic_name(self.graph_ns, "supervisor"),
             hardware_id="supervisor",
             message=state.name,
-            values=[KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
+            values=[KeyValue(key="ready", value=str(not missing).lower())]
+            + [KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
             + [KeyValue(key="not ready", value=m) for m in missing]
             + [
                 KeyValue(

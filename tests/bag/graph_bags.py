@@ -75,7 +75,7 @@ class ControllerReplay:
         self.duties: list = []
         self.statuses: list = []
         self.node.create_subscription(
-            DutyCommand, names.topic(finger, "duty"), self.duties.append, qos.COMMAND
+            DutyCommand, names.topic(finger, "duty"), self.duties.append, qos.DUTY
         )
         self.node.create_subscription(
             ControllerStatus,
@@ -91,7 +91,7 @@ class ControllerReplay:
                 EncoderReading, names.topic(finger, "encoder"), qos.SENSOR
             ),
             names.topic(finger, "wire_force"): self.node.create_publisher(
-                WireForce, names.topic(finger, "wire_force"), qos.WIRE_FORCE
+                WireForce, names.topic(finger, "wire_force"), qos.SENSOR
             ),
         }
         self.status = self.node.create_publisher(

@@ -98,7 +98,7 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(
                 msg_type,
                 topic,
                 received[topic].append,
-                qos.COMMAND if msg_type is DutyCommand else qos.SENSOR,
+                qos.DUTY if msg_type is DutyCommand else qos.SENSOR,
             )
         for finger in fingers:
             assert client.send_setpoint(finger, "position", 0.0, timeout=60)

@@ -45,7 +45,7 @@ def rec(graph):
     )
     recorder.listen(SupervisorStatus, names.SUPERVISOR_STATUS_TOPIC, qos.STATUS)
     recorder.listen(DiagnosticArray, names.DIAGNOSTICS_TOPIC, 10)
-    recorder.listen(DutyCommand, names.topic(FINGER, "duty"), qos.COMMAND)
+    recorder.listen(DutyCommand, names.topic(FINGER, "duty"), qos.DUTY)
     for finger in names.FINGERS:
         recorder.listen(ActuatorState, names.sim_topic(finger, "state"), qos.SENSOR)
     recorder.spin(1.0)

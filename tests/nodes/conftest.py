@@ -61,12 +61,6 @@ def _wait_alive(watch, seconds: float = 10.0) -> None:
 
 
 @pytest.fixture
-def wait_alive():
-    """wait_alive(watch): until a LivelinessWatch sees a writer alive (10 s at most)."""
-    return _wait_alive
-
-
-@pytest.fixture
 def live_supervisor(other_participant):
     """live_supervisor(unit): a SupervisorStatus writer the unit under test sees alive (its
     liveliness gates the heating); returns (its node, the publisher)."""

@@ -38,7 +38,7 @@ def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context, 
     helper = rclpy.create_node("force_sender", context=context)
     try:
         assert node.setpoint.mode == "position" and node.status_every == 2
-        publisher = matched_publisher(helper, WireForce, "/hems/index/wire_force", qos.WIRE_FORCE)
+        publisher = matched_publisher(helper, WireForce, "/hems/index/wire_force", qos.SENSOR)
         node.wire_position = 0.0
         node.control((0, 0))  # the first step reports at once (a new status key)
         publisher.publish(WireForce(finger="index", force=7.5))

@@ -86,14 +86,14 @@ def test_enable_is_refused_while_the_units_watchdog_sees_no_duty_commands(one_fi
 
     supervisor = one_finger(controller_remaps=["/hems/index/duty:=/hems/index/duty_nowhere"])
     with GraphClient("enable_gate") as client:
-        # every refusal is asked again until the window ends, as `hems enable` does: the
-        # unit's watchdog is also tripped for a healthy finger until discovery has matched
-        # the controller's duty writer with the unit
+        # the graph is not ready until the window ends, as `hems enable` waits: the unit's
+        # watchdog is also tripped for a healthy finger until discovery has matched the
+        # controller's duty writer with the unit
         ok, message = client.enable_when_ready(timeout=6.0, retry_s=0.3)
         assert not ok
-        assert (
-            message
-            == "cannot enable: index: no duty commands reach the unit (its watchdog is tripped)"
+        assert message == (
+            "the graph was not ready after 6 s: "
+            "index: no duty commands reach the unit (its watchdog is tripped)"
         )
         assert supervisor.logic.state.name == "IDLE"
 
