@@ -11,6 +11,7 @@ from hems_ros.cli.waiting import READY_TIMEOUT_S, WaitingLine
 from hems_ros.client import DISCOVERY_S
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
+from hems_ros.graph.supervisor_logic import LOSS_LIMIT_KEY, longest_gap, parse_gaps
 
 UNITS = {"mm": ("position", 1e-3), "m": ("position", 1.0), "N": ("force", 1.0)}
 
@@ -235,7 +236,20 @@ def format_status(snap) -> str:
         f"supervisor: {sup.state_name if sup else 'not running'}"
         + (f" ({'; '.join(sup.faults)})" if sup and sup.faults else "")
     )
+    if snap.diagnostics:
+        rows.append(gap_line(snap))
     return "\n".join(rows)
+
+
+def gap_line(snap) -> str:
+    """The supervisor's count of stream gaps and its loss limit, from its /diagnostics."""
+    if not snap.diagnostics:
+        return "stream gaps: no supervisor diagnostics received"
+    limit = dict(snap.diagnostics).get(LOSS_LIMIT_KEY, "?")
+    return (
+        f"stream gaps while ENABLED: {longest_gap(parse_gaps(snap.diagnostics))}; "
+        f"a stream silent for {limit} ms faults"
+    )
 
 
 def run_status(args: argparse.Namespace) -> int:

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from hems_ros.cli import grasp
+from hems_ros.cli.commands import gap_line
 from hems_ros.cli.numbers import positive
 from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder
 from hems_ros.client.recording import wait_until_recording
@@ -91,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
             except RuntimeError as error:
                 print(f"demo: {graph.with_exits(str(error))}", file=sys.stderr)
                 return 1
+            # the supervisor's /diagnostics come once a second
+            print(f"demo: {gap_line(client.snapshot(fingers=(), seconds=1.2))}", flush=True)
         rows = grasp.report(traces, plan, phase_starts, args.plot)
         problem = grasp.fault_report(statuses) or grasp.tracking_report(rows, plan, options.fingers)
         if problem:

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from hems_ros.cli.numbers import add_namespace_argument, finite, non_negative, positive
+from hems_ros.cli.waiting import WaitingLine
 from hems_ros.graph import names
 from hems_ros.graph.grasp import (
     FingerTrace,
@@ -256,7 +257,9 @@ def enabled_grasp(client, plan: GraspPlan, fingers, enable_timeout: float, who: 
 
     listener = GraspListener(client, fingers)
     require_controllers(client, fingers)
-    ok, message = client.enable_when_ready(enable_timeout)
+    line = WaitingLine(who)
+    ok, message = client.enable_when_ready(enable_timeout, progress=line)
+    line.end()
     if not ok:
         raise EnableRefused(message)
     print(f"{who}: {message}", flush=True)

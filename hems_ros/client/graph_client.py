@@ -74,6 +74,8 @@ class Snapshot:
     states: dict[str, ActuatorState] = field(default_factory=dict)
     forces: dict[str, WireForce] = field(default_factory=dict)
     supervisor: SupervisorStatus | None = None
+    # the supervisor's latest /diagnostics key-value pairs (1 Hz: empty if none came)
+    diagnostics: list[tuple[str, str]] = field(default_factory=list)
 
     def incomplete(self) -> bool:
         """The supervisor not heard yet, or a finger whose controller reported without its
@@ -408,13 +410,23 @@ class GraphClient:
         then waits for a periodic announcement, seconds later, and `hems status` reported a
         running supervisor as not running, or a finger's position and force as missing."""
         snap = Snapshot()
+        supervisor = names.diagnostic_name(self.namespace, "supervisor")
+
+        def on_diagnostics(array: DiagnosticArray) -> None:
+            for status in array.status:
+                if status.name == supervisor:
+                    snap.diagnostics = [(kv.key, kv.value) for kv in status.values]
+
         subs = [
             self.node.create_subscription(
                 SupervisorStatus,
                 names.supervisor_status_topic(self.namespace),
                 lambda m: setattr(snap, "supervisor", m),
                 qos.STATUS,
-            )
+            ),
+            self.node.create_subscription(
+                DiagnosticArray, names.DIAGNOSTICS_TOPIC, on_diagnostics, 10
+            ),
         ]
         for finger in fingers:
             subs.append(

@@ -12,7 +12,7 @@ controller heartbeat silent for longer than ``heartbeat_timeout_s``, and the act
 duty-watchdog flag held for ``watchdog_hold_s`` fault too. Outside ENABLED nothing heats, so a
 silent stream (a node starting or restarting) only blocks ``enable`` and ``reset`` until it is back.
 
-A sensor gap longer than ``stale_s`` but shorter than ``lost_s`` is counted, not latched
+A gap longer than ``stale_s`` but shorter than a loss is counted, not latched
 (:meth:`SupervisorLogic.gaps`): a host that is busy for a moment (a command-line tool
 joining the domain, a garbage collection) delays streams by tens of milliseconds, and
 heating is already safe through it without the supervisor. A controller computes a duty
@@ -102,6 +102,16 @@ class MonitorLimits:
         and, like the heartbeat, is not judged to the tens of milliseconds."""
         return self.stale_s if stream in ("encoder", "wire_force") else self.heartbeat_timeout_s
 
+    @property
+    def loss_s(self) -> float:
+        """The shortest silence of a stream that faults (lost_s, heartbeat_timeout_s)."""
+        return min(self.lost_s, self.heartbeat_timeout_s)
+
+    def gap_s(self, stream: str) -> float:
+        """A silence longer than this is counted as a gap: ``stale_s``, and for the unit state,
+        which comes every 50 ms (the units' ``state_period_s``), twice that."""
+        return 2 * self.stale_s if stream == "unit state" else self.stale_s
+
     def __post_init__(self) -> None:
         for name in (
             "stale_s",
@@ -154,10 +164,9 @@ class SupervisorLogic:
     def saw(self, stream: str, finger: str, now: float) -> None:
         seen = self._last_seen.get((stream, finger))
         if (
-            stream in ("encoder", "wire_force")
-            and self.state == State.ENABLED
+            self.state == State.ENABLED
             and seen is not None
-            and now - seen > self.limits.stale_s
+            and now - max(seen, self._enabled_at) > self.limits.gap_s(stream)
         ):
             gap = self._gaps.setdefault((finger, stream), [0, 0.0])
             gap[0] += 1
@@ -179,8 +188,10 @@ class SupervisorLogic:
             )
 
     def gaps(self) -> dict[tuple[str, str], tuple[int, float]]:
-        """Sensor gaps longer than ``stale_s`` (and shorter than ``lost_s``) while ENABLED, by
-        (finger, stream): (count, longest s). Transient: counted for the diagnostics."""
+        """Gaps of every stream (sensor readings, heartbeats, unit states) longer than
+        :meth:`MonitorLimits.gap_s` and shorter than a loss, while ENABLED, by (finger,
+        stream): (count, longest s). Transient: counted for the diagnostics, and the margin
+        the loss limits keep over them (docs/reliability.md)."""
         return {key: (count, longest) for key, (count, longest) in self._gaps.items()}
 
     def wire_force(self, finger: str, force_n: float, now: float) -> None:
@@ -382,3 +393,35 @@ class SupervisorLogic:
         self.faults.append(Fault(finger, kind, text))
         if self.state != State.ESTOP:
             self.state = State.FAULT
+
+
+GAP_KEY = "gaps"
+LOSS_LIMIT_KEY = "loss limit ms"  # the shorter of lost_s and heartbeat_timeout_s
+
+
+def gap_entries(gaps: dict[tuple[str, str], tuple[int, float]]) -> list[tuple[str, str]]:
+    """:meth:`SupervisorLogic.gaps` as the supervisor's /diagnostics key-value pairs."""
+    return [
+        (f"{GAP_KEY} {finger} {stream}", f"{count}, longest {1e3 * longest:.0f} ms")
+        for (finger, stream), (count, longest) in sorted(gaps.items())
+    ]
+
+
+def parse_gaps(pairs) -> dict[tuple[str, str], tuple[int, float]]:
+    """The inverse of :func:`gap_entries`, from (key, value) pairs; other keys are skipped."""
+    gaps = {}
+    for key, value in pairs:
+        words = key.split(" ", 2)
+        if len(words) == 3 and words[0] == GAP_KEY:
+            count, longest = value.split(", longest ")
+            gaps[(words[1], words[2])] = (int(count), float(longest.removesuffix(" ms")) * 1e-3)
+    return gaps
+
+
+def longest_gap(gaps: dict[tuple[str, str], tuple[int, float]]) -> str:
+    """One line on the gaps: how many, the longest and whose."""
+    if not gaps:
+        return "no gaps"
+    (finger, stream), (_, longest) = max(gaps.items(), key=lambda item: item[1][1])
+    total = sum(count for count, _ in gaps.values())
+    return f"{total} gaps, longest {1e3 * longest:.0f} ms ({finger} {stream})"

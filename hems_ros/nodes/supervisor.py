@@ -40,7 +40,13 @@ from std_srvs.srv import Trigger
 
 from hems_ros.graph import names, transmission
 from hems_ros.graph.cadence import Cadence, supervisor_check_delay
-from hems_ros.graph.supervisor_logic import MonitorLimits, State, SupervisorLogic
+from hems_ros.graph.supervisor_logic import (
+    LOSS_LIMIT_KEY,
+    MonitorLimits,
+    State,
+    SupervisorLogic,
+    gap_entries,
+)
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import seconds, stamp_now
 from hems_ros.nodes.grid_timer import create_grid_timer
@@ -358,12 +364,8 @@ class SupervisorNode(LeanNode):
             values=[KeyValue(key="ready", value=str(not missing).lower())]
             + [KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
             + [KeyValue(key="not ready", value=m) for m in missing]
-            + [
-                KeyValue(
-                    key=f"gaps {finger} {stream}", value=f"{count}, longest {1e3 * longest:.0f} ms"
-                )
-                for (finger, stream), (count, longest) in sorted(self.logic.gaps().items())
-            ],
+            + [KeyValue(key=k, value=v) for k, v in gap_entries(self.logic.gaps())]
+            + [KeyValue(key=LOSS_LIMIT_KEY, value=f"{1e3 * self.logic.limits.loss_s:.0f}")],
         )
         array = DiagnosticArray(status=[status])
         array.header.stamp = stamp_now(self)

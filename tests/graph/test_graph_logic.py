@@ -125,6 +125,24 @@ def test_a_sensor_gap_shorter_than_a_loss_is_counted_not_latched():
     assert count == 2 and longest == pytest.approx(0.18)
 
 
+def test_heartbeat_and_unit_state_gaps_are_counted_with_their_longest():
+    """The margin of the loss limits is judged against the longest gap of every stream, the
+    controller's heartbeat and the unit's state reports included."""
+    logic = SupervisorLogic(("index",))
+    _ready(logic, 1.0)
+    logic.request("enable", 1.0)
+    _report(logic, "index", 1.02)
+    _report(logic, "index", 1.17)  # 150 ms without a status: heartbeat, sensors and state
+    _report(logic, "index", 1.19, unit=False)
+    _report(logic, "index", 1.21, unit=False)
+    _report(logic, "index", 1.25)  # the state 80 ms apart: within its 50 ms period's slack
+    gaps = logic.gaps()
+    assert gaps[("index", "heartbeat")] == (1, pytest.approx(0.15))
+    assert gaps[("index", "unit state")] == (1, pytest.approx(0.15))
+    assert gaps[("index", "encoder")] == (1, pytest.approx(0.15))
+    assert logic.state == State.ENABLED
+
+
 def test_a_silent_controller_is_its_heartbeat_fault_not_its_sensors():
     logic = SupervisorLogic(("index",), MonitorLimits(heartbeat_timeout_s=0.2))
     _ready(logic, 0.0)
