@@ -83,6 +83,24 @@ class LeanNode(Node):
                 else:
                     subscription.callback(taken[0])
 
+    def drain_in_order(self, *subscriptions) -> None:
+        """:meth:`drain` of several subscriptions at once, every callback with the message's
+        reception time (s, system clock), in the order the middleware received the messages:
+        a node that takes what came since its last wake-up applies it as it came."""
+        taken = []
+        for rank, subscription in enumerate(subscriptions):
+            with subscription.handle:
+                while (
+                    message := subscription.handle.take_message(
+                        subscription.msg_type, subscription.raw
+                    )
+                ) is not None:
+                    received_ns = message[1]["received_timestamp"]
+                    taken.append((received_ns, rank, subscription.callback, message[0]))
+        taken.sort(key=lambda entry: entry[:2])
+        for received_ns, _, callback, message in taken:
+            callback(message, received_ns * 1e-9)
+
     def create_publisher(self, *args, event_callbacks=None, **kwargs):
         return super().create_publisher(
             *args,

@@ -40,11 +40,12 @@ def tick_just_after_a_sample(node) -> float:
     return sample_s
 
 
-def test_duty_commands_wake_the_unit_only_on_sim_time(context):
+def test_duty_commands_and_statuses_wake_the_unit_only_on_sim_time(context):
     for use_sim_time in (False, True):
         node = unit(context, use_sim_time)
         try:
             assert (node.duty_sub in node.polled) is not use_sim_time
+            assert (node.supervisor_sub in node.polled) is not use_sim_time
         finally:
             node.destroy_node()
 
@@ -141,6 +142,48 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(
         assert heated == pytest.approx(67.0 * heating_s, rel=0.25)
     finally:
         helper.destroy_node()
+        node.destroy_node()
+
+
+def test_a_command_and_an_estop_taken_at_one_tick_act_in_the_order_they_came(
+    context, matched_publisher, live_supervisor
+):
+    """Both came between two ticks: the command heats from the sample it answers until the
+    ESTOP came, not until the tick that took them, and not at all if the ESTOP went first."""
+    from builtin_interfaces.msg import Time
+    from hems_msgs.msg import DutyCommand, SupervisorStatus
+    from rclpy.duration import Duration
+
+    from hems_ros.nodes import qos
+
+    node = unit(context, require_supervisor=True)
+    try:
+        helper, status_writer = live_supervisor(node)
+        status_writer.publish(SupervisorStatus(state=SupervisorStatus.ENABLED))
+        assert status_writer.wait_for_all_acked(Duration(seconds=5))
+        duty_writer = matched_publisher(helper, DutyCommand, "/hems/index/duty", qos.COMMAND)
+        sample_s = tick_just_after_a_sample(node)
+        assert node.driver.heating_allowed(sample_s)
+        energy_at_sample = node.driver.last_result.energy_joule_j
+        sec, nanosec = stamp(sample_s)
+        duty_writer.publish(
+            DutyCommand(
+                finger="index", duty_percent=100.0, measurement_stamp=Time(sec=sec, nanosec=nanosec)
+            )
+        )
+        assert duty_writer.wait_for_all_acked(Duration(seconds=5))
+        time.sleep(max(0.0, sample_s + 0.004 - time.time()))
+        status_writer.publish(SupervisorStatus(state=SupervisorStatus.ESTOP))
+        assert status_writer.wait_for_all_acked(Duration(seconds=5))
+        estop_s = time.time()  # a little after it came
+        time.sleep(max(0.0, sample_s + 0.009 - time.time()))
+        node.on_tick()
+        assert node.driver.commands == 1 and not node.driver.permitted(node.driver.time_s)
+        heated = node.driver.last_result.energy_joule_j - energy_at_sample
+        # about 67 W (4 A into 4.2 ohm) from the sample to the ESTOP's arrival, none after
+        assert 0.003 <= estop_s - sample_s < 0.009
+        assert heated == pytest.approx(67.0 * (estop_s - sample_s), rel=0.3)
+    finally:
         node.destroy_node()
 
 

@@ -1,0 +1,226 @@
+"""A new user's first runs, repeated: `make demo` and the README's typical run.
+
+Each demo is `hems demo` (what `make demo` runs after setup): valid when it exits 0 (the
+supervisor stayed ENABLED through the grasp and the fingers tracked). Each typical run is
+what the README shows, typed as fast as a script types it: `hems up &`, at once `hems enable`,
+`hems setpoint index 20 --unit mm`, three seconds of heating, `hems status`, Ctrl-C; valid
+when the status shows the supervisor ENABLED. Both print the supervisor's count of stream
+gaps while ENABLED (its /diagnostics), whose longest is compared with its loss limit.
+
+``--busy`` runs a busy loop on one core throughout (``python3 -c "while True: pass"`` at
+normal priority: a browser, a compiler, a user's own node). ``--kill-first`` starts one graph
+and kills every process of it with SIGKILL before the runs, as a crash or a closed terminal
+does: Fast DDS then leaves its shared-memory files in /dev/shm, which nothing here cleans.
+
+Usage: .venv/bin/python benchmarks/bench_first_runs.py [--demos 20] [--typical 20]
+       [--separate] [--busy] [--kill-first] [--smoke]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from hems_ros.rosenv import apply_network_defaults, use_private_domain  # noqa: E402
+
+apply_network_defaults()
+DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
+
+HEMS = [sys.executable, "-m", "hems_ros.cli.main"]
+GAPS = re.compile(
+    r"stream gaps while ENABLED: (?:no gaps|(\d+) gaps, longest (\d+) ms \(([^)]*)\))"
+)
+LIMIT = re.compile(r"a stream silent for (\d+) ms faults")
+READY = re.compile(r"ready after ([\d.]+) s")
+
+
+@dataclass
+class Run:
+    valid: bool
+    detail: str  # why not valid, or ""
+    longest_gap_ms: float  # 0 when no gap was counted
+    gap_stream: str
+    limit_ms: float
+    ready_s: float | None  # hems up or the demo: from start to every stream present
+
+
+def gaps_of(text: str) -> tuple[float, str, float]:
+    """(longest gap ms, whose, loss limit ms) from a `hems status` or demo output."""
+    gaps, limit = GAPS.search(text), LIMIT.search(text)
+    longest = float(gaps.group(2)) if gaps and gaps.group(2) else 0.0
+    stream = gaps.group(3) if gaps and gaps.group(3) else "-"
+    return longest, stream, float(limit.group(1)) if limit else float("nan")
+
+
+def demo(layout: list[str], scratch: Path, index: int) -> Run:
+    started = time.monotonic()
+    process = subprocess.Popen(
+        HEMS + ["demo", *layout, "--record", str(scratch / f"demo_{index}")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    lines, enabled_s = [], None
+    assert process.stdout is not None
+    for line in process.stdout:
+        lines.append(line)
+        if enabled_s is None and line.startswith("demo: ENABLED"):
+            enabled_s = time.monotonic() - started
+    code = process.wait()
+    shutil.rmtree(scratch / f"demo_{index}", ignore_errors=True)
+    text = "".join(lines)
+    problem = next(
+        (line for line in lines if "not a valid run" in line or "could not" in line),
+        f"exit code {code}",
+    ).strip()
+    longest, stream, limit = gaps_of(text)
+    return Run(code == 0, "" if code == 0 else problem, longest, stream, limit, enabled_s)
+
+
+def typical(layout: list[str]) -> Run:
+    up = subprocess.Popen(
+        HEMS + ["up", *layout, "--log-level", "warn"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        process_group=0,
+    )
+    try:
+        enable = subprocess.run(HEMS + ["enable"], capture_output=True, text=True, timeout=120)
+        setpoint = subprocess.run(
+            HEMS + ["setpoint", "index", "20", "--unit", "mm"],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        time.sleep(3.0)
+        status = subprocess.run(HEMS + ["status"], capture_output=True, text=True, timeout=60)
+    finally:
+        os.killpg(up.pid, signal.SIGINT)
+        output, _ = up.communicate(timeout=60)
+    ready = READY.search(output)
+    state = next(
+        (line for line in status.stdout.splitlines() if line.startswith("supervisor:")), ""
+    )
+    valid = enable.returncode == 0 and setpoint.returncode == 0 and "ENABLED" in state
+    detail = "" if valid else (enable.stderr + setpoint.stderr).strip().splitlines()[-1:] or [state]
+    longest, stream, limit = gaps_of(status.stdout)
+    return Run(
+        valid,
+        "" if valid else f"{state} {detail[0] if detail else ''}".strip(),
+        longest,
+        stream,
+        limit,
+        float(ready.group(1)) if ready else None,
+    )
+
+
+def children(pid: int) -> list[int]:
+    """Direct child processes of ``pid``."""
+    found = []
+    for task in os.listdir(f"/proc/{pid}/task"):
+        with open(f"/proc/{pid}/task/{task}/children") as listing:
+            found += [int(child) for child in listing.read().split()]
+    return found
+
+
+def kill_a_graph(layout: list[str]) -> int:
+    """Start a graph, wait until it is ready, SIGKILL every process of it (the nodes first:
+    killed, the launcher would stop them cleanly); the Fast DDS files they left."""
+    before = set(os.listdir("/dev/shm"))
+    up = subprocess.Popen(HEMS + ["up", *layout, "--log-level", "error"], process_group=0)
+    subprocess.run(HEMS + ["wait"], capture_output=True, timeout=120)
+    for pid in children(up.pid):
+        os.kill(pid, signal.SIGKILL)
+    up.kill()
+    up.wait()
+    time.sleep(1.0)
+    return len(set(os.listdir("/dev/shm")) - before)
+
+
+def summary(kind: str, runs: list[Run]) -> str:
+    valid = sum(r.valid for r in runs)
+    worst = max(runs, key=lambda r: r.longest_gap_ms)
+    ready = [r.ready_s for r in runs if r.ready_s is not None]
+    ready_text = f"{statistics.median(ready):.1f} / {max(ready):.1f}" if ready else "-"
+    return (
+        f"| {kind} | {len(runs)} | {valid} | {ready_text} | "
+        f"{worst.longest_gap_ms:.0f} ms ({worst.gap_stream}) | {worst.limit_ms:.0f} ms | "
+        f"{worst.limit_ms / worst.longest_gap_ms if worst.longest_gap_ms else float('inf'):.1f} |"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--demos", type=int, default=20, help="demo runs (default 20)")
+    parser.add_argument("--typical", type=int, default=20, help="typical runs (default 20)")
+    parser.add_argument(
+        "--separate", action="store_true", help="the 16 nodes in separate processes"
+    )
+    parser.add_argument("--busy", action="store_true", help="a busy loop on one core throughout")
+    parser.add_argument("--kill-first", action="store_true", help="SIGKILL a graph before the runs")
+    parser.add_argument("--smoke", action="store_true", help="one typical run, no demo")
+    args = parser.parse_args()
+    if args.smoke:
+        args.demos, args.typical = 0, 1
+    layout = ["--separate"] if args.separate else []
+    busy = subprocess.Popen(["python3", "-c", "while True: pass"]) if args.busy else None
+    scratch = Path(tempfile.mkdtemp(prefix="hems_bench_first_runs_"))
+    try:
+        conditions = [
+            "separate processes" if args.separate else "default layout",
+            "busy loop on one core" if args.busy else "no other load",
+        ]
+        if args.kill_first:
+            conditions.append(
+                f"after a killed graph ({kill_a_graph(layout)} files left in /dev/shm)"
+            )
+        print(
+            f"first runs: {', '.join(conditions)}; "
+            f"/dev/shm holds {len(os.listdir('/dev/shm'))} files"
+        )
+        results = {}
+        for kind, count, one in (
+            ("make demo", args.demos, lambda i: demo(layout, scratch, i)),
+            ("typical run", args.typical, lambda i: typical(layout)),
+        ):
+            runs = []
+            for i in range(count):
+                run = one(i)
+                runs.append(run)
+                print(
+                    f"  {kind} {i + 1}/{count}: "
+                    f"{'valid' if run.valid else 'NOT VALID: ' + run.detail}"
+                    f"; longest gap {run.longest_gap_ms:.0f} ms ({run.gap_stream})"
+                    + (f"; ready after {run.ready_s:.1f} s" if run.ready_s else ""),
+                    flush=True,
+                )
+            if runs:
+                results[kind] = runs
+        print(
+            "| run | runs | valid | ready s (median / max) | longest gap (stream) | loss limit "
+            "| limit / gap |"
+        )
+        print("|---|---|---|---|---|---|---|")
+        for kind, runs in results.items():
+            print(summary(kind, runs))
+    finally:
+        if busy is not None:
+            busy.kill()
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
