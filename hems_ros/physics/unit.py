@@ -79,7 +79,6 @@ class ActuationUnit:
             self.params, temperature_drive=True
         )  # the temperature drive row
         self._kernel_steps = compiled.step_kernel()
-        self._noisy = self.params.force_sensor.noise_std_n > 0
         self._out = np.zeros(rows.N_O)
         self.reset()
 
@@ -89,7 +88,11 @@ class ActuationUnit:
         self._s = rows.initial_state(self.params)
         self._out[:] = 0.0
         self._steps = 0
-        self._rng = sensors.noise_generator(self.params.force_sensor.seed)
+        # a noiseless sensor draws nothing (as the batch API), which spares a unit node, whose
+        # force sensor is the shoulder module's, two generator calls a tick, and spares its
+        # process numpy.random
+        fs = self.params.force_sensor
+        self._rng = sensors.noise_generator(fs.seed) if fs.noise_std_n > 0 else None
         self._noise = 0.0
 
     def snapshot(self) -> tuple:
@@ -98,7 +101,7 @@ class ActuationUnit:
             self._s.copy(),
             self._out.copy(),
             self._steps,
-            self._rng.bit_generator.state,
+            None if self._rng is None else self._rng.bit_generator.state,
             self._noise,
         )
 
@@ -108,7 +111,8 @@ class ActuationUnit:
         self._s[:] = state
         self._out[:] = out
         self._steps = steps
-        self._rng.bit_generator.state = rng_state
+        if self._rng is not None:
+            self._rng.bit_generator.state = rng_state
         self._noise = noise
 
     @property
@@ -168,10 +172,8 @@ class ActuationUnit:
                 f"state became non-finite at t = {self.time + self.dt:.6f} s ({self.state})"
             )
         # the result's force noise is the last step's draw; a block of draws continues the
-        # generator's stream exactly as single draws would. A noiseless sensor draws nothing
-        # (as the batch API), which spares a unit node, whose force sensor is the shoulder
-        # module's, two generator calls a tick.
-        if self._noisy:
+        # generator's stream exactly as single draws would
+        if self._rng is not None:
             self._noise = (
                 self._rng.standard_normal() if steps == 1 else self._rng.standard_normal(steps)[-1]
             )
