@@ -13,10 +13,14 @@ DEMO_ARGS ?=
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
 MSG_SOURCES := $(wildcard hems_msgs/msg/*.msg hems_msgs/srv/*.srv) hems_msgs/CMakeLists.txt hems_msgs/package.xml
+# The unit's step kernel compiled ahead of time, so that node processes run without numba
+# (hems_ros/physics/compiled.py); an extension module of the venv's Python version.
+EXT_SUFFIX := $(shell $(PYTHON) -c "import sysconfig; print(sysconfig.get_config_var('EXT_SUFFIX'))" 2>/dev/null)
+AOT_KERNEL := hems_ros/physics/_kernel_aot$(EXT_SUFFIX)
 
 .PHONY: setup demo test test-quick test-graph test-faults bench clean check-system
 
-setup: check-system $(VENV)/.stamp-hems_ros
+setup: check-system $(VENV)/.stamp-hems_ros $(AOT_KERNEL)
 
 check-system:
 	@tools/check_system.sh $(PYTHON)
@@ -45,6 +49,10 @@ $(VENV)/.stamp-hems_ros: setup.py setup.cfg package.xml hems_ros/executables.py 
 	$(PY) tools/ament_install.py $(PREFIX)
 	@touch $@
 
+$(AOT_KERNEL): $(wildcard hems_ros/physics/*.py) $(VENV)/.stamp-hems_ros
+	@echo "compiling the physics step kernel ahead of time ($@)"
+	$(PY) -m hems_ros.physics.compiled $@
+
 demo: setup
 	$(VENV)/bin/hems demo $(DEMO_ARGS)
 
@@ -64,4 +72,4 @@ bench: setup
 	@for b in benchmarks/bench_*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build *.egg-info $(AOT_KERNEL)

@@ -56,7 +56,7 @@ from hems_ros.diagnosis.bagload import load_bag_runs  # noqa: E402
 from hems_ros.diagnosis.workflow import diagnose, prepare  # noqa: E402
 from hems_ros.experiments.lockstep import simulate_loop  # noqa: E402
 from hems_ros.graph import names  # noqa: E402
-from hems_ros.physics import kernel, load_params, sensors, simulate  # noqa: E402
+from hems_ros.physics import load_params, rows, sensors, simulate  # noqa: E402
 
 GOAL_S = 60.0
 FINGER = "index"
@@ -120,10 +120,10 @@ def make_truth() -> Truth:
     res = simulate(truth, DT, duty=np.repeat(duty, sub), record_every=sub)
     # sample k is read before duty k is applied: sample 0 is the initial state, sample k the
     # state after k control periods (record k - 1)
-    state0 = kernel.initial_state(truth)
-    first = {name: state0[kernel.STATE_NAMES.index(name)] for name in kernel.STATE_NAMES}
+    state0 = rows.initial_state(truth)
+    first = {name: state0[rows.STATE_NAMES.index(name)] for name in rows.STATE_NAMES}
     first.update(
-        wire_force_n=truth.wire.cross_section_m2 * state0[kernel.S_SIG],
+        wire_force_n=truth.wire.cross_section_m2 * state0[rows.S_SIG],
         resistance_ohm=0.0,
         current_a=0.0,
         electrical_power_w=0.0,

@@ -39,6 +39,7 @@ from hems_ros.physics import (  # noqa: E402
     heat,
     kinetics,
     load_params,
+    rows,
     sheath,
     simulate,
 )
@@ -129,9 +130,9 @@ def lsoda_rhs(p):
 
 def run_lsoda(params, current: np.ndarray, dt: float) -> np.ndarray:
     """Slider position at the kernel's sample times, integrating between input changes."""
-    p = K.pack(params)
+    p = rows.pack(params)
     rhs = lsoda_rhs(p)
-    y = K.initial_state(params)[:7].copy()
+    y = rows.initial_state(params)[:7].copy()
     edges = np.flatnonzero(np.diff(current)) + 1
     bounds = np.concatenate([[0], edges, [current.size]])
     out = np.empty(current.size)
@@ -156,8 +157,8 @@ def set_by_set(sets, current: np.ndarray, every: int) -> np.ndarray:
     """Slider position and wire force of every set, the sets one after the other through
     kernel.step on one thread (kernel._run_sets, what run_batch did for every set before the
     SIMD blocks)."""
-    packed = np.stack([K.pack(p) for p in sets])
-    states = np.stack([K.initial_state(p) for p in sets])
+    packed = np.stack([rows.pack(p) for p in sets])
+    states = np.stack([rows.initial_state(p) for p in sets])
     drives = np.ascontiguousarray(np.broadcast_to(current, (len(sets), current.size)))
     channels = np.array([K.S_X, K.N_S + K.O_FW])
     records = np.zeros((2, len(sets), current.size // every))

@@ -89,10 +89,14 @@ def executable_path(executable: str) -> list[str]:
 
 
 def warm_physics_cache(env: dict[str, str]) -> None:
-    """Compile (or load) the numba physics kernel once before the units start.
+    """Load the physics kernel the units and controllers step with, once, before they start.
 
-    Without it, after a fresh install or a physics change, every actuation unit compiles the
-    kernel at the same time, which starves the whole graph of CPU for tens of seconds.
+    With the kernel compiled ahead of time by `make setup` (hems_ros.physics.compiled) this
+    loads no numba and costs a fraction of a second. It matters when that module is missing or
+    was built from other sources (the physics edited without `make setup`, or another commit's
+    tree: benchmarks/bench_graph_ab.py): the nodes then fall back to numba's JIT kernel, and
+    without this every one of them would compile it at the same time, which starves the whole
+    graph of CPU for tens of seconds. The fallback's warning is then printed here first.
     """
     done = subprocess.run(
         [

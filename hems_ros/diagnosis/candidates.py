@@ -101,7 +101,7 @@ def _bound(base: UnitParams, par: Parameter) -> tuple[float, float]:
     if par.key == "load.pretension_n":
         lower, upper = max(0.0, base.load.pretension_n + lower), base.load.pretension_n + upper
     if par.key == "start.temperature_offset_c":
-        # a warm wire still has to start as martensite, below As0 (kernel.initial_state)
+        # a warm wire still has to start as martensite, below As0 (rows.initial_state)
         upper = min(upper, base.kinetics.as0_c - base.ambient_temperature_c - 5.0)
     return lower, upper
 

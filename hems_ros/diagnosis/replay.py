@@ -19,7 +19,7 @@ import numpy as np
 
 from hems_ros.diagnosis.candidates import SENSOR_KEYS
 from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
-from hems_ros.physics import kernel
+from hems_ros.physics import rows
 from hems_ros.physics.batch import simulate
 from hems_ros.physics.params import UnitParams
 
@@ -176,12 +176,12 @@ def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
     )
     initial = _initial_outputs(physics, start)
     live = np.array([k in unique for k in keys])
-    rows = np.array([unique[k] for k in keys if k in unique])
+    picked = np.array([unique[k] for k in keys if k in unique])
     chosen = [s for s, ok in zip(sets, live) if ok]
     for name in run.outputs:
         channel = _KERNEL_CHANNELS[name]
         series = np.concatenate([initial[channel][:, None], res[channel][:, p.records]], axis=1)[
-            rows
+            picked
         ]
         out[name][live] = _sensor(name, series, chosen, run.time)
     return out
@@ -189,13 +189,13 @@ def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
 
 def _initial_outputs(sets: list[UnitParams], start: float | None) -> dict[str, np.ndarray]:
     """The kernel channels at t = 0 (the batch records only after steps)."""
-    rows = [kernel.initial_state(p, start) for p in sets]
-    force = np.array([p.wire.cross_section_m2 * s[kernel.S_SIG] for p, s in zip(sets, rows)])
+    states = [rows.initial_state(p, start) for p in sets]
+    force = np.array([p.wire.cross_section_m2 * s[rows.S_SIG] for p, s in zip(sets, states)])
     return {
-        "slider_position_m": np.array([s[kernel.S_X] for s in rows]),
+        "slider_position_m": np.array([s[rows.S_X] for s in states]),
         "wire_force_n": force,
         "tendon_force_n": np.array([p.load.static_force_n() for p in sets]),
-        "wire_temperature_c": np.array([s[kernel.S_T] for s in rows]),
+        "wire_temperature_c": np.array([s[rows.S_T] for s in states]),
     }
 
 

@@ -32,7 +32,7 @@ import numpy as np
 
 from hems_ros.control import DEFAULT_N_FILTER, DEFAULT_TS, make_controller, metrics
 from hems_ros.control.references import PROTOCOLS, Protocol
-from hems_ros.physics import kernel, sensors
+from hems_ros.physics import kernel, rows, sensors
 from hems_ros.physics.electrical import DRIVE_NAMES
 from hems_ros.physics.params import UnitParams, load_params
 
@@ -83,7 +83,7 @@ def simulate_loop(
     """Closed loop over ``reference`` (one value per control sample, SI unit of ``mode``).
 
     The unit starts cold (ambient) unless ``start_temperature_c`` is given
-    (:func:`hems_ros.physics.kernel.initial_state`). Returns (measurement, duty,
+    (:func:`hems_ros.physics.rows.initial_state`). Returns (measurement, duty,
     position_m, wire_force_n, power_w, fault); the arrays are cut at the sample where a
     controller fault or a non-finite plant state stopped the run.
     """
@@ -94,9 +94,9 @@ def simulate_loop(
     ref = np.asarray(reference, dtype=float)
     n = ref.size
     controller = make_controller(strategy, mode, gains, ts=ts, n_filter=n_filter)
-    p = kernel.pack(prm)
-    s = kernel.initial_state(prm, start_temperature_c)
-    out = np.zeros(kernel.N_O)
+    p = rows.pack(prm)
+    s = rows.initial_state(prm, start_temperature_c)
+    out = np.zeros(rows.N_O)
     enc, fs = prm.encoder, prm.force_sensor
     # One draw per plant step, in order: the reading at sample k (after step k*sub) uses
     # draw k*sub - 1.
@@ -109,11 +109,11 @@ def simulate_loop(
     pos = np.empty(n)
     force = np.empty(n)
     power = np.empty(n)
-    force_now = prm.wire.cross_section_m2 * s[kernel.S_SIG]
+    force_now = prm.wire.cross_section_m2 * s[rows.S_SIG]
     noise_now = 0.0
     fault = None
     for k in range(n):
-        x = s[kernel.S_X]
+        x = s[rows.S_X]
         if mode == "position":
             y = sensors.encoder_counts(x, enc.resolution_m, enc.gain) * enc.resolution_m
         else:
@@ -138,8 +138,8 @@ def simulate_loop(
             n = k + 1
             power[k] = math.nan
             break
-        power[k] = out[kernel.O_P]
-        force_now = out[kernel.O_FW]
+        power[k] = out[rows.O_P]
+        force_now = out[rows.O_FW]
         noise_now = noise[k]
     return meas[:n], duty[:n], pos[:n], force[:n], power[:n], fault
 

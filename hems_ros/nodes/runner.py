@@ -83,9 +83,10 @@ def run_node(
 def freeze_long_lived_objects() -> None:
     """Exempt everything alive now from garbage collection; call once the nodes exist.
 
-    Imports (numpy, numba, the physics kernel) leave ~10^5 long-lived objects that every
-    full collection would walk, pausing the node for tens of milliseconds; frozen, the
-    collector's pauses stay far below the 10 ms control period."""
+    Imports (rclpy, numpy, the message types) leave ~3 x 10^4 long-lived objects, 1.2 x 10^5
+    in a process that runs numba's JIT kernel, that every full collection would walk, pausing
+    the node for up to tens of milliseconds; frozen, the collector's pauses stay far below the
+    10 ms control period."""
     gc.collect()
     gc.freeze()
 

@@ -22,11 +22,11 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from hems_ros.physics import kernel, sensors
+from hems_ros.physics import kernel, rows, sensors
 from hems_ros.physics.electrical import DRIVE_NAMES, select_drive
 from hems_ros.physics.params import UnitParams
 
-CHANNELS = kernel.STATE_NAMES + kernel.OUT_NAMES
+CHANNELS = rows.STATE_NAMES + rows.OUT_NAMES
 DERIVED = ("strain", "encoder_counts", "encoder_position_m", "force_reading_n", "force_saturated")
 
 
@@ -128,7 +128,7 @@ def simulate(
     temperature imposed at the end of each step, degC); arrays shaped (n_steps,) (same input
     for every set) or (n_sets, n_steps). ``start_temperature_c``: a start temperature for
     every set, or one per set (None: the set's own start, ambient plus ``params.start``),
-    as kernel.initial_state takes it.
+    as rows.initial_state takes it.
     """
     plist = [params] if isinstance(params, UnitParams) else list(params)
     if not plist or not all(isinstance(p, UnitParams) for p in plist):
@@ -150,11 +150,11 @@ def simulate(
     n_rec = n_steps // record_every
     imposed = kind == "temperature"
     packed = np.ascontiguousarray(
-        np.stack([kernel.pack(p, temperature_drive=imposed) for p in plist])
+        np.stack([rows.pack(p, temperature_drive=imposed) for p in plist])
     )
     starts = _start_temperatures(start_temperature_c, n_sets)
     states = np.ascontiguousarray(
-        np.stack([kernel.initial_state(p, t) for p, t in zip(plist, starts)])
+        np.stack([rows.initial_state(p, t) for p, t in zip(plist, starts)])
     )
     records = np.zeros((len(index), n_sets, n_rec))
     failed_at = np.zeros(n_sets, dtype=np.int64)

@@ -14,17 +14,15 @@ from __future__ import annotations
 
 import math
 
-from hems_ros.physics.jit import jit
 
-
-@jit
-def capstan_ratio(friction_coefficient, bend_angle_rad):
+def capstan_ratio(friction_coefficient: float, bend_angle_rad: float) -> float:
     """F_out / F_in = exp(-mu Theta) (eq. 3.1)."""
     return math.exp(-friction_coefficient * bend_angle_rad)
 
 
-@jit
-def transmitted_force(wire_force, direction, capstan, pulley_ratio, coulomb_n):
+def transmitted_force(
+    wire_force: float, direction: float, capstan: float, pulley_ratio: float, coulomb_n: float
+) -> float:
     """Force reaching the load for motion ``direction`` (+1 pulling in, -1 paying out)."""
     if direction > 0:
         return capstan * wire_force / pulley_ratio - coulomb_n

@@ -1,8 +1,8 @@
 """The one numba step kernel shared by the stepping API (unit.py) and the batch API (batch.py).
 
-Parameters are packed into a flat float64 row (:func:`pack`, index constants ``P_*``) so
-the batch loop can run many parameter sets in parallel (``prange``); the state is a flat
-row too (``S_*``), and each step writes its derived outputs into ``out`` (``O_*``).
+The kernel steps a unit's state row with its packed parameter row and writes its outputs into
+``out`` (the rows and their index constants are in rows.py); the batch loop runs many
+parameter sets in parallel (``prange``).
 
 Order inside one step (dissertation chapter 4): electrical (R, drive) and heat flows at the start
 of the step -> elastic trial (no transformation: heat balance, constitutive increment at
@@ -18,282 +18,114 @@ The state row carries, after the named states, the kinetics' reversal-point memo
 
 A temperature drive (electrical.DRIVE_TEMPERATURE) imposes the wire temperature at the end
 of the step instead of the heat balance: no electrical power, and the latent heat changes
-nothing, so it runs on a row packed with ``pack(params, temperature_drive=True)``
+nothing, so it runs on a row packed with ``rows.pack(params, temperature_drive=True)``
 (P_LAT = P_TPX = 0). The row, not the drive kind, carries this because the batch's block
 path reads P_TPX from the packed row in several places; step and the batch then agree.
 
 The batch (run_batch) runs blocks of sets with the step's arithmetic vectorised across the
 sets of a block (see "batch" below); step and the batch give bit-identical results while the
 batch keeps the energy accumulators, and agree to rounding when it skips them. Compilation
-options (error model, multiply-add contraction) are in jit.py.
-
-Numba's on-disk cache only tracks each function's own file, while the kernel inlines the
-equation modules and all of them take their compilation options from jit.py;
-:func:`use_current_cache` drops every cached physics function when any of these files
-changed. Every run builds its parameter row with :func:`pack` before its first step, so pack
-checks the cache, once per process, before numba loads anything from it.
+options (error model, multiply-add contraction) are in jit.py; numba compiles these functions
+at their first call (jit.use_numba), and a node process runs :func:`steps` compiled ahead of
+time instead (compiled.py).
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
-from pathlib import Path
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
-from hems_ros.physics import constitutive, electrical, friction, heat, kinetics, loads, sheath
-from hems_ros.physics import jit as jit_options
-from hems_ros.physics.jit import OPTIONS, jit, jit_inline
-from hems_ros.physics.params import UnitParams
-
-_cache_checked = False
-
-
-def use_current_cache() -> None:
-    """Delete the cached compilations of the physics functions when the sources they inline
-    changed since they were cached (a hash of those sources kept beside the cache)."""
-    global _cache_checked
-    if _cache_checked:
-        return
-    _cache_checked = True
-    here = Path(__file__).resolve()
-    sources = hashlib.sha256()
-    for module in (constitutive, electrical, friction, heat, jit_options, kinetics, loads, sheath):
-        sources.update(Path(str(module.__file__)).read_bytes())
-    stamp = here.parent / "__pycache__" / "kernel.deps"
-    try:
-        if stamp.is_file() and stamp.read_text() == sources.hexdigest():
-            return
-        for cached in stamp.parent.glob("*.nb[ic]"):
-            cached.unlink()
-        stamp.parent.mkdir(exist_ok=True)
-        stamp.write_text(sources.hexdigest())
-    except OSError:
-        pass  # read-only install: sources cannot change under it either
-
-
-# ---------------------------------------------------------------- packed parameters
-(
-    P_L0,
-    P_S,
+from hems_ros.physics import constitutive, electrical, heat, kinetics, loads, sheath
+from hems_ros.physics.jit import jit, jit_inline, jit_parallel
+from hems_ros.physics.rows import (
+    N_O,
+    N_P,
+    N_S,
+    O_FT,
+    O_FW,
+    O_I,
+    O_P,
+    O_R,
+    O_XT,
+    P_A_IN,
+    P_A_OUT,
+    P_ALA,
+    P_ALM,
     P_AREA,
+    P_AS0,
+    P_BN,
+    P_CH,
+    P_CS,
     P_CW,
-    P_LAT,
-    P_RHO0M,
-    P_T0M,
-    P_DRDTM,
-    P_DRDSM,
-    P_RHO0A,
-    P_T0A,
-    P_DRDTA,
     P_DRDSA,
+    P_DRDSM,
+    P_DRDTA,
+    P_DRDTM,
+    P_EA,
+    P_EM,
+    P_EPSL,
+    P_F_IN,
+    P_F_OUT,
+    P_FSTAT,
+    P_GHA,
+    P_GSA,
+    P_GWS,
     P_H0,
     P_H2,
-    P_TAMB,
-    P_MF0,
-    P_INV_MW,
-    P_AS0,
-    P_INV_AW,
-    P_EM,
-    P_EA,
-    P_ALM,
-    P_ALA,
-    P_EPSL,
-    P_NU,
-    P_VSUP,
-    P_ILIM,
-    P_RSRC,
-    P_MN,
-    P_BN,
-    P_KN,
-    P_K3N,
-    P_FSTAT,
-    P_N,
-    P_SHEATH,
-    P_GWS,
-    P_GSA,
-    P_CS,
-    P_GHA,
-    P_CH,
-    P_INV_CH,
     P_HELIX,
-    P_A_IN,
-    P_F_IN,
-    P_A_OUT,
-    P_F_OUT,
-    P_INV_CW,
-    P_INV_CM,
+    P_ILIM,
+    P_INV_AW,
     P_INV_CA,
-    P_INV_L0,
+    P_INV_CH,
+    P_INV_CM,
     P_INV_CS,
+    P_INV_CW,
+    P_INV_L0,
+    P_INV_MW,
     P_INV_S,
+    P_K3N,
+    P_KN,
+    P_L0,
+    P_LAT,
+    P_MF0,
+    P_MN,
+    P_N,
+    P_NU,
+    P_RHO0A,
+    P_RHO0M,
+    P_RSRC,
+    P_S,
+    P_SHEATH,
+    P_T0A,
+    P_T0M,
+    P_TAMB,
     P_TPX,
-    N_P,
-) = range(55)
-
-# ---------------------------------------------------------------- state row
-STATE_NAMES = (
-    "wire_temperature_c",
-    "martensite_fraction",
-    "stress_pa",
-    "slider_position_m",
-    "slider_velocity_m_s",
-    "sheath_temperature_c",
-    "sheath_helix_temperature_c",
-    "energy_joule_j",
-    "energy_stored_j",
-    "energy_convected_j",
-    "energy_latent_j",
-    "energy_to_sheath_j",
-    "energy_sheath_stored_j",
-    "energy_sheath_convected_j",
-)
-(
-    S_T,
-    S_XI,
-    S_SIG,
-    S_X,
-    S_V,
-    S_TS,
-    S_TH,
-    S_EJ,
-    S_ESTORED,
+    P_VSUP,
+    S_DIR,
     S_ECONV,
+    S_EJ,
     S_ELAT,
     S_ESH,
-    S_ESHSTORED,
     S_ESHCONV,
-) = range(len(STATE_NAMES))
-N_S = len(STATE_NAMES)
-# kinetics memory: last direction (+1 heating, -1 cooling, 0 none yet), number of reversal
-# points, then the points (kinetics.memory_branch layout)
-S_DIR, S_NREV = N_S, N_S + 1
-S_MEM = N_S + 2
-N_STATE = S_MEM + kinetics.POINT_SIZE * kinetics.MEMORY_DEPTH
+    S_ESHSTORED,
+    S_ESTORED,
+    S_MEM,
+    S_NREV,
+    S_SIG,
+    S_T,
+    S_TH,
+    S_TS,
+    S_V,
+    S_X,
+    S_XI,
+)
 
 # coupled kinetic-mechanical solve: residual tolerance in xi, iteration cap (the bracket
 # halves at least every other iteration, so the cap is never the limit in practice)
 XI_TOLERANCE = 1e-12
 MAX_ITERATIONS = 60
-
-# ---------------------------------------------------------------- per-step outputs
-OUT_NAMES = (
-    "resistance_ohm",
-    "current_a",
-    "electrical_power_w",
-    "wire_force_n",
-    "tendon_force_n",
-    "tendon_position_m",
-)
-O_R, O_I, O_P, O_FW, O_FT, O_XT = range(len(OUT_NAMES))
-N_O = len(OUT_NAMES)
-
-
-def pack(params: UnitParams, temperature_drive: bool = False) -> np.ndarray:
-    """Flat float64 row of one parameter set, with the derived quantities precomputed.
-
-    ``temperature_drive``: the row for electrical.DRIVE_TEMPERATURE, whose imposed temperature
-    leaves the latent heat nothing to change (P_LAT = P_TPX = 0; see the module docstring).
-    """
-    use_current_cache()
-    w, th, el, ki, co = (
-        params.wire,
-        params.thermal,
-        params.electrical,
-        params.kinetics,
-        params.constitutive,
-    )
-    ld = params.load
-    p = np.zeros(N_P)
-    p[P_L0] = w.length_m
-    p[P_S] = w.cross_section_m2
-    p[P_AREA] = w.surface_area_m2
-    p[P_CW] = params.wire_heat_capacity_j_per_k
-    p[P_LAT] = params.wire_latent_heat_j
-    p[P_RHO0M], p[P_T0M] = el.rho0_martensite_ohm_m, el.t0_martensite_c
-    p[P_DRDTM], p[P_DRDSM] = (
-        el.drho_dt_martensite_ohm_m_per_c,
-        el.drho_dsigma_martensite_ohm_m_per_pa,
-    )
-    p[P_RHO0A], p[P_T0A] = el.rho0_austenite_ohm_m, el.t0_austenite_c
-    p[P_DRDTA], p[P_DRDSA] = el.drho_dt_austenite_ohm_m_per_c, el.drho_dsigma_austenite_ohm_m_per_pa
-    p[P_H0], p[P_H2], p[P_TAMB] = th.h0_w_m2_c, th.h2_w_m2_c3, params.ambient_temperature_c
-    p[P_MF0], p[P_INV_MW], p[P_AS0], p[P_INV_AW] = kinetics.band(
-        ki.ms0_c, ki.mf0_c, ki.as0_c, ki.af0_c
-    )
-    p[P_EM], p[P_EA] = co.e_martensite_pa, co.e_austenite_pa
-    p[P_ALM], p[P_ALA] = co.alpha_martensite_per_c, co.alpha_austenite_per_c
-    p[P_EPSL], p[P_NU] = co.max_recoverable_strain, co.poisson_ratio
-    p[P_VSUP], p[P_ILIM] = params.drive.supply_voltage_v, params.drive.current_limit_a
-    p[P_RSRC] = params.drive.source_resistance_ohm
-    p[P_MN], p[P_BN], p[P_KN], p[P_K3N] = loads.referred_load(
-        ld.mass_kg,
-        ld.damping_n_s_per_m,
-        ld.stiffness_n_per_m,
-        ld.pulley_ratio,
-        ld.cubic_stiffness_n_per_m3,
-    )
-    p[P_FSTAT], p[P_N] = ld.static_force_n(), ld.pulley_ratio
-    if params.sheath.enabled:
-        sh = params.sheath
-        r = sheath.sheath_resistances(sh, w.length_m)
-        p[P_SHEATH] = 1.0
-        p[P_GWS] = 1.0 / r.wire_to_sheath
-        p[P_CS] = sh.heat_capacity_j_per_k
-        p[P_INV_CS] = 1.0 / p[P_CS]
-        # one node: its outer side is the air; two: the helix node, which meets the air.
-        # The helix of a one-node sheath stays at ambient (P_INV_CH = 0) and passes nothing on.
-        if sh.helix_heat_capacity_j_per_k > 0:
-            p[P_HELIX] = 1.0
-            p[P_GSA] = 1.0 / sh.liner_helix_resistance_k_per_w
-            p[P_GHA] = 1.0 / r.sheath_to_air
-            p[P_CH] = sh.helix_heat_capacity_j_per_k
-            p[P_INV_CH] = 1.0 / p[P_CH]
-        else:
-            p[P_GSA] = 1.0 / r.sheath_to_air
-    # reciprocals the step would otherwise divide by several times per step
-    p[P_INV_CW], p[P_INV_L0], p[P_INV_S] = 1.0 / p[P_CW], 1.0 / w.length_m, 1.0 / w.cross_section_m2
-    if temperature_drive:
-        p[P_LAT] = 0.0
-    p[P_TPX] = p[P_LAT] * p[P_INV_CW]  # temperature rise per unit of martensite formed (eq. 4.10)
-    p[P_INV_CM], p[P_INV_CA] = 1.0 / ki.cm_pa_per_c, 1.0 / ki.ca_pa_per_c
-    cap = params.capstan
-    capstan = (
-        friction.capstan_ratio(cap.friction_coefficient, cap.bend_angle_rad) if cap.enabled else 1.0
-    )
-    coulomb = params.glove_friction.force_n if params.glove_friction.enabled else 0.0
-    p[P_A_IN], p[P_F_IN], p[P_A_OUT], p[P_F_OUT] = loads.transmission(
-        capstan, ld.pulley_ratio, coulomb
-    )
-    return p
-
-
-def initial_state(params: UnitParams, temperature_c: float | None = None) -> np.ndarray:
-    """Fully martensitic wire at rest in the frictionless static balance with the load.
-
-    Wire and sheath start at the ambient temperature plus ``params.start.temperature_offset_c``
-    (a rig still warm from earlier work), or at ``temperature_c`` when given; a wire warmed
-    from cold stays martensite only below the stress-free As0 (eq. 4.21), so a start at or
-    above it is refused.
-    """
-    if temperature_c is None:
-        start = params.ambient_temperature_c + params.start.temperature_offset_c
-    else:
-        start = float(temperature_c)
-    if not math.isfinite(start) or start >= params.kinetics.as0_c:
-        raise ValueError(
-            f"start temperature must be finite and below As0 = {params.kinetics.as0_c:g} degC "
-            f"(a martensite wire), got {start!r}"
-        )
-    s = np.zeros(N_STATE)
-    s[S_T] = s[S_TS] = s[S_TH] = start
-    s[S_XI] = 1.0
-    s[S_SIG] = (
-        params.load.pulley_ratio * params.load.static_force_n() / params.wire.cross_section_m2
-    )
-    return s
 
 
 @jit_inline
@@ -1286,7 +1118,7 @@ def _run_sets(
                 r += 1
 
 
-@njit(**OPTIONS, parallel=True)
+@jit_parallel
 def run_batch(params, states, drive_kind, drives, dt, record_every, channels, records, failed_at):
     """Run every set (row of ``params``/``states``) over its row of ``drives``, or over its only
     row when every set has the same input (no copy per set: 256 sets x 30 s at 1 kHz would

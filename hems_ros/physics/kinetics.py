@@ -36,11 +36,7 @@ from __future__ import annotations
 
 import math
 
-from llvmlite import ir
-from numba import types
-from numba.extending import intrinsic
-
-from hems_ros.physics.jit import jit, jit_inline
+from hems_ros.physics.jit import intrinsic, jit, jit_inline
 
 # Below this branch separation both branches coincide (far outside the loop) and the
 # scaling ratio is 0/0; the branch slope is then ~0 too, so any ratio in [0, 1] is exact.
@@ -91,6 +87,9 @@ _EXP_FLOOR = -708.0
 @intrinsic
 def _float_bits(typingctx, x):
     """The IEEE-754 bits of a float64 as an int64 (a register reinterpretation)."""
+    from llvmlite import ir
+    from numba import types
+
     if not isinstance(x, types.Float):
         return None
 
@@ -103,6 +102,9 @@ def _float_bits(typingctx, x):
 @intrinsic
 def _bits_float(typingctx, bits):
     """The float64 whose IEEE-754 bits are the int64 ``bits``."""
+    from llvmlite import ir
+    from numba import types
+
     if not isinstance(bits, types.Integer):
         return None
 
@@ -151,12 +153,11 @@ def _logistic(a):
     return z, 4.0 * z * rest
 
 
-@jit
-def band(m_s, m_f, a_s, a_f):
+def band(m_s: float, m_f: float, a_s: float, a_f: float) -> tuple[float, float, float, float]:
     """The transformation band as the kinetics take it: (Mf, 1/(Ms - Mf), As, 1/(Af - As)).
 
     The reciprocal widths are constants of a parameter set; the batch would otherwise divide
-    by each width in every step of every set (kernel.pack keeps them).
+    by each width in every step of every set (rows.pack keeps them).
     """
     return m_f, 1.0 / (m_s - m_f), a_s, 1.0 / (a_f - a_s)
 

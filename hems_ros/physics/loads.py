@@ -23,10 +23,11 @@ from hems_ros.physics.friction import transmitted_force
 from hems_ros.physics.jit import jit
 
 
-@jit
-def transmission(capstan, pulley, coulomb):
+def transmission(
+    capstan: float, pulley: float, coulomb: float
+) -> tuple[float, float, float, float]:
     """(a_in, f_in, a_out, f_out): the load receives F_L = a F_wire + f while the slider moves
-    in / out (friction.transmitted_force), constants of a parameter set (kernel.pack)."""
+    in / out (friction.transmitted_force), constants of a parameter set (rows.pack)."""
     return (
         transmitted_force(1.0, 1.0, capstan, pulley, 0.0),
         transmitted_force(0.0, 1.0, capstan, pulley, coulomb),
@@ -35,12 +36,13 @@ def transmission(capstan, pulley, coulomb):
     )
 
 
-@jit
-def referred_load(mass, damping, stiffness, pulley, cubic_stiffness=0.0):
+def referred_load(
+    mass: float, damping: float, stiffness: float, pulley: float, cubic_stiffness: float = 0.0
+) -> tuple[float, float, float, float]:
     """The load's coefficients in eq. 4.33 written for the slider (x_L = n x):
     (m n, b n, k n, k3 n^3), so that m n x'' = F_L - F_static - b n x' - k n x - k3 n^3 x^3
     with F_static = m g + F_0 (params.Load.static_force_n): forces stay in load coordinates.
-    Constants of a parameter set (kernel.pack), so a step does not multiply them again."""
+    Constants of a parameter set (rows.pack), so a step does not multiply them again."""
     return (
         mass * pulley,
         damping * pulley,

@@ -396,7 +396,7 @@ class ForceSensor(_Group):
 
 @dataclass(frozen=True)
 class Start(_Group):
-    """Initial state of a run beyond the cold start (kernel.initial_state).
+    """Initial state of a run beyond the cold start (rows.initial_state).
 
     ``temperature_offset_c``: wire and sheath start this much above the ambient temperature,
     a rig still warm from earlier work; its residual heat shortens the next actuation's

@@ -10,7 +10,8 @@ limit), ``current`` in A (the dissertation's current source), ``voltage`` in V
 end of the step (a thermal cycle without the heat balance, kernel module docstring).
 Out-of-range or non-finite inputs raise ``ValueError``.
 The step is :func:`hems_ros.physics.kernel.step`, the same function the batch API loops,
-so both give the same trajectory for the same input.
+so both give the same trajectory for the same input; a unit runs it compiled ahead of time
+(compiled.step_kernel), so a process stepping units does not load numba.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hems_ros.physics import kernel, sensors
+from hems_ros.physics import compiled, rows, sensors
 from hems_ros.physics.electrical import DRIVE_NAMES, select_drive
 from hems_ros.physics.params import UnitParams
 
@@ -73,21 +74,25 @@ class ActuationUnit:
         if not isinstance(self.params, UnitParams):
             raise TypeError("params must be a UnitParams")
         self.dt = float(dt)
-        self._p = kernel.pack(self.params)
-        self._p_imposed = kernel.pack(
+        self._p = rows.pack(self.params)
+        self._p_imposed = rows.pack(
             self.params, temperature_drive=True
         )  # the temperature drive row
-        self._noisy = self.params.force_sensor.noise_std_n > 0
-        self._out = np.zeros(kernel.N_O)
+        self._kernel_steps = compiled.step_kernel()
+        self._out = np.zeros(rows.N_O)
         self.reset()
 
     def reset(self) -> None:
         """Back to t = 0: martensitic wire at rest at the start temperature (ambient plus
         ``params.start``), sensor noise generator re-seeded."""
-        self._s = kernel.initial_state(self.params)
+        self._s = rows.initial_state(self.params)
         self._out[:] = 0.0
         self._steps = 0
-        self._rng = sensors.noise_generator(self.params.force_sensor.seed)
+        # a noiseless sensor draws nothing (as the batch API), which spares a unit node, whose
+        # force sensor is the shoulder module's, two generator calls a tick, and spares its
+        # process numpy.random
+        fs = self.params.force_sensor
+        self._rng = sensors.noise_generator(fs.seed) if fs.noise_std_n > 0 else None
         self._noise = 0.0
 
     def snapshot(self) -> tuple:
@@ -96,7 +101,7 @@ class ActuationUnit:
             self._s.copy(),
             self._out.copy(),
             self._steps,
-            self._rng.bit_generator.state,
+            None if self._rng is None else self._rng.bit_generator.state,
             self._noise,
         )
 
@@ -106,7 +111,8 @@ class ActuationUnit:
         self._s[:] = state
         self._out[:] = out
         self._steps = steps
-        self._rng.bit_generator.state = rng_state
+        if self._rng is not None:
+            self._rng.bit_generator.state = rng_state
         self._noise = noise
 
     @property
@@ -122,7 +128,7 @@ class ActuationUnit:
     @property
     def state(self) -> dict[str, float]:
         """The kernel state by name (temperatures, fraction, stress, position, energies)."""
-        return {name: float(self._s[i]) for i, name in enumerate(kernel.STATE_NAMES)}
+        return {name: float(self._s[i]) for i, name in enumerate(rows.STATE_NAMES)}
 
     @property
     def energy(self) -> dict[str, float]:
@@ -159,17 +165,15 @@ class ActuationUnit:
         if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
             raise ValueError(f"steps = {steps!r}: must be a whole number >= 1")
         row = self._p_imposed if kind == "temperature" else self._p
-        done = kernel.steps(row, self._s, DRIVE_NAMES[kind], value, self.dt, self._out, steps)
+        done = self._kernel_steps(row, self._s, DRIVE_NAMES[kind], value, self.dt, self._out, steps)
         self._steps += done
         if done < steps:
             raise FloatingPointError(
                 f"state became non-finite at t = {self.time + self.dt:.6f} s ({self.state})"
             )
         # the result's force noise is the last step's draw; a block of draws continues the
-        # generator's stream exactly as single draws would. A noiseless sensor draws nothing
-        # (as the batch API), which spares a unit node, whose force sensor is the shoulder
-        # module's, two generator calls a tick.
-        if self._noisy:
+        # generator's stream exactly as single draws would
+        if self._rng is not None:
             self._noise = (
                 self._rng.standard_normal() if steps == 1 else self._rng.standard_normal(steps)[-1]
             )
@@ -179,13 +183,13 @@ class ActuationUnit:
         :meth:`result` a node publishes at every encoder sample, without building the rest
         (a fifth of a unit node's Python time per tick went into the whole result)."""
         enc = self.params.encoder
-        counts = sensors.encoder_counts(float(self._s[kernel.S_X]), enc.resolution_m, enc.gain)
-        return counts, counts * enc.resolution_m, float(self._out[kernel.O_FW])
+        counts = sensors.encoder_counts(float(self._s[rows.S_X]), enc.resolution_m, enc.gain)
+        return counts, counts * enc.resolution_m, float(self._out[rows.O_FW])
 
     def electrical(self) -> tuple[float, float]:
         """(resistance ohm, mean current A) of the last step: what a drive board measures, without
         building the rest of :meth:`result`."""
-        return float(self._out[kernel.O_R]), float(self._out[kernel.O_I])
+        return float(self._out[rows.O_R]), float(self._out[rows.O_I])
 
     def result(self) -> StepResult:
         """Measurements and truth after the last step: what that :meth:`step` returned."""
@@ -210,19 +214,19 @@ class ActuationUnit:
             encoder_position_m=position,
             force_reading_n=reading,
             force_saturated=saturated,
-            wire_temperature_c=s[kernel.S_T],
-            martensite_fraction=s[kernel.S_XI],
-            resistance_ohm=o[kernel.O_R],
-            current_a=o[kernel.O_I],
-            electrical_power_w=o[kernel.O_P],
-            energy_joule_j=s[kernel.S_EJ],
-            stress_pa=s[kernel.S_SIG],
-            strain=s[kernel.S_X] / prm.wire.length_m,
-            sheath_temperature_c=s[kernel.S_TS],
-            sheath_helix_temperature_c=s[kernel.S_TH],
-            slider_position_m=s[kernel.S_X],
-            slider_velocity_m_s=s[kernel.S_V],
-            tendon_position_m=o[kernel.O_XT],
-            tendon_force_n=o[kernel.O_FT],
+            wire_temperature_c=s[rows.S_T],
+            martensite_fraction=s[rows.S_XI],
+            resistance_ohm=o[rows.O_R],
+            current_a=o[rows.O_I],
+            electrical_power_w=o[rows.O_P],
+            energy_joule_j=s[rows.S_EJ],
+            stress_pa=s[rows.S_SIG],
+            strain=s[rows.S_X] / prm.wire.length_m,
+            sheath_temperature_c=s[rows.S_TS],
+            sheath_helix_temperature_c=s[rows.S_TH],
+            slider_position_m=s[rows.S_X],
+            slider_velocity_m_s=s[rows.S_V],
+            tendon_position_m=o[rows.O_XT],
+            tendon_force_n=o[rows.O_FT],
             wire_force_n=wire_force,
         )

@@ -204,14 +204,17 @@ def test_readings_are_the_results_sensor_values():
     assert len(seen) > 50
 
 
-def test_a_noiseless_force_sensor_draws_nothing():
+def test_a_noiseless_force_sensor_has_no_generator_and_a_snapshot_still_repeats():
     unit = ActuationUnit(load_params("ch6_hems_index").replace({"force_sensor.noise_std_n": 0.0}))
-    before = unit._rng.bit_generator.state
+    assert unit._rng is None
     unit.advance(duty=40.0, steps=50)
+    snapshot = unit.snapshot()
     unit.advance(duty=40.0)
-    assert unit._rng.bit_generator.state == before
-    r = unit.result()
-    assert r.force_reading_n == round(r.wire_force_n / 0.01) * 0.01 or r.force_saturated
+    first = unit.result()
+    unit.restore(snapshot)
+    unit.advance(duty=40.0)
+    assert unit.result() == first
+    assert first.force_reading_n == round(first.wire_force_n / 0.01) * 0.01 or first.force_saturated
 
 
 def test_advance_in_blocks_is_the_same_steps_one_by_one():

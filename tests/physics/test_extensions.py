@@ -8,7 +8,7 @@ import pytest
 
 from hems_ros.control import make_controller
 from hems_ros.experiments.lockstep import simulate_loop
-from hems_ros.physics import ActuationUnit, electrical, kernel, sensors, simulate
+from hems_ros.physics import ActuationUnit, electrical, rows, sensors, simulate
 from hems_ros.physics.batch import CHANNELS
 from hems_ros.physics.params import ParamError, Start, UnitParams, load_params, save_params
 
@@ -23,13 +23,13 @@ def _pulses(n_steps, level):
 
 def _step_all(unit, kind, values):
     """Every channel of the batch after each step of the stepping API, by name."""
-    rows = []
+    records = []
     for value in values:
         unit.advance(**{kind: float(value)})
         state = unit.state
-        out = dict(zip(kernel.OUT_NAMES, unit._out.tolist()))
-        rows.append([state[c] if c in state else out[c] for c in CHANNELS])
-    return dict(zip(CHANNELS, np.array(rows).T))
+        out = dict(zip(rows.OUT_NAMES, unit._out.tolist()))
+        records.append([state[c] if c in state else out[c] for c in CHANNELS])
+    return dict(zip(CHANNELS, np.array(records).T))
 
 
 # ------------------------------------------------------------------ defaults change nothing
@@ -180,13 +180,13 @@ def test_warm_start_sets_wire_and_sheath_and_the_explicit_start_wins():
             "sheath.liner_helix_resistance_k_per_w": 1.0,
         }
     )
-    s = kernel.initial_state(p)
+    s = rows.initial_state(p)
     start = p.ambient_temperature_c + 30.0
-    assert (s[kernel.S_T], s[kernel.S_TS], s[kernel.S_TH]) == (start, start, start)
-    assert kernel.initial_state(p, 40.0)[kernel.S_T] == 40.0
+    assert (s[rows.S_T], s[rows.S_TS], s[rows.S_TH]) == (start, start, start)
+    assert rows.initial_state(p, 40.0)[rows.S_T] == 40.0
     assert ActuationUnit(p).state["sheath_helix_temperature_c"] == start
     with pytest.raises(ValueError, match="below As0 = 88 degC"):
-        kernel.initial_state(
+        rows.initial_state(
             p.replace({"start.temperature_offset_c": 88.0 - p.ambient_temperature_c})
         )
 
