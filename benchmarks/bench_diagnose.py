@@ -39,6 +39,8 @@ import sys
 import tempfile
 import threading
 import time
+from collections import namedtuple
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -150,7 +152,9 @@ def make_truth() -> Truth:
     )
 
 
-def encoders() -> dict[str, cdr.Encoder]:
+def encoders() -> dict[str, tuple[type, Callable[[tuple], bytes]]]:
+    """Per message type: a named tuple of its leaf fields (nested names joined by ``_``, as
+    hems_ros.nodes.wire names them) and the CDR encoder of such a tuple."""
     out = {}
     for name in (
         "EncoderReading",
@@ -162,7 +166,9 @@ def encoders() -> dict[str, cdr.Encoder]:
     ):
         type_name = f"hems_msgs/msg/{name}"
         types = msgdefs.parse_full_definition(type_name, msgdefs.full_definition(type_name))
-        out[name] = cdr.build_encoder(type_name, types)
+        encoder = cdr.build_encoder(type_name, types)
+        fields = namedtuple(name, [c.name.replace(".", "_") for c in encoder.columns])
+        out[name] = (fields, encoder.encode)
     return out
 
 
@@ -194,8 +200,13 @@ def write_bag(folder: Path, t: Truth) -> int:
     c = t.channels
     messages: list[tuple[int, str, bytes]] = []
 
-    def add(stream: str, log_ns: int, values: tuple) -> None:
-        messages.append((log_ns, stream, enc[topics[stream][1]].encode(values)))
+    def add(stream: str, log_ns: int, stamp_ns: int, **values) -> None:
+        """A message of ``stream`` with its header stamped ``stamp_ns``, logged at ``log_ns``;
+        every other field by name (a field the definition gained stops the benchmark)."""
+        fields, encode = enc[topics[stream][1]]
+        sec, nsec = divmod(stamp_ns, 1_000_000_000)
+        values.update(header_stamp_sec=sec, header_stamp_nanosec=nsec, header_frame_id="")
+        messages.append((log_ns, stream, encode(fields(**values))))
 
     previous = None
     for k in range(t.duty.size):
@@ -204,92 +215,105 @@ def write_bag(folder: Path, t: Truth) -> int:
         seq = k + 1
         if t.reference[k] != previous:
             # `hems setpoint` stamps the header with its clock when it publishes
-            s_sec, s_nsec = divmod(at - SETPOINT_LEAD_NS, 1_000_000_000)
             add(
                 "setpoint",
                 at - SETPOINT_LEAD_NS + 300_000,
-                (s_sec, s_nsec, "", "position", float(t.reference[k] * ratio)),
+                at - SETPOINT_LEAD_NS,
+                mode="position",
+                value=float(t.reference[k] * ratio),
             )
             previous = t.reference[k]
         add(
             "encoder",
             at + LAG_NS["encoder"],
-            (sec, nsec, "", FINGER, int(t.counts[k]), float(t.position[k]), resolution, seq),
+            at,
+            finger=FINGER,
+            counts=int(t.counts[k]),
+            position=float(t.position[k]),
+            resolution=resolution,
+            sequence=seq,
         )
         add(
             "wire_tension",
             at + LAG_NS["wire_tension"],
-            (sec, nsec, "", FINGER, float(t.tension[k]), False, False, seq),
+            at,
+            finger=FINGER,
+            force=float(t.tension[k]),
+            saturated=False,
+            over_force=False,
+            sequence=seq,
         )
         add(
             "wire_force",
             at + LAG_NS["wire_force"],
-            (sec, nsec, "", FINGER, float(t.force[k]), bool(t.saturated[k]), False, seq),
+            at,
+            finger=FINGER,
+            force=float(t.force[k]),
+            saturated=bool(t.saturated[k]),
+            over_force=False,
+            sequence=seq,
         )
-        d_sec, d_nsec = divmod(at + DUTY_COMPUTE_NS, 1_000_000_000)
         add(
             "duty",
             at + LAG_NS["duty"],
-            (d_sec, d_nsec, "", FINGER, float(t.duty[k]), sec, nsec, seq),
+            at + DUTY_COMPUTE_NS,
+            finger=FINGER,
+            duty_percent=float(t.duty[k]),
+            measurement_stamp_sec=sec,
+            measurement_stamp_nanosec=nsec,
+            sequence=seq,
         )
         if k % STATUS_EVERY == STATUS_EVERY - 1:
-            error = (t.reference[k] - t.position[k]) * ratio
             add(
                 "controller_status",
                 at + LAG_NS["controller_status"],
-                (
-                    d_sec,
-                    d_nsec,
-                    "",
-                    FINGER,
-                    "bpid",
-                    "position",
-                    True,
-                    float(t.reference[k] * ratio),
-                    float(t.position[k] * ratio),
-                    float(error),
-                    float(t.duty[k]),
-                    "",
-                    sec,
-                    nsec,
-                    float(t.position[k]),
-                    sec,
-                    nsec,
-                    float(t.force[k]),
-                    0,
-                    "",
-                    seq // STATUS_EVERY,
-                ),
+                at + DUTY_COMPUTE_NS,
+                finger=FINGER,
+                strategy="bpid",
+                mode="position",
+                active=True,
+                setpoint=float(t.reference[k] * ratio),
+                measurement=float(t.position[k] * ratio),
+                error=float((t.reference[k] - t.position[k]) * ratio),
+                duty_percent=float(t.duty[k]),
+                fault="",
+                encoder_stamp_sec=sec,
+                encoder_stamp_nanosec=nsec,
+                wire_position=float(t.position[k]),
+                force_stamp_sec=sec,
+                force_stamp_nanosec=nsec,
+                wire_force=float(t.force[k]),
+                rejected_setpoints=0,
+                last_rejection="",
+                wire_temperature_c=float(c["wire_temperature_c"][k]),
+                thermal_limited=False,
+                sequence=seq // STATUS_EVERY,
             )
         if k % STATE_EVERY == 0:
             x = float(c["slider_position_m"][k])
             add(
                 "state",
                 at + LAG_NS["state"],
-                (
-                    sec,
-                    nsec,
-                    "",
-                    FINGER,
-                    float(t.duty[k - 1] if k else 0.0),
-                    False,
-                    True,
-                    float(c["wire_temperature_c"][k]),
-                    float(c["martensite_fraction"][k]),
-                    float(c["resistance_ohm"][k]),
-                    float(c["current_a"][k]),
-                    float(c["electrical_power_w"][k]),
-                    float(c["energy_joule_j"][k]),
-                    float(c["stress_pa"][k]),
-                    x / wire_length,
-                    float(c["sheath_temperature_c"][k]),
-                    x,
-                    float(c["slider_velocity_m_s"][k]),
-                    float(c["tendon_position_m"][k]),
-                    float(c["tendon_force_n"][k]),
-                    float(c["wire_force_n"][k]),
-                    k // STATE_EVERY + 1,
-                ),
+                at,
+                finger=FINGER,
+                duty_percent=float(t.duty[k - 1] if k else 0.0),
+                watchdog_tripped=False,
+                heating_allowed=True,
+                wire_temperature_c=float(c["wire_temperature_c"][k]),
+                martensite_fraction=float(c["martensite_fraction"][k]),
+                resistance=float(c["resistance_ohm"][k]),
+                current=float(c["current_a"][k]),
+                electrical_power=float(c["electrical_power_w"][k]),
+                electrical_energy=float(c["energy_joule_j"][k]),
+                stress=float(c["stress_pa"][k]),
+                strain=x / wire_length,
+                sheath_temperature_c=float(c["sheath_temperature_c"][k]),
+                slider_position=x,
+                slider_velocity=float(c["slider_velocity_m_s"][k]),
+                tendon_position=float(c["tendon_position_m"][k]),
+                tendon_force=float(c["tendon_force_n"][k]),
+                wire_force=float(c["wire_force_n"][k]),
+                sequence=k // STATE_EVERY + 1,
             )
     messages.sort(key=lambda m: m[0])  # the recorder writes in order of reception
     with BagWriter(folder) as writer:
