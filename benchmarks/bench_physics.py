@@ -6,7 +6,8 @@ Prints measured numbers and ratios side by side (not a pass/fail test; floors):
 - batch, 256 parameter sets x 30 s, recording slider position and wire force (what a fit
   compares): simulated unit-seconds per wall second (floor 1e5), at the 1 kHz step and at the
   100 Hz control period (Ts = 10 ms, dissertation chapter 5), with the trajectory difference between
-  the two steps, the CPU time and the threads numba used; and at 1 kHz recording every channel
+  the two steps, the CPU time, the threads numba used and the cores they kept busy (fewer
+  than the threads: other work on the host had the rest); and at 1 kHz recording every channel
   (mostly the cost of writing 123 MB of records, plus the energy accumulators);
 - the same batch on one thread, CPU time per set-step: the SIMD blocks of kernel.run_batch
   against the sets run one by one through kernel.step, and what each gives on idle cores
@@ -252,8 +253,8 @@ def main() -> int:
             f"{rate:10.0f} unit-s per wall-s (floor 1e5: {rate / 1e5:.2f} x floor; fastest of 7, "
             f"median {n_sets * span / t_median / 1e5:.2f} x floor; LSODA at this rate: "
             f"{span / lsoda_s:.1f}, ratio {rate / (span / lsoda_s):.0f}x); CPU {cpu * 1e3:.0f} ms "
-            f"on {threads} threads ({numba.threading_layer()}), "
-            f"{cpu / (n_sets * cur.size) * 1e9:.1f} ns per set-step"
+            f"on {threads} threads ({numba.threading_layer()}), {cpu / t:.2f} of {threads} cores "
+            f"busy, {cpu / (n_sets * cur.size) * 1e9:.1f} ns per set-step"
         )
 
     cur = current_profile(span, 1e-3)
