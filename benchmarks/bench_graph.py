@@ -9,13 +9,17 @@ in share of one core (and by node kind), and the supervisor's final state. Floor
 missed < 0.5 %, CPU <= 1 core.
 
 Usage: .venv/bin/python benchmarks/bench_graph.py [--seconds 60] [--modes separate,composed]
+       [--smoke]    (2 s of the separate graph)
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
+
+import smoke
 
 from hems_ros.rosenv import apply_network_defaults, use_private_domain
 
@@ -163,7 +167,7 @@ def main() -> None:
         default="separate,composed",
         help="comma-separated modes to run: separate, composed (default both)",
     )
-    args = parser.parse_args()
+    args = smoke.parse_args(parser, seconds=2.0, modes="separate")
     print(
         f"graph benchmark, {args.seconds:g} s per mode, load average {os.getloadavg()[0]:.1f}, "
         + host_line()
@@ -172,10 +176,12 @@ def main() -> None:
         f"{'mode':<10} {'p50 ms':>7} {'p99 ms':>7} {'max ms':>7} {'missed %':>9} "
         f"{'CPU cores':>10}  {'p99/floor':>9} {'missed/floor':>12} {'CPU/floor':>9}  supervisor"
     )
+    failed = []
     for mode in args.modes.split(","):
         r = run(mode == "composed", args.seconds)
         if "error" in r:
             print(f"{mode:<10} {r['error']}")
+            failed.append(mode)
             continue
         print(
             f"{mode:<10} {r['p50_ms']:>7.2f} {r['p99_ms']:>7.2f} {r['max_ms']:>7.2f} "
@@ -195,6 +201,8 @@ def main() -> None:
             print(" " * 10 + " supervisor faults: " + "; ".join(r["faults"]))
         print(" " * 10 + f" after the run: {host_line()}")
     print("floors: p99 <= 5 ms, missed < 0.5 %, CPU <= 1 core (a ratio above 1 misses its floor)")
+    if failed:
+        sys.exit(f"bench_graph: no figures for {', '.join(failed)}")
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@ tree's code in both runs and is left out. The two versions must speak the same m
 Against ``HEAD`` (the default) with a clean tree both halves run the same code: the ratios
 then show the method's own spread.
 
-Usage: .venv/bin/python benchmarks/bench_graph_ab.py [--against REV] [--seconds 30]
+Usage: .venv/bin/python benchmarks/bench_graph_ab.py [--against REV] [--seconds 30] [--smoke]
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
+import smoke
 from bench_graph import cpu_by_process, host_line  # reserves this run's ROS domain
 
 from hems_ros.client.graph_client import GraphClient
@@ -126,7 +127,7 @@ def main() -> None:
     parser.add_argument(
         "--seconds", type=float, default=30.0, help="measured time per run, s (default 30)"
     )
-    args = parser.parse_args()
+    args = smoke.parse_args(parser, seconds=2.0)
     with worktree(args.against) as (sha, tree):
         print(
             f"graph A/B benchmark: this tree against {args.against} ({sha[:8]}), 2 runs "

@@ -15,6 +15,7 @@ Layouts: the default `hems up` (16 processes, as `ros2 run` of each node gives) 
 
 Usage: .venv/bin/python benchmarks/bench_graph_joins.py [--joins 200] [--layouts separate,composed]
        [--markdown FILE]    (the result table, as docs/reliability.md shows it)
+       [--smoke]    (one join of each kind, composed)
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import smoke  # noqa: E402
 
 from hems_ros.rosenv import (  # noqa: E402
     apply_network_defaults,
@@ -240,7 +243,7 @@ def main() -> None:
     parser.add_argument(
         "--json", type=Path, default=None, help="also write the results as JSON to this file"
     )
-    args = parser.parse_args()
+    args = smoke.parse_args(parser, joins=len(KINDS), layouts="composed")
     results = {}
     for layout in args.layouts.split(","):
         print(f"{layout}: {args.joins} joins", flush=True)
@@ -253,6 +256,9 @@ def main() -> None:
         args.markdown.write_text(text)
     if args.json is not None:
         args.json.write_text(json.dumps(results, indent=1))
+    failed = [layout for layout, r in results.items() if "error" in r]
+    if failed:
+        sys.exit(f"bench_graph_joins: no figures for {', '.join(failed)}")
 
 
 if __name__ == "__main__":

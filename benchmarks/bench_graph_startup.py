@@ -9,6 +9,7 @@ watch ``--heat-s`` seconds, stop; and counts the starts after which the supervis
 ENABLED, with the first fault of each. Modes as in bench_graph.py.
 
 Usage: .venv/bin/python benchmarks/bench_graph_startup.py [--starts 10] [--modes separate,composed]
+       [--heat-s 2] [--smoke]    (one composed start)
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import smoke
 from bench_graph_joins import fault_kind  # reserves this run's ROS domain
 
 from hems_ros.bag.recording import RecorderProcess
@@ -76,7 +78,7 @@ def main() -> None:
         default=2.0,
         help="seconds of heating watched after the enable (default 2)",
     )
-    args = parser.parse_args()
+    args = smoke.parse_args(parser, starts=1, modes="composed")
     results: dict[str, tuple[int, collections.Counter]] = {}
     scratch = Path(tempfile.mkdtemp(prefix="hems_bench_startup_"))
     try:

@@ -8,7 +8,7 @@ at 1 kHz, and each side reports its CPU per message. Typed: build the message an
 it; take it as a message object and read its fields. Serialized: encode the named tuple and
 publish the bytes; take the bytes and decode them.
 
-Usage: .venv/bin/python benchmarks/bench_messages.py [--count 5000]
+Usage: .venv/bin/python benchmarks/bench_messages.py [--count 5000] [--smoke]
 """
 
 from __future__ import annotations
@@ -22,6 +22,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import smoke  # noqa: E402
 
 from hems_ros.rosenv import apply_network_defaults, use_private_domain  # noqa: E402
 
@@ -140,7 +142,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=5000, help="messages per variant")
     parser.add_argument("--subscriber", choices=("typed", "serialized"), help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = smoke.parse_args(parser, count=200)
     if args.subscriber:
         subscriber(args.subscriber == "serialized", args.count)
         return

@@ -6,7 +6,8 @@ Prints measured numbers and ratios side by side (not a pass/fail test; floors):
 - batch, 256 parameter sets x 30 s, recording slider position and wire force (what a fit
   compares): simulated unit-seconds per wall second (floor 1e5), at the 1 kHz step and at the
   100 Hz control period (Ts = 10 ms, dissertation chapter 5), with the trajectory difference between
-  the two steps, the CPU time and the threads numba used; and at 1 kHz recording every channel
+  the two steps, the CPU time, the threads numba used and the cores they kept busy (fewer
+  than the threads: other work on the host had the rest); and at 1 kHz recording every channel
   (mostly the cost of writing 123 MB of records, plus the energy accumulators);
 - the same batch on one thread, CPU time per set-step: the SIMD blocks of kernel.run_batch
   against the sets run one by one through kernel.step, and what each gives on idle cores
@@ -14,11 +15,13 @@ Prints measured numbers and ratios side by side (not a pass/fail test; floors):
 - baseline: scipy.integrate.solve_ivp(method="LSODA") on the same equations (right-hand side
   built from the same equation functions), integrated piecewise between input changes.
 
-Run: python benchmarks/bench_physics.py
+Run: python benchmarks/bench_physics.py [--sets N] [--seconds S] [--smoke]
+(--smoke: 64 sets x 3 s, which still fill two SIMD blocks, one per thread)
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import sys
@@ -30,6 +33,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+import smoke  # noqa: E402
 from scipy.integrate import solve_ivp  # noqa: E402
 
 from hems_ros.physics import (  # noqa: E402
@@ -180,50 +184,58 @@ def set_by_set(sets, current: np.ndarray, every: int) -> np.ndarray:
 
 
 def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sets", type=int, default=256, help="parameter sets of the batch")
+    parser.add_argument(
+        "--seconds", type=float, default=30.0, help="simulated time of the batch (one unit: twice)"
+    )
+    args = smoke.parse_args(parser, sets=64, seconds=3.0)
+    n_sets, span = args.sets, args.seconds
     params = load_params("sheathed_calibrated")
     dt = 1e-3
     print(
         "physics benchmark (calibrated sheathed rig: 30 N mass + 20 N spring, 4 A x 2 s every 10 s)"
     )
-    cur60 = current_profile(60.0, dt)
-    simulate(params, dt, current=cur60[:10])  # compile / load the cache
+    cur_unit = current_profile(2 * span, dt)
+    simulate(params, dt, current=cur_unit[:10])  # compile / load the cache
 
-    t_batch1 = timed(lambda: simulate(params, dt, current=cur60, channels=["slider_position_m"]))
+    t_batch1 = timed(lambda: simulate(params, dt, current=cur_unit, channels=["slider_position_m"]))
     unit = ActuationUnit(params, dt)
 
     def stepping():
         unit.reset()
-        for c in cur60:
+        for c in cur_unit:
             unit.step(current=c)
 
     t_step = timed(stepping, repeat=1)
     print(
-        f"one unit, 60 s at 1 kHz, batch API : {t_batch1 * 1e3:8.1f} ms  real-time factor "
-        f"{60 / t_batch1:9.0f}x (floor 1000x: {60 / t_batch1 / 1000:.1f} x floor)"
+        f"one unit, {2 * span:g} s at 1 kHz, batch API : {t_batch1 * 1e3:8.1f} ms  real-time "
+        f"factor {2 * span / t_batch1:9.0f}x (floor 1000x: {2 * span / t_batch1 / 1000:.1f} x "
+        f"floor)"
     )
     print(
-        f"one unit, 60 s at 1 kHz, step API  : {t_step * 1e3:8.1f} ms  real-time factor "
-        f"{60 / t_step:9.0f}x (a node needs 1x)"
+        f"one unit, {2 * span:g} s at 1 kHz, step API  : {t_step * 1e3:8.1f} ms  real-time "
+        f"factor {2 * span / t_step:9.0f}x (a node needs 1x)"
     )
 
-    cur30 = current_profile(30.0, dt)
-    lsoda_s = timed(lambda: run_lsoda(params, cur30, dt), repeat=1)
-    x_lsoda = run_lsoda(params, cur30, dt)
-    x_kernel = simulate(params, dt, current=cur30).slider_position_m[0]
+    cur_span = current_profile(span, dt)
+    lsoda_s = timed(lambda: run_lsoda(params, cur_span, dt), repeat=1)
+    x_lsoda = run_lsoda(params, cur_span, dt)
+    x_kernel = simulate(params, dt, current=cur_span).slider_position_m[0]
     diff = np.max(np.abs(x_lsoda - x_kernel)) / np.ptp(x_kernel)
     print(
-        f"LSODA baseline, one unit 30 s      : {lsoda_s * 1e3:8.1f} ms  real-time factor "
-        f"{30 / lsoda_s:9.1f}x; kernel / LSODA speed {lsoda_s / (t_batch1 / 2):.0f}x; max "
+        f"LSODA baseline, one unit {span:g} s      : {lsoda_s * 1e3:8.1f} ms  real-time factor "
+        f"{span / lsoda_s:9.1f}x; kernel / LSODA speed {lsoda_s / (t_batch1 / 2):.0f}x; max "
         f"|x_kernel - x_LSODA| = {diff:.2%} of stroke"
     )
 
     sets = [
         params.replace({"sheath.liner_helix_resistance_k_per_w": r})
-        for r in np.linspace(1.0, 4.0, 256)
+        for r in np.linspace(1.0, 4.0, n_sets)
     ]
     threads = numba.get_num_threads()
     for step in (1e-3, 1e-2):
-        cur = current_profile(30.0, step)
+        cur = current_profile(span, step)
         every = max(1, int(round(0.01 / step)))
         simulate(sets, step, current=cur[:10])
         t, cpu, t_median = timed_cpu(
@@ -236,27 +248,28 @@ def main() -> int:
             ),
             repeat=7,
         )
-        rate = 256 * 30.0 / t
+        rate = n_sets * span / t
         print(
-            f"batch 256 sets x 30 s, dt {step * 1e3:4.0f} ms : {t * 1e3:8.1f} ms  {rate:10.0f} "
-            f"unit-s per wall-s (floor 1e5: {rate / 1e5:.2f} x floor; fastest of 7, median "
-            f"{256 * 30.0 / t_median / 1e5:.2f} x floor; LSODA at this rate: {30 / lsoda_s:.1f}, "
-            f"ratio {rate / (30 / lsoda_s):.0f}x); CPU {cpu * 1e3:.0f} ms on {threads} threads "
-            f"({numba.threading_layer()}), {cpu / (256 * cur.size) * 1e9:.1f} ns per set-step"
+            f"batch {n_sets} sets x {span:g} s, dt {step * 1e3:4.0f} ms : {t * 1e3:8.1f} ms  "
+            f"{rate:10.0f} unit-s per wall-s (floor 1e5: {rate / 1e5:.2f} x floor; fastest of 7, "
+            f"median {n_sets * span / t_median / 1e5:.2f} x floor; LSODA at this rate: "
+            f"{span / lsoda_s:.1f}, ratio {rate / (span / lsoda_s):.0f}x); CPU {cpu * 1e3:.0f} ms "
+            f"on {threads} threads ({numba.threading_layer()}), {cpu / t:.2f} of {threads} cores "
+            f"busy, {cpu / (n_sets * cur.size) * 1e9:.1f} ns per set-step"
         )
 
-    cur = current_profile(30.0, 1e-3)
+    cur = current_profile(span, 1e-3)
     t_all, _, _ = timed_cpu(lambda: simulate(sets, 1e-3, current=cur, record_every=10), repeat=5)
-    mb = len(CHANNELS) * 256 * (cur.size // 10) * 8 / 1e6
+    mb = len(CHANNELS) * n_sets * (cur.size // 10) * 8 / 1e6
     print(
         f"the same at dt 1 ms recording every channel ({len(CHANNELS)} channels, {mb:.0f} MB of "
-        f"records, energy accumulators on): {256 * 30.0 / t_all:10.0f} unit-s per wall-s "
-        f"({256 * 30.0 / t_all / 1e5:.2f} x floor, fastest of 5)"
+        f"records, energy accumulators on): {n_sets * span / t_all:10.0f} unit-s per wall-s "
+        f"({n_sets * span / t_all / 1e5:.2f} x floor, fastest of 5)"
     )
 
     # Per-thread cost, one thread (CPU time: robust to other load on the machine): the SIMD
     # blocks against the same sets run one by one through kernel.step (the batch before blocks)
-    cur = current_profile(30.0, 1e-3)
+    cur = current_profile(span, 1e-3)
     numba.set_num_threads(1)
     _, cpu_blocks, _ = timed_cpu(
         lambda: simulate(
@@ -267,7 +280,7 @@ def main() -> int:
     numba.set_num_threads(threads)
     _, cpu_sets, _ = timed_cpu(lambda: set_by_set(sets, cur, 10), repeat=1)
     per_step = {
-        name: c / (256 * cur.size) for name, c in (("blocks", cpu_blocks), ("sets", cpu_sets))
+        name: c / (n_sets * cur.size) for name, c in (("blocks", cpu_blocks), ("sets", cpu_sets))
     }
     cores = os.cpu_count() or 1
     print(
@@ -282,8 +295,8 @@ def main() -> int:
         f"load average (1 min) at the end: {load:.1f} on {cores} cores; wall figures need idle "
         f"cores, the one-thread CPU figures much less so"
     )
-    fine = simulate(params, 1e-3, current=cur30, record_every=10).slider_position_m[0]
-    coarse = simulate(params, 1e-2, current=current_profile(30.0, 1e-2)).slider_position_m[0]
+    fine = simulate(params, 1e-3, current=cur_span, record_every=10).slider_position_m[0]
+    coarse = simulate(params, 1e-2, current=current_profile(span, 1e-2)).slider_position_m[0]
     print(
         f"dt 10 ms vs 1 ms trajectory difference: "
         f"{np.max(np.abs(fine - coarse)) / np.ptp(fine):.2%} of stroke"

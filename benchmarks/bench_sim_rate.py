@@ -4,6 +4,7 @@ run reached (simulated seconds per wall second while recording, from the bag's /
 
 Usage: .venv/bin/python benchmarks/bench_sim_rate.py [--fingers index] [--rates 1,4,max]
        [--layouts composed,separate] [--markdown FILE]
+       [--smoke]    (--rate max, composed)
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import smoke  # noqa: E402
 
 from hems_ros.rosenv import (  # noqa: E402
     apply_network_defaults,
@@ -76,7 +79,8 @@ def main() -> None:
     parser.add_argument(
         "--markdown", type=Path, default=None, help="also write the table to this file"
     )
-    args = parser.parse_args()
+    args = smoke.parse_args(parser, rates="max", layouts="composed")
+    failed = []
     lines = [
         "| layout | --rate | real-time factor reached | finger | RMSE, mm | overshoot, mm | "
         "steady-state error, mm |",
@@ -89,6 +93,7 @@ def main() -> None:
                 result = run(layout, rate, args.fingers, Path(tmp) / f"{layout}_{rate}")
                 if "error" in result:
                     lines.append(f"| {layout} | {rate} | - | - | {result['error']} | | |")
+                    failed.append(f"{layout} --rate {rate}")
                     continue
                 for finger, (rmse, overshoot, ss_error) in result["figures"].items():
                     lines.append(
@@ -100,6 +105,8 @@ def main() -> None:
     print(text)
     if args.markdown is not None:
         args.markdown.write_text(text)
+    if failed:
+        sys.exit(f"bench_sim_rate: no figures for {', '.join(failed)}")
 
 
 if __name__ == "__main__":
