@@ -31,9 +31,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import smoke
 
-from hems_ros.rosenv import apply_network_defaults, use_private_domain  # noqa: E402
+from hems_ros.rosenv import apply_network_defaults, use_private_domain
 
 apply_network_defaults()
 DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
@@ -171,10 +171,7 @@ def main() -> None:
     )
     parser.add_argument("--busy", action="store_true", help="a busy loop on one core throughout")
     parser.add_argument("--kill-first", action="store_true", help="SIGKILL a graph before the runs")
-    parser.add_argument("--smoke", action="store_true", help="one typical run, no demo")
-    args = parser.parse_args()
-    if args.smoke:
-        args.demos, args.typical = 0, 1
+    args = smoke.parse_args(parser, demos=0, typical=1)
     layout = ["--separate"] if args.separate else []
     busy = subprocess.Popen(["python3", "-c", "while True: pass"]) if args.busy else None
     scratch = Path(tempfile.mkdtemp(prefix="hems_bench_first_runs_"))

@@ -15,7 +15,12 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 BENCHMARKS = sorted((REPO / "benchmarks").glob("bench_*.py"))
 # these start the node graph (tens of seconds each even when short): not in make test-quick
-STARTS_THE_GRAPH = ("bench_graph*.py", "bench_sim_rate.py", "bench_recorder_cpu.py")
+STARTS_THE_GRAPH = (
+    "bench_graph*.py",
+    "bench_sim_rate.py",
+    "bench_recorder_cpu.py",
+    "bench_first_runs.py",
+)
 # 12, 0.25, -1.5e-3, 51,072, 4.1%, 2.20x: a number as the tables print one
 NUMBER = re.compile(r"(?<![\w.])[-+]?\d[\d,]*(\.\d+)?(e[-+]?\d+)?(?![\w.])", re.IGNORECASE)
 NOT_A_NUMBER = re.compile(r"\b(nan|inf)\b", re.IGNORECASE)
