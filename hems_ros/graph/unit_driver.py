@@ -20,8 +20,9 @@ Safety gates on the applied duty, checked at every physics step (re-integration 
   flagged, until the next command;
 - heating permission from the supervisor (ENABLED only), which also lapses when the
   supervisor's status is older than ``permission_timeout_s`` and never reaches back before
-  the status that granted it, and is suspended while the supervisor is not alive
-  (:attr:`UnitDriver.supervisor_alive`, its middleware liveliness);
+  the status that granted it: the supervisor sends it every 20 ms, so a stopped or killed
+  supervisor stops the heating within that timeout, at the physics step where it runs out
+  (:attr:`UnitDriver.permission_lapses` counts the lapses a later ENABLED ended);
 - an invalid command (non-finite, outside 0-100 %) is rejected and applies 0 duty.
 """
 
@@ -70,7 +71,7 @@ class UnitDriver:
         start_time_s: float,
         sample_period_s: float = 0.01,
         watchdog_timeout_s: float = 0.03,
-        permission_timeout_s: float = 0.5,
+        permission_timeout_s: float = 0.04,
         require_permission: bool = True,
         latency_window_s: float = 60.0,
     ) -> None:
@@ -84,7 +85,7 @@ class UnitDriver:
         self.last_command_s: float | None = None
         self.permission_s: float | None = None
         self.permitted_since_s: float | None = None
-        self.supervisor_alive = True
+        self.permission_lapses = 0
         self.watchdog_tripped = True
         self.applied_duty = 0.0
         self.rejected_commands = 0
@@ -191,6 +192,8 @@ class UnitDriver:
         if allowed:
             if self.permission_s is None:
                 self.permitted_since_s = now_s
+            elif now_s - self.permission_s > self.permission_timeout_s:
+                self.permission_lapses += 1  # a late status: the heating paused meanwhile
             self.permission_s = now_s
         else:
             self.permission_s = self.permitted_since_s = None
@@ -208,16 +211,12 @@ class UnitDriver:
             and now_s - self.permission_s <= self.permission_timeout_s
         )
 
-    def heating_allowed(self, now_s: float) -> bool:
-        """Permitted, and the supervisor alive (a transient loss suspends the heating only)."""
-        return self.permitted(now_s) and (self.supervisor_alive or not self.require_permission)
-
     def gate(self, now_s: float) -> float:
         """The duty the PWM stage applies at ``now_s`` after the safety gates."""
         self.watchdog_tripped = (
             self.last_command_s is None or now_s - self.last_command_s > self.watchdog_timeout_s
         )
-        if self.watchdog_tripped or not self.heating_allowed(now_s):
+        if self.watchdog_tripped or not self.permitted(now_s):
             return 0.0
         return self.commanded_duty
 

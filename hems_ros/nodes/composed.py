@@ -66,12 +66,10 @@ def main(argv: list[str] | None = None) -> int:
     executor = None
     nodes = []
     try:
-        executables = frozenset(spec.split(":", 1)[0] for spec in specs)
         for spec in specs:
             executable, node_name, cli_args = parse_spec(spec)
             module, cls = NODE_CLASSES[executable]
-            node_class = getattr(importlib.import_module(module), cls)
-            nodes.append(node_class(cli_args=cli_args, in_process_with=executables))
+            nodes.append(getattr(importlib.import_module(module), cls)(cli_args=cli_args))
         # No defer_middleware_threads here (runner.run_node does it): the nodes share one
         # participant, whose messages to each other go from writer to reader without a
         # listener thread, and three alternating runs showed no gain.

@@ -41,15 +41,8 @@ class LeanNode(Node):
 
         cls.__init__ = init_or_destroy  # type: ignore[method-assign]
 
-    def __init__(self, *args, in_process_with: frozenset[str] = frozenset(), **kwargs) -> None:
-        """``in_process_with``: the node kinds (executable names) sharing this process, as the
-        composed process knows them before it builds the nodes. The middleware asserts no
-        liveliness to readers of its own participant, so a node watches the liveliness of a
-        peer only when that peer runs elsewhere; and it must decide before it subscribes: a
-        liveliness status once enabled on a reader and never read again keeps the wait set
-        ready, and the loop spinning it then never sleeps."""
+    def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        self.in_process_with = frozenset(in_process_with)
         self.__created = True
         self._unreadable_logged: dict[str, float] = {}
         self.polled: frozenset = frozenset()

@@ -1,11 +1,9 @@
 """QoS of the graph: sensor streams and duty commands best effort, setpoints reliable, supervisor
 status transient local; the controller status (heartbeat) as the sensor streams."""
 
-from rclpy.duration import Duration
 from rclpy.qos import (
     DurabilityPolicy,
     HistoryPolicy,
-    LivelinessPolicy,
     QoSProfile,
     ReliabilityPolicy,
 )
@@ -16,18 +14,14 @@ SENSOR = QoSProfile(
 COMMAND = QoSProfile(
     depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE
 )
-# The supervisor's writer asserts its liveliness from the middleware's own threads, so a
-# stopped or killed supervisor is seen by the units within the lease (they stop heating), while
-# a supervisor whose Python is merely busy (a garbage collection, a burst of callbacks) stays
-# alive. A reader with the default (infinite) lease, such as `ros2 topic echo`, still matches.
-SUPERVISOR_LEASE_S = 0.03
+# The supervisor's status, every 20 ms: the units' permission to heat lapses 40 ms after the
+# last one (supervisor_timeout_s), so a stopped or killed supervisor stops the heating within
+# that. A late joiner (a command-line tool) gets the last one at once.
 STATUS = QoSProfile(
     depth=1,
     history=HistoryPolicy.KEEP_LAST,
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
-    liveliness=LivelinessPolicy.AUTOMATIC,
-    liveliness_lease_duration=Duration(seconds=SUPERVISOR_LEASE_S),
 )
 # Duty commands: each supersedes the last within one control period, and the unit's watchdog
 # stops the heating after three periods without one, so a lost command needs no repair. A

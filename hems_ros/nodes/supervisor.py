@@ -145,9 +145,10 @@ PARAMETERS = [
     ),
     Spec(
         "status_period_s",
-        0.1,
-        "status re-publishing period, s (also on every change; at the checks, so in "
-        "whole check periods)",
+        0.02,
+        "status re-publishing period, s (also on every change; at the checks, so in whole "
+        "check periods): the units stop heating when it is older than their "
+        "supervisor_timeout_s (40 ms)",
         PERIOD_LIMIT,
         True,
     ),

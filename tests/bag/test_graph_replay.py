@@ -10,14 +10,12 @@
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from graph_bags import (
     REFERENCES,
     grasp_metrics,
@@ -26,11 +24,10 @@ from graph_bags import (
     start_node,
 )
 
-from hems_ros.bag import BagWriter, iter_messages, offered_qos
+from hems_ros.bag import BagWriter, iter_messages
 from hems_ros.bag.recording import RecorderProcess
 from hems_ros.graph import names
 from hems_ros.graph.grasp import GraspPlan
-from hems_ros.nodes import qos
 from hems_ros.processes import stop_process
 from hems_ros.rosenv import child_environment
 
@@ -52,16 +49,13 @@ def rebased(
     target: Path,
     topics: list[str],
     start_ns: int = 1_000_000_000,
-    offered: dict[str, str] | None = None,
 ) -> Path:
     """``topics`` of ``source`` copied into a new bag with log times shifted to begin at
-    ``start_ns``; ``offered``: topic -> the offered QoS profiles (YAML) to store instead."""
+    ``start_ns``."""
     messages = sorted(iter_messages(source, topics=topics), key=lambda m: m.log_time_ns)
     offset = messages[0].log_time_ns - start_ns
     with BagWriter(target) as writer:
         for m in messages:
-            if offered and m.topic in offered:
-                m = dataclasses.replace(m, offered_qos_profiles=offered[m.topic])
             writer.write_copy(m, m.log_time_ns - offset)
     return target
 
@@ -88,15 +82,10 @@ def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(
     # actuation unit's simulation starts there; it catches up with a clock near 0 (as with
     # `hems up --sim-time`, which starts at 1 s) but not with wall-clock epoch times. So the
     # replayed streams are re-based to start at 1 s of simulated time.
-    # The reference bag's supervisor offered no liveliness lease, and the controller asks the
-    # supervisor's status for one (hems_ros.nodes.qos.STATUS): replayed as recorded, the
-    # status would match no reader and the controller would never be enabled.
-    lease = [offered_qos(True, True, 1, int(qos.SUPERVISOR_LEASE_S * 1e9))]
     inputs = rebased(
         reference.path,
         tmp_path / "inputs",
         [names.topic(finger, "setpoint"), names.SUPERVISOR_STATUS_TOPIC],
-        offered={names.SUPERVISOR_STATUS_TOPIC: yaml.safe_dump(lease)},
     )
     sim_time = ("-p", "use_sim_time:=true")
     output = tmp_path / "replayed"
@@ -105,7 +94,12 @@ def test_live_graph_replay_with_clock_gives_the_original_tracking_metrics(
         nodes = [
             start_node(executable, node, params, sim_time)
             for executable, node, params in (
-                ("actuation_unit", f"actuation_unit_{finger}", {"finger": finger}),
+                # the reference run's supervisor sent its status every 100 ms
+                (
+                    "actuation_unit",
+                    f"actuation_unit_{finger}",
+                    {"finger": finger, "supervisor_timeout_s": "0.5"},
+                ),
                 ("shoulder_module", "shoulder_module_index_middle", {"module": "index_middle"}),
                 ("finger_controller", f"finger_controller_{finger}", {"finger": finger}),
             )

@@ -296,6 +296,27 @@ def test_unit_driver_watchdog_permission_and_bad_commands_end_at_zero_duty():
     assert driver.applied_duty == 0.0 and driver.rejected_commands == 1
 
 
+def test_heating_stops_40_ms_after_the_last_supervisor_status_at_that_step():
+    """A stopped or killed supervisor sends no status: the permission runs out
+    permission_timeout_s (40 ms) after the last one, at that 1 ms physics step, whenever the
+    unit next looks; the next ENABLED lets it heat again, counted as a lapse."""
+    driver = UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=100.0)
+    driver.permit_heating(True, 100.0)
+    driver.command(100.0, 100.0)
+    energy = []
+    for k in range(1, 8):  # commands keep coming every 10 ms; the statuses stopped at 100.0
+        driver.advance(100.0 + 0.01 * k)
+        energy.append(driver.last_result.energy_joule_j)
+        driver.command(100.0, 100.0 + 0.01 * k)
+    per_period = [b - a for a, b in zip(energy, energy[1:])]
+    assert all(p > 0.3 for p in per_period[:3])  # about 0.67 J per 10 ms at 100 %
+    assert per_period[3:] == [0.0, 0.0, 0.0]  # from 100.04 on
+    assert driver.applied_duty == 0.0 and driver.permission_lapses == 0
+    driver.permit_heating(True, 100.075)
+    driver.advance(100.08)
+    assert driver.applied_duty == 100.0 and driver.permission_lapses == 1
+
+
 def test_unit_driver_publishes_one_sample_per_encoder_period_at_1khz_physics():
     driver = UnitDriver(
         ActuationUnit(load_params("ch6_hems_index")), start_time_s=5.0, require_permission=False

@@ -38,8 +38,8 @@ def matched_publisher():
 
 @pytest.fixture
 def other_participant(ros_domain_id):
-    """A node in a context of its own (its own DDS participant): the middleware asserts a
-    writer's liveliness to readers of other participants only."""
+    """A node in a context of its own (its own DDS participant), whose messages reach the node
+    under test through the middleware's transport, as another process's do."""
     import rclpy
     from rclpy.context import Context
 
@@ -51,29 +51,18 @@ def other_participant(ros_domain_id):
     rclpy.try_shutdown(context=other)
 
 
-def _wait_alive(watch, seconds: float = 10.0) -> None:
-    import time
-
-    deadline = time.monotonic() + seconds
-    while not (watch.alive() and watch.established):
-        assert time.monotonic() < deadline, "the writer never became alive"
-        time.sleep(0.01)
-
-
 @pytest.fixture
-def live_supervisor(other_participant):
-    """live_supervisor(unit): a SupervisorStatus writer the unit under test sees alive (its
-    liveliness gates the heating); returns (its node, the publisher)."""
+def supervisor_writer(other_participant, matched_publisher):
+    """supervisor_writer(): a SupervisorStatus writer in another participant that the unit under
+    test has matched; returns (its node, the publisher)."""
     from hems_msgs.msg import SupervisorStatus
 
     from hems_ros.nodes import qos
 
-    def make(unit):
-        publisher = other_participant.create_publisher(
-            SupervisorStatus, "/hems/supervisor/status", qos.STATUS
+    def make():
+        publisher = matched_publisher(
+            other_participant, SupervisorStatus, "/hems/supervisor/status", qos.STATUS
         )
-        _wait_alive(unit.supervisor_watch)
-        unit.driver.supervisor_alive = True
         return other_participant, publisher
 
     return make

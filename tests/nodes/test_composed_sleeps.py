@@ -1,8 +1,8 @@
 """Nodes sharing one process sleep between their timers and messages: a unit and a
 supervisor in one process (as `hems up --composed` runs them) wake about as often as their
-timers and the status ask, not tens of thousands of times a second (a liveliness status
-enabled on the unit's reader of the supervisor's status, and never read, kept the wait set
-ready and the composed graph at a full core while idle)."""
+timers ask, not tens of thousands of times a second (a QoS event status enabled on a reader
+and never read keeps the wait set ready: a liveliness watch once held the composed graph at
+a full core while idle)."""
 
 from __future__ import annotations
 
@@ -18,14 +18,12 @@ def test_unit_and_supervisor_in_one_process_wake_only_for_work(context):
     from hems_ros.nodes.actuation_unit import ActuationUnitNode
     from hems_ros.nodes.supervisor import SupervisorNode
 
-    together = frozenset({"actuation_unit", "supervisor"})
     nodes = [
         SupervisorNode(
             context=context,
             parameter_overrides=[Parameter("fingers", value=["index"])],
-            in_process_with=together,
         ),
-        ActuationUnitNode(context=context, in_process_with=together),
+        ActuationUnitNode(context=context),
     ]
     waits = [0]
     original = lean_spin._WaitSet.wait

@@ -31,23 +31,17 @@ def one_finger(context):
     from hems_ros.nodes.supervisor import SupervisorNode
 
     nodes, threads = [], []
-    together = frozenset({"actuation_unit", "shoulder_module", "finger_controller", "supervisor"})
 
     def make(unit_remaps=(), controller_remaps=()):
         supervisor = SupervisorNode(
             context=context,
             parameter_overrides=[Parameter("fingers", value=["index"])],
-            in_process_with=together,
         )
         nodes.extend(
             [
-                ActuationUnitNode(
-                    context=context, in_process_with=together, **_remapped(*unit_remaps)
-                ),
-                ShoulderModuleNode(context=context, in_process_with=together),
-                FingerControllerNode(
-                    context=context, in_process_with=together, **_remapped(*controller_remaps)
-                ),
+                ActuationUnitNode(context=context, **_remapped(*unit_remaps)),
+                ShoulderModuleNode(context=context),
+                FingerControllerNode(context=context, **_remapped(*controller_remaps)),
                 supervisor,
             ]
         )

@@ -12,6 +12,8 @@ from hems_ros.nodes.wire import stamp
 
 
 def unit(context, use_sim_time: bool = False, require_supervisor: bool = False):
+    """An index unit; with the supervisor required, its permission lasts a second after a
+    status (the graph's supervisor renews it every 20 ms; these tests send one or two)."""
     from rclpy.parameter import Parameter
 
     from hems_ros.nodes.actuation_unit import ActuationUnitNode
@@ -21,6 +23,7 @@ def unit(context, use_sim_time: bool = False, require_supervisor: bool = False):
         parameter_overrides=[
             Parameter("require_supervisor", value=require_supervisor),
             Parameter("use_sim_time", value=use_sim_time),
+            Parameter("supervisor_timeout_s", value=1.0),
         ],
     )
 
@@ -101,7 +104,7 @@ def test_units_tick_at_their_shoulder_modules_phase_on_wall_clock_time(context):
 
 
 def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(
-    context, matched_publisher, live_supervisor
+    context, matched_publisher
 ):
     """An ESTOP stops the heating when it comes: a command that came earlier still heats from
     the sample it answers up to the ESTOP, not only until the unit's previous tick."""
@@ -116,7 +119,6 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(
     helper = rclpy.create_node("duty_sender", context=context)
     try:
         publisher = matched_publisher(helper, DutyCommand, "/hems/index/duty", qos.COMMAND)
-        live_supervisor(node)
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         sample_s = tick_just_after_a_sample(node)
         energy_at_sample = node.driver.last_result.energy_joule_j  # the tick stopped at the sample
@@ -146,7 +148,7 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(
 
 
 def test_a_command_and_an_estop_taken_at_one_tick_act_in_the_order_they_came(
-    context, matched_publisher, live_supervisor
+    context, matched_publisher, supervisor_writer
 ):
     """Both came between two ticks: the command heats from the sample it answers until the
     ESTOP came, not until the tick that took them, and not at all if the ESTOP went first."""
@@ -158,12 +160,12 @@ def test_a_command_and_an_estop_taken_at_one_tick_act_in_the_order_they_came(
 
     node = unit(context, require_supervisor=True)
     try:
-        helper, status_writer = live_supervisor(node)
+        helper, status_writer = supervisor_writer()
         status_writer.publish(SupervisorStatus(state=SupervisorStatus.ENABLED))
         assert status_writer.wait_for_all_acked(Duration(seconds=5))
         duty_writer = matched_publisher(helper, DutyCommand, "/hems/index/duty", qos.COMMAND)
         sample_s = tick_just_after_a_sample(node)
-        assert node.driver.heating_allowed(sample_s)
+        assert node.driver.permitted(sample_s)
         energy_at_sample = node.driver.last_result.energy_joule_j
         sec, nanosec = stamp(sample_s)
         duty_writer.publish(
@@ -187,7 +189,7 @@ def test_a_command_and_an_estop_taken_at_one_tick_act_in_the_order_they_came(
         node.destroy_node()
 
 
-def test_a_repeated_enabled_status_only_moves_the_permission_on(context, live_supervisor):
+def test_a_repeated_enabled_status_only_moves_the_permission_on(context):
     """The supervisor's 10 Hz ENABLED wakes every unit at once: while heating is allowed it
     neither takes the queued commands nor integrates (the gates read the same for every step
     up to it), it only moves the lapse time on; a status after a lapse takes the full path."""
@@ -195,7 +197,6 @@ def test_a_repeated_enabled_status_only_moves_the_permission_on(context, live_su
 
     node = unit(context, require_supervisor=True)
     try:
-        live_supervisor(node)
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         granted_s = node.driver.permission_s
         time.sleep(0.025)
@@ -209,45 +210,6 @@ def test_a_repeated_enabled_status_only_moves_the_permission_on(context, live_su
         node.driver.permission_s -= 1.0  # as if the heartbeats had stopped: lapsed
         node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
         assert node.driver.time_s > integrated_s
-        assert node.driver.heating_allowed(node.driver.time_s)
-    finally:
-        node.destroy_node()
-
-
-def test_a_supervisor_that_is_no_longer_alive_stops_the_heating_until_it_is_again(
-    context, live_supervisor
-):
-    """The supervisor's liveliness (its middleware's, lease qos.SUPERVISOR_LEASE_S) gates the
-    heating at every tick; the permission itself stays, so a supervisor that comes back
-    within its status timeout lets the unit heat again without a new ENABLED."""
-    from hems_msgs.msg import SupervisorStatus
-
-    from hems_ros.nodes import qos
-
-    node = unit(context, require_supervisor=True)
-    try:
-        helper, writer = live_supervisor(node)
-        node.on_supervisor(SupervisorStatus(state=SupervisorStatus.ENABLED))
-        time.sleep(0.011)
-        node.on_tick()
-        assert node.driver.heating_allowed(node.driver.time_s)
-        helper.destroy_publisher(writer)
-        deadline = time.monotonic() + 2.0
-        while node.driver.supervisor_alive:
-            assert time.monotonic() < deadline, "the unit still sees a supervisor that left"
-            time.sleep(0.005)
-            node.on_tick()
-        assert not node.driver.heating_allowed(node.driver.time_s)
-        assert node.driver.gate(node.driver.time_s) == 0.0
-        assert node.supervisor_watch.losses == 1
-        helper.create_publisher(SupervisorStatus, "/hems/supervisor/status", qos.STATUS)
-        deadline = time.monotonic() + 10.0
-        while not node.driver.supervisor_alive:
-            assert time.monotonic() < deadline, "the unit never saw the supervisor come back"
-            time.sleep(0.005)
-            node.on_tick()
-        time.sleep(0.011)
-        node.on_tick()
-        assert node.driver.heating_allowed(node.driver.time_s)
+        assert node.driver.permitted(node.driver.time_s)
     finally:
         node.destroy_node()
