@@ -1,9 +1,10 @@
 """The wire's temperature from what its drive board measures, and the heating cut before a limit.
 
 The board reports, at every sample, the duty it applied over the period that ended and the
-wire's current and voltage while it conducted (hems_msgs/DriveReading). The guard runs the
-unit's model (the physics kernel) on that applied duty, which gives the wire temperature the
-energy put in implies with the model's heat balance, and checks it against the wire itself:
+wire's current and voltage while it conducted (hems_msgs/EncoderReading carries them beside
+the encoder reading, one packet a sample). The guard runs the unit's model (the physics
+kernel) on that applied duty, which gives the wire temperature the energy put in implies
+with the model's heat balance, and checks it against the wire itself:
 the measured resistance V/I against the model's, the difference moved onto the temperature
 through the resistance law's slope (eqs. 4.2-4.4 at the model's phase mixture). No encoder
 or force reading enters, so a stuck sensor that keeps a controller heating cannot hide the

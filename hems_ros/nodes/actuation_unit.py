@@ -2,17 +2,15 @@
 glove load, slider encoder (hems_ros.physics, integrated at 1 kHz of simulated time).
 
 Subscribes
-  /hems/<finger>/duty            hems_msgs/DutyCommand    reliable (on wall-clock time taken at the
-                                                          ticks, see below)
+  /hems/<finger>/duty            hems_msgs/DutyCommand    best effort (on wall-clock time taken at
+                                                          the ticks, see below)
   /hems/supervisor/status        hems_msgs/SupervisorStatus  transient local (heating only
                                                              while ENABLED)
 Publishes
-  /hems/<finger>/encoder         hems_msgs/EncoderReading  best effort, every encoder_period_s
-                                                           (wire side, m)
-  /hems/<finger>/drive           hems_msgs/DriveReading    best effort, with each encoder sample
-                                                           (what the drive board
-                                                           measures: applied duty, on-current
-                                                           and on-voltage)
+  /hems/<finger>/encoder         hems_msgs/EncoderReading  best effort, every encoder_period_s:
+                                                           the drive board's packet (encoder,
+                                                           wire side, m; applied duty,
+                                                           on-current and on-voltage)
   /hems/sim/<finger>/wire_tension hems_msgs/WireForce      best effort, same rate (simulation link
                                                            to the shoulder module)
   /hems/sim/<finger>/state       hems_msgs/ActuatorState   best effort, every state_period_s
@@ -27,11 +25,11 @@ next tick, before integrating, each at the time the middleware received it. Noth
 observes the simulated plant between ticks, so the physics is the same as if the unit had
 woken on arrival (a command answering the latest encoder sample takes effect from that
 sample either way, hems_ros.graph.unit_driver), at one wake-up a period instead of two; the
-latency in /diagnostics is measured to the reception. The supervisor's status (about 10 Hz)
-wakes the unit: the commands received before it are taken first, so an ESTOP stops the
-heating when it comes. On sim time (/clock) reception times are not in the node's clock,
-so commands are handled on arrival. On wall-clock time the
-ticks also fall on the clock's grid at the shoulder module's phase
+latency in /diagnostics is measured to the reception. The supervisor's statuses (every 20 ms)
+are taken at the ticks too, in the order the commands and they came, each from its own
+reception: an ESTOP stops the heating from the moment it came. On sim time (/clock)
+reception times are not in the node's clock, so commands are handled on arrival. On
+wall-clock time the ticks also fall on the clock's grid at the shoulder module's phase
 (hems_ros.graph.cadence.tick_delay).
 
 The duty, encoder, tension and state topics carry serialized messages (hems_ros.nodes.wire).
@@ -44,7 +42,6 @@ import time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from hems_msgs.msg import (
     ActuatorState,
-    DriveReading,
     DutyCommand,
     EncoderReading,
     SupervisorStatus,
@@ -64,9 +61,7 @@ from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.physics import ActuationUnit, load_params
 
 LOCKSTEP_WAIT_S, LOCKSTEP_POLL_S = 0.05, 0.0002
-ENCODER, TENSION, STATE, DRIVE = (
-    codec(t) for t in (EncoderReading, WireForce, ActuatorState, DriveReading)
-)
+ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
 #: Encoder faults a test can inject at run time (``ros2 param set ... sensor_fault stuck_encoder``).
 SENSOR_FAULTS = ("", "stuck_encoder", "encoder_jump", "nan_encoder")
 JUMP_M = 5e-3
@@ -197,9 +192,6 @@ class ActuationUnitNode(LeanNode):
         self.encoder_pub = self.create_publisher(
             EncoderReading, names.topic(self.finger, "encoder", self.graph_ns), qos.SENSOR
         )
-        self.drive_pub = self.create_publisher(
-            DriveReading, names.topic(self.finger, "drive", self.graph_ns), qos.SENSOR
-        )
         self.frozen: tuple[int, float] | None = None
         self.tension_pub = self.create_publisher(
             WireForce, names.sim_topic(self.finger, "wire_tension", self.graph_ns), qos.SENSOR
@@ -326,17 +318,6 @@ class ActuationUnitNode(LeanNode):
                         counts=counts,
                         position=position,
                         resolution=self.resolution,
-                        sequence=self.sequence,
-                    )
-                )
-            )
-            self.drive_pub.publish(
-                DRIVE.encode(
-                    DRIVE.fields(
-                        header_stamp_sec=sec,
-                        header_stamp_nanosec=nanosec,
-                        header_frame_id="",
-                        finger=self.finger,
                         duty_percent=sample.duty_percent,
                         on_current=sample.on_current_a,
                         on_voltage=sample.on_voltage_v,

@@ -7,11 +7,11 @@ side (what the hardware measures); the controller converts through the pulley ra
 Subscribes
   /hems/<finger>/setpoint    hems_msgs/FingerSetpoint   reliable   (mode position [m] | force [N],
                                                                    tendon side)
-  /hems/<finger>/encoder     hems_msgs/EncoderReading   best effort (position-mode feedback)
+  /hems/<finger>/encoder     hems_msgs/EncoderReading   best effort (position-mode feedback;
+                                                        the drive board's readings in the same
+                                                        packet feed the wire temperature
+                                                        estimate, hems_ros.graph.thermal_guard)
   /hems/<finger>/wire_force  hems_msgs/WireForce        best effort (force-mode feedback)
-  /hems/<finger>/drive       hems_msgs/DriveReading     best effort (the drive board's
-                                                        readings: the wire
-                             temperature estimate of hems_ros.graph.thermal_guard)
   /hems/supervisor/status    hems_msgs/SupervisorStatus transient local (computes duty only
                              while ENABLED;
                              read at every status_every-th step; the units stop heating on a
@@ -48,7 +48,6 @@ from dataclasses import fields
 from hems_msgs.msg import (
     CommandRecord,
     ControllerStatus,
-    DriveReading,
     DutyCommand,
     EncoderReading,
     FingerSetpoint,
@@ -248,14 +247,6 @@ class FingerControllerNode(LeanNode):
             self.on_supervisor,
             qos.STATUS,
         )
-        # taken at each control step, before the duty is computed (one reading per sample)
-        self.drive_sub = self.subscribe_serialized(
-            DriveReading,
-            names.topic(self.finger, "drive", self.graph_ns),
-            self.on_drive,
-            qos.SENSOR,
-        )
-        self.poll(self.drive_sub)
         self._poll_other_feedback()
         # restarted by every control step, so it fires only while no feedback comes: a
         # wake-up of a sleeping process costs more than the status it would send
@@ -288,8 +279,8 @@ class FingerControllerNode(LeanNode):
         """The stream of the other mode only feeds the status: taken when a status goes out
         (every status_every-th control step, or the idle status), instead of waking the node
         100 times a second on its own. The supervisor's status is taken at the same steps:
-        its 10 Hz heartbeat woke the six controllers together with the six units, and that
-        burst was most of the loop's latency tail; the units stop heating on its arrival
+        it reaches the six controllers and the six units together every 20 ms, and waking
+        for it made most of the loop's latency tail; the units stop heating from its arrival
         themselves, so a controller learning a state change up to status_every periods later
         changes no applied duty."""
         self.poll(self._other_feedback(), self.supervisor_sub)
@@ -344,13 +335,13 @@ class FingerControllerNode(LeanNode):
         self.enabled = enabled
 
     def on_encoder(self, message) -> None:
+        """The unit's packet: the encoder reading, and the drive's measurement over the period
+        that ended, which the thermal guard takes before any duty is computed from it."""
+        self.guard.reading(message.duty_percent, message.on_current, message.on_voltage)
         self.wire_position = message.position
         self.encoder_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
         if self.setpoint.mode == "position":
             self.control(self.encoder_stamp)
-
-    def on_drive(self, message) -> None:
-        self.guard.reading(message.duty_percent, message.on_current, message.on_voltage)
 
     def on_force(self, message) -> None:
         self.wire_force = message.force
@@ -376,7 +367,9 @@ class FingerControllerNode(LeanNode):
         status_due = self._steps_since_status >= self.status_every
         if status_due:
             self.drain(self.supervisor_sub)
-        self.drain(self.drive_sub)
+        if self.setpoint.mode == "force":
+            # the unit's packets, polled in force mode, still feed the thermal guard every step
+            self.drain(self.feedback["position"])
         if self.enabled and self._other_fresh(measurement_stamp) and not self.guard.limited:
             self.duty = self.controller.update(
                 self._wire_reference(), self._wire_measurement(self.setpoint.mode)

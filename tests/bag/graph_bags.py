@@ -3,6 +3,9 @@ replay, metrics."""
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
+import math
 import subprocess
 import time
 from dataclasses import dataclass
@@ -148,6 +151,30 @@ def stamp_ns_of(message) -> int:
     return message.sec * 1_000_000_000 + message.nanosec
 
 
+def as_installed(raw) -> bytes:
+    """A recorded message re-encoded with the installed definition of its type. The reference
+    bags' encoder readings predate the drive board's measurement in the same packet: those
+    fields come as NaN, which the thermal guard takes as no heating."""
+    from hems_ros.codec import cdr, msgdefs
+    from hems_ros.nodes.wire import codec
+
+    if raw.definition.strip() == msgdefs.full_definition(raw.type).strip():
+        return raw.data
+    recorded = cdr.build_decoder(raw.type, msgdefs.parse_full_definition(raw.type, raw.definition))
+    values = dict(
+        zip((c.name.replace(".", "_") for c in recorded.columns), recorded.decode(raw.data))
+    )
+    package, _, name = raw.type.partition("/msg/")
+    installed = codec(getattr(importlib.import_module(f"{package}.msg"), name))
+    missing = set(installed.fields._fields) - set(values)
+    if not missing <= DRIVE_FIELDS:
+        raise ValueError(f"{raw.type}: recorded without {sorted(missing)}")
+    return installed.encode(installed.fields(**{**dict.fromkeys(missing, math.nan), **values}))
+
+
+DRIVE_FIELDS = {"duty_percent", "on_current", "on_voltage"}
+
+
 def controller_inputs(bag_path: Path, finger: str):
     """The recorded controller inputs in the order the controller took them (see below).
 
@@ -169,6 +196,7 @@ def controller_inputs(bag_path: Path, finger: str):
     )
     decoded = []
     for m in iter_messages(bag_path, topics=list(types)):
+        m = dataclasses.replace(m, data=as_installed(m))
         msg = deserialize_message(m.data, types[m.topic])
         # Ordered by when the original controller most likely took each message; the
         # recorder's receive time can lag that by a few ms. A feedback sample was taken no
@@ -241,10 +269,11 @@ def replay_into_controller(
     encoder, wire_force, setpoint = (
         names.topic(finger, s) for s in ("encoder", "wire_force", "setpoint")
     )
+    # the reference runs' controllers judged the other sensor's lag at 100 ms
     controller = start_node(
         "finger_controller",
         f"finger_controller_{finger}",
-        {"finger": finger},
+        {"finger": finger, "feedback_lag_s": "0.1"},
         ("-p", f"pulley_ratio:={reference.pulley_ratio!r}"),
     )
     replay = ControllerReplay(finger)

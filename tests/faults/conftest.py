@@ -22,7 +22,7 @@ from faultrows import BEGIN, END, FINGER, ROWS, Observer, render
 @pytest.fixture(scope="module")
 def matrix_graph(ros_domain_id):
     import rclpy
-    from hems_msgs.msg import ActuatorState, ControllerStatus, DriveReading, SupervisorStatus
+    from hems_msgs.msg import ActuatorState, ControllerStatus, EncoderReading, SupervisorStatus
     from rclpy.executors import SingleThreadedExecutor
 
     from hems_ros.client.graph_client import GraphClient
@@ -45,8 +45,8 @@ def matrix_graph(ros_domain_id):
                     target.append(item)
 
             node.create_subscription(
-                DriveReading,
-                names.topic(FINGER, "drive"),
+                EncoderReading,
+                names.topic(FINGER, "encoder"),
                 lambda m: keep(observer.drive, (now(), m.duty_percent)),
                 qos.SENSOR,
             )

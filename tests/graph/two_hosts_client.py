@@ -9,7 +9,7 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
-from hems_msgs.msg import ControllerStatus, DriveReading
+from hems_msgs.msg import ControllerStatus, EncoderReading
 
 from hems_ros.client.graph_client import GraphClient
 from hems_ros.graph import names
@@ -43,8 +43,8 @@ def main() -> int:
             qos.CONTROLLER_STATUS,
         )
         client.node.create_subscription(
-            DriveReading,
-            names.topic(FINGER, "drive"),
+            EncoderReading,
+            names.topic(FINGER, "encoder"),
             lambda m: drive.append((time.monotonic(), m.duty_percent)),
             qos.SENSOR,
         )
