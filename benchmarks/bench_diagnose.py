@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import os
 import statistics
 import sys
@@ -234,6 +235,11 @@ def write_bag(folder: Path, t: Truth) -> int:
             counts=int(t.counts[k]),
             position=float(t.position[k]),
             resolution=resolution,
+            # the drive board's measurement of the period that ended (current and voltage are
+            # not simulated here: the diagnosis takes the commanded duty)
+            duty_percent=float(t.duty[k - 1] if k else 0.0),
+            on_current=math.nan,
+            on_voltage=math.nan,
             sequence=seq,
         )
         add(

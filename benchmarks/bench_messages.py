@@ -113,6 +113,9 @@ def publish(serialized: bool, count: int) -> dict:
                             counts=k,
                             position=k * 1e-6,
                             resolution=1e-6,
+                            duty_percent=0.0,
+                            on_current=float("nan"),
+                            on_voltage=float("nan"),
                             sequence=k,
                         )
                     )

@@ -37,38 +37,6 @@ def matched_publisher():
 
 
 @pytest.fixture
-def other_participant(ros_domain_id):
-    """A node in a context of its own (its own DDS participant), whose messages reach the node
-    under test through the middleware's transport, as another process's do."""
-    import rclpy
-    from rclpy.context import Context
-
-    other = Context()
-    rclpy.init(context=other)
-    node = rclpy.create_node("other_participant", context=other)
-    yield node
-    node.destroy_node()
-    rclpy.try_shutdown(context=other)
-
-
-@pytest.fixture
-def supervisor_writer(other_participant, matched_publisher):
-    """supervisor_writer(): a SupervisorStatus writer in another participant that the unit under
-    test has matched; returns (its node, the publisher)."""
-    from hems_msgs.msg import SupervisorStatus
-
-    from hems_ros.nodes import qos
-
-    def make():
-        publisher = matched_publisher(
-            other_participant, SupervisorStatus, "/hems/supervisor/status", qos.STATUS
-        )
-        return other_participant, publisher
-
-    return make
-
-
-@pytest.fixture
 def one_round(context):
     """one_round(node): wait once on ``node``'s subscriptions and timers in the nodes' spin
     loop (hems_ros.nodes.lean_spin) and run what is ready, as a node process does."""
