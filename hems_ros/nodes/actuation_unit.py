@@ -251,10 +251,11 @@ class ActuationUnitNode(LeanNode):
         enabled = message.state == SupervisorStatus.ENABLED
         if enabled and self.driver.permitted(now):
             # the periodic ENABLED that keeps the permission alive: allowed without a break
-            # from the last step to now, so it only moves the lapse time on, and the wake-up
-            # that six units take at once stays short
+            # from the last step to now, so it only moves the lapse time on
             self.driver.permit_heating(True, now)
             return
+        if not enabled and self.driver.permission_s is None:
+            return  # the periodic status of a graph not enabled: nothing was allowed
         # commands that came before this status act first, and the plant runs with the old
         # permission up to it: taken at the next tick instead, a command answering the latest
         # sample would integrate again from that sample under the new permission, and stop

@@ -641,3 +641,44 @@ def test_a_reading_that_jumps_or_is_not_a_number_is_a_failed_sensor():
     kinds = [(f.finger, f.kind) for f in logic.faults]
     assert kinds == [("index", "encoder jump"), ("middle", "wire_force"), ("ring", "controller")]
     assert "encoder jump +5.0 mm in 20 ms" in str(logic.faults[0]) and logic.state == State.FAULT
+
+
+def test_advancing_at_one_gated_duty_gives_the_bits_of_gating_every_step():
+    """UnitDriver.advance skips the per-step gates when the gated duty is the same at the
+    first and last step: a random run of ticks, commands (some answering the latest sample,
+    some late), permissions, lapses and watchdog trips gives the same samples, state and flags
+    as a driver that gates every step."""
+
+    class GatedEveryStep(UnitDriver):
+        def advance(self, now_s: float) -> list:
+            return self._advance_gated(self.unit.steps, self.unit.steps + 500, now_s + 1e-9)
+
+    rng = np.random.default_rng(7)
+    params = load_params("ch6_hems_index")
+    drivers = [
+        cls(ActuationUnit(params), start_time_s=1000.0) for cls in (UnitDriver, GatedEveryStep)
+    ]
+    now = 1000.0
+    for _ in range(3000):
+        now += float(rng.choice([0.0, 0.0005, 0.004, 0.01, 0.01, 0.01, 0.05]))
+        action = rng.integers(10)
+        outputs = []
+        for driver in drivers:
+            if action == 0:
+                driver.permit_heating(True, now)
+            elif action == 1:
+                driver.permit_heating(False, now)
+            elif action <= 5:
+                answering = driver._sample_time_s if action <= 4 else None
+                if not driver.will_rewind(30.0 * action, answering, now):
+                    driver.advance(now)
+                driver.command(30.0 * (action - 2) % 101, now, answering)
+            outputs.append(driver.advance(now))
+        assert outputs[0] == outputs[1]
+        fast, gated = drivers
+        assert np.array_equal(fast.unit._s, gated.unit._s)
+        assert (fast.applied_duty, fast.watchdog_tripped, fast.permission_lapses) == (
+            gated.applied_duty,
+            gated.watchdog_tripped,
+            gated.permission_lapses,
+        )
