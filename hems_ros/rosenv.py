@@ -35,6 +35,17 @@ def die_with_parent() -> None:
     ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
+def skip_code_generators() -> None:
+    """Keep ROS's message code generator out of this process (call before importing rclpy).
+
+    The type support every message loads at run time comes from rosidl_generator_py, whose
+    package also imports its generator (empy, lark, the IDL parser and through lark OpenSSL:
+    some 3 MB and 40 modules a process) and goes on without it when that import fails, as
+    a missing module in ``sys.modules`` makes it. The graph generates no code at run time.
+    """
+    sys.modules.setdefault("rosidl_generator_py.generate_py_impl", None)  # type: ignore[assignment]
+
+
 def apply_network_defaults(env: dict[str, str] | os._Environ | None = None):
     """Set ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and the Fast DDS profiles file (each
     unless set) and the ament prefix."""

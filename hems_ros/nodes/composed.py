@@ -19,7 +19,7 @@ import sys
 
 from hems_ros.nodes import lean_spin
 from hems_ros.nodes.runner import freeze_long_lived_objects
-from hems_ros.rosenv import apply_network_defaults
+from hems_ros.rosenv import apply_network_defaults, skip_code_generators
 
 NODE_CLASSES = {
     "actuation_unit": ("hems_ros.nodes.actuation_unit", "ActuationUnitNode"),
@@ -54,6 +54,7 @@ def _split_params(text: str) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     apply_network_defaults()
+    skip_code_generators()
     import importlib
 
     import rclpy

@@ -8,7 +8,7 @@ import sys
 from collections.abc import Callable
 
 from hems_ros.nodes.middleware_threads import defer_middleware_threads
-from hems_ros.rosenv import apply_network_defaults
+from hems_ros.rosenv import apply_network_defaults, skip_code_generators
 
 # Every rclpy node offers six parameter services (twelve DDS endpoints, more than half of a
 # graph node's), and every participant announces all of its endpoints to each process that
@@ -43,6 +43,7 @@ def run_node(
         {"start_parameter_services": False} if NO_PARAMETER_SERVICES_FLAG in user_args else {}
     )
     apply_network_defaults()
+    skip_code_generators()
     import rclpy
     from rclpy.executors import ExternalShutdownException
 

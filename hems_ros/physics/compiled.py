@@ -19,10 +19,10 @@ modules and takes its layout from rows.py and its options from jit.py:
 from __future__ import annotations
 
 import functools
-import hashlib
 import importlib
 import sys
 import warnings
+import zlib
 from pathlib import Path
 from typing import Any, Callable
 
@@ -45,13 +45,12 @@ STEPS_SIGNATURE = "i8(f8[::1], f8[::1], i8, f8, f8, f8[::1], i8)"
 
 @functools.cache
 def build_hash() -> int:
-    """The first 60 bits of a SHA-256 of the kernel's sources and of the host CPU's model and
-    features (code compiled for one CPU may use instructions another lacks)."""
-    digest = hashlib.sha256()
-    for name in SOURCES:
-        digest.update((HERE / f"{name}.py").read_bytes())
-    digest.update(_host_cpu())
-    return int(digest.hexdigest()[:15], 16)
+    """A checksum of the kernel's sources and of the host CPU's model and features (code
+    compiled for one CPU may use instructions another lacks): CRC-32 and Adler-32 in 63 bits.
+    Telling an edit from none needs no cryptographic hash, and hashlib would load OpenSSL
+    (3 MB) into every unit and controller."""
+    data = b"".join((HERE / f"{name}.py").read_bytes() for name in SOURCES) + _host_cpu()
+    return (zlib.crc32(data) << 31) ^ zlib.adler32(data)
 
 
 def _host_cpu() -> bytes:

@@ -50,3 +50,30 @@ def test_a_reserved_domain_is_not_given_twice_until_released() -> None:
     finally:
         first_lock.close()
         second_lock.close()
+
+
+def test_a_node_process_runs_its_messages_without_the_code_generator(ros_domain_id):
+    """skip_code_generators keeps rosidl's generator (empy, lark and OpenSSL) out, and the
+    messages still load and travel: a node publishes and takes one of the graph's messages."""
+    import subprocess
+
+    script = """
+import sys
+from hems_ros.rosenv import skip_code_generators
+skip_code_generators()
+import rclpy
+from hems_msgs.msg import FingerSetpoint
+rclpy.init()
+node = rclpy.create_node("generator_free")
+got = []
+node.create_subscription(FingerSetpoint, "/generator_free", got.append, 10)
+pub = node.create_publisher(FingerSetpoint, "/generator_free", 10)
+pub.publish(FingerSetpoint(mode="position", value=0.02))
+rclpy.spin_once(node, timeout_sec=2.0)
+print(got[0].value, " ".join(m for m in ("em", "lark", "_hashlib") if m in sys.modules) or "none")
+"""
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split() == ["0.02", "none"]
