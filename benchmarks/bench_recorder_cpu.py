@@ -38,7 +38,7 @@ def cpu_seconds(pid: int) -> float:
 
 
 def measure(fingers: tuple[str, ...], seconds: float, warmup: float) -> dict[str, float]:
-    graph = Graph(GraphOptions(fingers=fingers, log_level="warn"))
+    graph = Graph(GraphOptions(fingers=fingers, composed=False, log_level="warn"))
     graph.start()
     try:
         with tempfile.TemporaryDirectory() as tmp:
@@ -96,9 +96,10 @@ def main() -> int:
         fingers = names.FINGERS if choice == "all" else (names.check_finger(choice),)
         result = measure(fingers, args.seconds, args.warmup)
         ok &= result["share"] <= CEILING
+        processes = len(Graph(GraphOptions(fingers=fingers, composed=False)).commands())
         print(
             f"  {len(fingers)} finger{'s' if len(fingers) > 1 else ' '} "
-            f"({len(Graph(GraphOptions(fingers=fingers)).commands()):>2} processes): "
+            f"({processes:>2} processes): "
             f"{result['rate']:>6,.0f} msg/s on {result['topics']} topics   recorder "
             f"{result['share']:6.1%} of one core   ceiling {CEILING:.0%}   ratio "
             f"{result['share'] / CEILING:.2f}"

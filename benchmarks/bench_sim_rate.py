@@ -51,7 +51,7 @@ def run(layout: str, rate: str, fingers: str, folder: Path) -> dict:
         "error",
         "--record",
         str(folder),
-    ] + (["--composed"] if layout == "composed" else [])
+    ] + (["--composed"] if layout == "composed" else ["--separate"])
     done = subprocess.run(
         command, capture_output=True, text=True, env=child_environment(), timeout=1800
     )

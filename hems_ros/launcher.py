@@ -31,7 +31,10 @@ class GraphOptions:
     # applied after params_file, each over the ones before (ROS takes the last value of a
     # parameter): the gains `hems tune --write-params` writes, a lab's own overrides
     extra_params_files: tuple[Path, ...] = ()
-    composed: bool = False
+    # one process for all nodes (hems_ros/nodes/composed.py): the default layout, a third of
+    # the CPU and a tenth of the memory of sixteen processes (docs/design.md); False: each
+    # node in its own process, as `ros2 run` starts them
+    composed: bool = True
     sim_time: bool = False
     rate: float = 1.0
     fingers: tuple[str, ...] = names.FINGERS

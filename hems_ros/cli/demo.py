@@ -17,7 +17,13 @@ from pathlib import Path
 from hems_ros.cli import grasp
 from hems_ros.cli.commands import gap_line
 from hems_ros.cli.numbers import positive
-from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder
+from hems_ros.cli.up import (
+    add_graph_arguments,
+    bag_folder,
+    graph_options,
+    layout_text,
+    stop_recorder,
+)
 from hems_ros.client.recording import wait_until_recording
 from hems_ros.launcher import Graph
 
@@ -64,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     graph.start()
     recorder = RecorderProcess(record, regex=record_regex(options.namespace))
     print(
-        f"demo: started {len(graph.processes)} processes, recording into {record}; waiting for "
+        f"demo: started the graph ({layout_text(options)}), recording into {record}; waiting for "
         f"every stream",
         flush=True,
     )

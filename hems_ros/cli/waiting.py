@@ -78,19 +78,26 @@ def register(subparsers) -> None:
         help=argparse.SUPPRESS,  # `hems up`: its start, time.monotonic() (the clock is system-wide)
     )
     parser.add_argument("--prefix", default="wait", help=argparse.SUPPRESS)
-    # `hems up` says only when the graph is ready
-    parser.add_argument("--no-progress", action="store_true", help=argparse.SUPPRESS)
+    # `hems up`'s watcher: only the outcome, and a stop (the graph stopped first) says nothing
+    parser.add_argument("--for-up", action="store_true", help=argparse.SUPPRESS)
     add_namespace_argument(parser)
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from rclpy.executors import ExternalShutdownException
+
     from hems_ros.client.graph_client import GraphClient
 
     since = time.monotonic() if args.since is None else args.since
     line = WaitingLine(args.prefix)
-    with GraphClient(name="hems_wait", namespace=args.namespace) as client:
-        missing = client.wait_until_ready(args.timeout, None if args.no_progress else line)
+    try:
+        with GraphClient(name="hems_wait", namespace=args.namespace) as client:
+            missing = client.wait_until_ready(args.timeout, None if args.for_up else line)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        if args.for_up:
+            return 0
+        raise
     line.end()
     if missing == []:
         print(

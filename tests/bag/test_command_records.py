@@ -33,7 +33,7 @@ def test_every_setpoint_and_supervisor_call_is_in_the_bag(ros_domain_id, tmp_pat
     from hems_ros.launcher import Graph, GraphOptions
 
     output = tmp_path / "recording"
-    graph = Graph(GraphOptions(fingers=(FINGER,), log_level="warn"))
+    graph = Graph(GraphOptions(fingers=(FINGER,), composed=False, log_level="warn"))
     graph.start()
     recorder = RecorderProcess(output, regex=r"/hems/.*")
     try:

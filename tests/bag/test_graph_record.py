@@ -91,7 +91,9 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(
     # every process is stopped whatever fails: a graph left running would share the test
     # domain with every later test's graph
     with contextlib.ExitStack() as cleanup:
-        graph = cleanup.enter_context(Graph(GraphOptions(fingers=tuple(fingers), log_level="warn")))
+        graph = cleanup.enter_context(
+            Graph(GraphOptions(fingers=tuple(fingers), composed=False, log_level="warn"))
+        )
         client = cleanup.enter_context(GraphClient("hems_test_record"))
         for topic, msg_type in witnessed.items():
             client.node.create_subscription(

@@ -64,7 +64,9 @@ def test_params_file_gives_the_finger_controllers_the_tuned_gains(
     )
 
     command = Graph(
-        GraphOptions(fingers=("index",), extra_params_files=(path,), log_level="error")
+        GraphOptions(
+            fingers=("index",), extra_params_files=(path,), composed=False, log_level="error"
+        )
     ).commands()["finger_controller_index"]
     assert command.count("--params-file") == 2 and command[-1] != str(path)
     process = subprocess.Popen(command)

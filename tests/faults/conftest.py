@@ -30,7 +30,7 @@ def matrix_graph(ros_domain_id):
     from hems_ros.launcher import Graph, GraphOptions
     from hems_ros.nodes import qos
 
-    graph = Graph(GraphOptions(fingers=(FINGER,), log_level="error"))
+    graph = Graph(GraphOptions(fingers=(FINGER,), composed=False, log_level="error"))
     graph.start()
     observer = Observer()
     try:

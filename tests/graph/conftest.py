@@ -11,7 +11,10 @@ def graph(venv):
     from hems_ros.graph import names
     from hems_ros.launcher import Graph, GraphOptions
 
-    with Graph(GraphOptions(log_level="warn")) as running, GraphClient("hems_test") as client:
+    with (
+        Graph(GraphOptions(composed=False, log_level="warn")) as running,
+        GraphClient("hems_test") as client,
+    ):
         # reset first: a start-up hiccup may have latched a fault
         ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
         assert ok, f"graph did not become ready: {running.with_exits(message)}"

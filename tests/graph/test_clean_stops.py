@@ -17,7 +17,7 @@ pytestmark = pytest.mark.slow
 @pytest.mark.parametrize("after_s, group", [(1.0, True), (3.0, True), (12.0, True), (12.0, False)])
 def test_a_signal_stops_hems_up_without_a_traceback(venv, after_s, group):
     up = subprocess.Popen(
-        [str(venv / "bin" / "hems"), "up", "--log-level", "warn"],
+        [str(venv / "bin" / "hems"), "up", "--separate", "--log-level", "warn"],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,

@@ -28,7 +28,7 @@ def test_composed_graph_tracks_a_step_and_stops_on_ctrl_c(ros_domain_id: int) ->
     from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
 
-    graph = Graph(GraphOptions(fingers=(FINGER,), composed=True, log_level="warn"))
+    graph = Graph(GraphOptions(fingers=(FINGER,), log_level="warn"))
     graph.start()
     assert list(graph.processes) == ["composed"]
     try:

@@ -497,8 +497,8 @@ def test_latency_percentiles_are_the_ranked_window_values():
 
 def test_extra_ros_args_reach_every_node_separate_or_composed():
     extra = ("-p", "latency_window_s:=5")
-    separate = Graph(GraphOptions(extra_ros_args=extra)).commands()
-    composed = Graph(GraphOptions(extra_ros_args=extra, composed=True)).commands()
+    separate = Graph(GraphOptions(extra_ros_args=extra, composed=False)).commands()
+    composed = Graph(GraphOptions(extra_ros_args=extra)).commands()
     assert len(separate) == 16 and all(cmd[-2:] == list(extra) for cmd in separate.values())
     assert list(composed) == ["composed"] and composed["composed"][-2:] == list(extra)
 
@@ -510,13 +510,13 @@ def test_only_the_separate_processes_leave_their_parameter_services_out_and_only
             for cmd in Graph(GraphOptions(**options)).commands().values()
         ]
 
-    assert flagged() == [False] * 16
-    assert flagged(parameter_services=False) == [True] * 16
-    assert flagged(parameter_services=False, composed=True) == [False]
+    assert flagged(composed=False) == [False] * 16
+    assert flagged(parameter_services=False, composed=False) == [True] * 16
+    assert flagged(parameter_services=False) == [False]
 
 
 def test_extra_environment_reaches_only_the_named_nodes():
-    graph = Graph(GraphOptions())
+    graph = Graph(GraphOptions(composed=False))
     graph.node_env = {"supervisor": {"PYTHONPATH": "/elsewhere"}}
     assert graph.environment("supervisor")["PYTHONPATH"] == "/elsewhere"
     assert graph.environment("finger_controller_index").get("PYTHONPATH") != "/elsewhere"

@@ -1,4 +1,5 @@
-"""`hems up` starts 16 node processes and Ctrl-C stops all of them within 3 s."""
+"""`hems up` starts its node processes (one composed, or 16 with --separate) and Ctrl-C stops
+all of them, and the readiness watcher, within 3 s."""
 
 import os
 import signal
@@ -23,19 +24,29 @@ def children_of(pid: int) -> set[int]:
     return found
 
 
-def test_up_then_ctrl_c_leaves_no_process_after_3_seconds(venv):
+def is_node(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/cmdline") as cmdline:
+            text = cmdline.read()
+    except OSError:
+        return False
+    return "lib/hems_ros/" in text or "hems_ros.nodes.composed" in text
+
+
+@pytest.mark.parametrize("layout, nodes", [([], 1), (["--separate"], 16)])
+def test_up_then_ctrl_c_leaves_no_process_after_3_seconds(venv, layout, nodes):
     up = subprocess.Popen(
-        [str(venv / "bin" / "hems"), "up", "--log-level", "warn"],
+        [str(venv / "bin" / "hems"), "up", *layout, "--log-level", "warn"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     )
     deadline = time.monotonic() + 60
     children: set[int] = set()
-    while time.monotonic() < deadline and len(children) < 16:
+    while time.monotonic() < deadline and sum(map(is_node, children)) < nodes:
         time.sleep(0.5)
         children = children_of(up.pid)
-    assert len(children) == 16, f"{len(children)} node processes"
+    assert sum(map(is_node, children)) == nodes, f"{len(children)} processes"
     time.sleep(5.0)
     started = time.monotonic()
     up.send_signal(signal.SIGINT)

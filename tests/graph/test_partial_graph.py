@@ -27,7 +27,7 @@ def one_finger_graph(ros_domain_id):
     from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
 
-    graph = Graph(GraphOptions(fingers=(FINGER,), composed=True, log_level="warn"))
+    graph = Graph(GraphOptions(fingers=(FINGER,), log_level="warn"))
     graph.start()
     try:
         with GraphClient("hems_test_partial_graph") as client:

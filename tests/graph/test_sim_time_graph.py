@@ -20,7 +20,7 @@ def test_a_sim_time_graph_keeps_heating_and_reaches_its_setpoint(ros_domain_id):
     from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
 
-    graph = Graph(GraphOptions(fingers=(FINGER,), composed=True, sim_time=True, log_level="warn"))
+    graph = Graph(GraphOptions(fingers=(FINGER,), sim_time=True, log_level="warn"))
     graph.start()
     try:
         with GraphClient("hems_test_sim_time") as client:
@@ -99,7 +99,7 @@ def test_a_step_on_sim_time_gives_the_same_figures_at_any_rate_and_layout(
     # overshoot where 1x gave 0.06, as the nodes fell behind it.
     runs = {
         "composed, max": _step(venv, tmp_path, "--composed", "--rate", "max"),
-        "separate, 4x": _step(venv, tmp_path, "--rate", "4"),
+        "separate, 4x": _step(venv, tmp_path, "--separate", "--rate", "4"),
         "composed, 1x": _step(venv, tmp_path, "--composed", "--rate", "1"),
     }
     print(runs)

@@ -46,7 +46,7 @@ def test_a_stuck_encoder_cannot_overheat_the_wire(ros_domain_id):
     from hems_ros.launcher import Graph, GraphOptions
     from hems_ros.nodes import qos
 
-    graph = Graph(GraphOptions(fingers=(FINGER,), log_level="warn"))
+    graph = Graph(GraphOptions(fingers=(FINGER,), composed=False, log_level="warn"))
     graph.start()
     try:
         with GraphClient("hems_test_thermal") as client:

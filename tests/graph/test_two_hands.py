@@ -38,10 +38,10 @@ def _snapshot(namespace: str):
 def test_verbs_with_a_namespace_move_one_hand_and_leave_the_other_untouched(ros_domain_id, venv):
     from hems_ros.launcher import Graph, GraphOptions
 
-    left = Graph(GraphOptions(fingers=(FINGER,), namespace="/left", log_level="warn"))
-    right = Graph(
-        GraphOptions(fingers=(FINGER,), namespace="/right", composed=True, log_level="warn")
+    left = Graph(
+        GraphOptions(fingers=(FINGER,), namespace="/left", composed=False, log_level="warn")
     )
+    right = Graph(GraphOptions(fingers=(FINGER,), namespace="/right", log_level="warn"))
     left.start()
     right.start()
     try:

@@ -71,7 +71,7 @@ def namespaces():
 def _run(ns: dict[str, str], split: bool) -> dict:
     """Start the index graph (split across the namespaces, or all in ``a``), run the client in
     the supervisor's namespace, stop everything; the client's JSON."""
-    graph = Graph(GraphOptions(fingers=("index",), log_level="error"))
+    graph = Graph(GraphOptions(fingers=("index",), composed=False, log_level="error"))
     warm_physics_cache(child_environment())
     side_of = {name: ("a" if name in SIDE_A or not split else "b") for name in graph.commands()}
     processes = []
