@@ -47,21 +47,20 @@ class ThermalGuard:
         with the measured resistance, update the cut-off; the estimate, degC."""
         duty = min(max(duty_percent, 0.0), 100.0) if math.isfinite(duty_percent) else 0.0
         self.model.advance(duty=duty, steps=self.steps)
-        state = self.model.state
-        estimate = state["wire_temperature_c"]
+        estimate, xi, slider_m = self.model.wire()
         if math.isfinite(on_current_a) and math.isfinite(on_voltage_v) and on_current_a > 0.0:
-            estimate += self._correction(on_voltage_v / on_current_a, state)
+            estimate += self._correction(on_voltage_v / on_current_a, xi, slider_m)
         self.estimate_c = estimate
         self.limited = estimate >= self.cut_c or (self.limited and estimate > self.resume_c)
         return estimate
 
-    def _correction(self, measured_ohm: float, state: dict[str, float]) -> float:
+    def _correction(self, measured_ohm: float, xi: float, slider_m: float) -> float:
         """Temperature difference the measured resistance asks for, from the resistance law's
-        temperature slope at the model's state (eq. 4.4 in both phases, mixed by eq. 4.3)."""
+        temperature slope at the model's martensite fraction ``xi`` and wire length (eq. 4.4
+        in both phases, mixed by eq. 4.3)."""
         p = self.model.params
         el = p.electrical
-        xi = state["martensite_fraction"]
-        length = p.wire.length_m - state["slider_position_m"]
+        length = p.wire.length_m - slider_m
         slope = (
             (xi * el.drho_dt_martensite_ohm_m_per_c + (1.0 - xi) * el.drho_dt_austenite_ohm_m_per_c)
             * length

@@ -155,7 +155,7 @@ class ActuationUnitNode(LeanNode):
     def __init__(self, **node_kwargs) -> None:
         super().__init__("actuation_unit", namespace=names.NAMESPACE, **node_kwargs)
         self.graph_ns = self.get_namespace()
-        p = declare(self, PARAMETERS)
+        p = self.params = declare(self, PARAMETERS)
         self.finger = p["finger"]
         try:
             physics = load_params(p["physics_config"])
@@ -343,7 +343,7 @@ class ActuationUnitNode(LeanNode):
 
     def encoder_reading(self, sample) -> tuple[int, float]:
         """(counts, position m) the encoder reports, with the injected fault if one is set."""
-        fault = self.get_parameter("sensor_fault").value
+        fault = self.params["sensor_fault"]
         if fault != "stuck_encoder":
             self.frozen = None
         if fault == "stuck_encoder":

@@ -75,7 +75,11 @@ def one_of(*choices: str) -> Callable[[Any], str | None]:
 
 
 def declare(node: Node, specs: list[Spec]) -> dict[str, Any]:
-    """Declare, validate and return the parameters; reject invalid later changes."""
+    """Declare, validate and return the parameters; reject invalid later changes.
+
+    The returned dict follows every accepted change (``ros2 param set``): a node reads a
+    parameter it lets change at run time from it, at the cost of a dict lookup, where
+    ``get_parameter`` builds a Parameter object at every call."""
     by_name = {spec.name: spec for spec in specs}
     values = {}
     for spec in specs:
@@ -102,7 +106,13 @@ def declare(node: Node, specs: list[Spec]) -> dict[str, Any]:
                 return SetParametersResult(successful=False, reason=error)
         return SetParametersResult(successful=True)
 
+    def after_set(parameters) -> None:
+        for parameter in parameters:
+            if parameter.name in values:
+                values[parameter.name] = parameter.value
+
     node.add_on_set_parameters_callback(on_set)
+    node.add_post_set_parameters_callback(after_set)
     return values
 
 

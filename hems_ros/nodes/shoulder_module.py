@@ -103,8 +103,8 @@ class ShoulderModuleNode(LeanNode):
 
     def fault(self, finger: str) -> str:
         """The fault injected into ``finger``'s sensor ('' none)."""
-        target = self.get_parameter("fault_finger").value
-        return self.get_parameter("sensor_fault").value if target in ("", finger) else ""
+        p = self.params
+        return p["sensor_fault"] if p["fault_finger"] in ("", finger) else ""
 
     def on_tension(self, finger: str, tension) -> None:
         p = self.params

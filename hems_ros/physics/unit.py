@@ -130,6 +130,13 @@ class ActuationUnit:
         """The kernel state by name (temperatures, fraction, stress, position, energies)."""
         return {name: float(self._s[i]) for i, name in enumerate(rows.STATE_NAMES)}
 
+    def wire(self) -> tuple[float, float, float]:
+        """(wire temperature degC, martensite fraction, slider position m) now: the part of
+        :attr:`state` a controller's thermal guard reads at every control step, without
+        building the rest."""
+        s = self._s
+        return float(s[rows.S_T]), float(s[rows.S_XI]), float(s[rows.S_X])
+
     @property
     def energy(self) -> dict[str, float]:
         """Energy accumulators since reset, J (Joule = stored + convected + latent + to sheath)."""

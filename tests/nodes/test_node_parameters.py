@@ -48,3 +48,25 @@ def test_bad_parameter_stops_the_node_naming_it(venv, ros_domain_id, executable,
     assert result.returncode == 2, result.stderr[-2000:]
     assert message in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_a_parameter_changed_at_run_time_reaches_the_node_and_a_bad_one_does_not(context):
+    """The values declare() returns follow every accepted change, which the nodes read
+    instead of get_parameter; a rejected value leaves them as they were."""
+    from rclpy.parameter import Parameter
+
+    from hems_ros.nodes.shoulder_module import ShoulderModuleNode
+
+    node = ShoulderModuleNode(context=context)
+    try:
+        assert node.fault("index") == ""
+        results = node.set_parameters(
+            [Parameter("sensor_fault", value="nan_force"), Parameter("fault_finger", value="index")]
+        )
+        assert all(r.successful for r in results)
+        assert (node.fault("index"), node.fault("middle")) == ("nan_force", "")
+        (bad,) = node.set_parameters([Parameter("sensor_fault", value="melted")])
+        assert not bad.successful and "must be one of" in bad.reason
+        assert node.params["sensor_fault"] == "nan_force"
+    finally:
+        node.destroy_node()
