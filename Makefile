@@ -8,8 +8,8 @@ MSGS_BUILD := build/hems_msgs
 PYTEST_ARGS ?=
 # Passed to every benchmark of `make bench`; --smoke runs each in seconds without its floors.
 BENCH_ARGS ?=
-# All six fingers, the 16 nodes in separate processes as `hems up` starts them; composed in
-# one process: DEMO_ARGS=--composed; one finger's four processes: DEMO_ARGS="--fingers index".
+# All six fingers, the 16 nodes composed in one process as `hems up` starts them; a process
+# per node: DEMO_ARGS=--separate; one finger's four nodes: DEMO_ARGS="--fingers index".
 DEMO_ARGS ?=
 # Every process started from here keeps DDS discovery on the loopback interface.
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
