@@ -82,7 +82,7 @@ class UnitDriver:
         start_time_s: float,
         sample_period_s: float = 0.01,
         watchdog_timeout_s: float = 0.03,
-        permission_timeout_s: float = 0.04,
+        permission_timeout_s: float = 0.035,
         require_permission: bool = True,
         latency_window_s: float = 60.0,
     ) -> None:

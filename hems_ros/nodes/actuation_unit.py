@@ -115,7 +115,7 @@ PARAMETERS = [
     Spec("require_supervisor", True, "heat only while the supervisor reports ENABLED", None, True),
     Spec(
         "supervisor_timeout_s",
-        0.04,
+        0.035,
         "supervisor status older than this withdraws heating permission, s: the supervisor "
         "sends one every 20 ms, so a stopped or killed one stops the heating within this",
         PERIOD_LIMIT,

@@ -127,11 +127,11 @@ PARAMETERS = [
     ),
     Spec(
         "feedback_lag_s",
-        0.035,
+        0.025,
         "0 % duty while the other mode's readings (force in position mode, encoder in "
         "force mode) are older than this against the feedback's, on the unit's stamps, s: without "
         "them over-force and over-travel cannot be seen; a shoulder module that stops stops a "
-        "position loop within four samples (40 ms)",
+        "position loop within three samples (30 ms)",
         PERIOD_LIMIT,
         True,
     ),

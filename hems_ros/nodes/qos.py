@@ -14,7 +14,7 @@ SENSOR = QoSProfile(
 COMMAND = QoSProfile(
     depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE
 )
-# The supervisor's status, every 20 ms: the units' permission to heat lapses 40 ms after the
+# The supervisor's status, every 20 ms: the units' permission to heat lapses 35 ms after the
 # last one (supervisor_timeout_s), so a stopped or killed supervisor stops the heating within
 # that. Best effort, as the sensor streams: each status supersedes the last, a new reader has
 # the next within 20 ms, and a reliable writer drew an acknowledgement from each of its dozen

@@ -148,7 +148,7 @@ PARAMETERS = [
         0.02,
         "status re-publishing period, s (also on every change; at the checks, so in whole "
         "check periods): the units stop heating when it is older than their "
-        "supervisor_timeout_s (40 ms)",
+        "supervisor_timeout_s (35 ms)",
         PERIOD_LIMIT,
         True,
     ),

@@ -7,8 +7,8 @@ finger and the fault), then recovers the graph (restart, reset, enable, the setp
 Real processes over Fast DDS; ``make test-faults`` runs it and writes the table into
 docs/reliability.md. The limits asserted are those of the design (docs/user-guide.md,
 Safety): zero duty within 50 ms of a stopped or killed controller (the duty watchdog, 30 ms),
-shoulder module (its force readings lag the encoder's by more than the controller's 35 ms) or
-supervisor (its status, every 20 ms, older than the units' 40 ms), and FAULT latched within
+shoulder module (its force readings lag the encoder's by more than the controller's 25 ms) or
+supervisor (its status, every 20 ms, older than the units' 35 ms), and FAULT latched within
 500 ms (a lost stream,
 unit state report or heartbeat: 400 ms, then the supervisor's 20 ms checks and its status;
 the heating stopped long before).

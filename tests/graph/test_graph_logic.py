@@ -296,9 +296,9 @@ def test_unit_driver_watchdog_permission_and_bad_commands_end_at_zero_duty():
     assert driver.applied_duty == 0.0 and driver.rejected_commands == 1
 
 
-def test_heating_stops_40_ms_after_the_last_supervisor_status_at_that_step():
+def test_heating_stops_35_ms_after_the_last_supervisor_status_at_that_step():
     """A stopped or killed supervisor sends no status: the permission runs out
-    permission_timeout_s (40 ms) after the last one, at that 1 ms physics step, whenever the
+    permission_timeout_s (35 ms) after the last one, at that 1 ms physics step, whenever the
     unit next looks; the next ENABLED lets it heat again, counted as a lapse."""
     driver = UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=100.0)
     driver.permit_heating(True, 100.0)
@@ -309,8 +309,10 @@ def test_heating_stops_40_ms_after_the_last_supervisor_status_at_that_step():
         energy.append(driver.last_result.energy_joule_j)
         driver.command(100.0, 100.0 + 0.01 * k)
     per_period = [b - a for a, b in zip(energy, energy[1:])]
-    assert all(p > 0.3 for p in per_period[:3])  # about 0.67 J per 10 ms at 100 %
-    assert per_period[3:] == [0.0, 0.0, 0.0]  # from 100.04 on
+    assert all(p > 0.6 for p in per_period[:2])  # about 0.67 J per 10 ms at 100 %
+    # four or five of the period's ten steps (the epoch clock's rounding decides the fifth)
+    assert 0.35 < per_period[2] / per_period[1] < 0.55
+    assert per_period[3:] == [0.0, 0.0, 0.0]  # from 100.035 on
     assert driver.applied_duty == 0.0 and driver.permission_lapses == 0
     driver.permit_heating(True, 100.075)
     driver.advance(100.08)

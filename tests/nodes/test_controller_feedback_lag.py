@@ -1,8 +1,8 @@
 """A controller in position mode sends 0 % while its force readings lag its encoder by more
 than feedback_lag_s on the unit's stamps: a lost force sensor must not leave the wire heating
 blind to over-force (and the supervisor then latches only a loss that persists). With the
-default 35 ms, a shoulder module that stops or dies stops a position loop at the fourth encoder
-sample after its last reading, within 40 ms of it."""
+default 25 ms, a shoulder module that stops or dies stops a position loop at the third encoder
+sample after its last reading, within 30 ms of it."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def test_duty_is_zero_while_the_other_sensor_lags_and_back_when_it_returns(conte
             node.encoder_stamp = _stamp(t0 + 0.01 * sample)
             node.control(node.encoder_stamp)
             duties.append(node.duty)
-        assert duties == [100.0, 100.0, 100.0, 0.0, 0.0]  # 40 ms behind (unit clock): 0 %
+        assert duties == [100.0, 100.0, 0.0, 0.0, 0.0]  # 30 ms behind (unit clock): 0 %
         node.force_stamp = _stamp(t0 + 0.05)  # the sensor is back
         node.encoder_stamp = _stamp(t0 + 0.06)
         node.control(node.encoder_stamp)
