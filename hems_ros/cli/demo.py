@@ -98,8 +98,7 @@ def run(args: argparse.Namespace) -> int:
             except RuntimeError as error:
                 print(f"demo: {graph.with_exits(str(error))}", file=sys.stderr)
                 return 1
-            # the supervisor's /diagnostics come once a second
-            print(f"demo: {gap_line(client.snapshot(fingers=(), seconds=1.2))}", flush=True)
+            print(f"demo: {gap_line(client.snapshot(fingers=(), seconds=0.2))}", flush=True)
         rows = grasp.report(traces, plan, phase_starts, args.plot)
         problem = grasp.fault_report(statuses) or grasp.tracking_report(rows, plan, options.fingers)
         if problem:

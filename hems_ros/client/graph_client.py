@@ -78,10 +78,12 @@ class Snapshot:
     diagnostics: list[tuple[str, str]] = field(default_factory=list)
 
     def incomplete(self) -> bool:
-        """The supervisor not heard yet, or a finger whose controller reported without its
-        unit's state or its wire force."""
-        return self.supervisor is None or any(
-            f not in self.states or f not in self.forces for f in self.controllers
+        """The supervisor not heard yet (its status, or its once-a-second diagnostics), or a
+        finger whose controller reported without its unit's state or its wire force."""
+        return (
+            self.supervisor is None
+            or not self.diagnostics
+            or any(f not in self.states or f not in self.forces for f in self.controllers)
         )
 
 

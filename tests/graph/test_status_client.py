@@ -71,6 +71,10 @@ def test_a_finger_heard_without_its_state_or_force_keeps_the_snapshot_listening_
     snap.states["index"] = ActuatorState(finger="index", tendon_position=0.012)
     assert snap.incomplete()
     snap.forces["index"] = WireForce(finger="index", force=8.0)
+    assert snap.incomplete()  # the supervisor's diagnostics, once a second, not yet
+    snap.diagnostics = [("ready", "true"), ("gaps index encoder", "2, longest 71 ms")]
     assert not snap.incomplete()
-    row = next(line for line in format_status(snap).splitlines() if line.startswith("index"))
+    lines = format_status(snap).splitlines()
+    row = next(line for line in lines if line.startswith("index"))
     assert row.split()[4:6] == ["12.00", "4.00"]
+    assert lines[-1].startswith("stream gaps while ENABLED: 2 gaps, longest 71 ms (index encoder)")
