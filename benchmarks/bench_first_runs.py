@@ -40,7 +40,8 @@ DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
 
 HEMS = [sys.executable, "-m", "hems_ros.cli.main"]
 GAPS = re.compile(
-    r"stream gaps while ENABLED: (?:no gaps|(\d+) gaps, longest (\d+) ms \(([^)]*)\))"
+    r"stream gaps while ENABLED: (?:no gap over (\d+) ms|(\d+) gaps, longest (\d+) ms "
+    r"\(([^)]*)\))"
 )
 LIMIT = re.compile(r"a stream silent for (\d+) ms faults")
 READY = re.compile(r"ready after ([\d.]+) s")
@@ -50,8 +51,8 @@ READY = re.compile(r"ready after ([\d.]+) s")
 class Run:
     valid: bool
     detail: str  # why not valid, or ""
-    longest_gap_ms: float  # 0 when no gap was counted
-    gap_stream: str
+    longest_gap_ms: float  # no gap counted: the silence a gap must exceed; 0: not reported
+    gap_stream: str  # "-": no gap counted
     limit_ms: float
     ready_s: float | None  # hems up or the demo: from start to every stream present
 
@@ -59,9 +60,10 @@ class Run:
 def gaps_of(text: str) -> tuple[float, str, float]:
     """(longest gap ms, whose, loss limit ms) from a `hems status` or demo output."""
     gaps, limit = GAPS.search(text), LIMIT.search(text)
-    longest = float(gaps.group(2)) if gaps and gaps.group(2) else 0.0
-    stream = gaps.group(3) if gaps and gaps.group(3) else "-"
-    return longest, stream, float(limit.group(1)) if limit else float("nan")
+    limit_ms = float(limit.group(1)) if limit else 0.0
+    if gaps is None:  # no status came (the run is not valid either)
+        return 0.0, "not reported", limit_ms
+    return float(gaps.group(1) or gaps.group(3)), gaps.group(4) or "-", limit_ms
 
 
 def demo(layout: list[str], scratch: Path, index: int) -> Run:
@@ -152,16 +154,27 @@ def kill_a_graph(layout: list[str]) -> int:
 
 def summary(kind: str, runs: list[Run]) -> str:
     valid = sum(r.valid for r in runs)
-    worst = max(runs, key=lambda r: r.longest_gap_ms)
+    reported = [r for r in runs if r.longest_gap_ms > 0] or runs
+    counted = [r for r in reported if r.gap_stream != "-"]
+    worst = max(counted or reported, key=lambda r: r.longest_gap_ms)
     ready = [r.ready_s for r in runs if r.ready_s is not None]
     ready_text = f"{statistics.median(ready):.1f} / {max(ready):.1f}" if ready else "-"
-    # no gap counted in a run: no stream came late enough to be counted, so no ratio
-    margin = f"{worst.limit_ms / worst.longest_gap_ms:.1f}" if worst.longest_gap_ms else "-"
+    if worst.longest_gap_ms > 0:
+        margin = f"{'' if counted else '> '}{worst.limit_ms / worst.longest_gap_ms:.1f}"
+    else:
+        margin = "-"
     return (
-        f"| {kind} | {len(runs)} | {valid} | {ready_text} | "
-        f"{worst.longest_gap_ms:.0f} ms ({worst.gap_stream}) | {worst.limit_ms:.0f} ms | "
-        f"{margin} |"
+        f"| {kind} | {len(runs)} | {valid} | {ready_text} | {gap_text(worst)} | "
+        f"{worst.limit_ms:.0f} ms | {margin} |"
     )
+
+
+def gap_text(run: Run) -> str:
+    if run.longest_gap_ms <= 0:
+        return run.gap_stream
+    if run.gap_stream == "-":
+        return f"none over {run.longest_gap_ms:.0f} ms"
+    return f"{run.longest_gap_ms:.0f} ms ({run.gap_stream})"
 
 
 def main() -> None:
@@ -202,7 +215,7 @@ def main() -> None:
                 print(
                     f"  {kind} {i + 1}/{count}: "
                     f"{'valid' if run.valid else 'NOT VALID: ' + run.detail}"
-                    f"; longest gap {run.longest_gap_ms:.0f} ms ({run.gap_stream})"
+                    f"; longest gap {gap_text(run)}"
                     + (f"; ready after {run.ready_s:.1f} s" if run.ready_s else ""),
                     flush=True,
                 )

@@ -11,7 +11,12 @@ from hems_ros.cli.waiting import READY_TIMEOUT_S, WaitingLine
 from hems_ros.client import DISCOVERY_S
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
-from hems_ros.graph.supervisor_logic import LOSS_LIMIT_KEY, longest_gap, parse_gaps
+from hems_ros.graph.supervisor_logic import (
+    GAP_FLOOR_KEY,
+    LOSS_LIMIT_KEY,
+    longest_gap,
+    parse_gaps,
+)
 
 UNITS = {"mm": ("position", 1e-3), "m": ("position", 1.0), "N": ("force", 1.0)}
 
@@ -245,11 +250,10 @@ def gap_line(snap) -> str:
     """The supervisor's count of stream gaps and its loss limit, from its /diagnostics."""
     if not snap.diagnostics:
         return "stream gaps: no supervisor diagnostics received"
-    limit = dict(snap.diagnostics).get(LOSS_LIMIT_KEY, "?")
-    return (
-        f"stream gaps while ENABLED: {longest_gap(parse_gaps(snap.diagnostics))}; "
-        f"a stream silent for {limit} ms faults"
-    )
+    values = dict(snap.diagnostics)
+    limit = values.get(LOSS_LIMIT_KEY, "?")
+    gaps = longest_gap(parse_gaps(snap.diagnostics), values.get(GAP_FLOOR_KEY, "?"))
+    return f"stream gaps while ENABLED: {gaps}; " f"a stream silent for {limit} ms faults"
 
 
 def run_status(args: argparse.Namespace) -> int:

@@ -36,7 +36,10 @@ class LockstepClock:
     step_s: float = 0.01
     rate: float = 1.0  # simulated s per wall s at most; 0: no cap
     stall_s: float = 5.0
-    supervisor_lag_s: float = 0.2
+    # the units' permission lapses 35 ms after the last status (UnitDriver): the next step
+    # must come within that of the status the clock waited for, or the heating would pause
+    # on a host too slow for the pace, and the figures would follow the host
+    supervisor_lag_s: float = 0.02
     now_s: float = field(init=False)
     stalls: int = field(default=0, init=False)
     steps: int = field(default=0, init=False)

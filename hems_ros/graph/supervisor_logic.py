@@ -91,10 +91,11 @@ class MonitorLimits:
     # 50 ms for controllers held up 54-101 ms by the busy host (8 of 20 starts,
     # benchmarks/bench_graph_startup.py), at 200 ms once in 10 starts for 210 ms without
     # commands: about as long as a reliable reader held later samples back behind a lost
-    # one until its repair (why the controller status is best effort, nodes/qos.py); the
-    # duty topic is reliable, so that is the likely cause, not confirmed.
+    # one until its repair (why the controller status and the duty commands are best
+    # effort, nodes/qos.py), the likely cause, not confirmed.
     watchdog_hold_s: float = 0.5
-    # the units' permission lapses after 0.5 s without a status; as long again to take it
+    # units and controllers take a new state from the status that follows it (20 ms); this
+    # is how long one of them may report otherwise while ENABLED, on a busy host
     enable_grace_s: float = 0.5
 
     def timeout(self, stream: str) -> float:
@@ -397,6 +398,7 @@ class SupervisorLogic:
 
 GAP_KEY = "gaps"
 LOSS_LIMIT_KEY = "loss limit ms"  # the shorter of lost_s and heartbeat_timeout_s
+GAP_FLOOR_KEY = "gap floor ms"  # stale_s: shorter silences are not counted as gaps
 
 
 def gap_entries(gaps: dict[tuple[str, str], tuple[int, float]]) -> list[tuple[str, str]]:
@@ -418,10 +420,11 @@ def parse_gaps(pairs) -> dict[tuple[str, str], tuple[int, float]]:
     return gaps
 
 
-def longest_gap(gaps: dict[tuple[str, str], tuple[int, float]]) -> str:
-    """One line on the gaps: how many, the longest and whose."""
+def longest_gap(gaps: dict[tuple[str, str], tuple[int, float]], floor_ms: str = "?") -> str:
+    """One line on the gaps: how many, the longest and whose; ``floor_ms``: the silence under
+    which none is counted (:data:`GAP_FLOOR_KEY`)."""
     if not gaps:
-        return "no gaps"
+        return f"no gap over {floor_ms} ms"
     (finger, stream), (_, longest) = max(gaps.items(), key=lambda item: item[1][1])
     total = sum(count for count, _ in gaps.values())
     return f"{total} gaps, longest {1e3 * longest:.0f} ms ({finger} {stream})"

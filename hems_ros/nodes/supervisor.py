@@ -41,6 +41,7 @@ from std_srvs.srv import Trigger
 from hems_ros.graph import names, transmission
 from hems_ros.graph.cadence import Cadence, supervisor_check_delay
 from hems_ros.graph.supervisor_logic import (
+    GAP_FLOOR_KEY,
     LOSS_LIMIT_KEY,
     MonitorLimits,
     State,
@@ -366,6 +367,7 @@ class SupervisorNode(LeanNode):
             + [KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
             + [KeyValue(key="not ready", value=m) for m in missing]
             + [KeyValue(key=k, value=v) for k, v in gap_entries(self.logic.gaps())]
+            + [KeyValue(key=GAP_FLOOR_KEY, value=f"{1e3 * self.logic.limits.stale_s:.0f}")]
             + [KeyValue(key=LOSS_LIMIT_KEY, value=f"{1e3 * self.logic.limits.loss_s:.0f}")],
         )
         array = DiagnosticArray(status=[status])

@@ -4,6 +4,8 @@ supervisor keeps up; the rate caps the pace; a finger that stops answering is le
 
 from __future__ import annotations
 
+import inspect
+
 import pytest
 
 from hems_ros.graph.lockstep_clock import LockstepClock
@@ -74,3 +76,11 @@ def test_before_anything_answers_it_runs_at_the_cap_or_real_time():
     clock = LockstepClock(("index",), start_s=1.0, step_s=0.01, rate=0.0)
     assert clock.try_advance(5.0) is None
     assert clock.try_advance(5.011) == pytest.approx(1.01)
+
+
+def test_no_step_outruns_the_units_permission():
+    from hems_ros.graph.unit_driver import UnitDriver
+
+    permission_s = inspect.signature(UnitDriver).parameters["permission_timeout_s"].default
+    clock = LockstepClock(("index",))
+    assert clock.supervisor_lag_s + clock.step_s < permission_s

@@ -78,3 +78,7 @@ def test_a_finger_heard_without_its_state_or_force_keeps_the_snapshot_listening_
     row = next(line for line in lines if line.startswith("index"))
     assert row.split()[4:6] == ["12.00", "4.00"]
     assert lines[-1].startswith("stream gaps while ENABLED: 2 gaps, longest 71 ms (index encoder)")
+    snap.diagnostics = [("ready", "true"), ("gap floor ms", "50"), ("loss limit ms", "400")]
+    assert format_status(snap).splitlines()[-1] == (
+        "stream gaps while ENABLED: no gap over 50 ms; a stream silent for 400 ms faults"
+    )
