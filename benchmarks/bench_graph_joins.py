@@ -236,7 +236,7 @@ def main() -> None:
     parser.add_argument(
         "--layouts",
         default="separate,composed",
-        help="comma-separated layouts: separate (hems up), composed (default both)",
+        help="comma-separated layouts: separate (hems up --separate), composed (default both)",
     )
     parser.add_argument(
         "--markdown", type=Path, default=None, help="also write the result table to this file"
