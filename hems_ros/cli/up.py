@@ -12,7 +12,7 @@ from pathlib import Path
 
 from hems_ros.cli.numbers import add_namespace_argument, positive, positive_or_max
 from hems_ros.graph import names
-from hems_ros.launcher import Graph, GraphOptions, default_params_file
+from hems_ros.launcher import Graph, GraphOptions, default_params_file, node_specs
 from hems_ros.rosenv import child_environment, die_with_parent
 
 
@@ -175,7 +175,8 @@ def register(subparsers) -> None:
 
 def layout_text(options: GraphOptions) -> str:
     """How the graph's nodes run, in a few words."""
-    return "composed in one process" if options.composed else "one process per node"
+    nodes = len(node_specs(options))
+    return f"{nodes} nodes in one process" if options.composed else f"{nodes} node processes"
 
 
 def readiness_watcher(options: GraphOptions, started: float) -> subprocess.Popen:
@@ -217,9 +218,8 @@ def run(args: argparse.Namespace) -> int:
         recorder = RecorderProcess(record, regex=record_regex(options.namespace))
         print(f"hems up: recording into {recorder.output}", flush=True)
     print(
-        f"hems up: {len(graph.processes)} processes "
-        f"({layout_text(options)}"
-        f"{f', sim time x{rate_text(options.rate)}' if options.sim_time else ''}); Ctrl-C to stop",
+        f"hems up: {layout_text(options)}"
+        f"{f', sim time x{rate_text(options.rate)}' if options.sim_time else ''}; Ctrl-C to stop",
         flush=True,
     )
     reported: set[str] = set()
@@ -243,7 +243,8 @@ def run(args: argparse.Namespace) -> int:
         t0 = time.monotonic()
         codes = graph.stop()
         print(
-            f"hems up: stopped {len(codes)} processes in {time.monotonic() - t0:.2f} s"
+            f"hems up: stopped {len(codes)} process{'es' if len(codes) != 1 else ''} "
+            f"in {time.monotonic() - t0:.2f} s"
             + (
                 f" (killed after the grace period: {', '.join(graph.killed)})"
                 if graph.killed
