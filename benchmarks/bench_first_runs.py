@@ -31,6 +31,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import busy as busy_option
 import smoke
 
 from hems_ros.rosenv import apply_network_defaults, use_private_domain
@@ -184,11 +185,11 @@ def main() -> None:
     parser.add_argument(
         "--separate", action="store_true", help="the 16 nodes in separate processes"
     )
-    parser.add_argument("--busy", action="store_true", help="a busy loop on one core throughout")
+    busy_option.add_option(parser)
     parser.add_argument("--kill-first", action="store_true", help="SIGKILL a graph before the runs")
     args = smoke.parse_args(parser, demos=0, typical=1)
     layout = ["--separate"] if args.separate else []
-    busy = subprocess.Popen(["python3", "-c", "while True: pass"]) if args.busy else None
+    busy = busy_option.start(args)
     scratch = Path(tempfile.mkdtemp(prefix="hems_bench_first_runs_"))
     try:
         conditions = [

@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+import busy as busy_option
 import smoke
 
 from hems_ros.rosenv import apply_network_defaults, use_private_domain
@@ -51,7 +51,6 @@ FLOORS = {  # layout: (CPU cores while enabled, RSS MiB)
     "composed": (0.35, 300.0),
 }
 P99_FLOOR_MS, MISSED_FLOOR_PCT = 5.0, 0.5
-BUSY_LOOP = ["python3", "-c", "while True: pass"]
 SETTLE_S = 5.0  # before each measured window (a shorter run: as long as the run)
 
 
@@ -252,11 +251,9 @@ def main() -> None:
         default="separate,composed",
         help="comma-separated modes to run: separate, composed (default both)",
     )
-    parser.add_argument(
-        "--busy", action="store_true", help="a busy Python loop on one core throughout"
-    )
+    busy_option.add_option(parser)
     args = smoke.parse_args(parser, seconds=2.0, modes="separate")
-    busy = subprocess.Popen(BUSY_LOOP) if args.busy else None
+    busy = busy_option.start(args)
     try:
         print(
             f"graph benchmark, {args.seconds:g} s enabled per mode"

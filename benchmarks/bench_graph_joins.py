@@ -31,6 +31,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+import busy as busy_option  # noqa: E402
 import smoke  # noqa: E402
 
 from hems_ros.rosenv import (  # noqa: E402
@@ -244,12 +245,10 @@ def main() -> None:
     parser.add_argument(
         "--json", type=Path, default=None, help="also write the results as JSON to this file"
     )
-    parser.add_argument(
-        "--busy", action="store_true", help="a busy Python loop on one core throughout"
-    )
+    busy_option.add_option(parser)
     args = smoke.parse_args(parser, joins=len(KINDS), layouts="composed")
     results = {}
-    busy = subprocess.Popen(["python3", "-c", "while True: pass"]) if args.busy else None
+    busy = busy_option.start(args)
     try:
         for layout in args.layouts.split(","):
             print(
