@@ -170,6 +170,7 @@ class SupervisorNode(LeanNode):
         super().__init__("supervisor", namespace=names.NAMESPACE, **node_kwargs)
         self.graph_ns = self.get_namespace()
         p = declare(self, PARAMETERS)
+        self.wall_clock = not self.get_parameter("use_sim_time").value
         self.fingers = tuple(p["fingers"])
         self.logic = SupervisorLogic(
             self.fingers,
@@ -202,7 +203,7 @@ class SupervisorNode(LeanNode):
                 self.subscribe_serialized(
                     ControllerStatus,
                     names.topic(finger, "controller_status", self.graph_ns),
-                    lambda m, f=finger: self.on_controller(f, m),
+                    lambda m, t=None, f=finger: self.on_controller(f, m, t),
                     qos.CONTROLLER_STATUS,
                 )
             )
@@ -210,7 +211,7 @@ class SupervisorNode(LeanNode):
                 self.subscribe_serialized(
                     ActuatorState,
                     names.sim_topic(finger, "state", self.graph_ns),
-                    lambda m, f=finger: self.on_state(f, m),
+                    lambda m, t=None, f=finger: self.on_state(f, m, t),
                     qos.SENSOR,
                 )
             )
@@ -233,8 +234,8 @@ class SupervisorNode(LeanNode):
         self.create_timer(1.0, self.publish_diagnostics)
         self.publish_status()
 
-    def on_controller(self, finger: str, message) -> None:
-        now = seconds(self)
+    def on_controller(self, finger: str, message, received_s: float | None = None) -> None:
+        now = seconds(self) if received_s is None else received_s
         self.logic.saw("heartbeat", finger, now)
         self.logic.sees_enabled(finger, "controller", message.active, now)
         self.logic.temperature(finger, message.wire_temperature_c)
@@ -257,8 +258,8 @@ class SupervisorNode(LeanNode):
             self.logic.unchanged("wire_force", finger, now)
         self.publish_if_changed()
 
-    def on_state(self, finger: str, message) -> None:
-        now = seconds(self)
+    def on_state(self, finger: str, message, received_s: float | None = None) -> None:
+        now = seconds(self) if received_s is None else received_s
         self.logic.saw("unit state", finger, now)
         self.logic.watchdog(finger, message.watchdog_tripped, now)
         self.logic.sees_enabled(finger, "unit", message.heating_allowed, now)
@@ -290,9 +291,14 @@ class SupervisorNode(LeanNode):
         return response
 
     def take_reports(self) -> None:
-        """Take the controller status and unit state messages received since the last take."""
+        """Take the controller status and unit state messages received since the last take.
+
+        On the wall clock each counts from when the middleware received it: a check that ran
+        late (the process not scheduled for a while, on a busy host) then sees how the streams
+        came, not how late it looked at them; its own delay is no stream's gap. On sim time
+        the reception's system-clock time is not the graph's time: taken now."""
         for subscription in self.monitored:
-            self.drain(subscription)
+            self.drain(subscription, with_reception_time=self.wall_clock)
 
     def check(self) -> None:
         self.take_reports()

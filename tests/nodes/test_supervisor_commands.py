@@ -26,8 +26,14 @@ def test_enable_judges_the_reports_received_since_the_last_check(context, matche
             helper, ControllerStatus, "/hems/index/controller_status", qos.CONTROLLER_STATUS
         )
         unit = matched_publisher(helper, ActuatorState, "/hems/sim/index/state", qos.SENSOR)
-        # a controller's report with fresh readings and the unit's state, queued while no
-        # check runs (the node is not spun, so its 20 ms check never takes them)
+        # the unit's state and a controller's report with fresh readings, queued while no
+        # check runs (the node is not spun, so its 20 ms check never takes them); each counts
+        # from its reception, so the report comes last, as it would within 20 ms of enable
+        state = ActuatorState(finger="index", watchdog_tripped=False)
+        state.header.stamp = to_msg(time.time())
+        for _ in range(3):  # best effort: nothing acknowledges it, so it goes more than once
+            unit.publish(state)
+            time.sleep(0.01)
         now = to_msg(time.time())
         publisher.publish(
             ControllerStatus(
@@ -39,12 +45,8 @@ def test_enable_judges_the_reports_received_since_the_last_check(context, matche
                 force_stamp=now,
             )
         )
-        state = ActuatorState(finger="index", watchdog_tripped=False)
-        state.header.stamp = now
         assert publisher.wait_for_all_acked(Duration(seconds=5))
-        for _ in range(3):  # best effort: nothing acknowledges it, so it goes more than once
-            unit.publish(state)
-            time.sleep(0.03)
+        time.sleep(0.01)
         response = supervisor.on_command("enable", Trigger.Response())
         assert response.success, response.message
         assert supervisor.logic.state.name == "ENABLED"
