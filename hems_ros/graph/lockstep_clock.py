@@ -8,14 +8,10 @@ sample with a duty command, and the supervisor's status is no older than
 ``supervisor_lag_s``. A run's figures then follow from its inputs, not from how fast the host
 is: ``rate`` only caps the pace (0: as fast as the graph answers).
 
-A finger takes part from its controller's first answer to one of the unit's two latest
-samples. One that does not answer within ``stall_s`` of wall time (a killed controller) is
-left out, so the rest go on, and takes part again from such an answer; such stalls are
-counted. Until a finger takes part the clock runs at real time at most, as the graph comes
-up, and still waits for the sample of each step from a unit that has sent one: a unit whose
-clock moved on by several steps at one tick would find its controller's last answer more
-than the duty watchdog's three periods old (a slow start-up on a busy host), and the answer
-to its newest sample would never be in before the clock moved on again.
+A finger takes part from its controller's first answer. One that does not answer within
+``stall_s`` of wall time (a killed controller) is left out, so the rest go on, and takes
+part again from its next answer to its latest sample; such stalls are counted. Until a
+finger takes part the clock runs at real time at most, as the graph comes up.
 """
 
 from __future__ import annotations
@@ -40,10 +36,7 @@ class LockstepClock:
     step_s: float = 0.01
     rate: float = 1.0  # simulated s per wall s at most; 0: no cap
     stall_s: float = 5.0
-    # the units' permission lapses 35 ms after the last status (UnitDriver): the next step
-    # must come within that of the status the clock waited for, or the heating would pause
-    # on a host too slow for the pace, and the figures would follow the host
-    supervisor_lag_s: float = 0.02
+    supervisor_lag_s: float = 0.2
     now_s: float = field(init=False)
     stalls: int = field(default=0, init=False)
     steps: int = field(default=0, init=False)
@@ -73,34 +66,26 @@ class LockstepClock:
         state.answered_s = measurement_s
         self._join(state)
 
-    def _join(self, state: FingerState) -> None:
-        # the controller answers one of the unit's two latest samples (whichever message came
-        # first): the step waits for the answer to the latest from then on
-        if not state.joined and 0 <= state.encoder_s - state.answered_s < self.step_s + EPS_S:
+    @staticmethod
+    def _join(state: FingerState) -> None:
+        # the controller answers the unit's latest sample (whichever of the two came first)
+        if not state.joined and abs(state.answered_s - state.encoder_s) < EPS_S:
             state.joined = True
 
     def supervisor(self, stamp_s: float) -> None:
         self.supervisor_s = stamp_s
 
     # the clock ---------------------------------------------------------------
-    def _sampled(self, state: FingerState) -> bool:
-        return self.now_s - self.step_s + EPS_S < state.encoder_s <= self.now_s + EPS_S
-
     def _finger_done(self, state: FingerState) -> bool:
         return (
-            self._sampled(state)
+            self.now_s - self.step_s + EPS_S < state.encoder_s <= self.now_s + EPS_S
             and abs(state.answered_s - state.encoder_s) < EPS_S
             and abs(state.force_s - state.encoder_s) < EPS_S
         )
 
-    def _waits_for(self, state: FingerState) -> bool:
-        if state.joined:
-            return not self._finger_done(state)
-        return state.encoder_s >= 0 and not self._sampled(state)
-
     def waiting_for(self) -> list[str]:
         """What the current step still waits for (empty: it may advance)."""
-        waiting = [f for f, s in self.state.items() if self._waits_for(s)]
+        waiting = [f for f, s in self.state.items() if s.joined and not self._finger_done(s)]
         if (
             self.supervisor_s is not None
             and self.supervisor_s < self.now_s - self.supervisor_lag_s - EPS_S
@@ -125,9 +110,7 @@ class LockstepClock:
             self.stalls += 1
             for finger in waiting:
                 if finger in self.state:
-                    # not waited for again until its unit sends a sample
                     self.state[finger].joined = False
-                    self.state[finger].encoder_s = -1.0
             if "supervisor" in waiting:
                 self.supervisor_s = None
         # nothing answering yet: the graph is starting; real time at most, which the nodes
