@@ -166,7 +166,6 @@ class ActuationUnitNode(LeanNode):
         # the shoulder module measures this unit's wire tension with its own noisy sensor; the
         # model's sensor reading is not published here, and noiseless it costs no draws
         physics = physics.replace({"force_sensor.noise_std_n": 0.0})
-        self.wall_clock = not self.get_parameter("use_sim_time").value
         tick = create_grid_timer(
             self,
             p["tick_period_s"],

@@ -46,6 +46,8 @@ class LeanNode(Node):
         self.__created = True
         self._unreadable_logged: dict[str, float] = {}
         self.polled: frozenset = frozenset()
+        # on the system clock (not /clock): messages may count from their reception times
+        self.wall_clock = not self.get_parameter("use_sim_time").value
 
     def poll(self, *subscriptions) -> None:
         """Leave these subscriptions out of lean_spin's wait set from now on: the node drains

@@ -170,7 +170,6 @@ class SupervisorNode(LeanNode):
         super().__init__("supervisor", namespace=names.NAMESPACE, **node_kwargs)
         self.graph_ns = self.get_namespace()
         p = declare(self, PARAMETERS)
-        self.wall_clock = not self.get_parameter("use_sim_time").value
         self.fingers = tuple(p["fingers"])
         self.logic = SupervisorLogic(
             self.fingers,
