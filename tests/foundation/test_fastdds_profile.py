@@ -101,3 +101,49 @@ def test_the_profile_parses_and_spares_the_event_thread_a_wake_up_per_sample(ros
     # 50 ms window at 200 Hz about twice per eleven samples
     assert default >= SAMPLES
     assert ours <= 0.5 * SAMPLES
+
+
+# An idle node process: after a second to settle, the most voluntary context switches one of
+# its shared-memory listener threads made in two seconds.
+IDLE_LISTENER = textwrap.dedent("""
+    import os, time
+    import rclpy
+
+    def listener_switches():
+        counts = []
+        for tid in os.listdir("/proc/self/task"):
+            with open(f"/proc/self/task/{tid}/comm") as comm:
+                name = comm.read().strip()
+            if not name.startswith("dds.shm.") or name == "dds.shm.wdog":
+                continue
+            with open(f"/proc/self/task/{tid}/status") as status:
+                counts.append(sum(
+                    int(line.split()[1]) for line in status if line.startswith("voluntary_ctxt")
+                ))
+        return counts
+
+    rclpy.init()
+    node = rclpy.create_node("idle_listener")
+    time.sleep(1.0)
+    before = listener_switches()
+    time.sleep(2.0)
+    print("WAKES", max(b - a for a, b in zip(before, listener_switches())), flush=True)
+""")
+
+
+def idle_listener_wakes(env: dict[str, str]) -> int:
+    out = subprocess.run(
+        [sys.executable, "-c", IDLE_LISTENER], env=env, text=True, capture_output=True, timeout=60
+    ).stdout
+    return int(next(line for line in out.splitlines() if line.startswith("WAKES")).split()[1])
+
+
+def test_a_shared_memory_listener_sleeps_50_ms_at_most(ros_domain_id):
+    """A listener wakes on a writer's signal or at a third of healthy_check_timeout_ms; when
+    a signal is lost, the message waits for that timeout (see the file's comment)."""
+    with_profile = child_environment()
+    default = idle_listener_wakes(dict(with_profile, **{PROFILES_VARIABLE: ""}))
+    ours = idle_listener_wakes(with_profile)
+    # two seconds of 333 ms sleeps (Fast DDS's default) make 6, of 50 ms sleeps 40
+    assert default <= 8, default
+    assert ours >= 25, ours
