@@ -1,6 +1,7 @@
-"""config/fastdds_profiles.xml takes effect: Fast DDS parses it without complaint, and a
+"""config/fastdds_profiles.xml takes effect: Fast DDS parses it without complaint, a
 reliable writer sending to a reader in another process no longer wakes its participant's
-event thread at every sample (the nack-suppression timer, see the file's comment)."""
+event thread at every sample (the nack-suppression timer), and a shared-memory listener
+sleeps 50 ms at most (see the file's comments)."""
 
 from __future__ import annotations
 
