@@ -16,24 +16,31 @@ SAMPLES = 200
 
 # A writer process: waits for the test's reader, sends SAMPLES reliable messages at 200 Hz,
 # then prints its event thread's voluntary context switches during the sending.
-WRITER = textwrap.dedent(f"""
-    import os, time
+# Opens both test scripts: each thread's voluntary context switches, by (thread id, name).
+THREAD_SWITCHES = textwrap.dedent("""
+    import os
+
+    def thread_switches():
+        counts = {}
+        for tid in os.listdir("/proc/self/task"):
+            with open(f"/proc/self/task/{tid}/comm") as comm:
+                name = comm.read().strip()
+            with open(f"/proc/self/task/{tid}/status") as status:
+                counts[tid, name] = sum(
+                    int(line.split()[1]) for line in status if line.startswith("voluntary_ctxt")
+                )
+        return counts
+""")
+
+WRITER = THREAD_SWITCHES + textwrap.dedent(f"""
+    import time
     import rclpy
     import rclpy.duration
     from std_msgs.msg import Int32
     from rclpy.qos import QoSProfile, ReliabilityPolicy
 
     def event_thread_switches():
-        total = 0
-        for tid in os.listdir("/proc/self/task"):
-            with open(f"/proc/self/task/{{tid}}/comm") as comm:
-                if not comm.read().startswith("dds.ev"):
-                    continue
-            with open(f"/proc/self/task/{{tid}}/status") as status:
-                total += sum(
-                    int(line.split()[1]) for line in status if line.startswith("voluntary_ctxt")
-                )
-        return total
+        return sum(n for (_, name), n in thread_switches().items() if name.startswith("dds.ev"))
 
     rclpy.init()
     node = rclpy.create_node("profile_writer")
@@ -106,29 +113,23 @@ def test_the_profile_parses_and_spares_the_event_thread_a_wake_up_per_sample(ros
 
 # An idle node process: after a second to settle, the most voluntary context switches one of
 # its shared-memory listener threads made in two seconds.
-IDLE_LISTENER = textwrap.dedent("""
-    import os, time
+IDLE_LISTENER = THREAD_SWITCHES + textwrap.dedent("""
+    import time
     import rclpy
 
     def listener_switches():
-        counts = []
-        for tid in os.listdir("/proc/self/task"):
-            with open(f"/proc/self/task/{tid}/comm") as comm:
-                name = comm.read().strip()
-            if not name.startswith("dds.shm.") or name == "dds.shm.wdog":
-                continue
-            with open(f"/proc/self/task/{tid}/status") as status:
-                counts.append(sum(
-                    int(line.split()[1]) for line in status if line.startswith("voluntary_ctxt")
-                ))
-        return counts
+        return {
+            key: n for key, n in thread_switches().items()
+            if key[1].startswith("dds.shm.") and key[1] != "dds.shm.wdog"
+        }
 
     rclpy.init()
     node = rclpy.create_node("idle_listener")
     time.sleep(1.0)
     before = listener_switches()
     time.sleep(2.0)
-    print("WAKES", max(b - a for a, b in zip(before, listener_switches())), flush=True)
+    after = listener_switches()
+    print("WAKES", max(after[key] - before[key] for key in before if key in after), flush=True)
 """)
 
 
