@@ -16,7 +16,7 @@ from pathlib import Path
 from hems_ros.graph import names
 from hems_ros.nodes.runner import NO_PARAMETER_SERVICES_FLAG
 from hems_ros.paths import config_path
-from hems_ros.processes import stop_processes
+from hems_ros.processes import exit_description, stop_processes
 from hems_ros.rosenv import child_environment, die_with_parent
 
 
@@ -199,7 +199,7 @@ class Graph:
             return message
         return (
             f"{message} (exited: "
-            + ", ".join(f"{name} with code {code}" for name, code in exited)
+            + ", ".join(f"{name} {exit_description(code)}" for name, code in exited)
             + ")"
         )
 

@@ -39,3 +39,14 @@ def stop_process(
     """:func:`stop_processes` for one child; its exit code."""
     stop_processes([process], grace_s, signum)
     return process.returncode
+
+
+def exit_description(code: int) -> str:
+    """How a child ended, for a message: 'with code 2', or 'killed by SIGSEGV' for a negative
+    return code (Popen's way of saying that signal ended it)."""
+    if code >= 0:
+        return f"with code {code}"
+    try:
+        return f"killed by {signal.Signals(-code).name}"
+    except ValueError:
+        return f"killed by signal {-code}"

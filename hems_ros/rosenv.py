@@ -66,6 +66,9 @@ def child_environment(
     one of their own."""
     env = dict(os.environ)
     apply_network_defaults(env)
+    # a child that dies by a signal (a crash inside the middleware or a compiled kernel)
+    # prints the Python stack of each of its threads to the stderr it shares with the caller
+    env.setdefault("PYTHONFAULTHANDLER", "1")
     if env[PROFILES_VARIABLE] == str(config_path(PROFILES_FILE)):
         env[PROFILES_VARIABLE] = str(config_path(profiles))
     if extra:

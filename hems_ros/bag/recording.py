@@ -24,7 +24,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from hems_ros.bag.reader import BagInfo, bag_info
-from hems_ros.processes import stop_process
+from hems_ros.processes import exit_description, stop_process
 from hems_ros.rosenv import RECORDER_PROFILES_FILE, child_environment, die_with_parent
 
 READY_MARK = "]: recording "
@@ -110,7 +110,7 @@ class RecorderProcess:
             while not wanted <= set(self.recording):
                 if self.process.poll() is not None and not self._reader.is_alive():
                     raise RuntimeError(
-                        f"recorder exited with code {self.process.returncode}: "
+                        f"recorder exited {exit_description(self.process.returncode)}: "
                         + " | ".join(self.log[-5:])
                     )
                 remaining = deadline - time.monotonic()
@@ -144,7 +144,8 @@ class RecorderProcess:
         self._reader.join(5.0)
         if self.process.returncode not in (0, -signal.SIGTERM):
             raise RuntimeError(
-                f"recorder exited with code {self.process.returncode}: " + " | ".join(self.log[-5:])
+                f"recorder exited {exit_description(self.process.returncode)}: "
+                + " | ".join(self.log[-5:])
             )
         self.result = bag_info(self.output)
         return self.result

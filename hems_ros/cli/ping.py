@@ -9,7 +9,7 @@ import sys
 import time
 
 from hems_ros.cli.numbers import positive, positive_int
-from hems_ros.processes import stop_process
+from hems_ros.processes import exit_description, stop_process
 from hems_ros.rosenv import child_environment
 
 
@@ -143,5 +143,5 @@ def run(args: argparse.Namespace) -> int:
         if responder is not None:
             code = stop_process(responder)
             if code not in (0, None):
-                print(f"ping: ping_responder exited with code {code}", file=sys.stderr)
+                print(f"ping: ping_responder exited {exit_description(code)}", file=sys.stderr)
     return report(result)

@@ -13,6 +13,7 @@ from pathlib import Path
 from hems_ros.cli.numbers import add_namespace_argument, positive, positive_or_max
 from hems_ros.graph import names
 from hems_ros.launcher import Graph, GraphOptions, default_params_file, node_specs
+from hems_ros.processes import exit_description
 from hems_ros.rosenv import child_environment, die_with_parent
 
 
@@ -231,7 +232,11 @@ def run(args: argparse.Namespace) -> int:
             for name, code in graph.exited().items():
                 if name not in reported:
                     reported.add(name)
-                    print(f"hems up: {name} exited with code {code}", file=sys.stderr, flush=True)
+                    print(
+                        f"hems up: {name} exited {exit_description(code)}",
+                        file=sys.stderr,
+                        flush=True,
+                    )
             if len(reported) == len(graph.processes):
                 break
             time.sleep(0.05)

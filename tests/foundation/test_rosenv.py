@@ -23,6 +23,27 @@ def test_child_environment_carries_the_test_domain(ros_domain_id):
     assert 11 <= ros_domain_id <= 100
 
 
+def test_a_child_that_crashes_prints_its_python_stack_and_is_named_by_its_signal():
+    import subprocess
+
+    from hems_ros.processes import exit_description
+
+    crash = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import ctypes\ndef read_null():\n    ctypes.string_at(0)\nread_null()",
+        ],
+        env=child_environment(),
+        capture_output=True,
+        text=True,
+    )
+    assert exit_description(crash.returncode) == "killed by SIGSEGV"
+    assert "Fatal Python error: Segmentation fault" in crash.stderr
+    assert "in read_null" in crash.stderr
+    assert exit_description(3) == "with code 3"
+
+
 def test_fast_dds_reads_the_project_profiles_unless_the_user_named_a_file():
     from hems_ros.rosenv import PROFILES_VARIABLE
 

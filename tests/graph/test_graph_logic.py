@@ -547,7 +547,7 @@ def test_a_graph_that_does_not_come_up_names_the_nodes_that_exited():
     finally:
         graph.stop()
         graph.processes["running"].stdout.close()
-    assert graph.with_exits("x") == "x (exited: crashed with code 3, running with code -15)"
+    assert graph.with_exits("x") == "x (exited: crashed with code 3, running killed by SIGTERM)"
 
 
 def test_the_log_level_reaches_every_node_separate_or_composed():
