@@ -169,7 +169,7 @@ def test_stop_twice_gives_the_same_bag_and_an_error_leaving_the_block_stays_the_
         publisher.wait()
     assert recorder.process.returncode == -9
     assert any(
-        "stopping the recorder failed" in note and "code -9" in note
+        "stopping the recorder failed" in note and "killed by SIGKILL" in note
         for note in raised.value.__notes__
     )
 
