@@ -118,7 +118,9 @@ def typical(layout: list[str]) -> Run:
         (line for line in status.stdout.splitlines() if line.startswith("supervisor:")), ""
     )
     valid = enable.returncode == 0 and setpoint.returncode == 0 and "ENABLED" in state
-    detail = "" if valid else (enable.stderr + setpoint.stderr).strip().splitlines()[-1:] or [state]
+    # the first step that failed says why (an enable that gave up names the missing streams)
+    failed = next((step for step in (enable, setpoint) if step.returncode != 0), None)
+    detail = failed.stderr.strip().splitlines()[-1:] if failed is not None else []
     longest, stream, limit = gaps_of(status.stdout)
     return Run(
         valid,
