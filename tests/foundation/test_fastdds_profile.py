@@ -16,7 +16,7 @@ SAMPLES = 200
 
 # A writer process: waits for the test's reader, sends SAMPLES reliable messages at 200 Hz,
 # then prints its event thread's voluntary context switches during the sending.
-# Opens both test scripts: each thread's voluntary context switches, by (thread id, name).
+# The start of both test scripts: each thread's voluntary context switches, by (thread id, name).
 THREAD_SWITCHES = textwrap.dedent("""
     import os
 
