@@ -19,6 +19,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 EPS_S = 1e-6
+#: wall time a finger's answer is waited for before it is left out (a stopped controller)
+STALL_S = 5.0
+#: how old the supervisor's latest status may be when the clock steps: its statuses come every
+#: 20 ms and a unit's heating permission lasts 35 ms from a status's stamp, so the status a unit
+#: needs to heat through the next 10 ms step has then been sent, and the unit waits for it
+SUPERVISOR_LAG_S = 0.02
 
 
 @dataclass
@@ -35,8 +41,8 @@ class LockstepClock:
     start_s: float = 1.0
     step_s: float = 0.01
     rate: float = 1.0  # simulated s per wall s at most; 0: no cap
-    stall_s: float = 5.0
-    supervisor_lag_s: float = 0.2
+    stall_s: float = STALL_S
+    supervisor_lag_s: float = SUPERVISOR_LAG_S
     now_s: float = field(init=False)
     stalls: int = field(default=0, init=False)
     steps: int = field(default=0, init=False)

@@ -28,8 +28,10 @@ sample either way, hems_ros.graph.unit_driver), at one wake-up a period instead 
 latency in /diagnostics is measured to the reception. The supervisor's statuses (every 20 ms)
 are taken at the ticks too, in the order the commands and they came, each from its own
 reception: an ESTOP stops the heating from the moment it came. On sim time (/clock)
-reception times are not in the node's clock, so commands are handled on arrival. On
-wall-clock time the ticks also fall on the clock's grid at the shoulder module's phase
+reception times are not in the node's clock, so commands are handled on arrival; with the
+lockstep clock the answer and the statuses are taken at the steps, and the unit waits for
+those the clock has made sure were sent, so a run's figures do not depend on the host's
+pace. On wall-clock time the ticks also fall on the clock's grid at the shoulder module's phase
 (hems_ros.graph.cadence.tick_delay).
 
 The duty, encoder, tension and state topics carry serialized messages (hems_ros.nodes.wire).
@@ -38,6 +40,7 @@ The duty, encoder, tension and state topics carry serialized messages (hems_ros.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from hems_msgs.msg import (
@@ -50,6 +53,7 @@ from hems_msgs.msg import (
 
 from hems_ros.graph import names
 from hems_ros.graph.cadence import Cadence, tick_delay
+from hems_ros.graph.lockstep_clock import STALL_S
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import seconds, stamp_now
@@ -60,7 +64,7 @@ from hems_ros.nodes.runner import run_node
 from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.physics import ActuationUnit, load_params
 
-LOCKSTEP_WAIT_S, LOCKSTEP_POLL_S = 0.05, 0.0002
+LOCKSTEP_POLL_S = 0.0002
 ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
 #: Encoder faults a test can inject at run time (``ros2 param set ... sensor_fault stuck_encoder``).
 SENSOR_FAULTS = ("", "stuck_encoder", "encoder_jump", "nan_encoder")
@@ -133,8 +137,9 @@ PARAMETERS = [
         "lockstep",
         False,
         "on sim time from the lockstep clock (hems up --sim-time): take the controller's answer "
-        "to the latest sample before each step, waiting for it up to 50 ms of wall time, since the "
-        "clock moved on only after it was sent",
+        "to the latest sample before each step, since the clock moved on only after it was sent; "
+        "waited for as long as the clock waits for it (5 s of wall time), from the controller's "
+        "first answer on",
         None,
         True,
     ),
@@ -208,20 +213,20 @@ class ActuationUnitNode(LeanNode):
         )
         # lockstep: answers are taken at the steps, each as if received at its sample
         self.lockstep = p["lockstep"] and not self.wall_clock
-        self.answering = True
+        # a finger takes part from its controller's first answer, as on the clock
+        self.answering = False
+        self.supervisor_keeps_up = True
         self.supervisor_sub = self.create_subscription(
             SupervisorStatus,
             names.supervisor_status_topic(self.graph_ns),
             self.on_supervisor,
-            qos.STATUS,
+            qos.STATUS_EACH,
         )
         # On the wall clock the unit wakes only for its ticks: what came since the last one is
         # taken there, in the order it came, each from its reception time (a status's 10 Hz
         # wake-up of six units cost as much as a tenth of their ticks)
-        if self.wall_clock:
+        if self.wall_clock or self.lockstep:
             self.poll(self.duty_sub, self.supervisor_sub)
-        elif self.lockstep:
-            self.poll(self.duty_sub)
         self.state_cadence = Cadence(p["state_period_s"], p["tick_period_s"])
         self.create_timer(1.0, self.publish_diagnostics)
         self.get_logger().info(f"{self.finger}: physics '{physics.name}', dt {p['physics_dt_s']} s")
@@ -261,8 +266,6 @@ class ActuationUnitNode(LeanNode):
         # (or start) the heating before the status came
         if self.wall_clock and received_s is None:
             self.drain(self.duty_sub, with_reception_time=True)
-        elif self.lockstep:
-            self.take_answer()
         self.advance_to(now)
         was_allowed = self.driver.permitted(now)
         self.driver.permit_heating(enabled, now)
@@ -277,6 +280,7 @@ class ActuationUnitNode(LeanNode):
             self.drain_in_order(self.duty_sub, self.supervisor_sub)
         elif self.lockstep:
             self.take_answer()
+            self.take_statuses(now)
         self.advance_to(now)
         if self.state_cadence.due(now):
             self.publish_state()
@@ -284,18 +288,41 @@ class ActuationUnitNode(LeanNode):
     def take_answer(self) -> None:
         """Lockstep: the clock took this step only after the controller had answered the
         latest sample, so the answer is here or on its way; it acts from its sample, as the
-        board's would. A controller that stopped answering is not waited for again until it
-        answers."""
+        board's would. A busy host only delays it, so it is waited for as long as the clock
+        waits; a controller that stopped answering is not waited for again until it answers."""
         at = self.driver.time_s
-        deadline = time.monotonic() + LOCKSTEP_WAIT_S
+        self.answering = self._wait_for(
+            lambda: self.drain(self.duty_sub, at=at),
+            lambda: self.driver.latest_sample_answered,
+            self.answering,
+        )
+
+    def take_statuses(self, now: float) -> None:
+        """Lockstep: the supervisor's statuses, each from its own stamp. The clock moves on only
+        while the supervisor's latest status is at most 20 ms old (``SUPERVISOR_LAG_S``), so a
+        status within the heating permission's timeout of ``now`` has been sent: it is waited
+        for, and a slow host does not pause the heating (it gave other figures at every rate).
+        One that does not come within the clock's stall time (a stopped supervisor) is not
+        waited for again until one comes; the permission lapses meanwhile."""
+        driver = self.driver
+        self.supervisor_keeps_up = self._wait_for(
+            lambda: self.drain(self.supervisor_sub, at=status_stamp),
+            lambda: driver.permission_s is None
+            or now - driver.permission_s <= driver.permission_timeout_s,
+            self.supervisor_keeps_up,
+        )
+
+    @staticmethod
+    def _wait_for(take: Callable[[], None], arrived: Callable[[], bool], waiting: bool) -> bool:
+        """Take messages until ``arrived`` (True), for up to the clock's stall time if
+        ``waiting``, else once (False unless it arrived)."""
+        deadline = time.monotonic() + STALL_S
         while True:
-            self.drain(self.duty_sub, at=at)
-            if self.driver.latest_sample_answered:
-                self.answering = True
-                return
-            if not self.answering or time.monotonic() >= deadline:
-                self.answering = False
-                return
+            take()
+            if arrived():
+                return True
+            if not waiting or time.monotonic() >= deadline:
+                return False
             time.sleep(LOCKSTEP_POLL_S)
 
     def advance_to(self, now: float) -> None:
@@ -419,6 +446,10 @@ class ActuationUnitNode(LeanNode):
         array = DiagnosticArray(status=[status])
         array.header.stamp = stamp_now(self)
         self.diagnostics_pub.publish(array)
+
+
+def status_stamp(message: SupervisorStatus) -> float:
+    return seconds_of(message.header.stamp.sec, message.header.stamp.nanosec)
 
 
 def main() -> int:

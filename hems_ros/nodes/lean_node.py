@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import functools
 import time
+from collections.abc import Callable
+from typing import Any
 
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
@@ -59,19 +61,25 @@ class LeanNode(Node):
             lean_spin.polled_changed()
 
     def drain(
-        self, subscription, with_reception_time: bool = False, at: float | None = None
+        self,
+        subscription,
+        with_reception_time: bool = False,
+        at: float | Callable[[Any], float] | None = None,
     ) -> None:
         """Run ``subscription``'s callback on every message queued for it, oldest first.
 
         ``with_reception_time``: the callback also gets the time the middleware received the
         message (s, system clock, the ROS clock without sim time): when the node took it, at
         its own convenience, says nothing about when it came. ``at``: the callback gets this
-        time instead (a lockstep clock says when a message counts as received)."""
+        time instead, or this function of the message (a lockstep clock says when a message
+        counts as received)."""
         with subscription.handle:
             while (
                 taken := subscription.handle.take_message(subscription.msg_type, subscription.raw)
             ) is not None:
-                if at is not None:
+                if callable(at):
+                    subscription.callback(taken[0], at(taken[0]))
+                elif at is not None:
                     subscription.callback(taken[0], at)
                 elif with_reception_time:
                     subscription.callback(taken[0], taken[1]["received_timestamp"] * 1e-9)

@@ -22,6 +22,12 @@ COMMAND = QoSProfile(
 STATUS = QoSProfile(
     depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
 )
+# The same statuses for a unit, which takes them in a batch at its tick and runs its permission
+# from each one's time: kept to one, a late tick (a busy host) that found two took only the
+# newer, and the heating paused over the gap the older one had covered.
+STATUS_EACH = QoSProfile(
+    depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
+)
 # Duty commands: each supersedes the last within one control period, and the unit's watchdog
 # stops the heating after three periods without one, so a lost command needs no repair. A
 # reliable writer kept each in a history and traded heartbeats and acknowledgements with the

@@ -22,7 +22,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
 from hems_ros.graph import names
-from hems_ros.graph.lockstep_clock import LockstepClock
+from hems_ros.graph.lockstep_clock import STALL_S, LockstepClock
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import from_msg, to_msg
 from hems_ros.nodes.lean_node import LeanNode
@@ -69,7 +69,7 @@ PARAMETERS = [
     ),
     Spec(
         "stall_s",
-        5.0,
+        STALL_S,
         "lockstep: a finger that has not answered for this long (wall clock, s) is left out "
         "until it answers again (a stopped controller; a busy host only slows the clock down)",
         PERIOD_LIMIT,

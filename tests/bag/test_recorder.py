@@ -331,8 +331,9 @@ def test_a_recorder_stopped_while_it_subscribes_still_finishes_its_bag(
 ) -> None:
     # SIGTERM right after the first topic was reported subscribed: the recorder was still
     # subscribing in its constructor, whose next rcl call failed on the shut-down context, and
-    # the bag was left at its 41-byte header (once in a full `make test` on a busy host)
-    publisher = publish(count=3000, rate=500.0)
+    # the bag was left at its 41-byte header (once in a full `make test` on a busy host).
+    # The publisher outlasts five recorder start-ups on a slow host; it is killed at the end.
+    publisher = publish(count=60_000, rate=500.0)
     try:
         for attempt in range(5):
             recorder = RecorderProcess(tmp_path / f"early_{attempt}", topics=TOPICS)
@@ -361,7 +362,7 @@ def test_a_recorder_ends_with_the_process_that_started_it(
         f"RecorderProcess\nr = RecorderProcess(Path({str(output)!r}), topics={TOPICS!r})\n"
         f"r.wait_for_topics({TOPICS[:1]!r})\nprint(r.process.pid, flush=True)\ntime.sleep(120)\n"
     )
-    publisher = publish(count=3000, rate=500.0)
+    publisher = publish(count=60_000, rate=500.0)  # outlasts any start-up; killed at the end
     parent = subprocess.Popen(
         [sys.executable, "-c", script], env=child_environment(), stdout=subprocess.PIPE, text=True
     )

@@ -74,3 +74,17 @@ def test_before_anything_answers_it_runs_at_the_cap_or_real_time():
     clock = LockstepClock(("index",), start_s=1.0, step_s=0.01, rate=0.0)
     assert clock.try_advance(5.0) is None
     assert clock.try_advance(5.011) == pytest.approx(1.01)
+
+
+def test_the_supervisor_lag_leaves_a_status_sent_that_keeps_a_unit_heating_through_a_step():
+    # a unit waits for the status that keeps its heating permission over the next step: the
+    # clock's limit on the supervisor's lag must leave that status sent
+    import yaml
+
+    from hems_ros.paths import config_path
+    from hems_ros.graph.lockstep_clock import SUPERVISOR_LAG_S
+
+    shared = yaml.safe_load(config_path("hems.yaml").read_text())["/**"]["ros__parameters"]
+    step_s = LockstepClock(("index",)).step_s
+    assert step_s == shared["encoder_period_s"]
+    assert SUPERVISOR_LAG_S + step_s <= shared["supervisor_timeout_s"]
