@@ -81,8 +81,8 @@ def test_the_supervisor_lag_leaves_a_status_sent_that_keeps_a_unit_heating_throu
     # clock's limit on the supervisor's lag must leave that status sent
     import yaml
 
-    from hems_ros.paths import config_path
     from hems_ros.graph.lockstep_clock import SUPERVISOR_LAG_S
+    from hems_ros.paths import config_path
 
     shared = yaml.safe_load(config_path("hems.yaml").read_text())["/**"]["ros__parameters"]
     step_s = LockstepClock(("index",)).step_s
