@@ -210,6 +210,15 @@ class UnitDriver:
             self.permission_s = self.permitted_since_s = None
             self.applied_duty = 0.0
 
+    def permission_lapses_by(self, now_s: float) -> bool:
+        """Heating is allowed, but by ``now_s`` the latest status no longer covers it: a status
+        is due before the physics may run there with the heating on."""
+        return (
+            self.require_permission
+            and self.permission_s is not None
+            and now_s - self.permission_s > self.permission_timeout_s
+        )
+
     def permitted(self, now_s: float) -> bool:
         """The supervisor's ENABLED taken and not lapsed: what the unit reports as its
         permission (the supervisor faults a unit that has not taken its ENABLED)."""

@@ -304,11 +304,9 @@ class ActuationUnitNode(LeanNode):
         for, and a slow host does not pause the heating (it gave other figures at every rate).
         One that does not come within the clock's stall time (a stopped supervisor) is not
         waited for again until one comes; the permission lapses meanwhile."""
-        driver = self.driver
         self.supervisor_keeps_up = self._wait_for(
             lambda: self.drain(self.supervisor_sub, at=status_stamp),
-            lambda: driver.permission_s is None
-            or now - driver.permission_s <= driver.permission_timeout_s,
+            lambda: not self.driver.permission_lapses_by(now),
             self.supervisor_keeps_up,
         )
 

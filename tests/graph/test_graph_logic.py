@@ -684,3 +684,13 @@ def test_advancing_at_one_gated_duty_gives_the_bits_of_gating_every_step():
             gated.watchdog_tripped,
             gated.permission_lapses,
         )
+
+
+def test_a_status_is_due_only_while_heating_is_allowed_and_the_last_one_runs_out():
+    driver = UnitDriver(ActuationUnit(load_params("ch6_hems_index")), start_time_s=100.0)
+    assert not driver.permission_lapses_by(101.0)  # nothing allowed: nothing to keep
+    driver.permit_heating(True, 100.0)
+    assert not driver.permission_lapses_by(100.035)
+    assert driver.permission_lapses_by(100.036)
+    driver.permit_heating(False, 100.02)
+    assert not driver.permission_lapses_by(101.0)
