@@ -30,9 +30,16 @@ def _snapshot(namespace: str):
 
     with GraphClient("hems_test_two_hands", namespace=namespace) as client:
         assert not client.fingers_without_readers((FINGER,), timeout=60.0)
-        return client.snapshot(
-            fingers=(FINGER,), seconds=1.0, supervisor_wait_s=30.0
-        ), client.node.get_topic_names_and_types()
+        snapshot = client.snapshot(fingers=(FINGER,), seconds=1.0, supervisor_wait_s=30.0)
+        # a new participant learns the other hand's topics by discovery, which can take seconds
+        # on a busy host: the names it knows when its own hand answers may still lack them
+        wanted = {names.topic(FINGER, "encoder", ns) for ns in ("/left", "/right")}
+        deadline = time.monotonic() + 30.0
+        while not wanted <= {n for n, _ in client.node.get_topic_names_and_types()}:
+            if time.monotonic() > deadline:
+                break
+            client.spin_for(0.2)
+        return snapshot, client.node.get_topic_names_and_types()
 
 
 def test_verbs_with_a_namespace_move_one_hand_and_leave_the_other_untouched(ros_domain_id, venv):
