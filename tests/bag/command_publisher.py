@@ -76,6 +76,8 @@ def main() -> int:
             rclpy.spin_once(node, timeout_sec=0.01)
             if not args.until_taken or value in shown[-5:] or time.monotonic() > until:
                 break
+    taken = "" if not args.until_taken else f", taken: {value in shown}"
+    print(f"command_publisher: published {args.count}{taken}", flush=True)
     until = time.monotonic() + args.linger
     while (
         rclpy.ok() and time.monotonic() < until

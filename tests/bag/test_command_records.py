@@ -7,21 +7,18 @@ from __future__ import annotations
 
 import math
 import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from bag_helpers import run_command_publisher
 
 from hems_ros.bag import load_bag
 from hems_ros.bag.recording import RecorderProcess
 from hems_ros.graph import names
-from hems_ros.rosenv import child_environment
 
 pytestmark = pytest.mark.slow
 
 FINGER = "index"
-COMMAND_SCRIPT = Path(__file__).resolve().parent / "command_publisher.py"
 CLI_SETPOINTS_MM = [2.0, 4.0, 6.0, 8.0, 10.0, 12.0]
 # short-lived writers, as a user running `ros2 topic pub -r 100` until the finger takes it: the
 # recorder, a third participant, may not have matched them in time
@@ -50,22 +47,9 @@ def test_every_setpoint_and_supervisor_call_is_in_the_bag(ros_domain_id, tmp_pat
                     timeout=120,
                 )
             for value in QUICK_SETPOINTS_MM:
-                result = subprocess.run(
-                    [
-                        sys.executable,
-                        str(COMMAND_SCRIPT),
-                        "--subscribers",
-                        "1",
-                        "--value",
-                        f"{value:g}",
-                        "--until-taken",
-                    ],
-                    env=child_environment(),
-                    capture_output=True,
-                    text=True,
-                    timeout=60,
+                run_command_publisher(
+                    "--subscribers", "1", "--value", f"{value:g}", "--until-taken"
                 )
-                assert result.returncode == 0, result.stderr
             client.call("estop")
             client.call("reset")
             client.spin_for(1.0)

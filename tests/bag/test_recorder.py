@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bag_helpers import PUBLISHER_SCRIPT
+from bag_helpers import COMMAND_SCRIPT, PUBLISHER_SCRIPT, run_command_publisher
 from synthetic_publisher import STATUS_TOPIC, STREAMS, expected_values
 
 from hems_ros.bag import load_bag
@@ -174,20 +174,6 @@ def test_stop_twice_gives_the_same_bag_and_an_error_leaving_the_block_stays_the_
     )
 
 
-COMMAND_SCRIPT = Path(__file__).resolve().parent / "command_publisher.py"
-
-
-def command(*args: str) -> None:
-    result = subprocess.run(
-        [sys.executable, str(COMMAND_SCRIPT), *args],
-        env=child_environment(),
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    assert result.returncode == 0, result.stderr
-
-
 @pytest.fixture
 def listener(ros_domain_id: int):
     """A subscription to /hems/index/setpoint, as a controller has: the topic is in the graph
@@ -225,7 +211,7 @@ def record_commands(output: Path, *args: str) -> tuple[RecorderProcess, object]:
     recorder = RecorderProcess(output, topics=["/hems/index/setpoint"], discovery_period=0.05)
     try:
         recorder.wait_for_topics(["/hems/index/setpoint"])  # no publisher in the graph yet
-        command(*args)
+        run_command_publisher(*args)
     finally:
         info = recorder.stop()
     return recorder, info

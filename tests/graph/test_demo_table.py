@@ -2,13 +2,17 @@
 the bag's own streams (joint states for tendon position and force, the unit's state for its
 energy accumulator, the controller's status for the phase starts) over the same phases.
 
-A composed one-finger demo keeps it short (marked slow).
+A composed one-finger demo keeps it short (marked slow). The recorder takes the best-effort
+streams in its own process, so on a busy host its bag may lack a sample the demo got: where
+that happens at the edge of the energy window, the printed figure is checked against the bounds
+the bag leaves (the unit's accumulator never decreases).
 """
 
 from __future__ import annotations
 
 import subprocess
 
+import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
@@ -61,7 +65,49 @@ def _from_bag(bag_path, plan: GraspPlan):
         trace.force_n.append(joints.effort[i])
     trace.energy_t.extend(state.stamp)
     trace.energy_j.extend(state["electrical_energy"])
-    return summarize(FINGER, trace, plan, tracker.starts), tracker.starts
+    return summarize(FINGER, trace, plan, tracker.starts), tracker.starts, status, state
+
+
+STATE_PERIOD_S = 0.05
+
+
+def _earliest_starts(status, starts: list[float]) -> list[float]:
+    """Each phase start, or the stamp of the recorded status before it where the bag lost the
+    statuses in between (the phase began at one of them)."""
+    stamps = status["encoder_stamp.sec"] + 1e-9 * status["encoder_stamp.nanosec"]
+    sequence = status["sequence"].astype(np.int64)
+    earliest = []
+    for start in starts:
+        i = int(np.argmin(np.abs(stamps - start)))
+        lost = i > 0 and sequence[i] - sequence[i - 1] != 1
+        earliest.append(float(stamps[i - 1]) if lost else start)
+    return earliest
+
+
+def _energy_bounds(state, start: tuple[float, float], end: tuple[float, float]):
+    """The least and most energy the bag allows between an instant in ``start`` and one in
+    ``end`` (each an earliest, latest pair): the accumulator read at the samples outside."""
+    t, e = np.asarray(state.stamp), np.asarray(state["electrical_energy"])
+
+    def at_or_before(instant):
+        return e[np.searchsorted(t, instant, side="right") - 1]
+
+    def at_or_after(instant):
+        return e[np.searchsorted(t, instant, side="left")]
+
+    return (
+        at_or_before(end[0]) - at_or_after(start[1]),
+        at_or_after(end[1]) - at_or_before(start[0]),
+    )
+
+
+def _bag_lost_an_edge(state, edges: list[float]) -> bool:
+    t = np.asarray(state.stamp)
+    for instant in edges:
+        i = np.searchsorted(t, instant)
+        if t[i] - t[i - 1] > 1.5 * STATE_PERIOD_S:
+            return True
+    return False
 
 
 def test_the_printed_table_is_the_bags(ros_domain_id, venv, tmp_path):
@@ -91,17 +137,20 @@ def test_the_printed_table_is_the_bags(ros_domain_id, venv, tmp_path):
     )
     assert done.returncode == 0, done.stdout + done.stderr
     printed = _printed_row(done.stdout)
-    recorded, starts = _from_bag(bag_path, plan)
+    recorded, starts, status, state = _from_bag(bag_path, plan)
     assert len(starts) == 3
+    earliest = _earliest_starts(status, starts)
+    release_s = plan.phases()[-1][3]
+    window = ((earliest[0], starts[0]), (earliest[-1] + release_s, starts[-1] + release_s))
+    if earliest == starts and not _bag_lost_an_edge(state, [starts[0], starts[-1] + release_s]):
+        assert printed["energy_j"] == pytest.approx(recorded.energy_j, abs=0.1)
+    else:
+        least, most = _energy_bounds(state, *window)
+        assert least - 0.1 <= printed["energy_j"] <= most + 0.1, (least, most)
     # the whole grasp heats the wire: the table reads the accumulator between samples that
     # bracket it, so it holds all of the bag's energy over the run
-    total = load_bag(bag_path, topics=[names.sim_topic(FINGER, "state")])[
-        names.sim_topic(FINGER, "state")
-    ]
-    assert printed["energy_j"] == pytest.approx(recorded.energy_j, abs=0.1)
-    assert printed["energy_j"] == pytest.approx(
-        total["electrical_energy"][-1] - total["electrical_energy"][0], rel=0.02
-    )
+    total = state["electrical_energy"]
+    assert printed["energy_j"] == pytest.approx(total[-1] - total[0], rel=0.02)
     # the rest from the same joint states, as printed (three decimals; the live tool may miss
     # a best-effort sample the recorder got)
     for column in ("approach_rmse_mm", "position_rmse_mm", "hold_rmse_n", "force_rmse_n"):
