@@ -29,6 +29,7 @@ from hems_ros.rosenv import RECORDER_PROFILES_FILE, child_environment, die_with_
 
 READY_MARK = "]: recording "
 FINISHED_MARK = "]: bag finished: "
+HEARD_MARK = "]: first message on "
 
 
 def recorder_command(
@@ -73,6 +74,7 @@ class RecorderProcess:
     ) -> None:
         self.output = Path(output)
         self.recording: list[str] = []
+        self.heard: set[str] = set()  # topics of which a message reached the bag
         self.log: list[str] = []
         self.result: BagInfo | None = None
         self._changed = threading.Condition()
@@ -98,6 +100,8 @@ class RecorderProcess:
                 self.log.append(line.rstrip("\n"))
                 if READY_MARK in line:
                     self.recording.append(line.split(READY_MARK, 1)[1].split(" ", 1)[0])
+                elif HEARD_MARK in line:
+                    self.heard.add(line.split(HEARD_MARK, 1)[1].strip())
                 self._changed.notify_all()
         with self._changed:
             self._changed.notify_all()
@@ -105,9 +109,24 @@ class RecorderProcess:
     def wait_for_topics(self, topics: Iterable[str], timeout: float = 20.0) -> None:
         """Block until the recorder has subscribed to every topic in ``topics``."""
         wanted = set(topics)
+        self._wait_for(
+            lambda: wanted - set(self.recording), "recorder did not subscribe to {}", timeout
+        )
+
+    def wait_for_messages(self, topics: Iterable[str], timeout: float = 20.0) -> None:
+        """Block until a message of every topic in ``topics`` has reached the bag."""
+        wanted = set(topics)
+        self._wait_for(
+            lambda: wanted - self.heard, "no message of {} reached the recorder", timeout
+        )
+
+    def _wait_for(self, missing, what: str, timeout: float) -> None:
+        """Until ``missing()`` (read under the lock) is empty; TimeoutError naming them (``what``
+        formatted with their sorted list) after ``timeout`` s, RuntimeError when the recorder
+        exited."""
         deadline = time.monotonic() + timeout
         with self._changed:
-            while not wanted <= set(self.recording):
+            while missing():
                 if self.process.poll() is not None and not self._reader.is_alive():
                     raise RuntimeError(
                         f"recorder exited {exit_description(self.process.returncode)}: "
@@ -115,10 +134,7 @@ class RecorderProcess:
                     )
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
-                    raise TimeoutError(
-                        f"recorder did not subscribe to {sorted(wanted - set(self.recording))} "
-                        f"within {timeout:.0f} s"
-                    )
+                    raise TimeoutError(f"{what.format(sorted(missing()))} within {timeout:.0f} s")
                 self._changed.wait(min(remaining, 0.2))
 
     def wait(self, timeout: float | None = None) -> BagInfo:

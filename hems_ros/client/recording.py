@@ -18,6 +18,19 @@ def graph_topics(fingers, namespace: str = names.NAMESPACE) -> list[str]:
     return topics
 
 
+def periodic_topics(fingers, namespace: str = names.NAMESPACE) -> list[str]:
+    """The streams the graph publishes whether enabled or not, one message of each to be in
+    the bag before a run starts."""
+    topics = [names.supervisor_status_topic(namespace)]
+    for finger in fingers:
+        topics += [
+            names.topic(finger, "encoder", namespace),
+            names.topic(finger, "controller_status", namespace),
+            names.sim_topic(finger, "state", namespace),
+        ]
+    return topics
+
+
 def wait_until_recording(client, recorder, fingers, deadline: float) -> None:
     """Send every finger's controller its start setpoint (position 0), which creates the
     client's setpoint publishers, wait until ``recorder`` holds :func:`graph_topics`, setpoints
@@ -38,3 +51,8 @@ def wait_until_recording(client, recorder, fingers, deadline: float) -> None:
             "the recorder's setpoint readers did not match this tool's writers in time: "
             + ", ".join(names.topic(f, "setpoint", client.namespace) for f in unmatched)
         )
+    # a reader subscribed is not yet matched by the writers of the streams: the first
+    # states and statuses of a run went missing from a demo's bag on a slow host
+    recorder.wait_for_messages(
+        periodic_topics(fingers, client.namespace), timeout=max(1.0, deadline - time.monotonic())
+    )

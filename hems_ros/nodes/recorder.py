@@ -53,6 +53,7 @@ from hems_ros.nodes import lean_spin
 READY_PREFIX = "recording "
 BATCH_S = 0.02  # recorder loop: pause after each round, so that rounds find batches
 FINISHED_PREFIX = "bag finished: "
+HEARD_PREFIX = "first message on "
 
 
 def message_class(type_name: str) -> type:
@@ -118,6 +119,7 @@ class Recorder(Node):
             raise ValueError("chunk_size and queue_depth must be positive, duration >= 0")
         self._writer = BagWriter(output, compression=compression, chunk_size=chunk_size)
         self._recorded: dict[str, object] = {}
+        self._topics_heard: set[str] = set()
         self._channels: dict[
             object, tuple[int | None, type]
         ] = {}  # subscription -> (channel, class)
@@ -181,6 +183,7 @@ class Recorder(Node):
         # only for an executor that calls back per message; spin_until_expired drains instead
         def on_message(data: bytes) -> None:
             self._writer.write(self._channel(subscription), time.time_ns(), data)
+            self._heard(topic)
 
         subscription = self.create_subscription(cls, topic, on_message, qos, raw=True)
         self._recorded[topic] = subscription
@@ -238,13 +241,23 @@ class Recorder(Node):
         for count in range(self._depth):
             taken = take(cls, True)
             if taken is None:
+                if count:
+                    self._heard(subscription.topic_name)
                 return count
             if channel is None:
                 channel = self._channel(subscription)
             data, info = taken
             received = info["received_timestamp"] or time.time_ns()  # 0: the middleware gave none
             write(channel, received, data, info["source_timestamp"] or received)
+        self._heard(subscription.topic_name)
         return self._depth
+
+    def _heard(self, topic: str) -> None:
+        # once per topic: a tool that starts a run waits for these lines, so that its bag
+        # holds each stream from before the run (a reader subscribed is not yet matched)
+        if topic not in self._topics_heard:
+            self._topics_heard.add(topic)
+            self.get_logger().info(f"{HEARD_PREFIX}{topic}")
 
     def finish(self) -> None:
         if not hasattr(self, "_writer"):  # construction failed before the bag was opened

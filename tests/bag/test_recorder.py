@@ -63,9 +63,13 @@ def test_records_every_message_and_finishes_on_sigterm(ros_domain_id: int, tmp_p
     try:
         publisher = publish(count=2000, rate=1000.0)
         recorder.wait_for_topics(TOPICS)
+        recorder.wait_for_messages(STREAMS, timeout=20.0)
         counts = published_counts(publisher)
     finally:
         info = recorder.stop()
+    # each topic's first message is announced once, as a run's tool waits for it
+    assert recorder.heard == set(counts)
+    assert sum("first message on" in line for line in recorder.log) == len(counts)
     assert recorder.process.returncode in (0, -15)
     assert any("bag finished" in line for line in recorder.log)
     assert (output / "metadata.yaml").is_file()
@@ -211,6 +215,8 @@ def record_commands(output: Path, *args: str) -> tuple[RecorderProcess, object]:
     recorder = RecorderProcess(output, topics=["/hems/index/setpoint"], discovery_period=0.05)
     try:
         recorder.wait_for_topics(["/hems/index/setpoint"])  # no publisher in the graph yet
+        with pytest.raises(TimeoutError, match=r"no message of \['/hems/index/setpoint'\]"):
+            recorder.wait_for_messages(["/hems/index/setpoint"], timeout=0.3)
         run_command_publisher(*args)
     finally:
         info = recorder.stop()
