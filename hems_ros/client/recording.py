@@ -36,7 +36,8 @@ def wait_until_recording(client, recorder, fingers, deadline: float) -> None:
     client's setpoint publishers, wait until ``recorder`` holds :func:`graph_topics`, setpoints
     included, then until its setpoint readers have matched the client's writers, so that the
     run's first real setpoint is recorded (a subscribed reader not matched yet loses it: once
-    here a step's bag held one of its four setpoints). ``deadline`` is a time.monotonic()
+    here a step's bag held one of its four setpoints), and until a message of each of
+    :func:`periodic_topics` has reached the bag. ``deadline`` is a time.monotonic()
     value; TimeoutError when it passes, the recorder's RuntimeError passes through."""
     for finger in fingers:
         while not client.send_setpoint(finger, "position", 0.0) and time.monotonic() < deadline:
@@ -51,8 +52,8 @@ def wait_until_recording(client, recorder, fingers, deadline: float) -> None:
             "the recorder's setpoint readers did not match this tool's writers in time: "
             + ", ".join(names.topic(f, "setpoint", client.namespace) for f in unmatched)
         )
-    # a reader subscribed is not yet matched by the writers of the streams: the first
-    # states and statuses of a run went missing from a demo's bag on a slow host
+    # a subscribed reader need not have matched the streams' writers yet: on a slow host a
+    # demo's bag began its states and statuses after the approach had started
     recorder.wait_for_messages(
         periodic_topics(fingers, client.namespace), timeout=max(1.0, deadline - time.monotonic())
     )
