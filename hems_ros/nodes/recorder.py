@@ -120,6 +120,7 @@ class Recorder(Node):
         self._writer = BagWriter(output, compression=compression, chunk_size=chunk_size)
         self._recorded: dict[str, object] = {}
         self._topics_heard: set[str] = set()
+        self._subscriptions_heard: set[object] = set()  # spares the topic-name call per drain
         self._channels: dict[
             object, tuple[int | None, type]
         ] = {}  # subscription -> (channel, class)
@@ -238,19 +239,21 @@ class Recorder(Node):
         """
         channel, cls = self._channels[subscription]
         take, write = subscription.handle.take_message, self._writer.write
-        for count in range(self._depth):
+        count = 0
+        while count < self._depth:
             taken = take(cls, True)
             if taken is None:
-                if count:
-                    self._heard(subscription.topic_name)
-                return count
+                break
             if channel is None:
                 channel = self._channel(subscription)
             data, info = taken
             received = info["received_timestamp"] or time.time_ns()  # 0: the middleware gave none
             write(channel, received, data, info["source_timestamp"] or received)
-        self._heard(subscription.topic_name)
-        return self._depth
+            count += 1
+        if count and subscription not in self._subscriptions_heard:
+            self._subscriptions_heard.add(subscription)
+            self._heard(subscription.topic_name)
+        return count
 
     def _heard(self, topic: str) -> None:
         # once per topic: a tool that starts a run waits for these lines, so that its bag
