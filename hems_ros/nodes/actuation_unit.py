@@ -4,8 +4,8 @@ glove load, slider encoder (hems_ros.physics, integrated at 1 kHz of simulated t
 Subscribes
   /hems/<finger>/duty            hems_msgs/DutyCommand    best effort (on wall-clock time taken at
                                                           the ticks, see below)
-  /hems/supervisor/status        hems_msgs/SupervisorStatus  transient local (heating only
-                                                             while ENABLED)
+  /hems/supervisor/status        hems_msgs/SupervisorStatus  best effort, every 20 ms (heating
+                                                             only while ENABLED)
 Publishes
   /hems/<finger>/encoder         hems_msgs/EncoderReading  best effort, every encoder_period_s:
                                                            the drive board's packet (encoder,
@@ -39,6 +39,7 @@ The duty, encoder, tension and state topics carry serialized messages (hems_ros.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 
@@ -51,6 +52,7 @@ from hems_msgs.msg import (
     WireForce,
 )
 
+from hems_ros.codec.cdr import CdrError
 from hems_ros.graph import names
 from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.lockstep_clock import STALL_S
@@ -65,7 +67,9 @@ from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.physics import ActuationUnit, load_params
 
 LOCKSTEP_POLL_S = 0.0002
-ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
+ENCODER, TENSION, STATE, SUPERVISOR = (
+    codec(t) for t in (EncoderReading, WireForce, ActuatorState, SupervisorStatus)
+)
 #: Encoder faults a test can inject at run time (``ros2 param set ... sensor_fault stuck_encoder``).
 SENSOR_FAULTS = ("", "stuck_encoder", "encoder_jump", "nan_encoder")
 JUMP_M = 5e-3
@@ -216,7 +220,7 @@ class ActuationUnitNode(LeanNode):
         # a finger takes part from its controller's first answer, as on the clock
         self.answering = False
         self.supervisor_keeps_up = True
-        self.supervisor_sub = self.create_subscription(
+        self.supervisor_sub = self.subscribe_serialized(
             SupervisorStatus,
             names.supervisor_status_topic(self.graph_ns),
             self.on_supervisor,
@@ -248,7 +252,7 @@ class ActuationUnitNode(LeanNode):
         self.advance_to(seconds(self) if received_s is None else received_s)
         self.driver.reject()
 
-    def on_supervisor(self, message: SupervisorStatus, received_s: float | None = None) -> None:
+    def on_supervisor(self, message, received_s: float | None = None) -> None:
         """A status as it came (``received_s`` None: now), or as taken at a tick with the time
         it came, after the commands that came before it."""
         now = seconds(self) if received_s is None else received_s
@@ -446,8 +450,13 @@ class ActuationUnitNode(LeanNode):
         self.diagnostics_pub.publish(array)
 
 
-def status_stamp(message: SupervisorStatus) -> float:
-    return seconds_of(message.header.stamp.sec, message.header.stamp.nanosec)
+def status_stamp(data: bytes) -> float:
+    """The stamp of a serialized supervisor status (the lockstep counts it received then)."""
+    try:
+        message = SUPERVISOR.decode(data)
+    except CdrError:
+        return math.nan  # the subscription logs and drops it
+    return seconds_of(message.header_stamp_sec, message.header_stamp_nanosec)
 
 
 def main() -> int:

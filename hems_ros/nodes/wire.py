@@ -41,11 +41,21 @@ def codec(msg_type: type) -> Codec:
     type_name = f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
     types = msgdefs.parse_full_definition(type_name, msgdefs.full_definition(type_name))
     decoder = cdr.build_decoder(type_name, types)
-    encoder = cdr.build_encoder(type_name, types)
+    try:
+        encode = cdr.build_encoder(type_name, types).encode
+    except msgdefs.DefinitionError as error:
+        encode = _unencodable(error)  # read-only here: a type with sequences
     fields = namedtuple(
         msg_type.__name__ + "Fields", [c.name.replace(".", "_") for c in decoder.columns]
     )
-    return Codec(fields, encoder.encode, decoder.decode)
+    return Codec(fields, encode, decoder.decode)
+
+
+def _unencodable(error: Exception) -> Callable[[tuple], bytes]:
+    def encode(_values: tuple) -> bytes:
+        raise error
+
+    return encode
 
 
 def stamp(time_s: float) -> tuple[int, int]:

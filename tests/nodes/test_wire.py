@@ -5,10 +5,18 @@ from __future__ import annotations
 import math
 
 import pytest
-from hems_msgs.msg import ActuatorState, ControllerStatus, DutyCommand, EncoderReading, WireForce
+from hems_msgs.msg import (
+    ActuatorState,
+    ControllerStatus,
+    DutyCommand,
+    EncoderReading,
+    SupervisorStatus,
+    WireForce,
+)
 from rclpy.serialization import deserialize_message, serialize_message
 
 from hems_ros.codec.cdr import CdrError
+from hems_ros.codec.msgdefs import DefinitionError
 from hems_ros.nodes.wire import codec, seconds_of, stamp
 
 HOT_TYPES = (EncoderReading, WireForce, DutyCommand, ControllerStatus, ActuatorState)
@@ -78,6 +86,26 @@ def test_encode_names_the_type_and_the_bad_value():
         c.encode(good._replace(force="not-a-number"))
     with pytest.raises(CdrError, match="WireForce"):
         c.decode(serialize_message(WireForce(finger="index"))[:20])
+
+
+def test_a_status_with_string_lists_is_read_and_refused_for_writing():
+    """The units and controllers read the supervisor's status serialized; the encoder
+    writes no sequences, so the codec reads it only."""
+    status = SupervisorStatus(
+        state=SupervisorStatus.FAULT,
+        state_name="FAULT",
+        faults=["index: heartbeat stale (409 ms without a message)", ""],
+        fault_fingers=["index"],
+    )
+    status.header.stamp.sec, status.header.stamp.nanosec = 1_795_000_001, 20_000_000
+    c = codec(SupervisorStatus)
+    message = c.decode(serialize_message(status))
+    assert (message.header_stamp_sec, message.header_stamp_nanosec) == (1_795_000_001, 20_000_000)
+    assert message.state == SupervisorStatus.FAULT and message.state_name == "FAULT"
+    assert list(message.faults) == list(status.faults)
+    assert list(message.fault_fingers) == ["index"]
+    with pytest.raises(DefinitionError, match="faults"):
+        c.encode(message)
 
 
 def test_stamp_round_trip():
