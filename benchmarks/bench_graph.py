@@ -2,13 +2,14 @@
 
 Runs the 16-node graph in separate processes and then composed, with a recorder as `make
 demo` and `hems up --record` run one. For each layout: CPU of the graph's processes while
-idle (up, not enabled) for half of ``--seconds``, then enabled with every finger holding a
-10 mm tendon position for ``--seconds``: latency from the encoder stamp to the duty applied
-in the unit (p50, p99, max, from each unit's /diagnostics, whose latency window is the
-measured interval), missed control periods (10 ms periods without a duty command), CPU in
-share of one core (and by node kind), resident memory (sum of RSS, and of PSS, which
-shares the libraries among the processes), and the supervisor's final state. The recorder's
-CPU and memory are printed apart and count toward no floor.
+idle (up, not enabled) for a quarter of ``--seconds`` before and a quarter after it was
+enabled with every finger holding a 10 mm tendon position for ``--seconds`` (two idle windows
+around the enabled one, so that the host's drift favours neither): latency from the encoder
+stamp to the duty applied in the unit (p50, p99, max, from each unit's /diagnostics, whose
+latency window is the measured interval), missed control periods (10 ms periods without a
+duty command), CPU in share of one core (and by node kind), resident memory (sum of RSS, and
+of PSS, which shares the libraries among the processes), and the supervisor's final state.
+The recorder's CPU and memory are printed apart and count toward no floor.
 
 ``--busy`` keeps one core busy with a pure-Python loop (normal priority) for the whole run,
 as a browser or a user's own node would; its CPU is not counted.
@@ -72,6 +73,25 @@ def cores(before: dict[int, float], after: dict[int, float], elapsed: float) -> 
     return {pid: (used - before.get(pid, used)) / elapsed for pid, used in after.items()}
 
 
+def cpu_used(
+    pids: list[int], client: GraphClient, seconds: float
+) -> tuple[dict[int, float], float]:
+    """(CPU seconds of each process, elapsed s) over ``seconds`` of spinning ``client``."""
+    before, t0 = cpu_by_process(pids), time.monotonic()
+    client.spin_for(seconds)
+    after = cpu_by_process(pids)
+    return {pid: used - before.get(pid, used) for pid, used in after.items()}, (
+        time.monotonic() - t0
+    )
+
+
+def mean_cores(*windows: tuple[dict[int, float], float]) -> dict[int, float]:
+    """Cores of each process over several windows together."""
+    elapsed = sum(window[1] for window in windows)
+    pids = set().union(*(window[0] for window in windows))
+    return {pid: sum(window[0].get(pid, 0.0) for window in windows) / elapsed for pid in pids}
+
+
 def memory_mib(pids: list[int]) -> tuple[float, float]:
     """(sum of RSS, sum of PSS) of the processes, MiB."""
     rss = pss = 0.0
@@ -125,13 +145,10 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
             if client.wait_until_ready(90) != []:
                 return {"error": graph.with_exits("the graph was not ready within 90 s")}
             recorder_pid = [recorder.process.pid]
-            idle_s = seconds / 2
             # as long a settling as the enabled window has: discovery's last exchanges and the
             # recorder's matching are not the idle graph's cost
             client.spin_for(min(SETTLE_S, seconds))
-            cpu0, t0 = cpu_by_process(graph.pids), time.monotonic()
-            client.spin_for(idle_s)
-            idle = cores(cpu0, cpu_by_process(graph.pids), time.monotonic() - t0)
+            idle_before = cpu_used(graph.pids, client, seconds / 4)
             ok, message = client.enable_when_ready(90, reset=True, retry_s=1.0)
             if not ok:
                 return {"error": f"could not enable: {graph.with_exits(message)}"}
@@ -149,6 +166,13 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
             recorder_rss, _ = memory_mib(recorder_pid)
             kinds = {pid: node_kind(pid) for pid in graph.pids}
             state = client.snapshot(seconds=1.0).supervisor
+            # idle again after the enabled window: the host's speed drifts by a third within
+            # minutes, and one idle window before it compared two phases of the host
+            ok, message = client.call("disable")
+            if not ok:
+                return {"error": f"could not disable: {graph.with_exits(message)}"}
+            client.spin_for(min(SETTLE_S, seconds))
+            idle = mean_cores(idle_before, cpu_used(graph.pids, client, seconds / 4))
     finally:
         recorder.stop()
         graph.stop()
