@@ -12,6 +12,12 @@ forces 0 after more than three encoder periods without one; the run's ``drive_va
 exactly that on the encoder samples. The wire-force sensor stamps each reading with the
 encoder sample it comes from, so the two streams are joined on equal stamps; a sample
 missing from either is dropped (counted in the notes), leaving its gap in ``time``.
+
+A measurement that is not a number (NaN or inf, a sensor's failure value) is dropped the same
+way, named by topic and count in the notes; a run with more than ``MAX_BAD_SHARE`` of its
+samples dropped so is refused. A duty command outside 0-100 % or not a number is refused,
+naming the topic and the message: the input is what the model is driven with, and a wrong
+one would be fitted as physics.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ STREAMS = ("duty", "encoder", "wire_force", "setpoint")
 REQUIRED = ("duty", "encoder")
 WATCHDOG_PERIODS = 3
 DEFAULT_FORCE_RESOLUTION_N = 0.01
+MAX_BAD_SHARE = 0.05  # of a run's samples with a non-finite position or force
 
 
 def measured_topics(fingers: Iterable[str]) -> list[str]:
@@ -106,16 +113,21 @@ def _finger_run(
         )
     period_ns = int(np.median(np.diff(stamps)))
     duty = bag[names.topic(finger, "duty")]
+    _check_duty(path, duty, stamps[0])
     drive, duty_notes = _applied_duty(duty, stamps, period_ns)
     steps, step_notes = _duty_steps(duty, encoder.log_time_ns[first] - stamps, stamps, period_ns)
     notes += duty_notes + step_notes
     position = encoder["position"][first]
-    keep = np.ones(stamps.size, dtype=bool)
+    keep = np.isfinite(position)
+    notes += _dropped_non_finite(path, encoder.topic, "position", keep)
     outputs_extra, resolution = {}, {"position": float(np.median(encoder["resolution"]))}
     force_topic = names.topic(finger, "wire_force")
     if force_topic in bag:
-        force, keep, force_notes = _force_on_encoder(path, bag[force_topic], stamps)
+        force, at_force, force_notes = _force_on_encoder(path, bag[force_topic], stamps)
         notes += force_notes
+        finite = np.isfinite(force) | ~at_force
+        notes += _dropped_non_finite(path, force_topic, "force", finite)
+        keep &= at_force & finite
         outputs_extra["wire_force"] = force[keep]
         resolution["wire_force"] = _force_step(force[keep])
     else:
@@ -137,6 +149,35 @@ def _finger_run(
         notes=tuple(notes),
         drive_steps=None if steps is None else ((steps[0] - stamps[0]) * 1e-9, steps[1]),
     )
+
+
+def _check_duty(path: Path, duty: TopicData, t0_ns: int) -> None:
+    """Every duty command a number within 0-100 %, or DiagnosisInputError naming the first
+    that is not (its topic, message number and the sample it answers)."""
+    values = duty["duty_percent"]
+    bad = np.flatnonzero(~((values >= 0.0) & (values <= 100.0)))  # NaN fails both
+    if bad.size:
+        k = int(bad[0])
+        at = (_stamp_ns(duty, "measurement_stamp")[k] - t0_ns) * 1e-9
+        raise DiagnosisInputError(
+            f"{path}: {duty.topic} message {k + 1} of {values.size} (answering the encoder "
+            f"sample at {at:.3f} s) has duty_percent = {float(values[k])!r}: a duty is a number "
+            f"within 0-100 %" + (f"; {bad.size - 1} more such messages" if bad.size > 1 else "")
+        )
+
+
+def _dropped_non_finite(path: Path, topic: str, field: str, finite: np.ndarray) -> list[str]:
+    """The note on the samples whose ``field`` is not a number (``finite`` False), dropped;
+    DiagnosisInputError if they are more than MAX_BAD_SHARE of the run."""
+    bad = int(np.count_nonzero(~finite))
+    if not bad:
+        return []
+    if bad > MAX_BAD_SHARE * finite.size:
+        raise DiagnosisInputError(
+            f"{path}: {bad} of {finite.size} {topic} samples have a {field} that is not a "
+            f"number, more than {MAX_BAD_SHARE:.0%}: the run is refused"
+        )
+    return [f"{bad} {topic} samples with a {field} that is not a number (NaN or inf) dropped"]
 
 
 def _duty_steps(

@@ -4,12 +4,13 @@ hidden effect (bags/README.md): the committed bag, and (slow) a bag recorded afr
 from __future__ import annotations
 
 import json
+import math
 import re
 import subprocess
 from pathlib import Path
 
 import pytest
-from test_inputs import copy_bag
+from test_inputs import copy_bag, set_field
 
 from hems_ros.bag import bag_info, load_bag
 from hems_ros.physics.params import load_params
@@ -17,6 +18,7 @@ from hems_ros.physics.params import load_params
 REPO = Path(__file__).resolve().parents[2]
 BAG = REPO / "bags" / "diagnose_index_damping"
 TRUTH = BAG / "physics.yaml"
+ENCODER, DUTY = "/hems/index/encoder", "/hems/index/duty"
 HIDDEN_DAMPING = 260.0
 SUMMARY = re.compile(
     r"^named: load_damping \(b = ([\d.]+) N s/m\); held-out position RMSE ([\d.e+-]+) mm -> "
@@ -85,18 +87,52 @@ def test_diagnose_names_the_hidden_damping_from_the_measured_topics(
         tmp_path / "measured_only" / BAG.name,
         lambda m, _: not m.topic.startswith("/hems/sim/"),
     )
+    # one encoder sample with a failed reading (NaN), as a sensor fault leaves it in a bag
+    failed = copy_bag(
+        BAG,
+        tmp_path / "one_nan" / BAG.name,
+        rewrite=(ENCODER, set_field(BAG, ENCODER, "position", math.nan, {900})),
+    )
     assert [t for t in bag_info(BAG).topics if t.startswith("/hems/sim/")]
     assert not [t for t in bag_info(stripped).topics if t.startswith("/hems/sim/")]
-    # both at once: the host has two cores
     runs = {
         "bag": diagnose(venv, BAG, tmp_path / "r"),
         "stripped": diagnose(venv, stripped, tmp_path / "s"),
+        "one_nan": diagnose(venv, failed, tmp_path / "n"),
     }
     lines = {name: finished(process) for name, process in runs.items()}
     summary = assert_names_the_damping(lines["bag"], tmp_path / "r")
     # the simulation truth in the bag is not what the diagnosis found the damping with
     assert lines["stripped"] == lines["bag"]
     assert json.loads((tmp_path / "s" / "summary.json").read_text()) == summary
+    # the failed sample is dropped, said so, and the verdict stays
+    assert assert_names_the_damping(lines["one_nan"], tmp_path / "n")["named"][0]["parameters"][
+        "load.damping_n_s_per_m"
+    ]["si_value"] == pytest.approx(HIDDEN_DAMPING, rel=0.15)
+    assert (
+        "1 /hems/index/encoder samples with a position that is not a number (NaN or inf) dropped"
+        in (tmp_path / "n" / "report.md").read_text()
+    )
+
+
+def test_a_duty_outside_its_range_stops_the_diagnosis_naming_topic_and_message(
+    venv: Path, tmp_path: Path
+) -> None:
+    broken = copy_bag(
+        BAG,
+        tmp_path / "overdriven",
+        rewrite=(DUTY, set_field(BAG, DUTY, "duty_percent", 150.0, {2031})),
+    )
+    process = diagnose(venv, broken, tmp_path / "r")
+    stdout, stderr = process.communicate(timeout=120)
+    assert process.returncode == 2, stdout + stderr
+    assert "Traceback" not in stderr
+    assert re.search(
+        r"/hems/index/duty message 2032 of \d+ \(answering the encoder sample at [\d.]+ s\) "
+        r"has duty_percent = 150\.0: a duty is a number within 0-100 %",
+        stderr,
+    ), stderr
+    assert not (tmp_path / "r" / "summary.json").exists()
 
 
 # The replay applies every duty from the encoder sample it answers; the unit applies one that

@@ -4,6 +4,8 @@ error), and the bag loader on the committed reference bags (alignment, no simula
 from __future__ import annotations
 
 import dataclasses
+import itertools
+import math
 import struct
 import subprocess
 import sys
@@ -13,6 +15,7 @@ import numpy as np
 import pytest
 
 from hems_ros.bag import BagWriter, iter_messages, load_bag
+from hems_ros.codec import cdr, msgdefs
 from hems_ros.diagnosis import bagload, units
 from hems_ros.diagnosis.bagload import load_bag_runs, measured_topics
 from hems_ros.diagnosis.csvload import DEFAULT_CROSS_SECTION_M2, load_table, parse_columns
@@ -689,6 +692,91 @@ def test_bag_errors(tmp_path: Path) -> None:
         match=r"no finger has duty and encoder messages in the bag \(read: nothing\)",
     ):
         load_bag_runs(only_sim)
+
+
+def set_field(source: Path, topic: str, field: str, value, ordinals: set[int]):
+    """A ``copy_bag`` rewrite of ``topic``: ``field`` set to ``value`` in its messages at these
+    ordinals (file order), written with the type's definition stored in the bag (the committed
+    bags predate fields the installed messages have)."""
+    first = next(m for m in iter_messages(source) if m.topic == topic)
+    name = msgdefs.full_name(first.type)
+    types = msgdefs.parse_full_definition(first.type, first.definition)
+    decoder, encoder = cdr.build_decoder(name, types), cdr.build_encoder(name, types)
+    column = [c.name for c in decoder.columns].index(field)
+    counter = itertools.count()
+
+    def rewrite(data: bytes) -> bytes:
+        if next(counter) not in ordinals:
+            return data
+        values = list(decoder.decode(data))
+        values[column] = value
+        return encoder.encode(tuple(values))
+
+    return rewrite
+
+
+@pytest.mark.parametrize(
+    "topic, field, value",
+    [
+        ("/hems/index/encoder", "position", float("nan")),
+        ("/hems/index/wire_force", "force", float("inf")),
+    ],
+)
+def test_a_non_finite_measurement_is_dropped_with_a_note(
+    bag_runs, tmp_path: Path, topic: str, field: str, value: float
+) -> None:
+    [run] = bag_runs["ch5_step_index"]
+    raw = raw_streams(BAGS["ch5_step_index"])
+    ordinal = 700
+    stamp = raw["encoder" if field == "position" else "force_at"][ordinal]
+    k = int(np.searchsorted(np.unique(raw["encoder"]), stamp))
+    copy = copy_bag(
+        BAGS["ch5_step_index"],
+        tmp_path / "bad",
+        rewrite=(topic, set_field(BAGS["ch5_step_index"], topic, field, value, {ordinal})),
+    )
+    [bad] = load_bag_runs(copy)
+    note = f"1 {topic} samples with a {field} that is not a number (NaN or inf) dropped"
+    assert note in bad.notes
+    assert bad.n_samples == run.n_samples - 1
+    assert np.array_equal(bad.time, np.delete(run.time, k))
+    assert np.array_equal(bad.drive_values, np.delete(run.drive_values, k))
+    for name, values in run.outputs.items():
+        assert np.array_equal(bad.outputs[name], np.delete(values, k)), name
+
+
+def test_a_run_with_many_non_finite_positions_is_refused(tmp_path: Path) -> None:
+    topic = "/hems/index/encoder"
+    nan_at = set(range(300, 400))
+    copy = copy_bag(
+        BAGS["ch5_step_index"],
+        tmp_path / "failing_encoder",
+        rewrite=(topic, set_field(BAGS["ch5_step_index"], topic, "position", math.nan, nan_at)),
+    )
+    with pytest.raises(
+        DiagnosisInputError,
+        match=r"100 of 1797 /hems/index/encoder samples have a position that is not a number, "
+        r"more than 5%: the run is refused",
+    ):
+        load_bag_runs(copy)
+
+
+@pytest.mark.parametrize("value", [150.0, -1.0, float("nan")])
+def test_a_duty_outside_its_range_names_topic_and_message(tmp_path: Path, value: float) -> None:
+    raw = raw_streams(BAGS["ch5_step_index"])
+    topic = "/hems/index/duty"
+    copy = copy_bag(
+        BAGS["ch5_step_index"],
+        tmp_path / "bad_duty",
+        rewrite=(topic, set_field(BAGS["ch5_step_index"], topic, "duty_percent", value, {1000})),
+    )
+    at = (raw["duty_at"][1000] - raw["encoder"].min()) * 1e-9
+    with pytest.raises(DiagnosisInputError) as caught:
+        load_bag_runs(copy)
+    assert str(caught.value) == (
+        f"{copy}: /hems/index/duty message 1001 of 1797 (answering the encoder sample at "
+        f"{at:.3f} s) has duty_percent = {value!r}: a duty is a number within 0-100 %"
+    )
 
 
 def test_short_bag_is_too_short(tmp_path: Path) -> None:
