@@ -27,8 +27,8 @@ def add_graph_arguments(parser: argparse.ArgumentParser) -> None:
         "--separate",
         dest="composed",
         action="store_false",
-        help="run each node in a process of its own, as `ros2 run` starts them (about 0.6 "
-        "cores and 1.1 GB on a two-core host, against 0.25 cores and 100 MB composed)",
+        help="run each node in a process of its own, as `ros2 run` starts them (0.6-0.9 "
+        "cores and 1.1 GB on a two-core host, against 0.2-0.4 cores and 100 MB composed)",
     )
     layout.add_argument(
         "--composed",
