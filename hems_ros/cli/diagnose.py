@@ -16,8 +16,9 @@ DEFAULT_MODEL = "table41"
 EPILOG = """\
 RUN: a bag folder recorded from the graph (input /hems/<finger>/duty, measurements
   /hems/<finger>/encoder and wire_force; /hems/sim/* is never read), or a table with --columns.
-  A bag's measurement that is not a number is dropped with a note (more than 5 % of a run:
-  refused); a duty outside 0-100 % stops the diagnosis naming topic and message (exit 2).
+  A measurement that is not a number (a bag's NaN or inf, a table's nan or inf) is dropped
+  with a note (more than 5 % of a run: refused); an input outside its range or not a number
+  (a duty outside 0-100 %) stops the diagnosis naming topic and message or row (exit 2).
 
 --columns quantity=column[:unit],... e.g. time=t:s,duty=d:%,displacement=x:mm,force=F:N
   driven run:    time and one of duty, current, voltage in; displacement (contraction

@@ -14,8 +14,8 @@ encoder sample it comes from, so the two streams are joined on equal stamps; a s
 missing from either is dropped (counted in the notes), leaving its gap in ``time``.
 
 A measurement that is not a number (NaN or inf, a sensor's failure value) is dropped the same
-way, named by topic and count in the notes; a run with more than ``MAX_BAD_SHARE`` of its
-samples dropped so is refused. A duty command outside 0-100 % or not a number is refused,
+way, named by topic and count in the notes; a run with more than ``runs.MAX_BAD_SHARE`` of
+its samples dropped so is refused. A duty command outside 0-100 % or not a number is refused,
 naming the topic and the message: the input is what the model is driven with, and a wrong
 one would be fitted as physics.
 """
@@ -30,14 +30,13 @@ import numpy as np
 
 from hems_ros.bag import Bag, BagFormatError, TopicData, load_bag
 from hems_ros.diagnosis.csvload import require_span
-from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
+from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun, non_finite_note
 from hems_ros.graph import names
 
 STREAMS = ("duty", "encoder", "wire_force", "setpoint")
 REQUIRED = ("duty", "encoder")
 WATCHDOG_PERIODS = 3
 DEFAULT_FORCE_RESOLUTION_N = 0.01
-MAX_BAD_SHARE = 0.05  # of a run's samples with a non-finite position or force
 
 
 def measured_topics(fingers: Iterable[str]) -> list[str]:
@@ -119,19 +118,21 @@ def _finger_run(
     notes += duty_notes + step_notes
     position = encoder["position"][first]
     keep = np.isfinite(position)
-    notes += _dropped_non_finite(path, encoder.topic, "position", keep)
+    notes += non_finite_note(str(path), f"{encoder.topic} position", keep)
     outputs_extra, resolution = {}, {"position": float(np.median(encoder["resolution"]))}
     force_topic = names.topic(finger, "wire_force")
     if force_topic in bag:
         force, at_force, force_notes = _force_on_encoder(path, bag[force_topic], stamps)
         notes += force_notes
         finite = np.isfinite(force) | ~at_force
-        notes += _dropped_non_finite(path, force_topic, "force", finite)
+        notes += non_finite_note(str(path), f"{force_topic} force", finite)
         keep &= at_force & finite
         outputs_extra["wire_force"] = force[keep]
         resolution["wire_force"] = _force_step(force[keep])
     else:
         notes.append(f"no {force_topic} messages: the run has no wire force")
+    if steps is None and not keep.all():
+        steps = stamps, drive  # a dropped sample's interval keeps its own duty
     stamps, position = stamps[keep], position[keep]
     time = (stamps - stamps[0]) * 1e-9
     source = f"{path}:{finger}"
@@ -164,20 +165,6 @@ def _check_duty(path: Path, duty: TopicData, t0_ns: int) -> None:
             f"sample at {at:.3f} s) has duty_percent = {float(values[k])!r}: a duty is a number "
             f"within 0-100 %" + (f"; {bad.size - 1} more such messages" if bad.size > 1 else "")
         )
-
-
-def _dropped_non_finite(path: Path, topic: str, field: str, finite: np.ndarray) -> list[str]:
-    """The note on the samples whose ``field`` is not a number (``finite`` False), dropped;
-    DiagnosisInputError if they are more than MAX_BAD_SHARE of the run."""
-    bad = int(np.count_nonzero(~finite))
-    if not bad:
-        return []
-    if bad > MAX_BAD_SHARE * finite.size:
-        raise DiagnosisInputError(
-            f"{path}: {bad} of {finite.size} {topic} samples have a {field} that is not a "
-            f"number, more than {MAX_BAD_SHARE:.0%}: the run is refused"
-        )
-    return [f"{bad} {topic} samples with a {field} that is not a number (NaN or inf) dropped"]
 
 
 def _duty_steps(

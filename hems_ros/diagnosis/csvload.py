@@ -16,6 +16,11 @@ lead-in at rest (the mean of the rows before the drive first comes on, at most a
 first row of a thermal cycle). Rows are numbered as in the file (the header's line is row 1 when
 nothing precedes it), so an error's row is the line an editor shows. A table whose delimiter is not
 the comma may use decimal commas (``1,5``).
+
+A measured column's cell written ``nan`` or ``inf`` (a logger's value for a failed reading) drops
+its row with a note, the row's input still driving the model over its interval; more than
+``runs.MAX_BAD_SHARE`` of the rows so refuses the run. Any other cell that is not a finite
+number, in an input column any non-finite one, is an error naming row and column.
 """
 
 from __future__ import annotations
@@ -35,6 +40,7 @@ from hems_ros.diagnosis.runs import (
     FeatureRun,
     FeatureTest,
     TimeSeriesRun,
+    non_finite_note,
 )
 
 # the HEMS wire, 0.508 mm diameter (hems_ros.physics.params.WireGeometry; not imported: the
@@ -198,10 +204,16 @@ def _texts(table: _Table, quantity: str, column: str) -> list[str]:
 
 
 def _numbers(
-    table: _Table, quantity: str, column: str, unit: str | None, blanks: bool = False
+    table: _Table,
+    quantity: str,
+    column: str,
+    unit: str | None,
+    blanks: bool = False,
+    measured: bool = False,
 ) -> np.ndarray:
     """A numeric column in SI; every value must be a finite number (``blanks``: an empty cell
-    is a figure the table does not give, NaN)."""
+    is a figure the table does not give, NaN; ``measured``: a nan or inf written in the cell,
+    a sensor's failure value, is kept for the caller to drop)."""
     index = _column_index(table, quantity, column)
     values = np.empty(len(table.rows))
     for k, (number, fields) in enumerate(table.rows):
@@ -215,7 +227,10 @@ def _numbers(
             values[k] = float(text)
         except ValueError:
             values[k] = math.nan
-        if not math.isfinite(values[k]):
+            measured_failure = False
+        else:
+            measured_failure = measured
+        if not math.isfinite(values[k]) and not measured_failure:
             raise DiagnosisInputError(
                 f"{table.where(number, index)}: {fields[index]!r} " f"is not a finite number"
             )
@@ -316,17 +331,31 @@ def load_table(
 
 def _outputs(
     table: _Table, columns: Columns, quantities: tuple[str, ...], rest: int = 1
-) -> dict[str, np.ndarray]:
-    """The mapped outputs; displacement and strain as changes from their mean over the first
-    ``rest`` rows (the run's lead-in at rest): one noisy first reading would shift the whole run."""
-    outputs = {}
+) -> tuple[dict[str, np.ndarray], np.ndarray, list[str]]:
+    """The mapped outputs, the rows where each is a number, and the notes on those that are
+    not (a nan or inf written in a measured column: the row is dropped). Displacement and
+    strain as changes from their mean over the first ``rest`` rows (the run's lead-in at
+    rest): one noisy first reading would shift the whole run."""
+    outputs, keep, notes = {}, np.ones(len(table.rows), dtype=bool), []
     for quantity in quantities:
         if quantity in columns:
-            values = _numbers(table, quantity, *columns[quantity])
+            values = _numbers(table, quantity, *columns[quantity], measured=True)
+            finite = np.isfinite(values)
+            notes += non_finite_note(str(table.path), f"column {columns[quantity][0]}", finite)
+            keep &= finite
             if quantity in ("displacement", "strain"):
-                values = values - float(np.mean(values[:rest]))
+                lead_in = values[:rest][finite[:rest]]
+                values = values - float(np.mean(lead_in if lead_in.size else values[finite][:1]))
             outputs[OUTPUTS[quantity]] = values
-    return outputs
+    return outputs, keep, notes
+
+
+def _kept(
+    time: np.ndarray, outputs: dict[str, np.ndarray], keep: np.ndarray
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Time (from the first kept row) and outputs on the kept rows."""
+    time = time[keep]
+    return time - time[0], {name: values[keep] for name, values in outputs.items()}
 
 
 def _lead_in(time: np.ndarray, drive: np.ndarray, drive_name: str) -> int:
@@ -352,15 +381,23 @@ def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSerie
     time = time - time[0]
     require_span(str(table.path), time, "driven")
     values = _numbers(table, drive, *columns[drive])
-    outputs = _outputs(table, columns, tuple(OUTPUTS), rest=_lead_in(time, values, drive))
+    outputs, keep, notes = _outputs(
+        table, columns, tuple(OUTPUTS), rest=_lead_in(time, values, drive)
+    )
+    # a dropped row's interval keeps its own input
+    steps = None if keep.all() else (time - time[keep][0], values)
+    kept_time, outputs = _kept(time, outputs, keep)
+    require_span(str(table.path), kept_time, "driven")
     return TimeSeriesRun(
         name=name,
         source=str(table.path),
         kind="driven",
-        time=time,
+        time=kept_time,
         drive=drive,
-        drive_values=values,
+        drive_values=values[keep],
         outputs=outputs,
+        notes=tuple(notes),
+        drive_steps=steps,
     )
 
 
@@ -374,7 +411,7 @@ def _thermal_cycle(
         "a thermal cycle",
         path,
     )
-    outputs = _outputs(table, columns, ("strain", "displacement"))
+    outputs, keep, notes = _outputs(table, columns, ("strain", "displacement"))
     if not outputs:
         raise DiagnosisInputError(
             f"{path}: no output column mapped: a thermal cycle needs "
@@ -387,7 +424,6 @@ def _thermal_cycle(
             f"(stress=<column>[:unit] or load_force=<column>[:unit]); mapped: "
             f"{', '.join(loads) or 'none'}"
         )
-    notes = []
     load = _numbers(table, loads[0], *columns[loads[0]])
     if loads[0] != "stress":
         load = load / cross_section_m2
@@ -412,7 +448,7 @@ def _thermal_cycle(
         time = np.concatenate(([0.0], np.cumsum(np.abs(np.diff(temperature)))))
         _check_time(table, time, "without a time column, the cumulative temperature change")
         notes.append("no time column: time is the cumulative temperature change at 1 degC per s")
-    time = time - time[0]
+    time, outputs = _kept(time, outputs, keep)
     require_span(str(path), time, "thermal_cycle")
     return TimeSeriesRun(
         name=name,
@@ -420,7 +456,7 @@ def _thermal_cycle(
         kind="thermal_cycle",
         time=time,
         drive="temperature",
-        drive_values=temperature,
+        drive_values=temperature[keep],
         outputs=outputs,
         stress_pa=stress,
         notes=tuple(notes),

@@ -51,9 +51,29 @@ FIGURE_UNITS = {
 }
 
 
+#: A run with more than this share of its samples dropped for a measurement that is not a
+#: number (a sensor's failure value) is refused: it says more about the sensor than the wire.
+MAX_BAD_SHARE = 0.05
+
+
 class DiagnosisInputError(ValueError):
     """Measured data or an option the diagnosis cannot use; the message is one line that
     names the problem (``hems diagnose`` prints it and exits 2)."""
+
+
+def non_finite_note(source: str, what: str, finite: np.ndarray) -> list[str]:
+    """The note on the samples of ``what`` (a topic's field, a table's column) that are not a
+    number (``finite`` False), which the loader drops; DiagnosisInputError if they are more
+    than MAX_BAD_SHARE of the run."""
+    bad = int(np.count_nonzero(~finite))
+    if not bad:
+        return []
+    if bad > MAX_BAD_SHARE * finite.size:
+        raise DiagnosisInputError(
+            f"{source}: {bad} of {finite.size} samples of {what} are not a number, more than "
+            f"{MAX_BAD_SHARE:.0%}: the run is refused"
+        )
+    return [f"{bad} samples with {what} not a number (NaN or inf) dropped"]
 
 
 @dataclass(frozen=True)

@@ -110,7 +110,7 @@ def test_diagnose_names_the_hidden_damping_from_the_measured_topics(
         "load.damping_n_s_per_m"
     ]["si_value"] == pytest.approx(HIDDEN_DAMPING, rel=0.15)
     assert (
-        "1 /hems/index/encoder samples with a position that is not a number (NaN or inf) dropped"
+        "1 samples with /hems/index/encoder position not a number (NaN or inf) dropped"
         in (tmp_path / "n" / "report.md").read_text()
     )
 

@@ -300,12 +300,47 @@ def test_mapping_errors(tmp_path: Path) -> None:
     assert "time cannot be mapped in a feature table" in error_of(path, "pulse=t,rmse=x,time=t")
 
 
-@pytest.mark.parametrize("bad", ["nan", "inf", "-inf", "abc", ""])
-def test_non_finite_value_names_row_and_column(tmp_path: Path, bad: str) -> None:
+@pytest.mark.parametrize("bad", ["abc", ""])
+def test_unreadable_value_names_row_and_column(tmp_path: Path, bad: str) -> None:
     rows = driven_rows()
     rows[15] = (rows[15][0], rows[15][1], bad, rows[15][3])  # file row 17: the header is row 1
     path = write(tmp_path, "run.csv", "t,I,x,F", rows)
     assert error_of(path, DRIVEN) == f"{path}: row 17, column x: {bad!r} is not a finite number"
+
+
+@pytest.mark.parametrize("bad", ["nan", "inf", "-inf"])
+def test_a_non_finite_measurement_in_a_table_is_dropped_with_a_note(
+    tmp_path: Path, bad: str
+) -> None:
+    from hems_ros.diagnosis import replay
+
+    full = load_table(write(tmp_path, "full.csv", "t,I,x,F", driven_rows()), DRIVEN)
+    rows = driven_rows()
+    rows[15] = (rows[15][0], rows[15][1], bad, rows[15][3])
+    run = load_table(write(tmp_path, "run.csv", "t,I,x,F", rows), DRIVEN)
+    assert run.notes == ("1 samples with column x not a number (NaN or inf) dropped",)
+    assert np.array_equal(run.time, np.delete(full.time, 15))
+    assert np.array_equal(run.drive_values, np.delete(full.drive_values, 15))
+    assert np.array_equal(run.outputs["position"], np.delete(full.outputs["position"], 15))
+    # the dropped row's input still drives the model over its interval
+    assert np.array_equal(replay.plan(run).values, replay.plan(full).values)
+
+
+def test_a_non_finite_input_in_a_table_names_row_and_column(tmp_path: Path) -> None:
+    rows = driven_rows()
+    rows[15] = (rows[15][0], "nan", rows[15][2], rows[15][3])
+    path = write(tmp_path, "run.csv", "t,I,x,F", rows)
+    assert error_of(path, DRIVEN) == f"{path}: row 17, column I: 'nan' is not a finite number"
+
+
+def test_a_table_with_many_non_finite_measurements_is_refused(tmp_path: Path) -> None:
+    rows = [(t, i, "nan" if 10 <= k < 16 else x, f) for k, (t, i, x, f) in enumerate(driven_rows())]
+    path = write(tmp_path, "run.csv", "t,I,x,F", rows)
+    assert error_of(path, DRIVEN) == (
+        f"{path}: 6 of 101 samples of column x are not a number, more than 5%: the run is refused"
+    )
+    rows = [(t, i, "nan" if 10 <= k < 15 else x, f) for k, (t, i, x, f) in enumerate(driven_rows())]
+    assert load_table(write(tmp_path, "five.csv", "t,I,x,F", rows), DRIVEN).n_samples == 96
 
 
 def test_time_must_increase_strictly(tmp_path: Path) -> None:
@@ -736,7 +771,7 @@ def test_a_non_finite_measurement_is_dropped_with_a_note(
         rewrite=(topic, set_field(BAGS["ch5_step_index"], topic, field, value, {ordinal})),
     )
     [bad] = load_bag_runs(copy)
-    note = f"1 {topic} samples with a {field} that is not a number (NaN or inf) dropped"
+    note = f"1 samples with {topic} {field} not a number (NaN or inf) dropped"
     assert note in bad.notes
     assert bad.n_samples == run.n_samples - 1
     assert np.array_equal(bad.time, np.delete(run.time, k))
@@ -755,7 +790,7 @@ def test_a_run_with_many_non_finite_positions_is_refused(tmp_path: Path) -> None
     )
     with pytest.raises(
         DiagnosisInputError,
-        match=r"100 of 1797 /hems/index/encoder samples have a position that is not a number, "
+        match=r"100 of 1797 samples of /hems/index/encoder position are not a number, "
         r"more than 5%: the run is refused",
     ):
         load_bag_runs(copy)
