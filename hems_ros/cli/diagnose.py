@@ -81,6 +81,16 @@ def register(subparsers) -> None:
         dest="overrides",
         help="one model parameter, e.g. --set load.pretension_n=20 (repeatable)",
     )
+    parser.add_argument(
+        "--bounds",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="YAML of parameter ranges replacing the library's, SI units (temperatures degC): "
+        "'kinetics.as0_c: [40, 75]', or around the starting model's value "
+        "'kinetics.as0_c: {around_model: [15, 15]}'; for a wire outside the dissertation's "
+        "band (--list-candidates shows the keys and the library's ranges)",
+    )
     parser.add_argument("--columns", default=None, help="column mapping of table runs (see below)")
     parser.add_argument(
         "--fingers", default=None, help="fingers of a bag, comma separated (default: all found)"
@@ -172,13 +182,16 @@ def run(args: argparse.Namespace) -> int:
             raise DiagnosisInputError("no RUN given (a bag folder or a table file with --columns)")
         model = inputs.model(args.model, args.conditions, args.overrides)
         chosen = inputs.candidate_names(args.candidates)
+        bounds = inputs.bounds(args.bounds)
         runs = [r for path in args.runs for r in inputs.load(path, args.columns, args.fingers)]
         heldout = [
             r for path in args.heldout for r in inputs.load(path, args.columns, args.fingers)
         ]
         out = args.out or Path("results", "diagnosis", inputs.stem(args.runs[0]))
         inputs.check_output(out)
-        diagnosis = diagnose(runs, heldout, model, candidates=chosen, dt=args.dt, progress=say)
+        diagnosis = diagnose(
+            runs, heldout, model, candidates=chosen, bounds=bounds, dt=args.dt, progress=say
+        )
     except (DiagnosisInputError, ParamError) as error:
         print(f"hems diagnose: {error}", file=sys.stderr)
         return 2

@@ -16,7 +16,7 @@ Every parameter is in SI units; ``unit`` and ``scale`` give the unit the report 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Mapping
 
 from hems_ros.physics.params import UnitParams
@@ -71,6 +71,8 @@ class Candidate:
     switches: Mapping[str, object] = field(default_factory=dict)
     # (starting model, drive kinds of the data, measured channels) -> applicable?
     applies: Callable[[UnitParams, frozenset, frozenset], bool] = lambda p, d, c: True
+    # parameter key -> (lower, upper) SI, replacing the library's bounds (a user's wire)
+    bound_overrides: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
     def apply(self, base: UnitParams, values) -> UnitParams:
         """``base`` with the switches on and the parameters at ``values`` (SI)."""
@@ -83,7 +85,7 @@ class Candidate:
 
     def bounds(self, base: UnitParams) -> list[tuple[float, float]]:
         """Bounds of each parameter for this starting model (some depend on it)."""
-        return [_bound(base, par) for par in self.parameters]
+        return [self.bound_overrides.get(par.key) or _bound(base, par) for par in self.parameters]
 
     def off_values(self, base: UnitParams) -> list[float]:
         """Where each parameter leaves the candidate without effect: its neutral value, or the
@@ -341,13 +343,67 @@ def applicable(
     return [c for c in chosen if c.applies(base, drives, channels)]
 
 
+def parameter_keys() -> dict[str, Parameter]:
+    """Every parameter of the library by key."""
+    return {par.key: par for c in ALL for par in c.parameters}
+
+
+def with_bounds(
+    pool: list[Candidate], base: UnitParams, given: Mapping[str, object]
+) -> list[Candidate]:
+    """``pool`` with the bounds ``given`` per parameter key: ``[lower, upper]`` (SI), or
+    ``{around_model: [below, above]}``, the starting model's value minus ``below`` to plus
+    ``above``. ValueError naming the key for an unknown key, a malformed or empty range, or a
+    recalibration whose starting value lies outside its range."""
+    keys = parameter_keys()
+    bounds: dict[str, tuple[float, float]] = {}
+    for key, spec in given.items():
+        if key not in keys:
+            raise ValueError(f"{key}: not a parameter of the candidates (known: {', '.join(keys)})")
+        bounds[key] = _range(key, spec, float(base.get(key)))
+    for c in pool:
+        for par in c.parameters:
+            if c.kind == "recalibration" and par.key in bounds:
+                lower, upper = bounds[par.key]
+                value = float(base.get(par.key))
+                if not lower <= value <= upper:
+                    raise ValueError(
+                        f"{par.key}: the starting model's {par.describe(value)} lies outside "
+                        f"{par.display(lower):.4g}..{par.display(upper):.4g} {par.unit}".rstrip()
+                    )
+    return [
+        replace(c, bound_overrides={p.key: bounds[p.key] for p in c.parameters if p.key in bounds})
+        for c in pool
+    ]
+
+
+def _range(key: str, spec: object, value: float) -> tuple[float, float]:
+    around = isinstance(spec, Mapping) and set(spec) == {"around_model"}
+    pair = spec["around_model"] if around else spec  # type: ignore[index]
+    if not (
+        isinstance(pair, (list, tuple))
+        and len(pair) == 2
+        and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in pair)
+        and all(math.isfinite(v) for v in pair)
+    ):
+        raise ValueError(
+            f"{key}: expected [lower, upper] or {{around_model: [below, above]}} in SI units, "
+            f"got {spec!r}"
+        )
+    lower, upper = (value - pair[0], value + pair[1]) if around else (pair[0], pair[1])
+    if not lower < upper:
+        raise ValueError(f"{key}: the range {lower:g}..{upper:g} is empty")
+    return float(lower), float(upper)
+
+
 def describe_library() -> str:
-    """The library as text: each candidate's parameters, bounds, phases and sources."""
+    """The library as text: each candidate's parameters (with their keys), bounds, phases and
+    sources."""
     base = UnitParams()
     lines = []
     for c in ALL:
         bounds = ", ".join(
-            f"{p.symbol} {p.display(lo):.4g}..{p.display(hi):.4g} {p.unit}".rstrip()
+            f"{p.symbol} {p.display(lo):.4g}..{p.display(hi):.4g} {p.unit}".rstrip() + f" [{p.key}]"
             for p, (lo, hi) in zip(c.parameters, c.bounds(base))
         )
         lines += [

@@ -74,6 +74,28 @@ def _with_conditions(params: UnitParams, path: Path) -> UnitParams:
         raise DiagnosisInputError(f"--conditions {error}") from None
 
 
+def bounds(path: Path | None) -> dict[str, object]:
+    """The ``--bounds`` file: parameter key -> ``[lower, upper]`` or
+    ``{around_model: [below, above]}``, SI units (checked against the library by
+    ``candidates.with_bounds``)."""
+    if path is None:
+        return {}
+    try:
+        data = load_yaml(Path(path).read_text())
+    except OSError as error:
+        raise DiagnosisInputError(f"--bounds {path}: {error.strerror or error}") from None
+    except yaml.YAMLError as error:
+        raise DiagnosisInputError(
+            f"--bounds {path}: not valid YAML ({str(error).splitlines()[0]})"
+        ) from None
+    if not isinstance(data, dict) or not data:
+        raise DiagnosisInputError(
+            f"--bounds {path}: expected a mapping of parameter keys to [lower, upper], "
+            "e.g. kinetics.as0_c: [40, 75]"
+        )
+    return data
+
+
 def candidate_names(text: str | None) -> list[str] | None:
     if text is None:
         return None

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Mapping
 
 import numpy as np
 
@@ -145,10 +145,13 @@ def diagnose(
     model: UnitParams,
     *,
     candidates: list[str] | None = None,
+    bounds: Mapping[str, object] | None = None,
     dt: float | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Diagnosis:
-    """Replay, localise, explain (recalibration, then missing effects) and measure the gap."""
+    """Replay, localise, explain (recalibration, then missing effects) and measure the gap.
+
+    ``bounds``: parameter key -> range replacing the library's (``candidates.with_bounds``)."""
     say = progress or (lambda message: None)
     reasons = [
         r
@@ -175,6 +178,11 @@ def diagnose(
             )
         )
     pool = library.applicable(model, data.drives, data.measured, candidates)
+    if bounds:
+        try:
+            pool = library.with_bounds(pool, model, bounds)
+        except ValueError as error:
+            raise DiagnosisInputError(f"--bounds: {error}") from None
     say(f"candidates: {', '.join(c.name for c in pool)}")
     search = run_search(data, model, pool, progress=say)
     corrected = search.final.params

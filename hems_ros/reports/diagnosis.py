@@ -257,10 +257,15 @@ def _candidate_lines(d: Diagnosis) -> list[str]:
             f"{p.symbol} {p.display(lo):.4g}-{p.display(hi):.4g} {p.unit}".rstrip()
             for p, (lo, hi) in zip(c.parameters, c.bounds(d.start))
         )
-        + f". {c.source}."
+        + f". {_bounds_source(c)}."
         for c in d.candidates
     ]
     return lines + [""]
+
+
+def _bounds_source(c) -> str:
+    given = [p.symbol for p in c.parameters if p.key in c.bound_overrides]
+    return f"{', '.join(given)} from --bounds; the library's: {c.source}" if given else c.source
 
 
 def _changes(d: Diagnosis) -> list[tuple[str, str, str]]:

@@ -244,6 +244,49 @@ def test_describe_library_lists_every_candidate_with_its_bounds() -> None:
     text = lib.describe_library()
     assert text.count("\n") + 1 == 3 * len(lib.ALL)
     assert "load_damping (effect): viscous damping of the load beyond the model's" in text
-    assert "b 65..3000 N s/m" in text
-    assert "As0 60..110 degC" in text
+    assert "b 65..3000 N s/m [load.damping_n_s_per_m]" in text
+    assert "As0 60..110 degC [kinetics.as0_c]" in text
     assert "dT_start 0..61 degC" in text  # As0 88 - 22 ambient - 5
+
+
+def test_bounds_given_replace_the_librarys_for_their_keys() -> None:
+    pool = lib.applicable(TABLE41, ELECTRIC, BOTH)
+    given = {
+        "kinetics.as0_c": [70, 100],
+        "kinetics.ms0_c": {"around_model": [10, 5]},
+        "load.damping_n_s_per_m": [0.0, 500.0],
+    }
+    bounded = {c.name: c for c in lib.with_bounds(pool, TABLE41, given)}
+    assert bounded["heating_temperatures"].bounds(TABLE41) == [(70.0, 100.0)]
+    ms0 = TABLE41.kinetics.ms0_c
+    assert bounded["cooling_temperatures"].bounds(TABLE41) == [(ms0 - 10, ms0 + 5)]
+    assert bounded["load_damping"].bounds(TABLE41) == [(0.0, 500.0)]
+    # every other parameter keeps the library's range, and the library itself is unchanged
+    for c in pool:
+        for par, mine, theirs in zip(
+            c.parameters, c.bounds(TABLE41), bounded[c.name].bounds(TABLE41)
+        ):
+            if par.key not in given:
+                assert theirs == mine, par.key
+    assert lib.BY_NAME["heating_temperatures"].bounds(TABLE41) == [(60.0, 110.0)]
+
+
+@pytest.mark.parametrize(
+    "given, message",
+    [
+        ({"kinetics.as1_c": [1, 2]}, "kinetics.as1_c: not a parameter of the candidates"),
+        ({"kinetics.as0_c": [80]}, "kinetics.as0_c: expected [lower, upper]"),
+        ({"kinetics.as0_c": {"around": [5, 5]}}, "expected [lower, upper] or {around_model"),
+        ({"kinetics.as0_c": [90, "x"]}, "kinetics.as0_c: expected"),
+        ({"kinetics.as0_c": [90, 80]}, "kinetics.as0_c: the range 90..80 is empty"),
+        (
+            {"kinetics.as0_c": [20, 60]},
+            "kinetics.as0_c: the starting model's As0 = 88 degC lies outside 20..60 degC",
+        ),
+    ],
+)
+def test_bounds_that_cannot_be_used_are_named(given: dict, message: str) -> None:
+    pool = lib.applicable(TABLE41, ELECTRIC, BOTH)
+    with pytest.raises(ValueError) as caught:
+        lib.with_bounds(pool, TABLE41, given)
+    assert message in str(caught.value)

@@ -49,7 +49,9 @@ def folder(tmp_path_factory) -> Path:
     t, d, x, f = run.time, run.drive_values, run.outputs["position"], run.outputs["wire_force"]
     _write_run(root / "good.csv", t, d, x, f)
     text = (root / "good.csv").read_text().splitlines()
-    (root / "nan.csv").write_text("\n".join(text[:6] + ["0.0500,0,nan,12.00"] + text[7:]) + "\n")
+    # a duty that is not a number: an input, refused (a measured nan drops its row)
+    (root / "nan.csv").write_text("\n".join(text[:6] + ["0.0500,nan,0,12.00"] + text[7:]) + "\n")
+    (root / "bounds.yaml").write_text("kinetics.as1_c: [1, 2]\n")
     (root / "backwards.csv").write_text("\n".join(text[:11] + [text[9]] + text[12:]) + "\n")
     (root / "short.csv").write_text("\n".join(text[:11]) + "\n")
     _write_run(root / "one_pulse.csv", t[:1000], d[:1000], x[:1000], f[:1000])
@@ -79,7 +81,7 @@ def test_help_and_candidate_list(folder: Path) -> None:
         lines[0]
         == "heating_temperatures (recalibration): austenite transformation temperatures As0, Af0"
     )
-    assert "    b 65..3000 N s/m; changes transformation, cooling" in lines
+    assert "    b 65..3000 N s/m [load.damping_n_s_per_m]; changes transformation, cooling" in lines
 
 
 # (case, arguments, what the message must say): as processes, the way a user meets them; one
@@ -91,7 +93,12 @@ BAD = [
     (
         "nan",
         ["nan.csv", "--columns", COLUMNS],
-        "nan.csv: row 7, column x: 'nan' is not a finite number",
+        "nan.csv: row 7, column d: 'nan' is not a finite number",
+    ),
+    (
+        "bounds of no parameter",
+        ["good.csv", "--columns", COLUMNS, "--bounds", "bounds.yaml"],
+        "--bounds: kinetics.as1_c: not a parameter of the candidates",
     ),
     (
         "bag of other topics",

@@ -11,7 +11,7 @@ import pytest
 from hems_ros.diagnosis import candidates as lib
 from hems_ros.diagnosis import replay, search, suite
 from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned
-from hems_ros.diagnosis.runs import TimeSeriesRun
+from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
 from hems_ros.diagnosis.search import Step, _verdict
 from hems_ros.diagnosis.workflow import diagnose
 from hems_ros.physics.params import load_params
@@ -232,3 +232,36 @@ def test_a_partly_explained_run_does_not_say_no_candidate_helped() -> None:
     d = diagnose([suite.measure(case, DUTY, "low", 0, BASE)], [], BASE, candidates=["load_damping"])
     assert d.verdict == "unexplained" and [n["effect"] for n in d.named()] == ["load_damping"]
     assert "not removed by any candidate" not in d.summary_line()
+
+
+def test_a_wire_outside_the_librarys_band_recalibrates_within_bounds_around_its_model() -> None:
+    """A low-temperature alloy: its datasheet's As0 (50 degC) lies below the library's NiTi
+    range (60-110 degC), the wire's own is 44. The library's range cannot reach it; a range
+    around the starting model can."""
+    user = load_params("table41").replace(
+        {
+            "kinetics.as0_c": 50.0,
+            "kinetics.af0_c": 60.0,
+            "kinetics.ms0_c": 40.0,
+            "kinetics.mf0_c": 30.0,
+        }
+    )
+    case = suite.Case(
+        "low_alloy", "parameter", (), {"kinetics.as0_c": 44.0, "kinetics.af0_c": 54.0}
+    )
+    run = suite.measure(case, suite.pulse_profile()[:4000], "low", 0, user)
+    library_only = diagnose([run], [], user, candidates=["heating_temperatures"])
+    assert library_only.search.verdict == "unexplained"
+    assert library_only.corrected.kinetics.as0_c == 50.0
+    around = diagnose(
+        [run],
+        [],
+        user,
+        candidates=["heating_temperatures"],
+        bounds={"kinetics.as0_c": {"around_model": [15, 15]}},
+    )
+    assert around.search.verdict == "recalibrated"
+    assert around.corrected.kinetics.as0_c == pytest.approx(44.0, abs=0.2)
+    assert around.summary_line().startswith("recalibrated: As0 = 44 degC")
+    with pytest.raises(DiagnosisInputError, match=r"--bounds: kinetics.as0_c: the starting model"):
+        diagnose([run], [], user, bounds={"kinetics.as0_c": [60, 110]})
