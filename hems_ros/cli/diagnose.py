@@ -18,7 +18,9 @@ RUN: a bag folder recorded from the graph (input /hems/<finger>/duty, measuremen
   /hems/<finger>/encoder and wire_force; /hems/sim/* is never read), or a table with --columns.
   A measurement that is not a number (a bag's NaN or inf, a table's nan or inf) is dropped
   with a note (more than 5 % of a run: refused); an input outside its range or not a number
-  (a duty outside 0-100 %) stops the diagnosis naming topic and message or row (exit 2).
+  (a duty outside 0-100 %) stops the diagnosis naming topic and message or row (exit 2);
+  so does a unit that does not fit (a driven run sampled seconds apart, a duty that never
+  exceeds 1 %, a current over 20 A), naming the unit that would.
 
 --columns quantity=column[:unit],... e.g. time=t:s,duty=d:%,displacement=x:mm,force=F:N
   driven run:    time and one of duty, current, voltage in; displacement (contraction

@@ -50,6 +50,11 @@ MIN_SAMPLES = 20
 MIN_DRIVEN_S = 1.0
 MIN_TESTS = 2
 STRESS_TOLERANCE = 0.02
+#: A driven run sampled slower than this (median step) is no record of an electrically heated
+#: wire, whose thermal time constants are about a second: most likely a time in ms declared as s.
+MAX_DRIVEN_STEP_S = 1.0
+#: Inputs beyond these are not a thin SMA wire's: mA or mV declared as A or V.
+MAX_INPUT = {"current": 20.0, "voltage": 100.0}
 #: Drive at or below which a run's lead-in counts as at rest (% duty, A, V).
 LEAD_IN_OFF = {"duty": 0.5, "current": 0.05, "voltage": 0.1}
 
@@ -384,6 +389,7 @@ def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSerie
     outputs, keep, notes = _outputs(
         table, columns, tuple(OUTPUTS), rest=_lead_in(time, values, drive)
     )
+    _check_plausible(table, columns, time, drive, values)
     # a dropped row's interval keeps its own input
     steps = None if keep.all() else (time - time[keep][0], values)
     kept_time, outputs = _kept(time, outputs, keep)
@@ -399,6 +405,35 @@ def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSerie
         notes=tuple(notes),
         drive_steps=steps,
     )
+
+
+def _check_plausible(
+    table: _Table, columns: Columns, time: np.ndarray, drive: str, values: np.ndarray
+) -> None:
+    """Catch a unit declared wrongly, naming the column and the unit that fits: a driven run
+    sampled every few seconds, a duty that never exceeds 1 %, an input beyond a thin wire's."""
+    column, unit = columns["time"]
+    step = float(np.median(np.diff(time)))
+    if step > MAX_DRIVEN_STEP_S:
+        raise DiagnosisInputError(
+            f"{table.path}: column {column}: samples {step:g} s apart (median) over "
+            f"{time[-1]:g} s, too slow for an electrically driven wire: a time in ms declared "
+            f"as {unit or 's'}? map it as time={column}:ms"
+        )
+    column, unit = columns[drive]
+    top = float(np.max(values))
+    if drive == "duty" and (unit or "%") == "%" and 0.0 < top <= 1.0:
+        raise DiagnosisInputError(
+            f"{table.path}: column {column}: the duty never exceeds {top:g} %: a 0-1 "
+            f"fraction declared as %? map it as duty={column}:1"
+        )
+    if drive in MAX_INPUT and top > MAX_INPUT[drive]:
+        small = "mA" if drive == "current" else "mV"
+        raise DiagnosisInputError(
+            f"{table.path}: column {column}: a {drive} of {top:g} "
+            f"{units.default_unit(drive)}, beyond a thin SMA wire's: {small} declared as "
+            f"{unit or units.default_unit(drive)}? map it as {drive}={column}:{small}"
+        )
 
 
 def _thermal_cycle(

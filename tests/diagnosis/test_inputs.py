@@ -343,6 +343,26 @@ def test_a_table_with_many_non_finite_measurements_is_refused(tmp_path: Path) ->
     assert load_table(write(tmp_path, "five.csv", "t,I,x,F", rows), DRIVEN).n_samples == 96
 
 
+def test_units_declared_wrongly_are_caught_naming_the_unit_that_fits(tmp_path: Path) -> None:
+    path = write(tmp_path, "run.csv", "t,I,x,F", driven_rows())
+    assert error_of(path, "time=t,current=I:mA,displacement=x:mm") == (
+        f"{path}: column t: samples 10 s apart (median) over 1000 s, too slow for an "
+        f"electrically driven wire: a time in ms declared as s? map it as time=t:ms"
+    )
+    assert error_of(path, "time=t:ms,current=I,displacement=x:mm") == (
+        f"{path}: column I: a current of 300 A, beyond a thin SMA wire's: mA declared as A? "
+        f"map it as current=I:mA"
+    )
+    rows = [(t, i * 1e-3 / 0.4, x, f) for t, i, x, f in driven_rows()]  # duty 0-0.75
+    fraction = write(tmp_path, "fraction.csv", "t,d,x,F", rows)
+    assert error_of(fraction, "time=t:ms,duty=d,displacement=x:mm") == (
+        f"{fraction}: column d: the duty never exceeds 0.75 %: a 0-1 fraction declared as %? "
+        f"map it as duty=d:1"
+    )
+    run = load_table(fraction, "time=t:ms,duty=d:1,displacement=x:mm")
+    assert run.drive_values.max() == pytest.approx(75.0)
+
+
 def test_time_must_increase_strictly(tmp_path: Path) -> None:
     rows = driven_rows()
     rows[40] = (rows[39][0],) + rows[40][1:]
