@@ -113,6 +113,10 @@ class Fit:
     n_train: int
     pinned: list[str]  # parameters that ended on a bound other than "absent"
     evaluations: int = 0
+    # the least-squares run of the start kept: did it meet its tolerances, and why it stopped
+    converged: bool = True
+    stop: str = ""
+    starts: int = 0
 
     @property
     def n_parameters(self) -> int:
@@ -210,7 +214,8 @@ def _job(space: Space, u0: np.ndarray, n_train: int, n_heldout: int, max_evaluat
             xtol=1e-6,
         )
         r, _, held = evaluate(res.x)
-        return res.x, _cost(r), held, len(cache)
+        # status 0: the evaluation limit, before any tolerance was met
+        return res.x, _cost(r), held, len(cache), res.status > 0, res.message
 
     return run
 
@@ -251,12 +256,12 @@ def fit_structures(
     with threadpool_limits(limits=1, user_api="blas"):
         results = barrier.run(jobs)
     best: dict[int, tuple] = {}
-    for owner, (u, train, held, n_eval) in zip(owners, results):
-        if owner not in best or train < best[owner][1]:
-            best[owner] = (u, train, held, n_eval)
+    for owner, result in zip(owners, results):
+        if owner not in best or result[1] < best[owner][1]:
+            best[owner] = result
     fits = []
     for i, space in enumerate(spaces):
-        u, train, held, n_eval = best[i]
+        u, train, held, n_eval, converged, stop = best[i]
         fits.append(
             Fit(
                 space.structure,
@@ -267,6 +272,9 @@ def fit_structures(
                 n_train,
                 _pinned(space, u),
                 n_eval,
+                converged,
+                stop,
+                owners.count(i),
             )
         )
     return fits

@@ -62,7 +62,18 @@ def summary(d: Diagnosis) -> dict:
         "heldout": d.data.split.description,
         "noise_floor": _noise(d),
         "ranking": [_fit_entry(f, s.start) for f in (s.steps[0].ranked if s.steps else [])],
+        "fit": _convergence(s.final),
         "summary": d.summary_line(),
+    }
+
+
+def _convergence(f) -> dict:
+    """How the kept start's least-squares run ended (no structure: nothing was fitted)."""
+    return {
+        "converged": f.converged,
+        "stop": f.stop,
+        "starts": f.starts,
+        "evaluations": f.evaluations,
     }
 
 
@@ -87,6 +98,7 @@ def _fit_entry(f, start) -> dict:
         "heldout_cost": f.heldout,
         "delta_bic": f.bic - start.bic,
         "pinned": f.pinned,
+        **_convergence(f),
     }
 
 
@@ -146,6 +158,14 @@ def markdown(d: Diagnosis, figures: list[str]) -> str:
             "Noise floor (high-frequency part of the starting model's residual): "
             + ", ".join(f"{c} {v['value']:.3g} {v['unit']}" for c, v in _noise(d).items())
             + ".",
+            "",
+        ]
+    final = d.search.final
+    if not final.converged:
+        lines += [
+            f"The corrected model's fit ({', '.join(final.names)}) stopped after "
+            f"{final.evaluations} evaluations without meeting its tolerances ({final.stop}): "
+            "its values are where it stopped, not an optimum.",
             "",
         ]
     notes = [f"- {r.name}: {n}" for r in d.data.runs for n in r.notes]

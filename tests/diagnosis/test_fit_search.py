@@ -3,6 +3,7 @@ truth, and the verdict rules on constructed fits."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -10,7 +11,7 @@ import pytest
 
 from hems_ros.diagnosis import candidates as lib
 from hems_ros.diagnosis import replay, search, suite
-from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned
+from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned, fit_structures
 from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
 from hems_ros.diagnosis.search import Step, _verdict
 from hems_ros.diagnosis.workflow import diagnose
@@ -47,6 +48,35 @@ def test_hidden_load_damping_is_named_and_recovered(damping) -> None:
     (warm,) = [f for f in d.search.steps[0].ranked if f.names == ("warm_start",)]
     assert warm.values[0] < 1e-3 and warm.pinned == []
     assert not [f for f in d.search.findings if f.startswith("warm_start")]
+
+
+def test_the_fits_convergence_is_recorded(damping) -> None:
+    from hems_ros.reports.diagnosis import markdown, summary
+
+    final = damping.search.final
+    assert final.converged and final.starts == 2 and 0 < final.evaluations <= 30
+    assert summary(damping)["fit"] == {
+        "converged": True,
+        "stop": final.stop,
+        "starts": 2,
+        "evaluations": final.evaluations,
+    }
+    # one evaluation allowed: the fit stops at the limit and says so
+    [stopped] = fit_structures(
+        damping.data, BASE, [(lib.BY_NAME["load_damping"],)], {}, max_evaluations=1
+    )
+    assert not stopped.converged and "maximum number of function evaluations" in stopped.stop
+    unfinished = dataclasses.replace(
+        damping,
+        search=dataclasses.replace(
+            damping.search,
+            final=dataclasses.replace(final, converged=False, stop=stopped.stop, evaluations=30),
+        ),
+    )
+    assert (
+        "The corrected model's fit (load_damping) stopped after 30 evaluations without meeting "
+        "its tolerances" in markdown(unfinished, [])
+    )
 
 
 def test_nothing_hidden_gives_none() -> None:
