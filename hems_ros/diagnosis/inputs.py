@@ -50,18 +50,24 @@ def _value(text: str):
         return yaml.safe_load(text)
 
 
-def _with_conditions(params: UnitParams, path: Path) -> UnitParams:
-    """``params`` with the groups and keys a partial physics YAML gives."""
+def _mapping(option: str, path: Path, expected: str) -> dict:
+    """The YAML mapping in the file an option names; DiagnosisInputError otherwise."""
     try:
         data = load_yaml(Path(path).read_text())
     except OSError as error:
-        raise DiagnosisInputError(f"--conditions {path}: {error.strerror or error}") from None
+        raise DiagnosisInputError(f"{option} {path}: {error.strerror or error}") from None
     except yaml.YAMLError as error:
         raise DiagnosisInputError(
-            f"--conditions {path}: not valid YAML ({str(error).splitlines()[0]})"
+            f"{option} {path}: not valid YAML ({str(error).splitlines()[0]})"
         ) from None
-    if not isinstance(data, dict):
-        raise DiagnosisInputError(f"--conditions {path}: expected a mapping of parameter groups")
+    if not isinstance(data, dict) or not data:
+        raise DiagnosisInputError(f"{option} {path}: expected {expected}")
+    return data
+
+
+def _with_conditions(params: UnitParams, path: Path) -> UnitParams:
+    """``params`` with the groups and keys a partial physics YAML gives."""
+    data = _mapping("--conditions", path, "a mapping of parameter groups")
     merged = params.to_dict()
     for key, value in data.items():
         if isinstance(value, dict) and isinstance(merged.get(key), dict):
@@ -80,20 +86,11 @@ def bounds(path: Path | None) -> dict[str, object]:
     ``candidates.with_bounds``)."""
     if path is None:
         return {}
-    try:
-        data = load_yaml(Path(path).read_text())
-    except OSError as error:
-        raise DiagnosisInputError(f"--bounds {path}: {error.strerror or error}") from None
-    except yaml.YAMLError as error:
-        raise DiagnosisInputError(
-            f"--bounds {path}: not valid YAML ({str(error).splitlines()[0]})"
-        ) from None
-    if not isinstance(data, dict) or not data:
-        raise DiagnosisInputError(
-            f"--bounds {path}: expected a mapping of parameter keys to [lower, upper], "
-            "e.g. kinetics.as0_c: [40, 75]"
-        )
-    return data
+    return _mapping(
+        "--bounds",
+        path,
+        "a mapping of parameter keys to [lower, upper], e.g. kinetics.as0_c: [40, 75]",
+    )
 
 
 def candidate_names(text: str | None) -> list[str] | None:
