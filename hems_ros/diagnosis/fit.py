@@ -31,6 +31,8 @@ AT_BOUND = 2e-3
 PENALTY = 1e3
 STARTS = 2
 MAX_EVALUATIONS = 30
+#: A fitted value this close to a bound, as a share of its range, is reported with the bound.
+NEAR_BOUND = 0.05
 Structure = tuple[Candidate, ...]
 
 
@@ -308,6 +310,22 @@ def _screen(
     return [
         [u for _, u in sorted(scored[i], key=lambda x: x[0])[:starts]] for i in range(len(spaces))
     ]
+
+
+def near_bounds(base: UnitParams, fit: Fit) -> list[str]:
+    """Each fitted value within NEAR_BOUND of a bound (a share of its range) that is not where
+    its candidate is absent, with that bound: the data may ask for more than the range holds."""
+    space = Space(base, fit.structure)
+    out = []
+    for c, value, off in zip(space.coords, fit.values, space.off()):
+        u = c.unit(float(value)) if not (c.parameter.log and value <= 0) else 0.0
+        for bound, name in ((0.0, "lower"), (1.0, "upper")):
+            if abs(u - bound) <= NEAR_BOUND and abs(off - bound) > NEAR_BOUND:
+                out.append(
+                    f"{c.parameter.describe(float(value))} within {NEAR_BOUND:.0%} of its {name} "
+                    f"bound {c.parameter.display(c.value(bound)):.4g} {c.parameter.unit}".rstrip()
+                )
+    return out
 
 
 def _pinned(space: Space, u: np.ndarray) -> list[str]:

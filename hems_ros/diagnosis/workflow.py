@@ -14,6 +14,7 @@ import numpy as np
 
 from hems_ros.diagnosis import candidates as library
 from hems_ros.diagnosis import dataset, features, localise, replay
+from hems_ros.diagnosis.fit import near_bounds
 from hems_ros.diagnosis.runs import DiagnosisInputError, FeatureRun, Run, TimeSeriesRun
 from hems_ros.diagnosis.search import Search, run_search
 from hems_ros.physics.params import UnitParams
@@ -98,10 +99,15 @@ class Diagnosis:
                 else f": residual in {where} not removed by any candidate"
             )
         g = self.gap
+        near = "".join(f"; {text}" for text in self.near_bounds())
         return (
             f"{head}; held-out {g.metric} RMSE {g.heldout_before:.3g} {g.unit} "
-            f"-> {g.heldout_after:.3g} {g.unit} ({g.change * 100:+.0f} %)"
+            f"-> {g.heldout_after:.3g} {g.unit} ({g.change * 100:+.0f} %){near}"
         )
+
+    def near_bounds(self) -> list[str]:
+        """The corrected values close to a bound of their range (fit.NEAR_BOUND)."""
+        return near_bounds(self.start, self.search.final)
 
 
 def _parameters(fit, candidate: library.Candidate) -> dict[str, dict]:

@@ -57,6 +57,7 @@ def summary(d: Diagnosis) -> dict:
         },
         "ambiguous_with": [{"effect": e, "rivals": r} for e, r in s.ambiguous_with],
         "findings": s.findings,
+        "near_bounds": d.near_bounds(),
         "dropped": s.dropped,
         "model": d.model_name,
         "heldout": d.data.split.description,

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 
 import numpy as np
 import pytest
 
 from hems_ros.diagnosis import candidates as lib
 from hems_ros.diagnosis import replay, search, suite
-from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned, fit_structures
+from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned, fit_structures, near_bounds
 from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
 from hems_ros.diagnosis.search import Step, _verdict
 from hems_ros.diagnosis.workflow import diagnose
@@ -295,3 +296,17 @@ def test_a_wire_outside_the_librarys_band_recalibrates_within_bounds_around_its_
     assert around.summary_line().startswith("recalibrated: As0 = 44 degC")
     with pytest.raises(DiagnosisInputError, match=r"--bounds: kinetics.as0_c: the starting model"):
         diagnose([run], [], user, bounds={"kinetics.as0_c": [60, 110]})
+
+
+def test_a_value_near_a_bound_is_named_in_the_summary_line() -> None:
+    """As0 recalibrated to 62 degC, 4 % of its 60-110 range above the lower bound."""
+    case = suite.Case("as0_low", "parameter", (), {"kinetics.as0_c": 62.0, "kinetics.af0_c": 72.0})
+    run = suite.measure(case, suite.pulse_profile()[:4000], "low", 0, BASE)
+    d = diagnose([run], [], BASE, candidates=["heating_temperatures"])
+    assert d.verdict == "recalibrated"
+    [near] = d.near_bounds()
+    assert re.fullmatch(r"As0 = 62(\.0\d)? degC within 5% of its lower bound 60 degC", near)
+    assert d.summary_line().endswith("; " + near)
+    # a value well inside its range is not named
+    inside = dataclasses.replace(d.search.final, values=np.array([85.0]))
+    assert near_bounds(BASE, inside) == []
