@@ -93,6 +93,15 @@ def register(subparsers) -> None:
         "'kinetics.as0_c: {around_model: [15, 15]}'; for a wire outside the dissertation's "
         "band (--list-candidates shows the keys and the library's ranges)",
     )
+    parser.add_argument(
+        "--timing-range",
+        type=positive,
+        default=None,
+        metavar="S",
+        help="largest input delay either way the diagnosis of driven runs searches for, s "
+        "(default three sample periods): a logger that stamps each sample with the end of "
+        "the period it held, or a loop's latency, is named as timing, not as physics",
+    )
     parser.add_argument("--columns", default=None, help="column mapping of table runs (see below)")
     parser.add_argument(
         "--fingers", default=None, help="fingers of a bag, comma separated (default: all found)"
@@ -192,7 +201,14 @@ def run(args: argparse.Namespace) -> int:
         out = args.out or Path("results", "diagnosis", inputs.stem(args.runs[0]))
         inputs.check_output(out)
         diagnosis = diagnose(
-            runs, heldout, model, candidates=chosen, bounds=bounds, dt=args.dt, progress=say
+            runs,
+            heldout,
+            model,
+            candidates=chosen,
+            bounds=bounds,
+            timing_range_s=args.timing_range,
+            dt=args.dt,
+            progress=say,
         )
     except (DiagnosisInputError, ParamError) as error:
         print(f"hems diagnose: {error}", file=sys.stderr)

@@ -1,8 +1,10 @@
 """What the diagnosis may propose: recalibrations of the printed model and missing effects.
 
 A :class:`Candidate` is a set of bounded physical parameters of :class:`UnitParams` (dotted
-keys) that the fit may move, plus the switches that turn an effect on. Two kinds:
+keys) that the fit may move, plus the switches that turn an effect on. Three kinds:
 
+- ``timing``: when the recorded input reached the wire (``drive.input_delay_s``), for driven
+  time series; a timing offset is named as timing, never as physics.
 - ``recalibration``: parameters the dissertation's model already has (chapter 4, Table
   4.1), refitted within ranges published for NiTi actuator wires. A value that ends at a
   bound is a finding ("the data ask for more than a NiTi wire has"), not a value to use.
@@ -63,7 +65,7 @@ class Candidate:
     """A recalibration or a missing effect: parameters, switches and where it shows."""
 
     name: str
-    kind: str  # "recalibration" or "effect"
+    kind: str  # "timing", "recalibration" or "effect"
     title: str
     parameters: tuple[Parameter, ...]
     phases: tuple[str, ...]
@@ -324,7 +326,21 @@ EFFECTS: tuple[Candidate, ...] = (
     ),
 )
 
-ALL: tuple[Candidate, ...] = RECALIBRATIONS + EFFECTS
+# The input's timing against the outputs: measurement, not physics. Its range follows the
+# data's sample period (the workflow sets it, ``diagnose(timing_range_s=...)``); this one is
+# what the library shows.
+TIMING = Candidate(
+    "input_timing",
+    "timing",
+    "the input reaching the wire earlier or later than its record says",
+    (Parameter("drive.input_delay_s", "dt_in", "ms", 1e-3, -0.03, 0.03, neutral=0.0),),
+    (HEATING, TRANSFORMATION, COOLING),
+    "a logger's sample-and-hold or a loop's latency: three sample periods either way "
+    "(--timing-range)",
+    applies=_electric,
+)
+
+ALL: tuple[Candidate, ...] = RECALIBRATIONS + EFFECTS + (TIMING,)
 BY_NAME: dict[str, Candidate] = {c.name: c for c in ALL}
 
 #: Parameters that only change what a sensor reads, not the physics (a replay shares the

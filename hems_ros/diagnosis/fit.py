@@ -31,6 +31,8 @@ AT_BOUND = 2e-3
 PENALTY = 1e3
 STARTS = 2
 MAX_EVALUATIONS = 30
+#: Whole plant steps either side of a fitted input timing that finish its fit.
+TIMING_SCAN = 3
 #: A fitted value this close to a bound, as a share of its range, is reported with the bound.
 NEAR_BOUND = 0.05
 Structure = tuple[Candidate, ...]
@@ -261,6 +263,8 @@ def fit_structures(
     for owner, result in zip(owners, results):
         if owner not in best or result[1] < best[owner][1]:
             best[owner] = result
+    for i, space in enumerate(spaces):
+        best[i] = _on_whole_steps(space, best[i], evaluator, data)
     fits = []
     for i, space in enumerate(spaces):
         u, train, held, n_eval, converged, stop = best[i]
@@ -280,6 +284,33 @@ def fit_structures(
             )
         )
     return fits
+
+
+def _on_whole_steps(space: Space, result: tuple, evaluator: Evaluator, data) -> tuple:
+    """A fit with the input's timing, finished on the whole plant steps around it.
+
+    The replay holds the input per plant step and moves it between steps in proportion, so
+    the cost has a kink at every whole step, where a gradient step can stall (a 10 ms lag
+    fitted as 8 ms). The timing at each whole step within TIMING_SCAN steps of the fit's,
+    the other values kept, is tried; the best training cost wins."""
+    timing = [j for j, c in enumerate(space.coords) if c.candidate.kind == "timing"]
+    plans = getattr(data, "plans", None)
+    if not timing or not plans:
+        return result
+    u, train, held, n_eval, converged, stop = result
+    (j,) = timing
+    coord, step = space.coords[j], plans[0].dt
+    centre = round(coord.value(float(u[j])) / step)
+    tried = []
+    for k in range(centre - TIMING_SCAN, centre + TIMING_SCAN + 1):
+        v = u.copy()
+        v[j] = coord.unit(k * step)
+        if 0.0 <= v[j] <= 1.0:
+            tried.append(v)
+    for v, r in zip(tried, evaluator([space.params(v) for v in tried])):
+        if r is not None and _cost(r[0]) < train:
+            u, train, held = v, _cost(r[0]), _cost(r[1])
+    return u, train, held, n_eval + len(tried), converged, stop
 
 
 def _sizes(data, base: UnitParams) -> tuple[int, int]:

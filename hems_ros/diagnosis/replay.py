@@ -166,13 +166,15 @@ def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
     physics = list(unique)
     wanted = sorted({_KERNEL_CHANNELS[name] for name in run.outputs})
     start = start_temperature(run)
+    delays = [key.drive.input_delay_s for key in physics]
+    values = np.stack([delayed(p.values, d / p.dt) for d in delays]) if any(delays) else p.values
     res = simulate(
         physics,
         p.dt,
         record_every=p.record_every,
         channels=wanted,
         start_temperature_c=start,
-        **{p.drive: p.values},
+        **{p.drive: values},
     )
     initial = _initial_outputs(physics, start)
     live = np.array([k in unique for k in keys])
@@ -185,6 +187,19 @@ def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
         ]
         out[name][live] = _sensor(name, series, chosen, run.time)
     return out
+
+
+def delayed(values: np.ndarray, steps: float) -> np.ndarray:
+    """The per-step input as the wire receives it ``steps`` plant steps (any real number)
+    after its record: each step takes the record at its own index minus ``steps``, between
+    two steps in proportion (so a fit sees a smooth cost), the first or last record beyond
+    the ends."""
+    position = np.arange(values.size) - steps
+    below = np.floor(position)
+    share = position - below
+    below = below.astype(np.int64)
+    low, high = (np.clip(k, 0, values.size - 1) for k in (below, below + 1))
+    return (1.0 - share) * values[low] + share * values[high]
 
 
 def _initial_outputs(sets: list[UnitParams], start: float | None) -> dict[str, np.ndarray]:

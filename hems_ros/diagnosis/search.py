@@ -9,16 +9,17 @@ criterion (BIC, training data). The best is accepted when it removes a fair shar
 is left to explain in the training data (``MIN_SHARE``) and lowers the held-out cost by
 more than the noise can (``MIN_GAIN``) and by a material share of the starting model's gap
 (``MATERIAL``): the held-out data decide whether it generalises, the training data, which
-hold most of the samples, how much it explains. A recalibration
-that does as well as the best effect (training cost within ``TIE``) is taken instead: a
-parameter that is simply off comes before new physics. A fit whose parameter ends on a
-bound is a finding, not an explanation. Then backward elimination drops what the later
-terms made unnecessary.
+hold most of the samples, how much it explains. The input's timing or a recalibration that
+does as well as the best effect (training cost within ``TIE``) is taken instead, timing
+first: a late record or a parameter that is simply off comes before new physics. A fit
+whose parameter ends on a bound is a finding, not an explanation. Then backward elimination
+drops what the later terms made unnecessary.
 
-Verdicts: ``none`` (nothing beyond the noise to explain), ``recalibrated`` (parameters
-only), ``named`` (effects, with or without recalibration), ``ambiguous`` (another effect
-fits the held-out data as well as a named one), ``unexplained`` (nothing accepted, or what
-was accepted leaves more than half of the starting gap).
+Verdicts: ``none`` (nothing beyond the noise to explain), ``timing`` (the input's timing
+only), ``recalibrated`` (parameters, with or without timing), ``named`` (effects, with or
+without the others), ``ambiguous`` (another effect fits the held-out data as well as a named
+one), ``unexplained`` (nothing accepted, or what was accepted leaves more than half of the
+starting gap).
 """
 
 from __future__ import annotations
@@ -49,6 +50,8 @@ EXPLAINED = 0.5
 #: noise, a little each, and get named.
 MATERIAL = 0.05
 MAX_TERMS = 4
+#: Kinds taken before an effect that explains the data as well, in this order.
+PLAINER = ("timing", "recalibration")
 
 
 def excess(cost: float) -> float:
@@ -81,6 +84,10 @@ class Search:
     @property
     def recalibrations(self) -> list[Candidate]:
         return [c for c in self.final.structure if c.kind == "recalibration"]
+
+    @property
+    def timing(self) -> list[Candidate]:
+        return [c for c in self.final.structure if c.kind == "timing"]
 
     @property
     def ambiguous_with(self) -> list[tuple[str, list[str]]]:
@@ -159,7 +166,11 @@ def run_search(
             break
         best = eligible[0]
         tied = [f for f in eligible if f.train <= best.train * (1.0 + TIE)]
-        recal = [f for f in tied if f.structure[-1].kind == "recalibration"]
+        # the input's timing before a recalibration before new physics
+        recal = sorted(
+            (f for f in tied if f.structure[-1].kind in PLAINER),
+            key=lambda f: PLAINER.index(f.structure[-1].kind),
+        )
         chosen = recal[0] if recal else best
         rivals = [
             f
@@ -202,6 +213,8 @@ def _verdict(start: Fit, final: Fit, steps: list[Step]) -> str:
         return "none" if start.heldout - 1.0 <= NOTHING else "unexplained"
     if excess(final.heldout) > EXPLAINED * excess(start.heldout):
         return "unexplained"
+    if all(c.kind == "timing" for c in final.structure):
+        return "timing"
     if not any(c.kind == "effect" for c in final.structure):
         return "recalibrated"
     named = {c.name for c in final.structure}

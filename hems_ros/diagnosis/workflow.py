@@ -7,7 +7,7 @@ returns a :class:`Diagnosis` that the report renders; nothing here writes files.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Mapping
 
 import numpy as np
@@ -18,6 +18,9 @@ from hems_ros.diagnosis.fit import near_bounds
 from hems_ros.diagnosis.runs import DiagnosisInputError, FeatureRun, Run, TimeSeriesRun
 from hems_ros.diagnosis.search import Search, run_search
 from hems_ros.physics.params import UnitParams
+
+#: The input's timing is searched this many sample periods either way by default.
+TIMING_PERIODS = 3
 
 
 @dataclass
@@ -79,8 +82,36 @@ class Diagnosis:
                 out[entry[0]] = entry[1]
         return out
 
+    def timing(self) -> dict | None:
+        """The input's timing: the range searched, the first step's fit of it on the starting
+        model (the estimate every diagnosis of driven runs makes), and the value the corrected
+        model takes (None: not accepted). None when the data have no timing to estimate."""
+        timing = next((c for c in self.candidates if c.kind == "timing"), None)
+        if timing is None:
+            return None
+        lower, upper = timing.bounds(self.start)[0]
+        first = [f for f in (self.search.steps[0].ranked if self.search.steps else [])]
+        estimate = next((f.values[0] for f in first if f.structure == (timing,)), None)
+        final = self.search.final
+        kept = [v for c, v in zip(final.structure, final.values) if c is timing]
+        return {
+            "range_s": [lower, upper],
+            "estimate_s": None if estimate is None else float(estimate),
+            "accepted_s": float(kept[0]) if kept else None,
+        }
+
     def summary_line(self) -> str:
         head = self.verdict
+        timing = self.timing()
+        accepted = None if timing is None else timing["accepted_s"]
+        if self.verdict == "timing":
+            assert accepted is not None  # the verdict says only timing was accepted
+            head += (
+                f": the input reaches the wire {abs(accepted) * 1e3:.3g} ms "
+                f"{'after' if accepted > 0 else 'before'} its record; no physics changed"
+            )
+        elif accepted is not None:
+            head += f" (input timing {accepted * 1e3:+.3g} ms)"
         if self.verdict in ("named", "ambiguous"):
             head += ": " + ", ".join(
                 f"{n['effect']} ({'; '.join(_short(p) for p in n['parameters'].values())})"
@@ -152,12 +183,16 @@ def diagnose(
     *,
     candidates: list[str] | None = None,
     bounds: Mapping[str, object] | None = None,
+    timing_range_s: float | None = None,
     dt: float | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Diagnosis:
-    """Replay, localise, explain (recalibration, then missing effects) and measure the gap.
+    """Replay, localise, explain (timing, recalibration, then missing effects) and measure
+    the gap.
 
-    ``bounds``: parameter key -> range replacing the library's (``candidates.with_bounds``)."""
+    ``bounds``: parameter key -> range replacing the library's (``candidates.with_bounds``).
+    ``timing_range_s``: the largest input delay either way that driven runs are searched
+    for (default TIMING_PERIODS sample periods)."""
     say = progress or (lambda message: None)
     reasons = [
         r
@@ -183,7 +218,9 @@ def diagnose(
                 for c in data.channels
             )
         )
-    pool = library.applicable(model, data.drives, data.measured, candidates)
+    pool = _with_timing_range(
+        library.applicable(model, data.drives, data.measured, candidates), data, timing_range_s
+    )
     if bounds:
         try:
             pool = library.with_bounds(pool, model, bounds)
@@ -221,6 +258,23 @@ def diagnose(
         unexplained,
         {"start": start_prediction, "corrected": final_prediction},
     )
+
+
+def _with_timing_range(pool: list, data, range_s: float | None) -> list:
+    """The timing candidate over +-``range_s`` (default TIMING_PERIODS of the runs' median
+    sample period); out of the pool for data without a recorded input's timing (tables of
+    tests, thermal cycles)."""
+    driven = isinstance(data, dataset.TimeSeriesData) and all(r.kind == "driven" for r in data.runs)
+    if not driven:
+        return [c for c in pool if c.kind != "timing"]
+    if range_s is None:
+        range_s = TIMING_PERIODS * float(np.median([np.median(np.diff(r.time)) for r in data.runs]))
+    return [
+        replace(c, bound_overrides={"drive.input_delay_s": (-range_s, range_s)})
+        if c.kind == "timing"
+        else c
+        for c in pool
+    ]
 
 
 def _describe(data) -> str:

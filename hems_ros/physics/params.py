@@ -197,12 +197,18 @@ class Drive(_Group):
     MOSFET conducts (supply output, MOSFET, leads, contacts). A measured current below
     V/R at full duty points at it; it is not wire heat (electrical.pwm_stage). 0: the ideal
     stage. The current and voltage drives do not see it (ideal sources).
+
+    ``input_delay_s``: how much later the wire receives an input than its record says (a
+    loop's latency; negative: a record that lags, as a logger holding each sample's past
+    period does). Measurement timing, not physics: the diagnosis's replay shifts a recorded
+    input by it; the simulated unit applies its commands when they come.
     """
 
     _GROUP = "drive"
     supply_voltage_v: float = 20.0
     current_limit_a: float = 4.0
     source_resistance_ohm: float = 0.0
+    input_delay_s: float = 0.0
 
     def check(self) -> None:
         self._pos("supply_voltage_v", "current_limit_a")

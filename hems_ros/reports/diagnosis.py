@@ -58,6 +58,7 @@ def summary(d: Diagnosis) -> dict:
         "ambiguous_with": [{"effect": e, "rivals": r} for e, r in s.ambiguous_with],
         "findings": s.findings,
         "near_bounds": d.near_bounds(),
+        "timing": d.timing(),
         "dropped": s.dropped,
         "model": d.model_name,
         "heldout": d.data.split.description,
@@ -161,6 +162,9 @@ def markdown(d: Diagnosis, figures: list[str]) -> str:
             + ".",
             "",
         ]
+    timing = d.timing()
+    if timing is not None:
+        lines += [_timing_line(timing), ""]
     final = d.search.final
     if not final.converged:
         lines += [
@@ -282,6 +286,20 @@ def _candidate_lines(d: Diagnosis) -> list[str]:
         for c in d.candidates
     ]
     return lines + [""]
+
+
+def _timing_line(timing: dict) -> str:
+    lower, upper = (1e3 * v for v in timing["range_s"])
+    head = f"Input timing, searched within {lower:+.3g} to {upper:+.3g} ms (+: the wire gets "
+    head += "the input after its record): "
+    if timing["accepted_s"] is not None:
+        return head + f"{1e3 * timing['accepted_s']:+.3g} ms, taken into the corrected model."
+    if timing["estimate_s"] is None:
+        return head + "not estimated (nothing beyond the noise to explain)."
+    return head + (
+        f"{1e3 * timing['estimate_s']:+.3g} ms on the starting model, not taken (it explains "
+        "less than the terms that were)."
+    )
 
 
 def _bounds_source(c) -> str:

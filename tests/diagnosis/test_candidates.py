@@ -23,7 +23,8 @@ def test_library_names_and_kinds() -> None:
     assert len(lib.RECALIBRATIONS) == 6 and len(lib.EFFECTS) == 10
     assert all(c.kind == "recalibration" for c in lib.RECALIBRATIONS)
     assert all(c.kind == "effect" for c in lib.EFFECTS)
-    assert len(lib.BY_NAME) == len(lib.ALL) == 16
+    assert lib.TIMING.kind == "timing" and lib.ALL[-1] is lib.TIMING
+    assert len(lib.BY_NAME) == len(lib.ALL) == 17
     assert all(set(c.phases) <= set(lib.PHASES) and c.phases for c in lib.ALL)
 
 
@@ -112,7 +113,7 @@ def test_off_values_leave_the_physics_unchanged(name: str) -> None:
     base = load_params(name)
     assert _trajectory(base)["slider_position_m"].max() > 5e-3  # the pulse moves the wire
     pool = lib.applicable(base, ELECTRIC, BOTH)
-    assert len(pool) == (16 if name == "table41" else 12)
+    assert len(pool) == (17 if name == "table41" else 13)
     for c in pool:
         if c.name == "sheath_heat_sink":
             continue  # no sheath value leaves a bare wire bare (below)
@@ -198,7 +199,7 @@ def test_applicable_on_a_bare_wire_with_both_channels_is_the_whole_library() -> 
 def test_applicable_filters_by_channel() -> None:
     assert "encoder_gain" not in _names(TABLE41, channels=frozenset({"wire_force"}))
     assert "force_sensor_drift" not in _names(TABLE41, channels=frozenset({"position"}))
-    assert len(_names(TABLE41, channels=frozenset({"position"}))) == 15
+    assert len(_names(TABLE41, channels=frozenset({"position"}))) == 16
 
 
 def test_applicable_filters_by_drive() -> None:
@@ -212,7 +213,7 @@ def test_applicable_filters_by_drive() -> None:
         "transformation_strain",
     ]
     current = _names(TABLE41, drives=frozenset({"current"}))
-    assert "supply_sag" not in current and "load_damping" in current and len(current) == 15
+    assert "supply_sag" not in current and "load_damping" in current and len(current) == 16
 
 
 def test_applicable_skips_effects_the_starting_model_has() -> None:
@@ -222,7 +223,7 @@ def test_applicable_skips_effects_the_starting_model_has() -> None:
     assert not {"sheath_heat_sink", "capstan_friction", "tendon_friction", "convection"} & set(
         names
     )
-    assert len(names) == 12
+    assert len(names) == 13
     warm = TABLE41.replace({"start.temperature_offset_c": 5.0})
     assert "warm_start" not in _names(warm)
 

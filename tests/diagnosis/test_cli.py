@@ -76,7 +76,7 @@ def test_help_and_candidate_list(folder: Path) -> None:
     result = hems("diagnose", "--list-candidates", cwd=folder)
     assert result.returncode == 0 and result.stderr == ""
     lines = result.stdout.splitlines()
-    assert len(lines) == 3 * 16
+    assert len(lines) == 3 * 17
     assert (
         lines[0]
         == "heating_temperatures (recalibration): austenite transformation temperatures As0, Af0"

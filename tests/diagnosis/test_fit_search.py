@@ -17,6 +17,7 @@ from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
 from hems_ros.diagnosis.search import Step, _verdict
 from hems_ros.diagnosis.workflow import diagnose
 from hems_ros.physics.params import load_params
+from hems_ros.reports.diagnosis import markdown, summary
 
 BASE = load_params("table41")
 # the first 40 s of the suite's pulse train: five pulses, cycle 2 of 4 held out
@@ -52,8 +53,6 @@ def test_hidden_load_damping_is_named_and_recovered(damping) -> None:
 
 
 def test_the_fits_convergence_is_recorded(damping) -> None:
-    from hems_ros.reports.diagnosis import markdown, summary
-
     final = damping.search.final
     assert final.converged and final.starts == 2 and 0 < final.evaluations <= 30
     assert summary(damping)["fit"] == {
@@ -310,3 +309,69 @@ def test_a_value_near_a_bound_is_named_in_the_summary_line() -> None:
     # a value well inside its range is not named
     inside = dataclasses.replace(d.search.final, values=np.array([85.0]))
     assert near_bounds(BASE, inside) == []
+
+
+def _recorded_one_period_late(run: TimeSeriesRun) -> TimeSeriesRun:
+    """The run as a logger records it that stamps each input sample with the end of the
+    period it held (the past 10 ms): every record one period after what the wire received."""
+    late = np.concatenate([run.drive_values[:1], run.drive_values[:-1]])
+    return dataclasses.replace(run, drive_values=late)
+
+
+def _current_run(params, seed: int) -> TimeSeriesRun:
+    """The model driven by 3 A pulses logged at 100 Hz, read with 2 um and 0.02 N noise."""
+    time = np.arange(4000) * 0.01
+    current = np.where((time % 8.0 >= 0.5) & (time % 8.0 < 1.7), 3.0, 0.0)
+    blank = TimeSeriesRun(
+        "current_pulses",
+        "test",
+        "driven",
+        time,
+        "current",
+        current,
+        {"position": np.zeros(time.size), "wire_force": np.zeros(time.size)},
+    )
+    truth = replay.replay(replay.plan(blank), [params])
+    rng = np.random.default_rng(seed)
+    outputs = {
+        "position": truth["position"][0] + rng.normal(0.0, 2e-6, time.size),
+        "wire_force": truth["wire_force"][0] + rng.normal(0.0, 0.02, time.size),
+    }
+    return dataclasses.replace(blank, outputs=outputs)
+
+
+@pytest.mark.parametrize("drive", ["duty", "current"])
+def test_a_late_input_record_is_named_as_timing_not_physics(drive: str) -> None:
+    """The starting model is the truth; only the input's record is a period late."""
+    run = (
+        suite.measure(CASES["nothing"], DUTY, "low", 0, BASE)
+        if drive == "duty"
+        else _current_run(BASE, 0)
+    )
+    assert diagnose([run], [], BASE).verdict == "none"
+    d = diagnose([_recorded_one_period_late(run)], [], BASE)
+    assert d.verdict == "timing"
+    assert d.timing()["accepted_s"] == pytest.approx(-0.010, abs=3e-4)
+    assert d.summary_line().startswith(
+        "timing: the input reaches the wire 10 ms before its record; no physics changed; "
+    )
+    # no physics moved: the corrected model is the starting one but for the input's timing
+    assert d.corrected.replace({"drive.input_delay_s": 0.0}) == BASE
+    assert d.search.final.heldout == pytest.approx(1.0, abs=0.15)
+    assert summary(d)["timing"]["range_s"] == pytest.approx([-0.03, 0.03])
+    assert summary(d)["timing"]["accepted_s"] == pytest.approx(-0.010, abs=3e-4)
+    assert "-10 ms, taken into the corrected model" in markdown(d, [])
+    narrow = diagnose([_recorded_one_period_late(run)], [], BASE, timing_range_s=0.004)
+    assert narrow.timing()["range_s"] == pytest.approx([-0.004, 0.004])
+    assert narrow.verdict != "timing"
+
+
+def test_a_physical_change_is_not_taken_for_timing() -> None:
+    """As0 4 degC higher delays the stroke too; the timing cannot explain it and is not kept."""
+    case = suite.Case(
+        "as0_high", "parameter", (), {"kinetics.as0_c": 92.0, "kinetics.af0_c": 102.0}
+    )
+    d = diagnose([suite.measure(case, DUTY, "low", 0, BASE)], [], BASE)
+    assert d.verdict == "recalibrated" and d.timing()["accepted_s"] is None
+    assert d.corrected.kinetics.as0_c == pytest.approx(92.0, abs=0.2)
+    assert d.timing()["estimate_s"] is not None  # estimated all the same, in the first step
