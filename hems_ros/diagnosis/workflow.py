@@ -90,8 +90,8 @@ class Diagnosis:
         if timing is None:
             return None
         lower, upper = timing.bounds(self.start)[0]
-        first = [f for f in (self.search.steps[0].ranked if self.search.steps else [])]
-        estimate = next((f.values[0] for f in first if f.structure == (timing,)), None)
+        ranked = self.search.steps[0].ranked if self.search.steps else []
+        estimate = next((f.values[0] for f in ranked if f.structure == (timing,)), None)
         final = self.search.final
         kept = [v for c, v in zip(final.structure, final.values) if c is timing]
         return {
