@@ -347,27 +347,33 @@ def near_bounds(base: UnitParams, fit: Fit) -> list[str]:
     """Each fitted value within NEAR_BOUND of a bound (a share of its range) that is not where
     its candidate is absent, with that bound: the data may ask for more than the range holds."""
     space = Space(base, fit.structure)
-    out = []
-    for c, value, off in zip(space.coords, fit.values, space.off()):
-        u = c.unit(float(value)) if not (c.parameter.log and value <= 0) else 0.0
-        for bound, name in ((0.0, "lower"), (1.0, "upper")):
-            if abs(u - bound) <= NEAR_BOUND and abs(off - bound) > NEAR_BOUND:
-                out.append(
-                    f"{c.parameter.describe(float(value))} within {NEAR_BOUND:.0%} of its {name} "
-                    f"bound {c.parameter.display(c.value(bound)):.4g} {c.parameter.unit}".rstrip()
-                )
-    return out
+    u = np.array(
+        [
+            c.unit(float(v)) if not (c.parameter.log and v <= 0) else 0.0
+            for c, v in zip(space.coords, fit.values)
+        ]
+    )
+    return [
+        f"{c.parameter.describe(float(fit.values[j]))} within {NEAR_BOUND:.0%} of its {side}"
+        for j, c, side in _at_bounds(space, u, NEAR_BOUND)
+    ]
 
 
 def _pinned(space: Space, u: np.ndarray) -> list[str]:
     """Parameters at a bound that is not where the starting model has them."""
-    off = space.off()
+    return [
+        f"{c.candidate.name}: {c.parameter.symbol} at its {side}"
+        for _, c, side in _at_bounds(space, u, AT_BOUND)
+    ]
+
+
+def _at_bounds(space: Space, u: np.ndarray, within: float) -> list[tuple[int, Coordinate, str]]:
+    """(index, coordinate, "lower|upper bound <value> <unit>") of each coordinate of ``u``
+    within ``within`` of a bound where its candidate is not absent."""
     out = []
-    for c, x, o in zip(space.coords, u, off):
+    for j, (c, x, off) in enumerate(zip(space.coords, u, space.off())):
         for bound, name in ((0.0, "lower"), (1.0, "upper")):
-            if abs(x - bound) <= AT_BOUND and abs(o - bound) > AT_BOUND:
-                out.append(
-                    f"{c.candidate.name}: {c.parameter.symbol} at its {name} bound "
-                    f"{c.parameter.display(c.value(bound)):.4g} {c.parameter.unit}".rstrip()
-                )
+            if abs(x - bound) <= within and abs(off - bound) > within:
+                side = f"{name} bound {c.parameter.display(c.value(bound)):.4g} {c.parameter.unit}"
+                out.append((j, c, side.rstrip()))
     return out
