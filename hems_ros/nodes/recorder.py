@@ -119,8 +119,7 @@ class Recorder(Node):
             raise ValueError("chunk_size and queue_depth must be positive, duration >= 0")
         self._writer = BagWriter(output, compression=compression, chunk_size=chunk_size)
         self._recorded: dict[str, object] = {}
-        self._topics_heard: set[str] = set()
-        self._subscriptions_heard: set[object] = set()  # spares the topic-name call per drain
+        self._heard_from: set[object] = set()  # subscriptions that have taken a message
         self._channels: dict[
             object, tuple[int | None, type]
         ] = {}  # subscription -> (channel, class)
@@ -184,7 +183,7 @@ class Recorder(Node):
         # only for an executor that calls back per message; spin_until_expired drains instead
         def on_message(data: bytes) -> None:
             self._writer.write(self._channel(subscription), time.time_ns(), data)
-            self._heard(topic)
+            self._heard(subscription)
 
         subscription = self.create_subscription(cls, topic, on_message, qos, raw=True)
         self._recorded[topic] = subscription
@@ -250,17 +249,17 @@ class Recorder(Node):
             received = info["received_timestamp"] or time.time_ns()  # 0: the middleware gave none
             write(channel, received, data, info["source_timestamp"] or received)
             count += 1
-        if count and subscription not in self._subscriptions_heard:
-            self._subscriptions_heard.add(subscription)
-            self._heard(subscription.topic_name)
+        if count:
+            self._heard(subscription)
         return count
 
-    def _heard(self, topic: str) -> None:
-        # once per topic: a tool that starts a run waits for these lines, so that its bag
-        # holds each stream from before the run (a reader subscribed is not yet matched)
-        if topic not in self._topics_heard:
-            self._topics_heard.add(topic)
-            self.get_logger().info(f"{HEARD_PREFIX}{topic}")
+    def _heard(self, subscription) -> None:
+        # once per subscription (its topic's name asked then only): a tool that starts a run
+        # waits for these lines, so that its bag holds each stream from before the run (a
+        # reader subscribed is not yet matched)
+        if subscription not in self._heard_from:
+            self._heard_from.add(subscription)
+            self.get_logger().info(f"{HEARD_PREFIX}{subscription.topic_name}")
 
     def finish(self) -> None:
         if not hasattr(self, "_writer"):  # construction failed before the bag was opened
