@@ -39,7 +39,6 @@ The duty, encoder, tension and state topics carry serialized messages (hems_ros.
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 
@@ -52,7 +51,6 @@ from hems_msgs.msg import (
     WireForce,
 )
 
-from hems_ros.codec.cdr import CdrError
 from hems_ros.graph import names
 from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.lockstep_clock import STALL_S
@@ -67,9 +65,7 @@ from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.physics import ActuationUnit, load_params
 
 LOCKSTEP_POLL_S = 0.0002
-ENCODER, TENSION, STATE, SUPERVISOR = (
-    codec(t) for t in (EncoderReading, WireForce, ActuatorState, SupervisorStatus)
-)
+ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
 #: Encoder faults a test can inject at run time (``ros2 param set ... sensor_fault stuck_encoder``).
 SENSOR_FAULTS = ("", "stuck_encoder", "encoder_jump", "nan_encoder")
 JUMP_M = 5e-3
@@ -253,9 +249,14 @@ class ActuationUnitNode(LeanNode):
         self.driver.reject()
 
     def on_supervisor(self, message, received_s: float | None = None) -> None:
-        """A status as it came (``received_s`` None: now), or as taken at a tick with the time
-        it came, after the commands that came before it."""
-        now = seconds(self) if received_s is None else received_s
+        """A status as it came (``received_s`` None: now; in lockstep its own stamp), or as
+        taken at a tick with the time it came, after the commands that came before it."""
+        if received_s is not None:
+            now = received_s
+        elif self.lockstep:
+            now = seconds_of(message.header_stamp_sec, message.header_stamp_nanosec)
+        else:
+            now = seconds(self)
         enabled = message.state == SupervisorStatus.ENABLED
         if enabled and self.driver.permitted(now):
             # the periodic ENABLED that keeps the permission alive: allowed without a break
@@ -309,7 +310,7 @@ class ActuationUnitNode(LeanNode):
         One that does not come within the clock's stall time (a stopped supervisor) is not
         waited for again until one comes; the permission lapses meanwhile."""
         self.supervisor_keeps_up = self._wait_for(
-            lambda: self.drain(self.supervisor_sub, at=status_stamp),
+            lambda: self.drain(self.supervisor_sub),
             lambda: not self.driver.permission_lapses_by(now),
             self.supervisor_keeps_up,
         )
@@ -448,15 +449,6 @@ class ActuationUnitNode(LeanNode):
         array = DiagnosticArray(status=[status])
         array.header.stamp = stamp_now(self)
         self.diagnostics_pub.publish(array)
-
-
-def status_stamp(data: bytes) -> float:
-    """The stamp of a serialized supervisor status (the lockstep counts it received then)."""
-    try:
-        message = SUPERVISOR.decode(data)
-    except CdrError:
-        return math.nan  # the subscription logs and drops it
-    return seconds_of(message.header_stamp_sec, message.header_stamp_nanosec)
 
 
 def main() -> int:
