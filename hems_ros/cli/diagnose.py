@@ -27,7 +27,8 @@ RUN: a bag folder recorded from the graph (input /hems/<finger>/duty, measuremen
                  positive), strain (elongation positive), wire_force (alias force),
                  load_force, temperature out
   thermal cycle: temperature in (rows in path order, time optional), stress or load_force
-                 (constant), strain or displacement out
+                 (taken row by row where the frame let it wander), strain or
+                 displacement out
   table of tests: name, pulse_length, current, energy, cooled_displacement, protocol,
                  controller (conditions); peak_displacement, peak_force, cooling_time,
                  overshoot, rise_time, ss_error, rmse, mean_power (figures; blank = not given)

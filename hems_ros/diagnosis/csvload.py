@@ -8,7 +8,9 @@ the kind of run:
 - a feature table (any feature quantity mapped): one :class:`FeatureTest` per row;
 - a driven run: time, exactly one of duty/current/voltage, and at least one output;
 - a thermal cycle: temperature and none of duty/current/voltage, strain or displacement, and
-  a constant load (stress, or load_force/wire_force over the wire's cross-section).
+  the load (stress, or load_force/wire_force over the wire's cross-section); a load that
+  wanders by more than ``STRESS_TOLERANCE`` of its mean, as a frame's does, drives the model
+  row by row.
 
 Conventions of the columns: displacement increases when the wire contracts (the encoder's
 sign); strain is the wire's strain, elongation positive. Both become changes from the run's
@@ -436,6 +438,26 @@ def _check_plausible(
         )
 
 
+def _wandering(table: _Table, column: str, load: np.ndarray, notes: list[str]) -> bool:
+    """Whether the frame let the stress wander beyond STRESS_TOLERANCE of its mean (the model
+    then takes it row by row)."""
+    mean = float(np.mean(load))
+    if not np.all(load > 0):
+        row = int(np.argmax(~(load > 0)))
+        raise DiagnosisInputError(
+            f"{table.where(table.rows[row][0], table.header.index(column))}: stress "
+            f"{load[row]:.4g} Pa: a thermal cycle needs "
+            f"the wire under tension in every row"
+        )
+    if np.max(np.abs(load - mean)) <= STRESS_TOLERANCE * mean:
+        return False
+    notes.append(
+        f"stress {np.min(load) / 1e6:.4g}-{np.max(load) / 1e6:.4g} MPa (mean "
+        f"{mean / 1e6:.4g}, sd {np.std(load) / 1e6:.3g}): the model takes it row by row"
+    )
+    return True
+
+
 def _thermal_cycle(
     table: _Table, columns: Columns, name: str, cross_section_m2: float
 ) -> TimeSeriesRun:
@@ -466,14 +488,7 @@ def _thermal_cycle(
             f"stress from the {loads[0]} column over a wire cross-section of "
             f"{cross_section_m2:.4g} m2"
         )
-    stress = float(np.mean(load))
-    spread = float(np.max(np.abs(load - stress)))
-    if spread > STRESS_TOLERANCE * abs(stress):
-        raise DiagnosisInputError(
-            f"{path}: the stress varies by {spread:.4g} Pa around its mean "
-            f"{stress:.4g} Pa, more than {STRESS_TOLERANCE:.0%}: a thermal cycle "
-            f"is at constant stress"
-        )
+    wandering = _wandering(table, columns[loads[0]][0], load, notes)
     temperature = _numbers(table, "temperature", *columns["temperature"])
     if "time" in columns:
         time = _numbers(table, "time", *columns["time"])
@@ -493,7 +508,8 @@ def _thermal_cycle(
         drive="temperature",
         drive_values=temperature[keep],
         outputs=outputs,
-        stress_pa=stress,
+        stress_pa=float(load[keep][0]) if wandering else float(np.mean(load)),
+        stress_values=load[keep] if wandering else None,
         notes=tuple(notes),
     )
 

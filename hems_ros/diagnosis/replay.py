@@ -72,6 +72,8 @@ class ReplayPlan:
     values: np.ndarray  # per plant step
     record_every: int
     records: np.ndarray  # record index of samples 1..n-1 (sample 0 is the initial state)
+    # per plant step: the stress over the first sample's (a thermal cycle whose load wanders)
+    load_scale: np.ndarray | None = None
 
     @property
     def thermal(self) -> bool:
@@ -109,7 +111,18 @@ def plan(run: TimeSeriesRun, dt: float | None = None) -> ReplayPlan:
         values = np.where(last >= 0, levels[np.maximum(last, 0)], 0.0)
     else:
         values = np.repeat(run.drive_values[:-1], np.diff(index))
-    return ReplayPlan(run, step, run.drive, values, every, index[1:] // every - 1)
+    return ReplayPlan(
+        run, step, run.drive, values, every, index[1:] // every - 1, _load_scale(run, index)
+    )
+
+
+def _load_scale(run: TimeSeriesRun, index: np.ndarray) -> np.ndarray | None:
+    """Between two samples the frame holds the mean of their stresses, over the first
+    sample's (the rig's dead weight)."""
+    if run.stress_values is None:
+        return None
+    held = 0.5 * (run.stress_values[:-1] + run.stress_values[1:]) / run.stress_pa
+    return np.repeat(held, np.diff(index))
 
 
 def _grid_step(time: np.ndarray, step: float) -> float:
@@ -174,6 +187,7 @@ def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
         record_every=p.record_every,
         channels=wanted,
         start_temperature_c=start,
+        load_scale=p.load_scale,
         **{p.drive: values},
     )
     initial = _initial_outputs(physics, start)

@@ -88,7 +88,11 @@ class TimeSeriesRun:
     drive_values: np.ndarray  # at each sample instant, held until the next one
     outputs: dict[str, np.ndarray]  # OUTPUT_UNITS name -> values at the sample instants
     resolution: dict[str, float] = field(default_factory=dict)  # known quantisation step per output
-    stress_pa: float | None = None  # thermal cycles: the constant wire stress
+    # thermal cycles: the wire stress at the first sample (the dead weight the replay hangs)
+    stress_pa: float | None = None
+    # thermal cycles on a frame whose load wanders: the stress at each sample (Pa); None when
+    # it is constant
+    stress_values: np.ndarray | None = None
     # a bag's setpoints, for the phase labels only: (time s, mode, value)
     setpoints: tuple[tuple[float, str, float], ...] = ()
     notes: tuple[str, ...] = ()  # what the loader adjusted or dropped, for the report

@@ -98,6 +98,27 @@ def _drive_array(kind: str, values, n_sets: int) -> np.ndarray:
     return np.ascontiguousarray(arr)
 
 
+def _load_segments(load_scale, n_steps: int, every: int) -> list[tuple[int, int, float]]:
+    """(first step, end step, factor) of each run of steps under one load factor."""
+    if load_scale is None:
+        return [(0, n_steps, 1.0)]
+    scale = np.asarray(load_scale, dtype=np.float64)
+    if scale.shape != (n_steps,):
+        raise ValueError(f"load_scale: expected shape ({n_steps},), got {scale.shape}")
+    if not (np.isfinite(scale).all() and (scale >= 0).all()):
+        k = int(np.argmax(~(np.isfinite(scale) & (scale >= 0))))
+        raise ValueError(f"load_scale[{k}] = {float(scale[k])!r}: must be finite and >= 0")
+    changes = np.flatnonzero(np.diff(scale)) + 1
+    if (changes % every).any():
+        k = int(changes[np.argmax(changes % every != 0)])
+        raise ValueError(
+            f"load_scale changes at step {k}, inside a record of {every} steps: it may "
+            f"change only where a record ends"
+        )
+    bounds = np.concatenate(([0], changes, [n_steps]))
+    return [(int(a), int(b), float(scale[a])) for a, b in zip(bounds[:-1], bounds[1:])]
+
+
 def _start_temperatures(start_temperature_c, n_sets: int) -> list:
     """One start temperature (degC, or None: the set's own start) per set."""
     if start_temperature_c is None or np.ndim(start_temperature_c) == 0:
@@ -121,6 +142,7 @@ def simulate(
     record_every: int = 1,
     channels: Iterable[str] | None = None,
     start_temperature_c=None,
+    load_scale=None,
 ) -> SimResult:
     """Run one or many parameter sets from the initial state over one drive time series.
 
@@ -128,7 +150,10 @@ def simulate(
     temperature imposed at the end of each step, degC); arrays shaped (n_steps,) (same input
     for every set) or (n_sets, n_steps). ``start_temperature_c``: a start temperature for
     every set, or one per set (None: the set's own start, ambient plus ``params.start``),
-    as rows.initial_state takes it.
+    as rows.initial_state takes it. ``load_scale``: (n_steps,) factors on every set's static
+    load force (m g + F_0) step by step, as a load frame holding a stress that wanders; it may
+    change only where a record ends (a multiple of ``record_every`` steps), and the start
+    state is the one under the unscaled load.
     """
     plist = [params] if isinstance(params, UnitParams) else list(params)
     if not plist or not all(isinstance(p, UnitParams) for p in plist):
@@ -158,17 +183,27 @@ def simulate(
     )
     records = np.zeros((len(index), n_sets, n_rec))
     failed_at = np.zeros(n_sets, dtype=np.int64)
-    kernel.run_batch(
-        packed,
-        states,
-        DRIVE_NAMES[kind],
-        drives,
-        float(dt),
-        int(record_every),
-        index,
-        records,
-        failed_at,
-    )
+    static = packed[:, rows.P_FSTAT].copy()
+    for first, last, scale in _load_segments(load_scale, n_steps, record_every):
+        packed[:, rows.P_FSTAT] = scale * static
+        whole = (first, last) == (0, n_steps)
+        part = records if whole else np.zeros((len(index), n_sets, (last - first) // record_every))
+        kernel.run_batch(
+            packed,
+            states,
+            DRIVE_NAMES[kind],
+            np.ascontiguousarray(drives[:, first:last]),
+            float(dt),
+            int(record_every),
+            index,
+            part,
+            failed_at,
+        )
+        if part is not records:
+            records[:, :, first // record_every : last // record_every] = part
+        if (failed_at >= 0).any():
+            failed_at[failed_at >= 0] += first
+            break
     if (failed_at >= 0).any():
         i = int(np.argmax(failed_at >= 0))
         raise FloatingPointError(

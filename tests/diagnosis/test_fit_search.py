@@ -12,6 +12,7 @@ import pytest
 
 from hems_ros.diagnosis import candidates as lib
 from hems_ros.diagnosis import replay, search, suite
+from hems_ros.diagnosis.csvload import load_table
 from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned, fit_structures, near_bounds
 from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
 from hems_ros.diagnosis.search import Step, _verdict
@@ -209,11 +210,13 @@ def test_better_needs_held_out_gain_training_share_material_bic_and_no_bound() -
     assert search._better(_fit(("supply_sag", "spring_stiffening"), 40.0, 2.0), first, start)  # 9 %
 
 
-def _thermal_truth(start_c: float) -> TimeSeriesRun:
-    """Three thermal cycles at 150 MPa of a wire whose As0 is 4 degC above the model's."""
+def _thermal_truth(start_c: float, wander: float = 0.0) -> TimeSeriesRun:
+    """Three thermal cycles at 150 MPa (``wander``: the frame's stress swings by that share
+    of it, with a 37 s period) of a wire whose As0 is 4 degC above the model's."""
     one = np.r_[np.arange(start_c, 140.0), np.arange(140.0, start_c, -1.0)]
     temps = np.r_[np.tile(one, 3), start_c]
     t = np.arange(temps.size) * 1.0
+    stress = 150e6 * (1.0 + wander * np.sin(2 * np.pi * t / 37.0))
     shell = TimeSeriesRun(
         "tc",
         "synthetic",
@@ -222,21 +225,13 @@ def _thermal_truth(start_c: float) -> TimeSeriesRun:
         "temperature",
         temps,
         {"strain": t * 0},
-        stress_pa=150e6,
+        stress_pa=float(stress[0]),
+        stress_values=stress if wander else None,
     )
     truth = BASE.replace({"kinetics.as0_c": 92.0, "kinetics.af0_c": 102.0})
     strain = replay.replay(replay.plan(shell), [truth])["strain"][0]
     strain = strain + np.random.default_rng(0).normal(0.0, 2e-5, t.size)
-    return TimeSeriesRun(
-        "tc",
-        "synthetic",
-        "thermal_cycle",
-        t,
-        "temperature",
-        temps,
-        {"strain": strain},
-        stress_pa=150e6,
-    )
+    return dataclasses.replace(shell, outputs={"strain": strain})
 
 
 def test_thermal_cycle_recalibrates_as0() -> None:
@@ -248,6 +243,25 @@ def test_thermal_cycle_recalibrates_as0() -> None:
 def test_thermal_cycle_starting_inside_the_as0_bounds() -> None:
     d = diagnose([_thermal_truth(65.0)], [], BASE, candidates=["heating_temperatures"])
     assert d.verdict == "recalibrated"
+
+
+def test_thermal_cycle_whose_stress_wanders_15_percent_loads_and_diagnoses(tmp_path) -> None:
+    truth = _thermal_truth(40.0, wander=0.15)
+    table = np.column_stack(
+        [truth.time, truth.drive_values, 100 * truth.outputs["strain"], truth.stress_values / 1e6]
+    )
+    path = tmp_path / "frame.csv"
+    np.savetxt(path, table, delimiter=",", header="t,T,eps,sigma", comments="", fmt="%.9g")
+    run = load_table(path, "time=t:s,temperature=T,strain=eps:%,stress=sigma:MPa")
+    assert run.stress_values.min() == pytest.approx(127.5e6, rel=1e-3)
+    assert run.stress_values.max() == pytest.approx(172.5e6, rel=1e-3)
+    d = diagnose([run], [], BASE, candidates=["heating_temperatures"])
+    assert d.verdict == "recalibrated"
+    assert d.search.final.values[0] == pytest.approx(92.0, abs=0.3)
+    # the same strains read as if the frame had held its mean stress: the fit cannot make
+    # them up with As0 alone
+    held = dataclasses.replace(run, stress_pa=150e6, stress_values=None)
+    assert diagnose([held], [], BASE, candidates=["heating_temperatures"]).verdict == "unexplained"
 
 
 def test_a_partly_explained_run_does_not_say_no_candidate_helped() -> None:

@@ -331,6 +331,33 @@ def _crossing(temperature, xi):
     )
 
 
+def test_load_scale_steps_the_dead_weight_between_records():
+    # a cold (martensite) wire held at 22 degC; the frame's stress goes 20 -> 30 MPa after 1 s
+    sigma, dt, every = 20e6, 1e-2, 10
+    p = _dead_weight(sigma)
+    held = np.full(200, 22.0)
+    scale = np.r_[np.ones(100), np.full(100, 1.5)]
+    res = simulate(p, dt, temperature=held, record_every=every, load_scale=scale)
+    plain = simulate(p, dt, temperature=held, record_every=every)
+    x, stress = res.slider_position_m[0], res.stress_pa[0]
+    assert np.array_equal(x[:10], plain.slider_position_m[0][:10])
+    assert stress[9] == pytest.approx(sigma, rel=1e-6)
+    assert stress[-1] == pytest.approx(1.5 * sigma, rel=1e-6)
+    # the wire stretches elastically: the slider goes out by L dsigma / E_M
+    stretch = p.wire.length_m * 0.5 * sigma / p.constitutive.e_martensite_pa
+    assert x[9] - x[-1] == pytest.approx(stretch, rel=1e-3)
+    with pytest.raises(ValueError, match="inside a record of 10 steps"):
+        simulate(
+            p,
+            dt,
+            temperature=held,
+            record_every=every,
+            load_scale=np.r_[np.ones(95), np.full(105, 1.5)],
+        )
+    with pytest.raises(ValueError, match=r"load_scale\[3\] = -1.0"):
+        simulate(p, dt, temperature=held, load_scale=np.r_[np.ones(3), -np.ones(197)])
+
+
 def test_temperature_drive_thermal_cycle_at_constant_stress():
     # 1 degC/s from 22 to 130 degC and back; 20 MPa dead weight
     sigma, dt = 20e6, 1e-2
