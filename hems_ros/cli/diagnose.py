@@ -195,9 +195,12 @@ def run(args: argparse.Namespace) -> int:
         model = inputs.model(args.model, args.conditions, args.overrides)
         chosen = inputs.candidate_names(args.candidates)
         bounds = inputs.bounds(args.bounds)
-        runs = [r for path in args.runs for r in inputs.load(path, args.columns, args.fingers)]
+        area = model.wire.cross_section_m2
+        runs = [
+            r for path in args.runs for r in inputs.load(path, args.columns, args.fingers, area)
+        ]
         heldout = [
-            r for path in args.heldout for r in inputs.load(path, args.columns, args.fingers)
+            r for path in args.heldout for r in inputs.load(path, args.columns, args.fingers, area)
         ]
         out = args.out or Path("results", "diagnosis", inputs.stem(args.runs[0]))
         inputs.check_output(out)

@@ -325,6 +325,8 @@ def load_table(
             f"{path}: more than one input mapped ({', '.join(drives)}): "
             f"a driven run has exactly one of {', '.join(DRIVE_QUANTITIES)}"
         )
+    if drives and "prescribed_strain" in columns:
+        return _prescribed_strain(table, columns, name, drives[0], cross_section_m2)
     if drives:
         return _driven(table, columns, name, drives[0])
     if "temperature" in columns:
@@ -404,6 +406,69 @@ def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSerie
         drive=drive,
         drive_values=values[keep],
         outputs=outputs,
+        notes=tuple(notes),
+        drive_steps=steps,
+    )
+
+
+def _prescribed_strain(
+    table: _Table, columns: Columns, name: str, drive: str, cross_section_m2: float
+) -> TimeSeriesRun:
+    """A load frame moves the wire's end (prescribed_strain in) while the drive heats it: the
+    wire's force (or stress over the cross-section) comes out."""
+    path = table.path
+    _restrict(
+        columns,
+        ("time", drive, "prescribed_strain", "stress", "wire_force", "temperature"),
+        "a prescribed-strain run",
+        path,
+    )
+    if "time" not in columns:
+        raise DiagnosisInputError(f"{path}: a prescribed-strain run needs time=<column>[:unit]")
+    if not {"stress", "wire_force"} & set(columns):
+        raise DiagnosisInputError(
+            f"{path}: no output column mapped: a prescribed-strain run needs "
+            f"stress=<column>[:unit] or wire_force=<column>[:unit] in --columns"
+        )
+    time = _numbers(table, "time", *columns["time"])
+    _check_time(table, time, "time")
+    time = time - time[0]
+    require_span(str(path), time, "driven")
+    values = _numbers(table, drive, *columns[drive])
+    _check_plausible(table, columns, time, drive, values)
+    strain = _numbers(table, "prescribed_strain", *columns["prescribed_strain"])
+    outputs, keep, notes = _outputs(table, columns, ("wire_force", "temperature"))
+    if "stress" in columns:
+        stress = _numbers(table, "stress", *columns["stress"], measured=True)
+        finite = np.isfinite(stress)
+        notes += non_finite_note(str(path), f"column {columns['stress'][0]}", finite)
+        keep &= finite
+        outputs["wire_force"] = stress * cross_section_m2
+        notes.append(f"wire force from the stress column times {cross_section_m2:.4g} m2")
+    if not keep[0]:
+        raise DiagnosisInputError(
+            f"{table.where(table.rows[0][0], 0)}: the first row must hold the preload "
+            f"(the model starts from it)"
+        )
+    preload = float(outputs["wire_force"][0]) / cross_section_m2
+    if not preload > 0:
+        raise DiagnosisInputError(
+            f"{path}: a preload of {preload:.4g} Pa in the first row: the frame must hold "
+            f"the wire under tension from the start"
+        )
+    steps = None if keep.all() else (time, values)
+    kept_time, outputs = _kept(time, outputs, keep)
+    require_span(str(path), kept_time, "driven")
+    return TimeSeriesRun(
+        name=name,
+        source=str(path),
+        kind="prescribed_strain",
+        time=kept_time,
+        drive=drive,
+        drive_values=values[keep],
+        outputs=outputs,
+        stress_pa=preload,
+        strain_values=(strain - strain[0])[keep],
         notes=tuple(notes),
         drive_steps=steps,
     )

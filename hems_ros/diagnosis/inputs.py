@@ -112,8 +112,9 @@ def is_bag(path: Path) -> bool:
     )
 
 
-def load(text: str, columns: str | None, fingers: str | None) -> list[Run]:
-    """The runs in one RUN argument: every finger of a bag, or one table."""
+def load(text: str, columns: str | None, fingers: str | None, cross_section_m2: float) -> list[Run]:
+    """The runs in one RUN argument: every finger of a bag, or one table (a load column
+    turned into stress, or a stress into force, over the model wire's ``cross_section_m2``)."""
     path = Path(text)
     if not path.exists():
         raise DiagnosisInputError(f"{text}: no such file or folder")
@@ -127,7 +128,7 @@ def load(text: str, columns: str | None, fingers: str | None) -> list[Run]:
             f"{text}: a table needs --columns quantity=column[:unit],... "
             "(e.g. time=t:s,current=I:A,displacement=x:mm)"
         )
-    return [csvload.load_table(path, columns)]
+    return [csvload.load_table(path, columns, cross_section_m2=cross_section_m2)]
 
 
 def stem(text: str) -> str:

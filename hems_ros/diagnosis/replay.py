@@ -39,6 +39,52 @@ _KERNEL_CHANNELS = {
 }
 
 
+#: A load frame's stiffness over the wire's own (austenite, E A / L): the wire's strain is
+#: the frame's to a thousandth of its elastic part.
+FRAME_STIFFNESS_RATIO = 1e3
+
+
+def frame_rig(params: UnitParams, preload_pa: float) -> UnitParams:
+    """A bare wire whose end a stiff load frame moves, preloaded to ``preload_pa``; the
+    frame's load cell reads any force."""
+    if not preload_pa > 0:
+        raise DiagnosisInputError(
+            f"prescribed strain: preload {preload_pa:g} Pa must be > 0 (a wire under load)"
+        )
+    wire = params.wire
+    stiffness = (
+        FRAME_STIFFNESS_RATIO
+        * params.constitutive.e_austenite_pa
+        * wire.cross_section_m2
+        / wire.length_m
+    )
+    return params.replace(
+        {
+            "load.kind": "bias_spring",
+            "load.mass_kg": 0.0,
+            "load.damping_n_s_per_m": 0.0,
+            "load.pretension_n": preload_pa * wire.cross_section_m2,
+            "load.stiffness_n_per_m": stiffness,
+            "load.cubic_stiffness_n_per_m3": 0.0,
+            "load.pulley_ratio": 1.0,
+            "capstan.enabled": False,
+            "glove_friction.enabled": False,
+            "force_sensor.range_max_n": 1e6,
+        }
+    )
+
+
+def static_forces(sets: list[UnitParams], run: TimeSeriesRun, held: np.ndarray) -> np.ndarray:
+    """(n_sets, n_steps) static load force of each rigged set under the run's held load: a
+    thermal cycle's stress times the cross-section; a frame's preload plus its stiffness
+    times the end displacement that imposes the strain."""
+    if run.kind == "thermal_cycle":
+        return np.stack([held * s.wire.cross_section_m2 for s in sets])
+    return np.stack(
+        [s.load.pretension_n + s.load.stiffness_n_per_m * s.wire.length_m * held for s in sets]
+    )
+
+
 def thermal_cycle_rig(params: UnitParams, stress_pa: float) -> UnitParams:
     """A bare wire under a dead weight that holds ``stress_pa`` (the lab's constant stress)."""
     mass = stress_pa * params.wire.cross_section_m2 / _GRAVITY
@@ -72,8 +118,9 @@ class ReplayPlan:
     values: np.ndarray  # per plant step
     record_every: int
     records: np.ndarray  # record index of samples 1..n-1 (sample 0 is the initial state)
-    # per plant step: the stress over the first sample's (a thermal cycle whose load wanders)
-    load_scale: np.ndarray | None = None
+    # per plant step, the load the rig holds: a thermal cycle's stress (Pa) when it wanders,
+    # a prescribed-strain run's strain
+    held_load: np.ndarray | None = None
 
     @property
     def thermal(self) -> bool:
@@ -112,17 +159,16 @@ def plan(run: TimeSeriesRun, dt: float | None = None) -> ReplayPlan:
     else:
         values = np.repeat(run.drive_values[:-1], np.diff(index))
     return ReplayPlan(
-        run, step, run.drive, values, every, index[1:] // every - 1, _load_scale(run, index)
+        run, step, run.drive, values, every, index[1:] // every - 1, _held_load(run, index)
     )
 
 
-def _load_scale(run: TimeSeriesRun, index: np.ndarray) -> np.ndarray | None:
-    """Between two samples the frame holds the mean of their stresses, over the first
-    sample's (the rig's dead weight)."""
-    if run.stress_values is None:
+def _held_load(run: TimeSeriesRun, index: np.ndarray) -> np.ndarray | None:
+    """Between two samples the rig holds the mean of their loads."""
+    load = run.strain_values if run.kind == "prescribed_strain" else run.stress_values
+    if load is None:
         return None
-    held = 0.5 * (run.stress_values[:-1] + run.stress_values[1:]) / run.stress_pa
-    return np.repeat(held, np.diff(index))
+    return np.repeat(0.5 * (load[:-1] + load[1:]), np.diff(index))
 
 
 def _grid_step(time: np.ndarray, step: float) -> float:
@@ -139,8 +185,13 @@ def _grid_step(time: np.ndarray, step: float) -> float:
 
 
 def rig(params: UnitParams, run: TimeSeriesRun) -> UnitParams:
-    """The parameter set the run's conditions call for (a thermal cycle's dead weight)."""
-    return thermal_cycle_rig(params, run.stress_pa) if run.kind == "thermal_cycle" else params
+    """The parameter set the run's conditions call for (a thermal cycle's dead weight, a
+    prescribed-strain run's frame)."""
+    if run.kind == "thermal_cycle":
+        return thermal_cycle_rig(params, run.stress_pa)
+    if run.kind == "prescribed_strain":
+        return frame_rig(params, run.stress_pa)
+    return params
 
 
 def start_temperature(run: TimeSeriesRun) -> float | None:
@@ -187,13 +238,13 @@ def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
         record_every=p.record_every,
         channels=wanted,
         start_temperature_c=start,
-        load_scale=p.load_scale,
+        static_force_n=None if p.held_load is None else static_forces(physics, run, p.held_load),
         **{p.drive: values},
     )
     initial = _initial_outputs(physics, start)
     live = np.array([k in unique for k in keys])
     picked = np.array([unique[k] for k in keys if k in unique])
-    chosen = [s for s, ok in zip(sets, live) if ok]
+    chosen = [rig(s, run) for s, ok in zip(sets, live) if ok]  # the rig's sensors read
     for name in run.outputs:
         channel = _KERNEL_CHANNELS[name]
         series = np.concatenate([initial[channel][:, None], res[channel][:, p.records]], axis=1)[

@@ -14,8 +14,11 @@ the loaders (csvload, bagload) do every conversion once and the rest never sees 
 
 A :class:`TimeSeriesRun` has one input (``drive``): the PWM ``duty`` in %, a ``current`` in
 A or a ``voltage`` in V (electrically driven runs), or the wire ``temperature`` in degC
-(quasi-static thermal cycles of a bare wire at constant stress). Each input sample holds
-until the next sample (zero-order hold), as the HEMS board holds a duty between updates.
+(quasi-static thermal cycles of a bare wire under a load, constant or read row by row).
+Each input sample holds until the next sample (zero-order hold), as the HEMS board holds a
+duty between updates. A ``prescribed_strain`` run (a load frame moving the wire's end: work
+loops, tensile tests) has a second input, the strain the frame imposes, and the wire force
+out.
 
 A :class:`FeatureRun` is a table of tests, one row each, with the test's conditions and its
 measured figures (the dissertation's tables).
@@ -36,7 +39,7 @@ OUTPUT_UNITS = {
     "temperature": ("degC", "degC", 1.0),
 }
 DRIVES = ("duty", "current", "voltage", "temperature")
-KINDS = ("driven", "thermal_cycle")
+KINDS = ("driven", "thermal_cycle", "prescribed_strain")
 
 #: Figures a feature table may carry: name -> (SI unit, display unit, display scale).
 FIGURE_UNITS = {
@@ -82,17 +85,21 @@ class TimeSeriesRun:
 
     name: str
     source: str  # file path, or "<bag folder>:<finger>"
-    kind: str  # "driven" or "thermal_cycle"
+    kind: str  # one of KINDS
     time: np.ndarray  # s since the first sample (time[0] == 0), increasing
     drive: str  # one of DRIVES
     drive_values: np.ndarray  # at each sample instant, held until the next one
     outputs: dict[str, np.ndarray]  # OUTPUT_UNITS name -> values at the sample instants
     resolution: dict[str, float] = field(default_factory=dict)  # known quantisation step per output
-    # thermal cycles: the wire stress at the first sample (the dead weight the replay hangs)
+    # thermal cycles: the wire stress at the first sample (the dead weight the replay hangs);
+    # prescribed-strain runs: the measured preload at the first sample
     stress_pa: float | None = None
     # thermal cycles on a frame whose load wanders: the stress at each sample (Pa); None when
     # it is constant
     stress_values: np.ndarray | None = None
+    # prescribed-strain runs: the strain the frame imposes at each sample (elongation positive,
+    # change from the first sample)
+    strain_values: np.ndarray | None = None
     # a bag's setpoints, for the phase labels only: (time s, mode, value)
     setpoints: tuple[tuple[float, str, float], ...] = ()
     notes: tuple[str, ...] = ()  # what the loader adjusted or dropped, for the report

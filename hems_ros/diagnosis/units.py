@@ -28,6 +28,8 @@ UNITS: dict[str, dict[str, tuple[float, float]]] = {
     "wire_force": {"N": (1.0, 0.0), "kN": (1e3, 0.0), "mN": (1e-3, 0.0)},
     "displacement": dict(_LENGTH),
     "strain": {"1": (1.0, 0.0), "%": (1e-2, 0.0)},
+    # the strain a load frame imposes on the wire (an input, elongation positive)
+    "prescribed_strain": {"1": (1.0, 0.0), "%": (1e-2, 0.0)},
     # feature tables
     "pulse_length": dict(_TIME),
     "energy": {"J": (1.0, 0.0)},
@@ -91,7 +93,7 @@ def check_unit(quantity: str, unit: str | None) -> str | None:
         return None
     if not unit:
         return default_unit(name)
-    family = "length" if name in _LENGTHS else name
+    family = "length" if name in _LENGTHS else "strain" if name == "prescribed_strain" else name
     spelled = _UNIT_ALIASES.get(family, {}).get(unit, unit)
     if spelled not in UNITS[name]:
         raise DiagnosisInputError(

@@ -262,9 +262,11 @@ def diagnose(
 
 def _with_timing_range(pool: list, data, range_s: float | None) -> list:
     """The timing candidate over +-``range_s`` (default TIMING_PERIODS of the runs' median
-    sample period); out of the pool for data without a recorded input's timing (tables of
+    sample period); out of the pool for data without a recorded electrical input (tables of
     tests, thermal cycles)."""
-    driven = isinstance(data, dataset.TimeSeriesData) and all(r.kind == "driven" for r in data.runs)
+    driven = isinstance(data, dataset.TimeSeriesData) and all(
+        r.drive != "temperature" for r in data.runs
+    )
     if not driven:
         return [c for c in pool if c.kind != "timing"]
     if range_s is None:

@@ -98,25 +98,32 @@ def _drive_array(kind: str, values, n_sets: int) -> np.ndarray:
     return np.ascontiguousarray(arr)
 
 
-def _load_segments(load_scale, n_steps: int, every: int) -> list[tuple[int, int, float]]:
-    """(first step, end step, factor) of each run of steps under one load factor."""
-    if load_scale is None:
-        return [(0, n_steps, 1.0)]
-    scale = np.asarray(load_scale, dtype=np.float64)
-    if scale.shape != (n_steps,):
-        raise ValueError(f"load_scale: expected shape ({n_steps},), got {scale.shape}")
-    if not (np.isfinite(scale).all() and (scale >= 0).all()):
-        k = int(np.argmax(~(np.isfinite(scale) & (scale >= 0))))
-        raise ValueError(f"load_scale[{k}] = {float(scale[k])!r}: must be finite and >= 0")
-    changes = np.flatnonzero(np.diff(scale)) + 1
+def _load_segments(
+    static_force_n, n_sets: int, n_steps: int, every: int
+) -> list[tuple[int, int, np.ndarray | None]]:
+    """(first step, end step, static force of each set or None: its own) of each run of
+    steps under one load."""
+    if static_force_n is None:
+        return [(0, n_steps, None)]
+    force = np.asarray(static_force_n, dtype=np.float64)
+    force = np.broadcast_to(force, (n_sets, n_steps)) if force.ndim == 1 else force
+    if force.shape != (n_sets, n_steps):
+        raise ValueError(
+            f"static_force_n: expected shape ({n_steps},) or ({n_sets}, {n_steps}), "
+            f"got {np.shape(static_force_n)}"
+        )
+    if not np.isfinite(force).all():
+        i, k = np.argwhere(~np.isfinite(force))[0]
+        raise ValueError(f"static_force_n[{i}, {k}] = {float(force[i, k])!r}: must be finite")
+    changes = np.flatnonzero(np.any(np.diff(force, axis=1) != 0, axis=0)) + 1
     if (changes % every).any():
         k = int(changes[np.argmax(changes % every != 0)])
         raise ValueError(
-            f"load_scale changes at step {k}, inside a record of {every} steps: it may "
+            f"static_force_n changes at step {k}, inside a record of {every} steps: it may "
             f"change only where a record ends"
         )
     bounds = np.concatenate(([0], changes, [n_steps]))
-    return [(int(a), int(b), float(scale[a])) for a, b in zip(bounds[:-1], bounds[1:])]
+    return [(int(a), int(b), force[:, a].copy()) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
 def _start_temperatures(start_temperature_c, n_sets: int) -> list:
@@ -142,7 +149,7 @@ def simulate(
     record_every: int = 1,
     channels: Iterable[str] | None = None,
     start_temperature_c=None,
-    load_scale=None,
+    static_force_n=None,
 ) -> SimResult:
     """Run one or many parameter sets from the initial state over one drive time series.
 
@@ -150,10 +157,11 @@ def simulate(
     temperature imposed at the end of each step, degC); arrays shaped (n_steps,) (same input
     for every set) or (n_sets, n_steps). ``start_temperature_c``: a start temperature for
     every set, or one per set (None: the set's own start, ambient plus ``params.start``),
-    as rows.initial_state takes it. ``load_scale``: (n_steps,) factors on every set's static
-    load force (m g + F_0) step by step, as a load frame holding a stress that wanders; it may
-    change only where a record ends (a multiple of ``record_every`` steps), and the start
-    state is the one under the unscaled load.
+    as rows.initial_state takes it. ``static_force_n``: the load's static force (N, load
+    coordinates, in place of each set's m g + F_0) step by step, (n_steps,) or (n_sets,
+    n_steps): a frame holding a stress that wanders, or moving the end of a stiff spring; it
+    may change only where a record ends (a multiple of ``record_every`` steps), and the start
+    state is the one under each set's own static force.
     """
     plist = [params] if isinstance(params, UnitParams) else list(params)
     if not plist or not all(isinstance(p, UnitParams) for p in plist):
@@ -183,9 +191,9 @@ def simulate(
     )
     records = np.zeros((len(index), n_sets, n_rec))
     failed_at = np.zeros(n_sets, dtype=np.int64)
-    static = packed[:, rows.P_FSTAT].copy()
-    for first, last, scale in _load_segments(load_scale, n_steps, record_every):
-        packed[:, rows.P_FSTAT] = scale * static
+    for first, last, static in _load_segments(static_force_n, n_sets, n_steps, record_every):
+        if static is not None:
+            packed[:, rows.P_FSTAT] = static
         whole = (first, last) == (0, n_steps)
         part = records if whole else np.zeros((len(index), n_sets, (last - first) // record_every))
         kernel.run_batch(

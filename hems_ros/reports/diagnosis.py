@@ -229,7 +229,7 @@ def markdown(d: Diagnosis, figures: list[str]) -> str:
 def _data_line(d: Diagnosis) -> str:
     if isinstance(d.data, TimeSeriesData):
         return "; ".join(
-            f"{r.name} ({r.n_samples} samples, {r.duration_s:.1f} s, {r.drive} in)"
+            f"{r.name} ({r.n_samples} samples, {r.duration_s:.1f} s, {_inputs(r)} in)"
             for r in d.data.runs
         )
     return "; ".join(f"{r.name} ({len(r.tests)} rows)" for r in d.data.runs)
@@ -480,3 +480,11 @@ def _ranking(d: Diagnosis, folder: Path) -> str:
     fig.savefig(folder / "candidate_ranking.png", dpi=DPI)
     plt.close(fig)
     return "candidate_ranking.png"
+
+
+def _inputs(run) -> str:
+    if run.kind == "prescribed_strain":
+        return f"{run.drive} and the frame's strain"
+    if run.stress_values is not None:
+        return f"{run.drive} and the frame's stress"
+    return run.drive

@@ -264,6 +264,43 @@ def test_thermal_cycle_whose_stress_wanders_15_percent_loads_and_diagnoses(tmp_p
     assert diagnose([held], [], BASE, candidates=["heating_temperatures"]).verdict == "unexplained"
 
 
+def test_work_loop_in_a_frame_names_a_hidden_sheath(tmp_path) -> None:
+    # a frame shortens the wire by 0.5 % and lets it back at 0.1 Hz from a 200 MPa preload,
+    # 2.5 A while it shortens; the wire was in a Bowden sheath the model does not have
+    t = np.arange(0.0, 40.0, 0.01)
+    strain = -0.0025 * (1 - np.cos(2 * np.pi * 0.1 * t))
+    current = np.where((np.sin(2 * np.pi * 0.1 * t) > 0) & (t >= 1.0), 2.5, 0.0)
+    shell = TimeSeriesRun(
+        "loop",
+        "synthetic",
+        "prescribed_strain",
+        t,
+        "current",
+        current,
+        {"wire_force": t * 0},
+        stress_pa=200e6,
+        strain_values=strain,
+    )
+    truth = BASE.replace({"sheath.enabled": True})
+    force = replay.replay(replay.plan(shell), [truth])["wire_force"][0]
+    assert 14.0 < force.min() and force.max() < 42.0  # in tension throughout
+    force = force + np.random.default_rng(1).normal(0.0, 0.05, t.size)
+    table = np.column_stack([t, current, 100 * strain, force])
+    path = tmp_path / "loop.csv"
+    np.savetxt(path, table, delimiter=",", header="t,I,eps,F", comments="", fmt="%.9g")
+    run = load_table(
+        path,
+        "time=t:s,current=I:A,prescribed_strain=eps:%,wire_force=F:N",
+        cross_section_m2=BASE.wire.cross_section_m2,
+    )
+    d = diagnose([run], [], BASE)
+    assert d.verdict == "named"
+    assert [c.name for c in d.search.final.structure] == ["sheath_heat_sink"]
+    capacity, gap = d.search.final.values
+    assert capacity == pytest.approx(truth.sheath.heat_capacity_j_per_k, rel=0.05)
+    assert gap == pytest.approx(truth.sheath.gap_resistance_k_per_w, rel=0.05)
+
+
 def test_a_partly_explained_run_does_not_say_no_candidate_helped() -> None:
     # 150 N s/m of damping (the candidate fits it) and a 0.3 mm encoder ripple (nothing fits it)
     case = suite.Case(

@@ -415,6 +415,33 @@ def test_thermal_cycle_whose_stress_wanders_takes_it_row_by_row(tmp_path: Path) 
     assert steady.stress_values is None
 
 
+def test_prescribed_strain_run_takes_the_frame_strain_in_and_the_force_out(tmp_path: Path) -> None:
+    # t ms, I A, frame strain % (from a 1 % pre-stretch), stress MPa
+    rows = [(10 * k, 2.0 if k >= 20 else 0.0, 1.0 - 0.01 * k, 200.0 + k) for k in range(150)]
+    path = write(tmp_path, "loop.csv", "t,I,eps,sigma", rows)
+    columns = "time=t:ms,current=I,prescribed_strain=eps:%,stress=sigma:MPa"
+    run = load_table(path, columns, cross_section_m2=2e-7)
+    assert (run.kind, run.drive) == ("prescribed_strain", "current")
+    assert run.stress_pa == pytest.approx(200e6)
+    np.testing.assert_allclose(run.strain_values, -1e-4 * np.arange(150), atol=1e-15)
+    np.testing.assert_allclose(run.outputs["wire_force"], (200.0 + np.arange(150)) * 1e6 * 2e-7)
+    assert "wire force from the stress column times 2e-07 m2" in run.notes
+    # a failed load cell reading drops its row; the strain keeps its own rows
+    rows[40] = rows[40][:3] + ("nan",)
+    dropped = load_table(write(tmp_path, "gap.csv", "t,I,eps,sigma", rows), columns)
+    assert dropped.n_samples == 149 and dropped.strain_values[40] == pytest.approx(-41e-4)
+    assert "needs stress=<column>[:unit] or wire_force" in error_of(
+        path, "time=t:ms,current=I,prescribed_strain=eps:%"
+    )
+    assert "displacement cannot be mapped in a prescribed-strain run" in error_of(
+        path, columns + ",displacement=eps:mm"
+    )
+    slack = [(t, i, e, 0.0) for t, i, e, _ in rows]
+    assert "the frame must hold the wire under tension from the start" in error_of(
+        write(tmp_path, "slack.csv", "t,I,eps,sigma", slack), columns
+    )
+
+
 def test_thermal_cycle_errors(tmp_path: Path) -> None:
     rows = [(20.0 + k, 0.1 * k, 150.0) for k in range(25)]
     path = write(tmp_path, "cycle.csv", "T,eps,sigma", rows)

@@ -331,13 +331,19 @@ def _crossing(temperature, xi):
     )
 
 
-def test_load_scale_steps_the_dead_weight_between_records():
+def test_static_force_steps_the_dead_weight_between_records():
     # a cold (martensite) wire held at 22 degC; the frame's stress goes 20 -> 30 MPa after 1 s
     sigma, dt, every = 20e6, 1e-2, 10
     p = _dead_weight(sigma)
     held = np.full(200, 22.0)
-    scale = np.r_[np.ones(100), np.full(100, 1.5)]
-    res = simulate(p, dt, temperature=held, record_every=every, load_scale=scale)
+    weight = p.load.static_force_n()
+    res = simulate(
+        p,
+        dt,
+        temperature=held,
+        record_every=every,
+        static_force_n=np.repeat([1.0, 1.5], 100) * weight,
+    )
     plain = simulate(p, dt, temperature=held, record_every=every)
     x, stress = res.slider_position_m[0], res.stress_pa[0]
     assert np.array_equal(x[:10], plain.slider_position_m[0][:10])
@@ -352,10 +358,10 @@ def test_load_scale_steps_the_dead_weight_between_records():
             dt,
             temperature=held,
             record_every=every,
-            load_scale=np.r_[np.ones(95), np.full(105, 1.5)],
+            static_force_n=np.repeat([1.0, 1.5], [95, 105]) * weight,
         )
-    with pytest.raises(ValueError, match=r"load_scale\[3\] = -1.0"):
-        simulate(p, dt, temperature=held, load_scale=np.r_[np.ones(3), -np.ones(197)])
+    with pytest.raises(ValueError, match=r"static_force_n\[0, 3\] = nan"):
+        simulate(p, dt, temperature=held, static_force_n=np.r_[np.ones(3), np.full(197, np.nan)])
 
 
 def test_temperature_drive_thermal_cycle_at_constant_stress():
