@@ -19,7 +19,8 @@ Verdicts: ``none`` (nothing beyond the noise to explain), ``timing`` (the input'
 only), ``recalibrated`` (parameters, with or without timing), ``named`` (effects, with or
 without the others), ``ambiguous`` (another effect fits the held-out data as well as a named
 one), ``unexplained`` (nothing accepted, or what was accepted leaves more than half of the
-starting gap).
+starting gap). The diagnosis turns ``timing``, ``recalibrated`` and ``named`` into ``partial``
+when the corrected model leaves a phase above twice the noise (workflow.Diagnosis.verdict).
 """
 
 from __future__ import annotations

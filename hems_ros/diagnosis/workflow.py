@@ -62,9 +62,16 @@ class Diagnosis:
     phases_after: list[localise.Row]
     unexplained: list[str]
     predictions: dict = field(default_factory=dict)  # "start" / "corrected" -> Prediction
+    # groups the corrected model leaves above the noise (localise.left_above_noise) -> its RMS
+    # over the noise floor
+    left: dict[str, float] = field(default_factory=dict)
 
     @property
     def verdict(self) -> str:
+        """The search's verdict, or ``partial`` where it accepted terms (timing, parameters,
+        effects) and the corrected model still leaves a group above the noise."""
+        if self.search.verdict in ("timing", "recalibrated", "named") and self.left:
+            return "partial"
         return self.search.verdict
 
     def named(self) -> list[dict]:
@@ -119,6 +126,17 @@ class Diagnosis:
             )
         elif self.verdict == "recalibrated":
             head += ": " + ", ".join(_short(p) for p in self.recalibrated().values())
+        elif self.verdict == "partial":
+            terms = [
+                f"{n['effect']} ({'; '.join(_short(p) for p in n['parameters'].values())})"
+                for n in self.named()
+            ] + [_short(p) for p in self.recalibrated().values()]
+            head += (
+                ": "
+                + ", ".join(terms or ["the input timing"])
+                + f"; left above {localise.LEFT_RMS:g}x the noise: "
+                + ", ".join(f"{g} ({m:.2g}x)" for g, m in self.left.items())
+            )
         elif self.verdict == "unexplained":
             where = ", ".join(self.unexplained) or "every phase"
             kept = self.search.final.structure
@@ -257,6 +275,7 @@ def diagnose(
         after,
         unexplained,
         {"start": start_prediction, "corrected": final_prediction},
+        localise.left_above_noise(data, before, after),
     )
 
 

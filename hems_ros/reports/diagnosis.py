@@ -44,6 +44,9 @@ def summary(d: Diagnosis) -> dict:
         "named": d.named(),
         "recalibrated": d.recalibrated(),
         "unexplained": d.unexplained,
+        # group -> residual RMS over the noise floor, where the corrected model leaves more
+        # than localise.LEFT_RMS
+        "left_above_noise": d.left,
         "gap": {
             "metric": f"{g.metric} RMSE",
             "unit": g.unit,

@@ -218,7 +218,8 @@ def render(
         "candidate is fitted by bounded least squares from several starts on the training data, "
         "ranked by BIC and kept only when it removes a fair share of what is left there and "
         "improves the held-out data beyond the noise (`hems_ros/diagnosis/search.py`). The verdict "
-        "is one of none, recalibrated, named, ambiguous, unexplained. The README shows a worked "
+        "is one of none, timing, recalibrated, named, ambiguous, partial (terms accepted, a phase "
+        "left above twice the noise), unexplained. The README shows a worked "
         "example; `hems diagnose --help` the options.",
         "",
     ]

@@ -315,6 +315,28 @@ def test_a_partly_explained_run_does_not_say_no_candidate_helped() -> None:
     assert "not removed by any candidate" not in d.summary_line()
 
 
+def test_a_named_effect_that_leaves_phases_above_the_noise_is_partial() -> None:
+    # 150 N s/m of damping and a 0.1 mm encoder ripple: the damping removes 73 % of the
+    # held-out gap, the ripple stays at 10-26 times the 2 um noise in every phase
+    case = suite.Case(
+        "damped_ripple",
+        "outside",
+        (),
+        {"load.damping_n_s_per_m": 150.0},
+        distortion=lambda t, x, f: (x + 0.1e-3 * np.sin(2 * np.pi * x / 2e-3), f),
+    )
+    d = diagnose([suite.measure(case, DUTY, "low", 0, BASE)], [], BASE, candidates=["load_damping"])
+    assert (d.search.verdict, d.verdict) == ("named", "partial")
+    assert d.search.final.values[0] == pytest.approx(150.0, rel=0.03)
+    assert {"transformation", "cooling", "rest"} <= set(d.left)
+    assert min(d.left.values()) > 2.0
+    assert re.match(
+        r"partial: load_damping \(b = 1[45]\d N s/m\); left above 2x the noise: .*cooling \(\d+x\)",
+        d.summary_line(),
+    )
+    assert summary(d)["left_above_noise"] == d.left and summary(d)["verdict"] == "partial"
+
+
 def test_a_wire_outside_the_librarys_band_recalibrates_within_bounds_around_its_model() -> None:
     """A low-temperature alloy: its datasheet's As0 (50 degC) lies below the library's NiTi
     range (60-110 degC), the wire's own is 44. The library's range cannot reach it; a range
