@@ -348,6 +348,7 @@ class Outcome:
     first: str  # the first term the forward selection accepted ('' if none)
     ranking: tuple[str, ...]  # the first step's candidates, best held-out first
     errors: dict[str, float]  # relative error of each recovered value
+    covered: dict[str, bool]  # whether each recovered value's 95 % interval holds the truth
     gap_before: float
     gap_after: float
     beyond_before: float  # the same beyond the noise floor
@@ -379,6 +380,11 @@ def outcome(case: Case, prof: str, noise: str, seed: int, d: Diagnosis) -> Outco
     errors = {
         k: abs(values[k] / v - 1.0) for k, v in case.recover.items() if values.get(k) is not None
     }
+    covered = {
+        k: d.intervals.of(k)[0] <= v <= d.intervals.of(k)[1]
+        for k, v in case.recover.items()
+        if values.get(k) is not None and d.intervals is not None
+    }
     steps = d.search.steps
     first = steps[0].chosen.structure[-1].name if steps and steps[0].chosen else ""
     ranking = tuple(f.structure[-1].name for f in steps[0].ranked) if steps else ()
@@ -398,6 +404,7 @@ def outcome(case: Case, prof: str, noise: str, seed: int, d: Diagnosis) -> Outco
         first,
         ranking,
         errors,
+        covered,
         g.heldout_before,
         g.heldout_after,
         g.beyond_noise(g.heldout_before),

@@ -13,8 +13,9 @@ from typing import Callable, Mapping
 import numpy as np
 
 from hems_ros.diagnosis import candidates as library
-from hems_ros.diagnosis import dataset, features, localise, replay
+from hems_ros.diagnosis import dataset, features, intervals, localise, replay
 from hems_ros.diagnosis.fit import near_bounds
+from hems_ros.diagnosis.intervals import Intervals
 from hems_ros.diagnosis.runs import DiagnosisInputError, FeatureRun, Run, TimeSeriesRun
 from hems_ros.diagnosis.search import Search, run_search
 from hems_ros.physics.params import UnitParams
@@ -65,6 +66,8 @@ class Diagnosis:
     # groups the corrected model leaves above the noise (localise.left_above_noise) -> its RMS
     # over the noise floor
     left: dict[str, float] = field(default_factory=dict)
+    # 95 % intervals and correlations of the corrected values (None: nothing fitted)
+    intervals: Intervals | None = None
 
     @property
     def verdict(self) -> str:
@@ -77,7 +80,7 @@ class Diagnosis:
     def named(self) -> list[dict]:
         fit = self.search.final
         return [
-            {"effect": c.name, "title": c.title, "parameters": _parameters(fit, c)}
+            {"effect": c.name, "title": c.title, "parameters": _parameters(fit, c, self.intervals)}
             for c in self.search.effects
         ]
 
@@ -85,7 +88,7 @@ class Diagnosis:
         fit = self.search.final
         out = {}
         for c in self.search.recalibrations:
-            for entry in _parameters(fit, c).items():
+            for entry in _parameters(fit, c, self.intervals).items():
                 out[entry[0]] = entry[1]
         return out
 
@@ -101,10 +104,13 @@ class Diagnosis:
         estimate = next((f.values[0] for f in ranked if f.structure == (timing,)), None)
         final = self.search.final
         kept = [v for c, v in zip(final.structure, final.values) if c is timing]
+        key = timing.parameters[0].key
+        interval = self.intervals.of(key) if kept and self.intervals is not None else None
         return {
             "range_s": [lower, upper],
             "estimate_s": None if estimate is None else float(estimate),
             "accepted_s": float(kept[0]) if kept else None,
+            "interval_s": None if interval is None else list(interval),
         }
 
     def summary_line(self) -> str:
@@ -159,24 +165,46 @@ class Diagnosis:
         return near_bounds(self.start, self.search.final)
 
 
-def _parameters(fit, candidate: library.Candidate) -> dict[str, dict]:
+def _parameters(
+    fit, candidate: library.Candidate, bounds: Intervals | None = None
+) -> dict[str, dict]:
     out, i = {}, 0
     for cand in fit.structure:
         for par in cand.parameters:
             if cand is candidate:
                 value = float(fit.values[i])
-                out[par.key] = {
+                entry = {
                     "symbol": par.symbol,
                     "value": par.display(value),
                     "unit": par.unit,
                     "si_value": value,
                 }
+                if bounds is not None:
+                    lower, upper = bounds.of(par.key)
+                    entry |= {
+                        "lower": par.display(lower),
+                        "upper": par.display(upper),
+                        "si_lower": lower,
+                        "si_upper": upper,
+                    }
+                out[par.key] = entry
             i += 1
     return out
 
 
 def _short(p: dict) -> str:
-    return f"{p['symbol']} = {p['value']:.3g} {p['unit']}".rstrip()
+    """``b = 259 N s/m [241, 277]``: the value and, when known, its 95 % interval."""
+    interval = " [{}, {}]".format(*_apart(p["lower"], p["upper"])) if "lower" in p else ""
+    return f"{p['symbol']} = {p['value']:.3g} {p['unit']}".rstrip() + interval
+
+
+def _apart(low: float, high: float) -> tuple[str, str]:
+    """Both ends with the fewest significant digits (3 to 6) that tell them apart."""
+    for digits in range(3, 7):
+        a, b = f"{low:.{digits}g}", f"{high:.{digits}g}"
+        if a != b:
+            break
+    return a, b
 
 
 def prepare(runs: list[Run], heldout: list[Run], dt: float | None = None):
@@ -276,6 +304,7 @@ def diagnose(
         unexplained,
         {"start": start_prediction, "corrected": final_prediction},
         localise.left_above_noise(data, before, after),
+        intervals.estimate(data, model, search.final),
     )
 
 

@@ -62,6 +62,7 @@ def summary(d: Diagnosis) -> dict:
         "findings": s.findings,
         "near_bounds": d.near_bounds(),
         "timing": d.timing(),
+        "intervals": _interval_summary(d),
         "dropped": s.dropped,
         "model": d.model_name,
         "heldout": d.data.split.description,
@@ -211,6 +212,7 @@ def markdown(d: Diagnosis, figures: list[str]) -> str:
         )
     lines += ["", f"Left unexplained: {', '.join(d.unexplained) or 'nothing'}.", ""]
     lines += _candidate_lines(d)
+    lines += _interval_lines(d)
     lines += [
         "## Corrected model",
         "",
@@ -491,3 +493,60 @@ def _inputs(run) -> str:
     if run.stress_values is not None:
         return f"{run.drive} and the frame's stress"
     return run.drive
+
+
+def _interval_summary(d: Diagnosis) -> dict | None:
+    iv = d.intervals
+    if iv is None:
+        return None
+    return {
+        "level": 0.95,
+        "samples": iv.n_samples,
+        "effective_samples": iv.n_effective if math.isfinite(iv.n_effective) else None,
+        "unidentifiable": [{"keys": [a, b], "correlation": r} for a, b, r in iv.unidentifiable()],
+    }
+
+
+def _interval_lines(d: Diagnosis) -> list[str]:
+    """The corrected values with their 95 % intervals and the pairs the data cannot tell apart."""
+    iv = d.intervals
+    if iv is None:
+        return []
+    entries = {**d.recalibrated()}
+    for n in d.named():
+        entries |= n["parameters"]
+    timing = d.timing()
+    lines = [
+        "## Corrected values and their 95 % intervals",
+        "",
+        f"From the training residual's Jacobian, with {iv.n_effective:.0f} effective independent "
+        f"samples of {iv.n_samples} (the residual's autocorrelation counted). They hold for "
+        "the noise of the data; where the model's form is not the wire's, a value can be off by "
+        "more.",
+        "",
+        "| parameter | value | 95 % interval |",
+        "|---|---|---|",
+    ]
+    for key, p in entries.items():
+        lines.append(
+            f"| {p['symbol']} ({key}) | {p['value']:.4g} {p['unit']} | "
+            f"{p['lower']:.4g} to {p['upper']:.4g} |"
+        )
+    if timing is not None and timing["interval_s"] is not None:
+        low, high = timing["interval_s"]
+        lines.append(
+            f"| input delay (drive.input_delay_s) | {timing['accepted_s'] * 1e3:.3g} ms | "
+            f"{low * 1e3:.3g} to {high * 1e3:.3g} |"
+        )
+    pairs = iv.unidentifiable()
+    lines += [""] + (
+        [
+            "Not separately identifiable (correlation beyond 0.95): "
+            + "; ".join(f"{a} and {b} (r = {r:+.3f})" for a, b, r in pairs)
+            + ".",
+            "",
+        ]
+        if pairs
+        else []
+    )
+    return lines

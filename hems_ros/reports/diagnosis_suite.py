@@ -36,7 +36,14 @@ QUICK = (
     ("friction_and_sag", "pulses", "low"),
 )
 #: What the suite must show (the floors of the workflow's acceptance).
-FLOORS = {"single_low": 0.9, "single_high": 0.8, "null": 0.9, "gap_cut": 0.5, "recovery_low": 0.15}
+FLOORS = {
+    "single_low": 0.9,
+    "single_high": 0.8,
+    "null": 0.9,
+    "gap_cut": 0.5,
+    "recovery_low": 0.15,
+    "coverage": 0.85,
+}
 
 
 #: The committed bag recorded from the graph with a hidden effect (bags/README.md), in a checkout.
@@ -135,6 +142,7 @@ def _record(o: suite.Outcome) -> dict:
         "ranking": list(o.ranking),
         "right": o.right,
         "errors": o.errors,
+        "covered": o.covered,
         "gap_before": o.gap_before,
         "gap_after": o.gap_after,
         "beyond_noise_before": o.beyond_before,
@@ -161,6 +169,8 @@ def statistics(outcomes: list[suite.Outcome]) -> dict:
         }
     )
     low_errors = [e for o in outcomes if o.noise == "low" and o.right for e in o.errors.values()]
+    # calibration of the intervals: every recovered value of a right answer
+    covered = [c for o in outcomes if o.right for c in o.covered.values()]
     by = {}
     for level in suite.NOISE:
         group = [o for o in single if o.noise == level]
@@ -180,6 +190,8 @@ def statistics(outcomes: list[suite.Outcome]) -> dict:
         "beyond_noise_cut_min": float(min(beyond)) if beyond else math.nan,
         "gap_cut_short": short,
         "recovery_error_max_low": float(max(low_errors)) if low_errors else math.nan,
+        "coverage": _rate(covered),
+        "coverage_values": len(covered),
     }
 
 
@@ -196,6 +208,7 @@ def headline(stats: dict, n: int) -> str:
         f"smallest held-out cut {_pct(stats['gap_cut_min'])} "
         f"({_pct(stats['beyond_noise_cut_min'])} beyond the noise)"
     )
+    parts.append(f"95 % intervals hold the truth in {_pct(stats['coverage'])}")
     return "; ".join(parts)
 
 
@@ -314,6 +327,9 @@ def _suite_section(outcomes, stats, seed, quick, figure) -> list[str]:
         f"least {_pct(stats['gap_cut_min'])} |",
         f"| recovered parameters, low noise: largest error | {_pct(FLOORS['recovery_low'])} | "
         f"{_pct(stats['recovery_error_max_low'])} |",
+        f"| recovered parameters: 95 % interval holds the true value | "
+        f"{_pct(FLOORS['coverage'])} | {_pct(stats['coverage'])} of "
+        f"{stats['coverage_values']} values |",
         "",
     ]
     if stats["gap_cut_short"]:

@@ -331,7 +331,8 @@ def test_a_named_effect_that_leaves_phases_above_the_noise_is_partial() -> None:
     assert {"transformation", "cooling", "rest"} <= set(d.left)
     assert min(d.left.values()) > 2.0
     assert re.match(
-        r"partial: load_damping \(b = 1[45]\d N s/m\); left above 2x the noise: .*cooling \(\d+x\)",
+        r"partial: load_damping \(b = 1[45]\d N s/m \[[\d.]+, [\d.]+\]\); "
+        r"left above 2x the noise: .*cooling \(\d+x\)",
         d.summary_line(),
     )
     assert summary(d)["left_above_noise"] == d.left and summary(d)["verdict"] == "partial"

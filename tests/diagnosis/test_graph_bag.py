@@ -21,7 +21,8 @@ TRUTH = BAG / "physics.yaml"
 ENCODER, DUTY = "/hems/index/encoder", "/hems/index/duty"
 HIDDEN_DAMPING = 260.0
 SUMMARY = re.compile(
-    r"^named: load_damping \(b = ([\d.]+) N s/m\); held-out position RMSE ([\d.e+-]+) mm -> "
+    r"^named: load_damping \(b = ([\d.]+) N s/m \[[\d.]+, [\d.]+\]\); held-out position RMSE "
+    r"([\d.e+-]+) mm -> "
     r"([\d.e+-]+) mm \(([+-]\d+) %\)$"
 )
 
