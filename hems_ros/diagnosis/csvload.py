@@ -52,6 +52,8 @@ MIN_SAMPLES = 20
 MIN_DRIVEN_S = 1.0
 MIN_TESTS = 2
 STRESS_TOLERANCE = 0.02
+#: A thermal cycle whose last temperature is within this of its first closes (degC).
+CLOSED_C = 1.0
 #: A driven run sampled slower than this (median step) is no record of an electrically heated
 #: wire, whose thermal time constants are about a second: most likely a time in ms declared as s.
 MAX_DRIVEN_STEP_S = 1.0
@@ -559,11 +561,24 @@ def _thermal_cycle(
         time = _numbers(table, "time", *columns["time"])
         _check_time(table, time, "time")
     else:
-        # the path's own parameter: each row must move the temperature on
+        # the path's own parameter: a row that does not move the temperature on (a plateau of a
+        # digitised curve) adds nothing a quasi-static model could follow
+        still = np.r_[False, np.diff(temperature) == 0.0] & keep
+        if still.any():
+            keep = keep & ~still
+            notes.append(
+                f"{int(still.sum())} row(s) at the temperature of the row before dropped: "
+                "without a time column, the path is the temperature's"
+            )
         time = np.concatenate(([0.0], np.cumsum(np.abs(np.diff(temperature)))))
-        _check_time(table, time, "without a time column, the cumulative temperature change")
         notes.append("no time column: time is the cumulative temperature change at 1 degC per s")
     time, outputs = _kept(time, outputs, keep)
+    temperature, load = temperature[keep], load[keep]
+    order = _from_coldest(temperature, notes)
+    if order is not None:
+        time = _rotated_time(time, order)
+        temperature, load = temperature[order], load[order]
+        outputs = {k: v[order] - v[order][0] for k, v in outputs.items()}
     require_span(str(path), time, "thermal_cycle")
     return TimeSeriesRun(
         name=name,
@@ -571,12 +586,36 @@ def _thermal_cycle(
         kind="thermal_cycle",
         time=time,
         drive="temperature",
-        drive_values=temperature[keep],
+        drive_values=temperature,
         outputs=outputs,
-        stress_pa=float(load[keep][0]) if wandering else float(np.mean(load)),
-        stress_values=load[keep] if wandering else None,
+        stress_pa=float(load[0]) if wandering else float(np.mean(load)),
+        stress_values=load if wandering else None,
         notes=tuple(notes),
     )
+
+
+def _from_coldest(temperature: np.ndarray, notes: list[str]) -> np.ndarray | None:
+    """The rows of a closed cycle that starts warm (a wire cooled first, then heated back), read
+    from its coldest row, where the wire is martensite as the replay starts it: the rows before
+    it follow the last one, the first left out (the cycle closes on it). None when the run
+    starts at its coldest or is not closed (it ends more than CLOSED_C from its start)."""
+    coldest = int(np.argmin(temperature))
+    if temperature[0] - temperature[coldest] <= CLOSED_C:
+        return None
+    if abs(temperature[-1] - temperature[0]) > CLOSED_C:
+        return None
+    notes.append(
+        f"the cycle starts warm ({temperature[0]:.4g} degC) and closes: read from its coldest "
+        f"row ({temperature[coldest]:.4g} degC), the rows before it after the last"
+    )
+    n = temperature.size
+    return np.r_[np.arange(coldest, n), np.arange(1, coldest + 1)]
+
+
+def _rotated_time(time: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """Times of the rotated rows: each row keeps its step from the row before it (the first
+    row's after the last, which closes the cycle on it)."""
+    return np.r_[0.0, np.cumsum(np.diff(time)[order[1:] - 1])]
 
 
 def _features(table: _Table, columns: Columns, name: str) -> FeatureRun:
