@@ -387,10 +387,7 @@ def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSerie
             f"{table.path}: no output column mapped: add one of {', '.join(OUTPUTS)} "
             f"to --columns"
         )
-    time = _numbers(table, "time", *columns["time"])
-    _check_time(table, time, "time")
-    time = time - time[0]
-    require_span(str(table.path), time, "driven")
+    time = _driven_time(table, columns)
     values = _numbers(table, drive, *columns[drive])
     outputs, keep, notes = _outputs(
         table, columns, tuple(OUTPUTS), rest=_lead_in(time, values, drive)
@@ -413,6 +410,15 @@ def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSerie
     )
 
 
+def _driven_time(table: _Table, columns: Columns) -> np.ndarray:
+    """The time column of an electrically driven run, from its first row, checked."""
+    time = _numbers(table, "time", *columns["time"])
+    _check_time(table, time, "time")
+    time = time - time[0]
+    require_span(str(table.path), time, "driven")
+    return time
+
+
 def _prescribed_strain(
     table: _Table, columns: Columns, name: str, drive: str, cross_section_m2: float
 ) -> TimeSeriesRun:
@@ -432,10 +438,7 @@ def _prescribed_strain(
             f"{path}: no output column mapped: a prescribed-strain run needs "
             f"stress=<column>[:unit] or wire_force=<column>[:unit] in --columns"
         )
-    time = _numbers(table, "time", *columns["time"])
-    _check_time(table, time, "time")
-    time = time - time[0]
-    require_span(str(path), time, "driven")
+    time = _driven_time(table, columns)
     values = _numbers(table, drive, *columns[drive])
     _check_plausible(table, columns, time, drive, values)
     strain = _numbers(table, "prescribed_strain", *columns["prescribed_strain"])

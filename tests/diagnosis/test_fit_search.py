@@ -302,16 +302,24 @@ def test_work_loop_in_a_frame_names_a_hidden_sheath(tmp_path) -> None:
     assert gap == pytest.approx(truth.sheath.gap_resistance_k_per_w, rel=0.05)
 
 
-def test_a_partly_explained_run_does_not_say_no_candidate_helped() -> None:
-    # 150 N s/m of damping (the candidate fits it) and a 0.3 mm encoder ripple (nothing fits it)
+def _damped_with_ripple(amplitude_m: float):
+    """150 N s/m of damping and an encoder ripple of ``amplitude_m`` over a 2 mm pole pitch,
+    diagnosed with the damping candidate alone."""
     case = suite.Case(
         "damped_ripple",
         "outside",
         (),
         {"load.damping_n_s_per_m": 150.0},
-        distortion=lambda t, x, f: (x + 0.3e-3 * np.sin(2 * np.pi * x / 2e-3), f),
+        distortion=lambda t, x, f: (x + amplitude_m * np.sin(2 * np.pi * x / 2e-3), f),
     )
-    d = diagnose([suite.measure(case, DUTY, "low", 0, BASE)], [], BASE, candidates=["load_damping"])
+    return diagnose(
+        [suite.measure(case, DUTY, "low", 0, BASE)], [], BASE, candidates=["load_damping"]
+    )
+
+
+def test_a_partly_explained_run_does_not_say_no_candidate_helped() -> None:
+    # 150 N s/m of damping (the candidate fits it) and a 0.3 mm encoder ripple (nothing fits it)
+    d = _damped_with_ripple(0.3e-3)
     assert d.verdict == "unexplained" and [n["effect"] for n in d.named()] == ["load_damping"]
     assert "not removed by any candidate" not in d.summary_line()
 
@@ -319,14 +327,7 @@ def test_a_partly_explained_run_does_not_say_no_candidate_helped() -> None:
 def test_a_named_effect_that_leaves_phases_above_the_noise_is_partial() -> None:
     # 150 N s/m of damping and a 0.1 mm encoder ripple: the damping removes 73 % of the
     # held-out gap, the ripple stays at 10-26 times the 2 um noise in every phase
-    case = suite.Case(
-        "damped_ripple",
-        "outside",
-        (),
-        {"load.damping_n_s_per_m": 150.0},
-        distortion=lambda t, x, f: (x + 0.1e-3 * np.sin(2 * np.pi * x / 2e-3), f),
-    )
-    d = diagnose([suite.measure(case, DUTY, "low", 0, BASE)], [], BASE, candidates=["load_damping"])
+    d = _damped_with_ripple(0.1e-3)
     assert (d.search.verdict, d.verdict) == ("named", "partial")
     assert d.search.final.values[0] == pytest.approx(150.0, rel=0.03)
     assert {"transformation", "cooling", "rest"} <= set(d.left)
