@@ -472,10 +472,21 @@ def test_thermal_cycle_errors(tmp_path: Path) -> None:
         "T,eps,sigma",
         [(20.0 + min(k, 10), 0.1 * k, 150.0) for k in range(25)],
     )
-    assert (
-        "row 13: time 10 s is not after row 12's 10 s (without a time column, the cumulative "
-        "temperature change must increase strictly)"
-        in error_of(flat, "temperature=T,strain=eps,stress=sigma")
+    # without a time column a row that does not move the temperature on is dropped: here
+    # fourteen, which leaves too few
+    assert "flat.csv: 11 samples are too few" in error_of(
+        flat, "temperature=T,strain=eps,stress=sigma"
+    )
+    plateau = write(
+        tmp_path,
+        "plateau.csv",
+        "T,eps,sigma",
+        [(20.0 + k - (k == 7), 0.1 * k, 150.0) for k in range(25)],
+    )
+    run = load_table(plateau, "temperature=T,strain=eps,stress=sigma")
+    assert run.n_samples == 24 and (
+        "1 row(s) at the temperature of the row before dropped: without a time column, the path "
+        "is the temperature's" in run.notes
     )
 
 
