@@ -23,6 +23,12 @@ A measured column's cell written ``nan`` or ``inf`` (a logger's value for a fail
 its row with a note, the row's input still driving the model over its interval; more than
 ``runs.MAX_BAD_SHARE`` of the rows so refuses the run. Any other cell that is not a finite
 number, in an input column any non-finite one, is an error naming row and column.
+
+Logs with several rates: in a run with a time column, an empty cell of a measured column is a
+reading not taken at that row (the column is logged more slowly): the column's readings are
+interpolated linearly onto the rows between them, and rows before its first or after its last
+reading are dropped. An empty input cell holds the input before it. Rows unevenly spaced are
+read at the plant steps nearest their times. Each of these leaves a note.
 """
 
 from __future__ import annotations
@@ -341,16 +347,28 @@ def load_table(
 
 
 def _outputs(
-    table: _Table, columns: Columns, quantities: tuple[str, ...], rest: int = 1
+    table: _Table,
+    columns: Columns,
+    quantities: tuple[str, ...],
+    rest: int = 1,
+    time: np.ndarray | None = None,
 ) -> tuple[dict[str, np.ndarray], np.ndarray, list[str]]:
     """The mapped outputs, the rows where each is a number, and the notes on those that are
     not (a nan or inf written in a measured column: the row is dropped). Displacement and
     strain as changes from their mean over the first ``rest`` rows (the run's lead-in at
-    rest): one noisy first reading would shift the whole run."""
+    rest): one noisy first reading would shift the whole run. With the rows' ``time``, a
+    column with empty cells is a slower channel of a log with several rates (:func:`_slower`)."""
     outputs, keep, notes = {}, np.ones(len(table.rows), dtype=bool), []
     for quantity in quantities:
         if quantity in columns:
-            values = _numbers(table, quantity, *columns[quantity], measured=True)
+            values = _numbers(table, quantity, *columns[quantity], blanks=True, measured=True)
+            if time is not None:
+                values = _slower(table, columns[quantity][0], time, values, keep, notes)
+            elif _blank(table, columns[quantity][0]).any():
+                raise DiagnosisInputError(
+                    f"{table.path}: column {columns[quantity][0]} has empty cells: a table "
+                    f"without a time column cannot say when its readings were taken"
+                )
             finite = np.isfinite(values)
             notes += non_finite_note(str(table.path), f"column {columns[quantity][0]}", finite)
             keep &= finite
@@ -359,6 +377,44 @@ def _outputs(
                 values = values - float(np.mean(lead_in if lead_in.size else values[finite][:1]))
             outputs[OUTPUTS[quantity]] = values
     return outputs, keep, notes
+
+
+def _blank(table: _Table, column: str) -> np.ndarray:
+    index = _column_index(table, "", column)
+    return np.array([not fields[index].strip() for _, fields in table.rows])
+
+
+def _slower(
+    table: _Table,
+    column: str,
+    time: np.ndarray,
+    values: np.ndarray,
+    keep: np.ndarray,
+    notes: list[str],
+) -> np.ndarray:
+    """A column logged more slowly than the rows (empty cells between its readings): its
+    readings linearly interpolated onto the rows between them; rows before its first reading
+    or after its last are dropped (``keep``)."""
+    blank = _blank(table, column)
+    if not blank.any():
+        return values
+    read = np.flatnonzero(~blank)
+    if read.size < 2:
+        raise DiagnosisInputError(f"{table.path}: column {column} holds fewer than two readings")
+    finite = read[np.isfinite(values[read])]
+    filled = values.copy()
+    # rows outside the readings take the nearest one only to be dropped below
+    filled[blank] = np.interp(time[blank], time[finite], values[finite])
+    row = np.arange(values.size)
+    outside = blank & ((row < read[0]) | (row > read[-1]))
+    keep &= ~outside
+    rate = 1.0 / float(np.median(np.diff(time[read])))
+    notes.append(
+        f"column {column}: {read.size} readings in {values.size} rows (about {rate:.3g} Hz), "
+        f"interpolated linearly onto the rows between them"
+        + (f"; {int(outside.sum())} rows outside them dropped" if outside.any() else "")
+    )
+    return filled
 
 
 def _kept(
@@ -388,10 +444,12 @@ def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSerie
             f"to --columns"
         )
     time = _driven_time(table, columns)
-    values = _numbers(table, drive, *columns[drive])
-    outputs, keep, notes = _outputs(
-        table, columns, tuple(OUTPUTS), rest=_lead_in(time, values, drive)
+    notes = _sampling_notes(time)
+    values = _held(table, drive, columns[drive], notes)
+    outputs, keep, more = _outputs(
+        table, columns, tuple(OUTPUTS), rest=_lead_in(time, values, drive), time=time
     )
+    notes += more
     _check_plausible(table, columns, time, drive, values)
     # a dropped row's interval keeps its own input
     steps = None if keep.all() else (time - time[keep][0], values)
@@ -408,6 +466,37 @@ def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSerie
         notes=tuple(notes),
         drive_steps=steps,
     )
+
+
+def _held(table: _Table, drive: str, spec: tuple[str, str | None], notes: list[str]) -> np.ndarray:
+    """The input column; an empty cell (a log that writes the input only when it changes, or
+    at a slower rate) holds the value before it, as the drive board holds a command."""
+    values = _numbers(table, drive, *spec, blanks=True)
+    blank = np.isnan(values)
+    if blank[0]:
+        raise DiagnosisInputError(
+            f"{table.where(table.rows[0][0], _column_index(table, drive, spec[0]))}: the "
+            f"{drive} is empty in the first row: there is no value before it to hold"
+        )
+    if blank.any():
+        last = np.maximum.accumulate(np.where(blank, 0, np.arange(values.size)))
+        values = values[last]
+        notes.append(
+            f"column {spec[0]}: {int(blank.sum())} empty cells hold the {drive} before them"
+        )
+    return values
+
+
+def _sampling_notes(time: np.ndarray) -> list[str]:
+    """A note when the rows are not evenly spaced (a logger's jitter, a pause)."""
+    steps = np.diff(time)
+    median = float(np.median(steps))
+    if steps.min() >= 0.9 * median and steps.max() <= 1.1 * median:
+        return []
+    return [
+        f"rows {steps.min() * 1e3:.3g}-{steps.max() * 1e3:.3g} ms apart (median "
+        f"{median * 1e3:.3g} ms): each is read at the plant step nearest its time"
+    ]
 
 
 def _driven_time(table: _Table, columns: Columns) -> np.ndarray:
@@ -439,10 +528,12 @@ def _prescribed_strain(
             f"stress=<column>[:unit] or wire_force=<column>[:unit] in --columns"
         )
     time = _driven_time(table, columns)
-    values = _numbers(table, drive, *columns[drive])
+    notes = _sampling_notes(time)
+    values = _held(table, drive, columns[drive], notes)
     _check_plausible(table, columns, time, drive, values)
     strain = _numbers(table, "prescribed_strain", *columns["prescribed_strain"])
-    outputs, keep, notes = _outputs(table, columns, ("wire_force", "temperature"))
+    outputs, keep, more = _outputs(table, columns, ("wire_force", "temperature"), time=time)
+    notes += more
     if "stress" in columns:
         stress = _numbers(table, "stress", *columns["stress"], measured=True)
         finite = np.isfinite(stress)

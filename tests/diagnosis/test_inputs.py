@@ -300,12 +300,16 @@ def test_mapping_errors(tmp_path: Path) -> None:
     assert "time cannot be mapped in a feature table" in error_of(path, "pulse=t,rmse=x,time=t")
 
 
-@pytest.mark.parametrize("bad", ["abc", ""])
-def test_unreadable_value_names_row_and_column(tmp_path: Path, bad: str) -> None:
+def test_unreadable_value_names_row_and_column(tmp_path: Path) -> None:
     rows = driven_rows()
-    rows[15] = (rows[15][0], rows[15][1], bad, rows[15][3])  # file row 17: the header is row 1
+    rows[15] = (rows[15][0], rows[15][1], "abc", rows[15][3])  # file row 17: the header is row 1
     path = write(tmp_path, "run.csv", "t,I,x,F", rows)
-    assert error_of(path, DRIVEN) == f"{path}: row 17, column x: {bad!r} is not a finite number"
+    assert error_of(path, DRIVEN) == f"{path}: row 17, column x: 'abc' is not a finite number"
+    # an empty cell is a reading not taken at that row: the column's readings around it fill it
+    rows[15] = (rows[15][0], rows[15][1], "", rows[15][3])
+    run = load_table(write(tmp_path, "gap.csv", "t,I,x,F", rows), DRIVEN)
+    assert run.outputs["position"][15] == pytest.approx(0.05e-3 * 15)
+    assert "column x: 100 readings in 101 rows" in run.notes[0]
 
 
 @pytest.mark.parametrize("bad", ["nan", "inf", "-inf"])
@@ -439,6 +443,41 @@ def test_prescribed_strain_run_takes_the_frame_strain_in_and_the_force_out(tmp_p
     slack = [(t, i, e, 0.0) for t, i, e, _ in rows]
     assert "the frame must hold the wire under tension from the start" in error_of(
         write(tmp_path, "slack.csv", "t,I,eps,sigma", slack), columns
+    )
+
+
+def test_a_log_with_several_rates_and_a_jittery_clock_loads_with_notes(tmp_path: Path) -> None:
+    # rows every 10 ms but every seventh 3 ms late; the current written every fifth row (the
+    # cells between empty); the force read at 10 Hz, from row 3 on
+    rows = [
+        (
+            10 * k + (3 if k % 7 == 0 else 0),
+            ("0.3" if 50 <= k < 150 else "0") if k % 5 == 0 else "",
+            f"{3 + 0.01 * k:.3f}",
+            f"{1 + 0.01 * k:.3f}" if k % 10 == 2 else "",
+        )
+        for k in range(300)
+    ]
+    path = write(tmp_path, "rates.csv", "t,I,x,F", rows)
+    run = load_table(path, "time=t:ms,current=I:A,displacement=x:mm,force=F:N")
+    assert run.notes == (
+        "rows 7-13 ms apart (median 10 ms): each is read at the plant step nearest its time",
+        "column I: 240 empty cells hold the current before them",
+        "column F: 30 readings in 300 rows (about 10 Hz), interpolated linearly onto the rows "
+        "between them; 9 rows outside them dropped",
+    )
+    assert run.n_samples == 291
+    # the force between two readings lies on the line between them (a straight ramp here)
+    times = np.array([r[0] for r in rows], dtype=float)
+    read = np.arange(2, 300, 10)
+    expected = np.interp(times[2:293], times[read], 1.0 + 0.01 * read)
+    np.testing.assert_allclose(run.outputs["wire_force"], expected, atol=1e-12)
+    # the current holds from one written cell to the next; the dropped rows still drive
+    assert run.drive_values[47:51].tolist() == [0.0, 0.3, 0.3, 0.3]  # row k is sample k - 2
+    rows[0] = (0, "", "3.000", "")
+    assert "the current is empty in the first row" in error_of(
+        write(tmp_path, "late.csv", "t,I,x,F", rows),
+        "time=t:ms,current=I:A,displacement=x:mm,force=F:N",
     )
 
 
