@@ -53,10 +53,13 @@ class Case:
     @property
     def verdicts(self) -> tuple[str, ...]:
         """Verdicts that count as right."""
+        # an effect in another form than its candidate may leave a phase above the noise
+        # after the candidate is named: partial says so, naming the same candidate
         return {
             "null": ("none",),
             "parameter": ("recalibrated",),
             "outside": ("unexplained", "partial"),
+            "structural": ("named", "partial"),
         }.get(self.category, ("named",))
 
 

@@ -174,7 +174,9 @@ def _rate(items: list[bool]) -> float:
 def statistics(outcomes: list[suite.Outcome]) -> dict:
     """The suite's figures against its floors."""
     single = [o for o in outcomes if o.case.category == "single"]
-    named = [o for o in outcomes if o.verdict in ("named", "ambiguous") and o.case.expected]
+    named = [
+        o for o in outcomes if o.verdict in ("named", "ambiguous", "partial") and o.case.expected
+    ]
     cuts = [1.0 - o.gap_after / o.gap_before for o in named if o.gap_before > 0]
     beyond = [1.0 - o.beyond_after / o.beyond_before for o in named if o.beyond_before > 0]
     short = sorted(
@@ -363,7 +365,7 @@ def _suite_section(outcomes, stats, seed, quick, figure) -> list[str]:
         f"| two at once: both named | - | {_pct(c['pair']['right'])} of {c['pair']['runs']} |",
         f"| parameter only: recalibrated | - | {_pct(c['parameter']['right'])} of "
         f"{c['parameter']['runs']} |",
-        f"| outside the library: unexplained | - | {_pct(c['outside']['right'])} of "
+        f"| outside the library: unexplained or partial | - | {_pct(c['outside']['right'])} of "
         f"{c['outside']['runs']} |",
         f"| null: no missing effect | {_pct(FLOORS['null'])} | {_pct(c['null']['right'])} of "
         f"{c['null']['runs']} |",
