@@ -84,6 +84,7 @@ def test_the_committed_page_meets_the_floors() -> None:
     assert _measured("whenever named: held-out RMSE cut (noise included)") >= 0.5
     assert _measured("structural mismatch: right effect named") >= 0.5
     assert _measured("recovered parameters, low noise: largest error") <= 0.15
+    assert _measured("recovered parameters: 95 % interval holds the true value") >= 0.85
 
 
 @pytest.mark.parametrize("study", dissertation.STUDIES, ids=lambda s: s.key)
