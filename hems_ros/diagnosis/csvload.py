@@ -434,18 +434,12 @@ def _lead_in(time: np.ndarray, drive: np.ndarray, drive_name: str) -> int:
 
 def _driven(table: _Table, columns: Columns, name: str, drive: str) -> TimeSeriesRun:
     _restrict(columns, ("time", drive, *OUTPUTS), "a driven run", table.path)
-    if "time" not in columns:
-        raise DiagnosisInputError(
-            f"{table.path}: no time column mapped: " f"add time=<column>[:unit] to --columns"
-        )
-    if not any(q in columns for q in OUTPUTS):
+    if not any(q in columns for q in OUTPUTS) and "time" in columns:
         raise DiagnosisInputError(
             f"{table.path}: no output column mapped: add one of {', '.join(OUTPUTS)} "
             f"to --columns"
         )
-    time = _driven_time(table, columns)
-    notes = _sampling_notes(time)
-    values = _held(table, drive, columns[drive], notes)
+    time, values, notes = _driven_input(table, columns, drive)
     outputs, keep, more = _outputs(
         table, columns, tuple(OUTPUTS), rest=_lead_in(time, values, drive), time=time
     )
@@ -499,13 +493,21 @@ def _sampling_notes(time: np.ndarray) -> list[str]:
     ]
 
 
-def _driven_time(table: _Table, columns: Columns) -> np.ndarray:
-    """The time column of an electrically driven run, from its first row, checked."""
+def _driven_input(
+    table: _Table, columns: Columns, drive: str
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Time (from the first row) and input of an electrically driven run, checked, with the
+    notes on their sampling."""
+    if "time" not in columns:
+        raise DiagnosisInputError(
+            f"{table.path}: no time column mapped: add time=<column>[:unit] to --columns"
+        )
     time = _numbers(table, "time", *columns["time"])
     _check_time(table, time, "time")
     time = time - time[0]
     require_span(str(table.path), time, "driven")
-    return time
+    notes = _sampling_notes(time)
+    return time, _held(table, drive, columns[drive], notes), notes
 
 
 def _prescribed_strain(
@@ -520,16 +522,12 @@ def _prescribed_strain(
         "a prescribed-strain run",
         path,
     )
-    if "time" not in columns:
-        raise DiagnosisInputError(f"{path}: a prescribed-strain run needs time=<column>[:unit]")
-    if not {"stress", "wire_force"} & set(columns):
+    if not {"stress", "wire_force"} & set(columns) and "time" in columns:
         raise DiagnosisInputError(
             f"{path}: no output column mapped: a prescribed-strain run needs "
             f"stress=<column>[:unit] or wire_force=<column>[:unit] in --columns"
         )
-    time = _driven_time(table, columns)
-    notes = _sampling_notes(time)
-    values = _held(table, drive, columns[drive], notes)
+    time, values, notes = _driven_input(table, columns, drive)
     _check_plausible(table, columns, time, drive, values)
     strain = _numbers(table, "prescribed_strain", *columns["prescribed_strain"])
     outputs, keep, more = _outputs(table, columns, ("wire_force", "temperature"), time=time)
