@@ -25,13 +25,18 @@ RUN: a bag folder recorded from the graph (input /hems/<finger>/duty, measuremen
 --columns quantity=column[:unit],... e.g. time=t:s,duty=d:%,displacement=x:mm,force=F:N
   driven run:    time and one of duty, current, voltage in; displacement (contraction
                  positive), strain (elongation positive), wire_force (alias force),
-                 load_force, temperature out
+                 load_force, temperature out; an empty cell of a column logged more
+                 slowly is filled between its readings, an empty input cell holds
+  run in a frame: time, one of duty, current, voltage and prescribed_strain (elongation
+                 positive) in; stress or wire_force out (work loops)
   thermal cycle: temperature in (rows in path order, time optional), stress or load_force
                  (taken row by row where the frame let it wander), strain or
-                 displacement out
+                 displacement out; a cycle that starts warm and closes is read from
+                 its coldest row
   table of tests: name, pulse_length, current, energy, cooled_displacement, protocol,
                  controller (conditions); peak_displacement, peak_force, cooling_time,
                  overshoot, rise_time, ss_error, rmse, mean_power (figures; blank = not given)
+  stress and load over the cross-section of the --model wire
   units: s ms min | % 1 | A mA | V mV | degC K | Pa kPa MPa GPa | N kN mN | m mm um |
          strain 1 or %; a unit left out is SI (temperatures degC, duty %)
 """
