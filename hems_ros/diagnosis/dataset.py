@@ -32,11 +32,6 @@ NOISE_FLOOR = {
 PRIMARY_ORDER = ("position", "strain", "wire_force", "load_force", "temperature")
 
 
-#: The noise's sample-to-sample correlation is taken as at most this: a residual that wanders
-#: more slowly than AR(1) at 0.95 is the model's, not the sensor's.
-MAX_NOISE_RHO = 0.95
-
-
 #: Lags (samples) of the third differences the noise's correlation is read from.
 NOISE_LAGS = np.array([1, 2, 3])
 #: Correlations tried for the noise: a residual that wanders more slowly than AR(1) at 0.95 is

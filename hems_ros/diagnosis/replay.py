@@ -219,7 +219,8 @@ def physics_key(params: UnitParams) -> UnitParams:
 def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
     """Each measured output of the run as the model gives it: (n_sets, n_samples) arrays."""
     run = p.run
-    keys = [physics_key(rig(s, run)) for s in sets]
+    rigged = [rig(s, run) for s in sets]  # the rig's sensors read too
+    keys = [physics_key(r) for r in rigged]
     unique: dict[UnitParams, int] = {}
     for key in keys:
         if cannot_start(key, run) is None:
@@ -244,7 +245,7 @@ def replay(p: ReplayPlan, sets: list[UnitParams]) -> dict[str, np.ndarray]:
     initial = _initial_outputs(physics, start)
     live = np.array([k in unique for k in keys])
     picked = np.array([unique[k] for k in keys if k in unique])
-    chosen = [rig(s, run) for s, ok in zip(sets, live) if ok]  # the rig's sensors read
+    chosen = [r for r, ok in zip(rigged, live) if ok]
     for name in run.outputs:
         channel = _KERNEL_CHANNELS[name]
         series = np.concatenate([initial[channel][:, None], res[channel][:, p.records]], axis=1)[

@@ -168,11 +168,11 @@ def run_search(
         best = eligible[0]
         tied = [f for f in eligible if f.train <= best.train * (1.0 + TIE)]
         # the input's timing before a recalibration before new physics
-        recal = sorted(
+        plainer = sorted(
             (f for f in tied if f.structure[-1].kind in PLAINER),
             key=lambda f: PLAINER.index(f.structure[-1].kind),
         )
-        chosen = recal[0] if recal else best
+        chosen = plainer[0] if plainer else best
         rivals = [
             f
             for f in tied

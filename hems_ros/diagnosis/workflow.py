@@ -125,21 +125,19 @@ class Diagnosis:
             )
         elif accepted is not None:
             head += f" (input timing {accepted * 1e3:+.3g} ms)"
+        effects = [
+            f"{n['effect']} ({'; '.join(_short(p) for p in n['parameters'].values())})"
+            for n in self.named()
+        ]
+        values = [_short(p) for p in self.recalibrated().values()]
         if self.verdict in ("named", "ambiguous"):
-            head += ": " + ", ".join(
-                f"{n['effect']} ({'; '.join(_short(p) for p in n['parameters'].values())})"
-                for n in self.named()
-            )
+            head += ": " + ", ".join(effects)
         elif self.verdict == "recalibrated":
-            head += ": " + ", ".join(_short(p) for p in self.recalibrated().values())
+            head += ": " + ", ".join(values)
         elif self.verdict == "partial":
-            terms = [
-                f"{n['effect']} ({'; '.join(_short(p) for p in n['parameters'].values())})"
-                for n in self.named()
-            ] + [_short(p) for p in self.recalibrated().values()]
             head += (
                 ": "
-                + ", ".join(terms or ["the input timing"])
+                + ", ".join(effects + values or ["the input timing"])
                 + f"; left above {localise.LEFT_RMS:g}x the noise: "
                 + ", ".join(f"{g} ({m:.2g}x)" for g, m in self.left.items())
             )
