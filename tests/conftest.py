@@ -14,6 +14,9 @@ from pathlib import Path
 
 import pytest
 
+# the hook below is found by its name in this module: every test runs under the hang guard
+from hang_guard import live_descendants, pytest_runtest_protocol  # noqa: F401
+
 REPO = Path(__file__).resolve().parent.parent
 VENV = REPO / ".venv"
 _domain_lock = None
@@ -50,41 +53,12 @@ def venv() -> Path:
     return VENV
 
 
-def _live_descendants(root: int) -> dict[int, str]:
-    """Processes below ``root`` that still run (zombies left out), with their command lines."""
-    children: dict[int, list[int]] = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            pid, rest = stat.read_text().split(" (", 1)
-            state, ppid = rest.rsplit(") ", 1)[1].split()[:2]
-        except (OSError, ValueError):
-            continue  # gone while we looked
-        if state != "Z":
-            children.setdefault(int(ppid), []).append(int(pid))
-    found: dict[int, str] = {}
-    stack = list(children.get(root, []))
-    while stack:
-        pid = stack.pop()
-        try:
-            found[pid] = (
-                Path(f"/proc/{pid}/cmdline")
-                .read_bytes()
-                .replace(b"\0", b" ")
-                .decode(errors="replace")
-                .strip()
-            )
-        except OSError:
-            continue
-        stack.extend(children.get(pid, []))
-    return found
-
-
 @pytest.fixture(scope="module", autouse=True)
 def no_process_outlives_its_module():
     """A node a test module left running would join every later test's graph in this
     domain (a second controller answering the same samples); kill it and say which."""
     yield
-    left = _live_descendants(os.getpid())
+    left = live_descendants(os.getpid())
     if not left:
         return
     for pid in left:
