@@ -62,10 +62,13 @@ def register(subparsers) -> None:
         nargs="+",
         default=[],
         metavar="RUN",
-        help="runs to test on only (default: the tool holds out every third cycle, "
-        "or every third row of a table). A separate run recorded with other inputs is "
-        "the stronger test, and the only one of an effect that acts at a run's start "
-        "(a warm wire shows in the first cycle alone)",
+        help="runs kept out of the fit: their odd cycles (rows of a table) select the "
+        "terms, their even ones test the result. Default: every third cycle or row from the "
+        "second selects and, from eight cycles or rows on (three left to fit), every third "
+        "from the third tests; with fewer the gap is measured on the selecting data (the "
+        "report says so). A separate run recorded with other inputs is the stronger test, and the "
+        "only one of an effect that acts at a run's start (a warm wire shows in the first "
+        "cycle alone)",
     )
     parser.add_argument(
         "--model",

@@ -80,13 +80,32 @@ def _mean_square(d: np.ndarray) -> float:
     return float(np.mean(kept**2))
 
 
+#: The split's note when the data are too few for a test role of their own.
+NO_TEST = "; too few for a test of their own: the gap is measured on the selecting data"
+
+
 @dataclass
 class Split:
-    """Which samples of each run fit the model and which test it."""
+    """The role of every sample of each run: ``train`` fits the parameters, ``heldout`` selects
+    the terms and the verdict, ``test`` chose nothing and measures the gap (the selecting
+    samples again, said in ``description``, when the data are too few for a third role)."""
 
     train: list[np.ndarray]
     heldout: list[np.ndarray]
+    test: list[np.ndarray]
     description: str
+
+    def role(self, which: str) -> list[np.ndarray]:
+        return {"train": self.train, "heldout": self.heldout, "test": self.test}[which]
+
+
+def three_roles(
+    train: list[np.ndarray], select: list[np.ndarray], test: list[np.ndarray], description: str
+) -> Split:
+    """A Split, testing on the selecting samples (and saying so) when none are left to test."""
+    if not any(m.any() for m in test):
+        return Split(train, select, select, description + NO_TEST)
+    return Split(train, select, test, description)
 
 
 @dataclass
@@ -179,8 +198,8 @@ class TimeSeriesData:
         return max(self.channels, key=cost)
 
     def rmse(self, prediction: Prediction, name: str, which: str) -> float:
-        """RMSE of one output over the ``train`` or ``heldout`` samples, SI."""
-        masks = self.split.train if which == "train" else self.split.heldout
+        """RMSE of one output over the samples of one role (Split.role), SI."""
+        masks = self.split.role(which)
         sq, n = 0.0, 0
         for run, sim, mask in zip(self.runs, prediction.outputs, masks):
             if name in run.outputs and mask.any():
@@ -196,33 +215,52 @@ class TimeSeriesData:
 def prepare(
     runs: list[TimeSeriesRun], heldout: list[TimeSeriesRun], dt: float | None = None
 ) -> TimeSeriesData:
-    """Plans, phases and the split: the ``heldout`` runs, or every third cycle of each run."""
+    """Plans, phases and the split: the ``heldout`` runs (their odd cycles select, their even
+    ones test), or cycles of each run (phases.cycle_roles)."""
     everything = list(runs) + list(heldout)
     plans = [plan(r, dt) for r in everything]
     segments = [phase_mod.segment(r) for r in everything]
+    train, select, test = [], [], []
     if heldout:
-        train = [np.ones(r.n_samples, bool) for r in runs] + [
-            np.zeros(r.n_samples, bool) for r in heldout
-        ]
-        test = [~m for m in train]
-        names = ", ".join(r.name for r in heldout)
-        description = f"held-out runs: {names} (fitted on {', '.join(r.name for r in runs)})"
-    else:
-        train, test, parts = [], [], []
-        for run, seg in zip(runs, segments):
-            chosen = phase_mod.heldout_cycles(seg.n_cycles)
-            mask = np.isin(seg.cycle, chosen)
-            train.append(~mask)
-            test.append(mask)
-            parts.append(
-                f"{run.name}: cycles {', '.join(str(c + 1) for c in chosen) or 'none'} "
-                f"of {seg.n_cycles}"
-            )
-        if not any(m.any() for m in test):
-            counts = ", ".join(f"{r.name} {s.n_cycles}" for r, s in zip(runs, segments))
-            raise DiagnosisInputError(
-                f"too short to hold data out: {counts} cycle(s); a run needs at least "
-                f"{phase_mod.MIN_CYCLES} actuation cycles, or give --heldout RUN"
-            )
-        description = "held-out cycles (every third, from the second): " + "; ".join(parts)
-    return TimeSeriesData(everything, plans, segments, Split(train, test, description))
+        for run in runs:
+            train.append(np.ones(run.n_samples, bool))
+            select.append(np.zeros(run.n_samples, bool))
+            test.append(np.zeros(run.n_samples, bool))
+        for run, seg in zip(heldout, segments[len(runs) :]):
+            testing = np.isin(seg.cycle, np.arange(1, seg.n_cycles, 2))
+            train.append(np.zeros(run.n_samples, bool))
+            select.append(~testing)
+            test.append(testing)
+        description = (
+            f"held-out runs: {', '.join(r.name for r in heldout)}, cycles 1, 3 ... selecting "
+            f"the terms and 2, 4 ... testing them (fitted on {', '.join(r.name for r in runs)})"
+        )
+        return TimeSeriesData(
+            everything, plans, segments, three_roles(train, select, test, description)
+        )
+    parts = []
+    for run, seg in zip(runs, segments):
+        selecting, testing = phase_mod.cycle_roles(seg.n_cycles)
+        select.append(np.isin(seg.cycle, selecting))
+        test.append(np.isin(seg.cycle, testing))
+        train.append(~(select[-1] | test[-1]))
+        parts.append(
+            f"{run.name}: cycles {_numbers(selecting)} select, {_numbers(testing)} test, "
+            f"of {seg.n_cycles}"
+        )
+    if not any(m.any() for m in select):
+        counts = ", ".join(f"{r.name} {s.n_cycles}" for r, s in zip(runs, segments))
+        raise DiagnosisInputError(
+            f"too short to hold data out: {counts} cycle(s); a run needs at least "
+            f"{phase_mod.MIN_CYCLES} actuation cycles, or give --heldout RUN"
+        )
+    description = "cycles held out of the fit, selecting the terms or testing them: " + "; ".join(
+        parts
+    )
+    return TimeSeriesData(
+        everything, plans, segments, three_roles(train, select, test, description)
+    )
+
+
+def _numbers(cycles: list[int]) -> str:
+    return ", ".join(str(c + 1) for c in cycles) or "none"

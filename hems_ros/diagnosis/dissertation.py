@@ -9,10 +9,15 @@ calibrated chapter 5 rig, and Table 6.1 against the HEMS index unit the graph si
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Callable
 
-from hems_ros.diagnosis import csvload, inputs
+import numpy as np
+
+from hems_ros.diagnosis import csvload, features, inputs
+from hems_ros.diagnosis.runs import FeatureRun
 from hems_ros.diagnosis.workflow import Diagnosis, diagnose
 from hems_ros.paths import config_path
 from hems_ros.physics import validation
@@ -33,6 +38,8 @@ class Study:
     model: str
     conditions: str | None  # file in config/measurements
     question: str
+    rig: str  # conditions file in config/measurements of the rig alone, for the joint diagnosis
+    calibrated: str  # the calibrated set the graph and the experiments run on this rig
     sheath_check: bool = (
         False  # weigh the corrected wire and sheath against the chapter 3 sheath facts
     )
@@ -68,6 +75,8 @@ STUDIES = (
         "docs/validation.md's onset analysis points instead at lower transformation temperatures "
         "or at pulses that began on a warm wire. Here the bare Table 4.1 wire on the chapter 3 rig "
         "meets the six rows with every candidate within its published bounds.",
+        rig="ch3_rig.yaml",
+        calibrated="sheathed_calibrated",
         sheath_check=True,
     ),
     Study(
@@ -84,6 +93,8 @@ STUDIES = (
         "the step, 1.54 mm on the staircase against none measured) and finds the model's step "
         "rising three times faster than the dissertation's; by hand, about four times Table 4.1's "
         "load damping removed most of the overshoot.",
+        rig="ch5_rig.yaml",
+        calibrated="ch5_straight_40n",
     ),
     Study(
         "table_6_1",
@@ -95,8 +106,14 @@ STUDIES = (
         "docs/experiments.md misses Table 6.1's position RMSE by 5-55 times on the sine, ramp and "
         "step: the model's wire starts to move later than the dissertation's (a dead time at full "
         "duty), which a start from a warm wire shortens but does not remove.",
+        rig="ch6_rig.yaml",
+        calibrated="ch6_hems_index",
     ),
 )
+
+
+#: The joint diagnosis starts from the dissertation's own wire, every slope within NiTi's band.
+JOINT_MODEL = "table41"
 
 
 def run(study: Study, progress: Callable[[str], None] | None = None) -> Diagnosis:
@@ -130,3 +147,64 @@ def sheath_check(d: Diagnosis) -> SheathCheck:
     return SheathCheck(
         validation.sheath_facts(wire), validation.sheath_facts(load_params("sheathed_calibrated"))
     )
+
+
+def joint_tables() -> list[FeatureRun]:
+    """Every study's table, each on its own rig."""
+    folder = config_path("measurements")
+    return [
+        dataclasses.replace(
+            csvload.load_table(folder / s.table, s.columns, name=s.key),
+            rig=inputs.rig(folder / s.rig),
+        )
+        for s in STUDIES
+    ]
+
+
+def run_joint(progress: Callable[[str], None] | None = None) -> Diagnosis:
+    """One wire (and sheath) for the three tables together, from :data:`JOINT_MODEL`."""
+    return diagnose(joint_tables(), [], inputs.model(JOINT_MODEL), progress=progress)
+
+
+@dataclass(frozen=True)
+class FigureMiss:
+    """How far a model misses one figure of one table: the RMS over its rows of the miss in
+    units of the figure's assumed uncertainty (``features.uncertainty``)."""
+
+    study: Study
+    figure: str
+    calibrated: float  # the calibrated set of the study's rig
+    joint: float  # the joint corrected model on the study's rig
+
+
+def figure_misses(d: Diagnosis) -> list[FigureMiss]:
+    """Every study's figures, the calibrated sets against the joint corrected model."""
+    out = []
+    for study, table in zip(STUDIES, joint_tables()):
+        data = features.prepare([table], [])
+        calibrated, joint = data.predict(
+            [
+                load_params(study.calibrated).replace(dict(table.rig)),
+                d.corrected.replace(dict(table.rig)),
+            ]
+        )
+        for figure in data.channels:
+            out.append(
+                FigureMiss(
+                    study,
+                    figure,
+                    _miss(data, calibrated, figure),
+                    _miss(data, joint, figure),
+                )
+            )
+    return out
+
+
+def _miss(data: features.FeatureData, prediction, figure: str) -> float:
+    r = [
+        (prediction.outputs[j].get(figure, math.nan) - t.figures[figure])
+        / features.uncertainty(figure, t.figures[figure])
+        for j, (_, t) in enumerate(data.tests)
+        if figure in t.figures
+    ]
+    return float(np.sqrt(np.mean(np.square(r)))) if r else math.nan

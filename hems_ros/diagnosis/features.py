@@ -16,7 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from hems_ros.control import metrics
-from hems_ros.diagnosis.dataset import Prediction, Split
+from hems_ros.diagnosis import phases
+from hems_ros.diagnosis.dataset import Prediction, Split, three_roles
 from hems_ros.diagnosis.runs import FIGURE_UNITS, DiagnosisInputError, FeatureRun, FeatureTest
 from hems_ros.experiments.lockstep import run_protocol
 from hems_ros.physics.batch import simulate
@@ -106,9 +107,20 @@ class FeatureData:
         return np.array(parts)
 
     def _figures(self, sets: list[UnitParams]) -> list[list[dict[str, float]]]:
-        """Model figures, [set][test]."""
+        """Model figures, [set][test]; each table's rows on the sets with its rig."""
         out: list[list[dict[str, float]]] = [[{} for _ in self.tests] for _ in sets]
-        pulses = [j for j, (_, t) in enumerate(self.tests) if "pulse_s" in t.conditions]
+        rigs: dict[tuple, list[int]] = {}
+        for j, (run, _) in enumerate(self.tests):
+            rigs.setdefault(run.rig, []).append(j)
+        for rig, rows in rigs.items():
+            rigged = [s.replace(dict(rig)) for s in sets] if rig else sets
+            self._rig_figures(rigged, rows, out)
+        return out
+
+    def _rig_figures(
+        self, sets: list[UnitParams], rows: list[int], out: list[list[dict[str, float]]]
+    ) -> None:
+        pulses = [j for j in rows if "pulse_s" in self.tests[j][1].conditions]
         if pulses:
             for (i, j), fig in zip(
                 [(i, j) for i in range(len(sets)) for j in pulses],
@@ -116,19 +128,19 @@ class FeatureData:
             ):
                 out[i][j] = fig
         loops: dict[tuple[str, str], list[int]] = {}
-        for j, (_, t) in enumerate(self.tests):
+        for j in rows:
+            t = self.tests[j][1]
             if "protocol" in t.conditions:
                 loops.setdefault(
                     (str(t.conditions["protocol"]), str(t.conditions.get("controller", "bpid"))), []
                 ).append(j)
-        for (protocol, strategy), rows in loops.items():
+        for (protocol, strategy), same in loops.items():
             for i, figs in enumerate(_loop_figures(protocol, strategy, sets)):
-                for j in rows:
+                for j in same:
                     out[i][j] = {
                         name: figs.get(key, math.nan) * scale
                         for name, (key, scale) in LOOP_FIGURES.items()
                     }
-        return out
 
     def headline(self, start: Prediction) -> str:
         """The figure the starting model misses most on held-out rows, in uncertainty units."""
@@ -147,7 +159,7 @@ class FeatureData:
         return max(self.channels, key=cost)
 
     def rmse(self, prediction: Prediction, name: str, which: str) -> float:
-        mask = (self.split.train if which == "train" else self.split.heldout)[0]
+        mask = self.split.role(which)[0]
         errs = [
             prediction.outputs[j].get(name, math.nan) - t.figures[name]
             for j, ((_, t), take) in enumerate(zip(self.tests, mask))
@@ -226,17 +238,31 @@ def prepare(runs: list[FeatureRun], heldout: list[FeatureRun], dt: float = PULSE
                 "(pulse_length=<column>) or a protocol (protocol=<column>)"
             )
     if heldout:
-        test_mask = np.array([run in heldout for run, _ in tests])
-        description = f"held-out tables: {', '.join(r.name for r in heldout)}"
+        held = np.array([run in heldout for run, _ in tests])
+        order = np.cumsum(held) - 1  # position among the held-out rows
+        select, test = held & (order % 2 == 0), held & (order % 2 == 1)
+        description = (
+            f"held-out tables: {', '.join(r.name for r in heldout)}, rows 1, 3 ... of them "
+            "selecting the terms and 2, 4 ... testing them"
+        )
     else:
         if len(tests) < MIN_ROWS:
             raise DiagnosisInputError(
                 f"{len(tests)} test row(s): at least {MIN_ROWS} are needed to hold one out"
             )
-        test_mask = np.isin(np.arange(len(tests)), np.arange(1, len(tests), 3))
-        description = "held-out rows (every third, from the second): " + ", ".join(
-            t.name for (_, t), m in zip(tests, test_mask) if m
+        select_rows, test_rows = phases.cycle_roles(len(tests))
+        j = np.arange(len(tests))
+        select, test = np.isin(j, select_rows), np.isin(j, test_rows)
+        description = (
+            "rows held out of the fit: "
+            + ", ".join(t.name for (_, t), m in zip(tests, select) if m)
+            + " select the terms; "
+            + (", ".join(t.name for (_, t), m in zip(tests, test) if m) or "none")
+            + " test them"
         )
     return FeatureData(
-        list(runs) + list(heldout), tests, Split([~test_mask], [test_mask], description), dt
+        list(runs) + list(heldout),
+        tests,
+        three_roles([~(select | test)], [select], [test], description),
+        dt,
     )

@@ -67,17 +67,22 @@ def _mapping(option: str, path: Path, expected: str) -> dict:
 
 def _with_conditions(params: UnitParams, path: Path) -> UnitParams:
     """``params`` with the groups and keys a partial physics YAML gives."""
-    data = _mapping("--conditions", path, "a mapping of parameter groups")
-    merged = params.to_dict()
-    for key, value in data.items():
-        if isinstance(value, dict) and isinstance(merged.get(key), dict):
-            merged[key].update(value)
-        else:
-            merged[key] = value
     try:
-        return UnitParams.from_dict(merged, source=str(path))
+        return params.replace(dict(rig(path)))
     except (ParamError, TypeError) as error:
-        raise DiagnosisInputError(f"--conditions {error}") from None
+        raise DiagnosisInputError(f"--conditions {path}: {error}") from None
+
+
+def rig(path: Path) -> tuple[tuple[str, object], ...]:
+    """A conditions file (a partial physics YAML) as (dotted key, value) pairs."""
+    data = _mapping("--conditions", path, "a mapping of parameter groups")
+    pairs: list[tuple[str, object]] = []
+    for group, values in data.items():
+        if isinstance(values, dict):
+            pairs += [(f"{group}.{key}", value) for key, value in values.items()]
+        else:
+            pairs.append((group, values))
+    return tuple(pairs)
 
 
 def bounds(path: Path | None) -> dict[str, object]:

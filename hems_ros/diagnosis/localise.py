@@ -116,15 +116,15 @@ def cycles(
     """(run, cycle number from 1, residual RMS in display units, held out?) of ``name``."""
     unit, scale = display(data, name)
     out = []
-    for run, sim, seg, test in zip(
-        data.runs, prediction.outputs, data.segments, data.split.heldout
+    for run, sim, seg, select, test in zip(
+        data.runs, prediction.outputs, data.segments, data.split.heldout, data.split.test
     ):
         if name not in run.outputs:
             continue
         for c in range(seg.n_cycles):
             m = seg.cycle == c
             r = sim[name][m] - run.outputs[name][m]
-            out.append((run.name, c + 1, metrics.rms(r) * scale, bool(test[m].any())))
+            out.append((run.name, c + 1, metrics.rms(r) * scale, bool((select | test)[m].any())))
     return out
 
 

@@ -10,9 +10,9 @@ Phases (candidates.PHASES) say where in an actuation cycle a sample lies:
 
 A cycle starts where the drive comes on again after the wire was back near rest with the
 drive off (or, in a run that never gets back to rest, after the drive was off for a second);
-the tool holds out whole cycles (every third, from the second) when no
-held-out run is given, so that early cycles (a warm start) and late ones (heat building
-up) are both tested.
+when no held-out run is given, whole cycles are kept from the fit (every third from the
+second to select the terms, every third from the third to test them in a run long enough),
+so that early cycles (a warm start) and late ones (heat building up) are in every role.
 """
 
 from __future__ import annotations
@@ -35,6 +35,9 @@ MIN_OFF_S = 0.3
 #: Without returns to rest, a cycle starts after the drive was off this long.
 LONG_OFF_S = 1.0
 MIN_CYCLES = 3
+#: A test role of its own only when it leaves this many cycles (or table rows) to fit: fitted
+#: on two cycles, a hidden damping's estimate scattered three times as much as on three.
+MIN_FIT_CYCLES = 3
 #: A thermal cycle turns where the temperature reverses by this share of its range.
 TURN_FRACTION = 0.1
 
@@ -185,6 +188,13 @@ def _valleys(values: np.ndarray, turn: float) -> list[int]:
     return valleys
 
 
-def heldout_cycles(n_cycles: int) -> list[int]:
-    """Every third cycle from the second (0-based 1, 4, 7 ...); none below MIN_CYCLES."""
-    return list(range(1, n_cycles, 3)) if n_cycles >= MIN_CYCLES else []
+def cycle_roles(n_cycles: int) -> tuple[list[int], list[int]]:
+    """The cycles that select the terms, every third from the second (0-based 1, 4, 7 ...), and
+    those that test them, every third from the third (2, 5 ...) when MIN_FIT_CYCLES are left to
+    fit (none otherwise); neither below MIN_CYCLES."""
+    if n_cycles < MIN_CYCLES:
+        return [], []
+    select, test = list(range(1, n_cycles, 3)), list(range(2, n_cycles, 3))
+    if n_cycles - len(select) - len(test) < MIN_FIT_CYCLES:
+        return select, []
+    return select, test

@@ -134,12 +134,17 @@ class FeatureTest:
 
 @dataclass(frozen=True)
 class FeatureRun:
-    """A table of tests (kind (c) of the measured data)."""
+    """A table of tests (kind (c) of the measured data).
+
+    ``rig``: the parameters of the rig the table was measured on (dotted key, value), set on
+    every model its rows run on, so that tables from several rigs diagnose one wire
+    together; a parameter a rig sets is the rig's in every fit."""
 
     name: str
     source: str
     tests: tuple[FeatureTest, ...]
     notes: tuple[str, ...] = ()
+    rig: tuple[tuple[str, object], ...] = ()
 
 
 Run = TimeSeriesRun | FeatureRun

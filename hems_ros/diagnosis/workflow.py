@@ -26,8 +26,8 @@ TIMING_PERIODS = 3
 
 @dataclass
 class Gap:
-    """Headline disagreement: RMSE of the output the starting model misses most, train and
-    held-out, before and after."""
+    """Headline disagreement: RMSE of the output the starting model misses most, on the fitted
+    data and on the held-out data that chose nothing (Split.test), before and after."""
 
     metric: str
     unit: str
@@ -281,8 +281,8 @@ def diagnose(
         unit,
         data.rmse(start_prediction, headline, "train") * scale,
         data.rmse(final_prediction, headline, "train") * scale,
-        data.rmse(start_prediction, headline, "heldout") * scale,
-        data.rmse(final_prediction, headline, "heldout") * scale,
+        data.rmse(start_prediction, headline, "test") * scale,
+        data.rmse(final_prediction, headline, "test") * scale,
         data.sigma[headline] * scale if isinstance(data, dataset.TimeSeriesData) else math.nan,
     )
     before, after = localise.table(data, start_prediction), localise.table(data, final_prediction)

@@ -186,11 +186,12 @@ def markdown(d: Diagnosis, figures: list[str]) -> str:
         f"| {g.metric} RMSE, {g.unit} | before | after |",
         "|---|---|---|",
         f"| training data | {_num(g.train_before)} | {_num(g.train_after)} |",
-        f"| held-out data | {_num(g.heldout_before)} | {_num(g.heldout_after)} |",
+        f"| held-out data that chose nothing (test) | {_num(g.heldout_before)} | "
+        f"{_num(g.heldout_after)} |",
     ]
     if math.isfinite(g.noise):
         lines += [
-            f"| held-out, beyond the noise floor ({_num(g.noise)} {g.unit}) | "
+            f"| test, beyond the noise floor ({_num(g.noise)} {g.unit}) | "
             f"{_num(g.beyond_noise(g.heldout_before))} | {_num(g.beyond_noise(g.heldout_after))} |"
         ]
     lines += [""]
@@ -245,11 +246,12 @@ def _candidate_lines(d: Diagnosis) -> list[str]:
     lines = [
         "## Candidates",
         "",
-        f"Starting model: training cost {_num(s.start.train)}, held-out cost "
+        f"Starting model: training cost {_num(s.start.train)}, held-out (selecting) cost "
         f"{_num(s.start.heldout)}. Each step fits every candidate on top of the model so far "
         f"(bounded least squares, several starts) and ranks them by BIC on the training data "
-        f"(dBIC: against the starting model); the held-out cost decides whether the best one "
-        f"generalises.",
+        f"(dBIC: against the starting model); the cost on the held-out selecting data decides "
+        f"whether the best one generalises. The gap above is measured on the test data, which "
+        f"chose nothing.",
         "",
     ]
     for i, step in enumerate(s.steps, start=1):
@@ -351,7 +353,7 @@ def _overlays(d: Diagnosis, folder: Path) -> list[str]:
         fig, axes = plt.subplots(
             len(channels) + 1, 1, figsize=(10, 2.2 * (len(channels) + 1)), sharex=True
         )
-        seg, test = data.segments[i], data.split.heldout[i]
+        seg, test = data.segments[i], data.split.heldout[i] | data.split.test[i]
         for ax, name in zip(axes, channels):
             unit, scale = localise.display(data, name)
             _shade(ax, run.time, seg.phase, test)

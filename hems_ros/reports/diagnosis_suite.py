@@ -414,6 +414,11 @@ def _suite_section(outcomes, stats, seed, quick, figure) -> list[str]:
     return lines + [""]
 
 
+def _role(select: bool, test: bool) -> str:
+    """A held-out row's role; a row that is both (too few rows to test apart) selects."""
+    return " (held out, selects)" if select else " (held out, tests)" if test else ""
+
+
 def _study_section(study: studies_module.Study, d: Diagnosis) -> list[str]:
     data = d.data
     lines = [
@@ -434,7 +439,7 @@ def _study_section(study: studies_module.Study, d: Diagnosis) -> list[str]:
         "|---" * (len(channels) + 1) + "|",
     ]
     start, corrected = d.predictions["start"], d.predictions["corrected"]
-    held = data.split.heldout[0]
+    select, tested = data.split.heldout[0], data.split.test[0]
     for j, (_, test) in enumerate(data.tests):
         cells = []
         for name in channels:
@@ -447,9 +452,7 @@ def _study_section(study: studies_module.Study, d: Diagnosis) -> list[str]:
                 )
             else:
                 cells.append("-")
-        lines.append(
-            f"| {test.name}{' (held out)' if held[j] else ''} | " + " | ".join(cells) + " |"
-        )
+        lines.append(f"| {test.name}{_role(select[j], tested[j])} | " + " | ".join(cells) + " |")
     lines.append("")
     if d.search.findings:
         lines += [

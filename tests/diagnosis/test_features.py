@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from hems_ros.diagnosis import features, localise
+from hems_ros.diagnosis import dataset, features, localise
 from hems_ros.diagnosis.runs import DiagnosisInputError, FeatureRun, FeatureTest
 from hems_ros.diagnosis.workflow import diagnose
 from hems_ros.experiments.lockstep import run_protocol
@@ -52,7 +52,13 @@ def test_pulse_figures_of_table_4_1() -> None:
 def test_a_table_made_by_the_model_is_matched_by_it() -> None:
     truth = BASE.replace(SHEATH)
     data = features.prepare([_table(truth)], [])
+    # every third row from the second selects; six rows are too few to test apart as well
     assert data.split.heldout[0].tolist() == [False, True, False, False, True, False]
+    assert data.split.test[0].tolist() == data.split.heldout[0].tolist()
+    assert data.split.description.endswith(dataset.NO_TEST)
+    nine = features.prepare([_table(truth, ROWS + ROWS[:3])], []).split
+    assert nine.heldout[0].tolist() == [False, True, False] * 3
+    assert nine.test[0].tolist() == [False, False, True] * 3
     assert data.channels == ["peak_displacement", "peak_force", "cooling_time"] and data.drives == {
         "current"
     }
@@ -83,6 +89,7 @@ def test_a_hidden_sheath_is_recovered_from_pulse_figures() -> None:
     assert [c.name for c in d.search.final.structure] == ["sheath_heat_sink"]
     c_s, r_gap = d.search.final.values
     assert c_s == pytest.approx(4.0, rel=0.02) and r_gap == pytest.approx(2.0, rel=0.02)
+    # measured on the test rows, which chose nothing
     assert (
         d.gap.metric == "cooling_time" and d.gap.heldout_before > 1.0 and d.gap.heldout_after < 0.02
     )
@@ -130,7 +137,10 @@ def test_feature_tables_need_conditions_and_rows() -> None:
         features.prepare([_table(BASE, ROWS[:2])], [])
     data = features.prepare([_table(BASE, ROWS[:2])], [_table(BASE, ROWS[2:3], name="other")])
     assert data.split.heldout[0].tolist() == [False, False, True]
-    assert data.split.description == "held-out tables: other"
+    # one held-out row cannot both select and test: the gap is measured on it, and said so
+    assert data.split.test[0].tolist() == [False, False, True]
+    assert data.split.description.startswith("held-out tables: other")
+    assert data.split.description.endswith(dataset.NO_TEST)
 
 
 @pytest.fixture(scope="module")

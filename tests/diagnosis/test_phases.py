@@ -172,20 +172,18 @@ def test_thermal_cycles_of_a_noisy_thermometer() -> None:
 
 
 @pytest.mark.parametrize(
-    "n, held",
+    "n, select, test",
     [
-        (0, []),
-        (2, []),
-        (3, [1]),
-        (4, [1]),
-        (5, [1, 4]),
-        (7, [1, 4]),
-        (8, [1, 4, 7]),
-        (10, [1, 4, 7]),
+        (0, [], []),
+        (2, [], []),
+        (3, [1], []),
+        (6, [1, 4], []),
+        (8, [1, 4, 7], [2, 5]),
+        (9, [1, 4, 7], [2, 5, 8]),
     ],
 )
-def test_heldout_cycles(n: int, held: list[int]) -> None:
-    assert phases.heldout_cycles(n) == held
+def test_cycle_roles(n: int, select: list[int], test: list[int]) -> None:
+    assert phases.cycle_roles(n) == (select, test)
 
 
 def test_motion_prefers_position_then_strain_then_force() -> None:

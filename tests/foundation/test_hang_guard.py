@@ -30,7 +30,11 @@ def _pytest(folder: Path, *args: str) -> subprocess.CompletedProcess:
     env = dict(os.environ, HEMS_TEST_HANG_S="1", PYTHONPATH=str(TESTS))
     return subprocess.run(
         [sys.executable, "-m", "pytest", "-p", "hang_guard", "-p", "no:cacheprovider", *args],
-        cwd=folder, env=env, capture_output=True, text=True, timeout=60,
+        cwd=folder,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
 
 
