@@ -79,10 +79,13 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--conditions",
         type=Path,
-        default=None,
+        action="append",
+        default=[],
         metavar="FILE",
         help="YAML with the run's conditions over the model (load, ambient, drive), in the "
-        "layout of config/physics/*.yaml; only the keys it gives change",
+        "layout of config/physics/*.yaml; only the keys it gives change. Once per RUN "
+        "(then --heldout RUN, in order): tables of tests measured on different rigs, each "
+        "on its own, diagnosing one wire",
     )
     parser.add_argument(
         "--set",
@@ -111,7 +114,13 @@ def register(subparsers) -> None:
         "(default three sample periods): a logger that stamps each sample with the end of "
         "the period it held, or a loop's latency, is named as timing, not as physics",
     )
-    parser.add_argument("--columns", default=None, help="column mapping of table runs (see below)")
+    parser.add_argument(
+        "--columns",
+        action="append",
+        default=[],
+        help="column mapping of table runs (see below); once for every table, or once per RUN "
+        "(then --heldout RUN, in order)",
+    )
     parser.add_argument(
         "--fingers", default=None, help="fingers of a bag, comma separated (default: all found)"
     )
@@ -200,16 +209,22 @@ def run(args: argparse.Namespace) -> int:
     try:
         if not args.runs:
             raise DiagnosisInputError("no RUN given (a bag folder or a table file with --columns)")
-        model = inputs.model(args.model, args.conditions, args.overrides)
+        paths = args.runs + args.heldout
+        columns = inputs.per_run("--columns", args.columns, len(paths))
+        rigs = inputs.per_run("--conditions", args.conditions, len(paths))
+        shared = args.conditions[0] if len(args.conditions) == 1 else None
+        model = inputs.model(args.model, shared, args.overrides)
         chosen = inputs.candidate_names(args.candidates)
         bounds = inputs.bounds(args.bounds)
         area = model.wire.cross_section_m2
-        runs = [
-            r for path in args.runs for r in inputs.load(path, args.columns, args.fingers, area)
+        loaded = [
+            inputs.on_rig(
+                inputs.load(path, cols, args.fingers, area), None if shared else rig, model
+            )
+            for path, cols, rig in zip(paths, columns, rigs)
         ]
-        heldout = [
-            r for path in args.heldout for r in inputs.load(path, args.columns, args.fingers, area)
-        ]
+        runs = [r for group in loaded[: len(args.runs)] for r in group]
+        heldout = [r for group in loaded[len(args.runs) :] for r in group]
         out = args.out or Path("results", "diagnosis", inputs.stem(args.runs[0]))
         inputs.check_output(out)
         diagnosis = diagnose(

@@ -9,14 +9,13 @@ calibrated chapter 5 rig, and Table 6.1 against the HEMS index unit the graph si
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
-from hems_ros.diagnosis import csvload, features, inputs
+from hems_ros.diagnosis import candidates, csvload, features, fit, inputs, intervals
 from hems_ros.diagnosis.runs import FeatureRun
 from hems_ros.diagnosis.workflow import Diagnosis, diagnose
 from hems_ros.paths import config_path
@@ -150,15 +149,27 @@ def sheath_check(d: Diagnosis) -> SheathCheck:
 
 
 def joint_tables() -> list[FeatureRun]:
-    """Every study's table, each on its own rig."""
+    """Every study's table, each on its own rig (what :func:`joint_command` loads)."""
     folder = config_path("measurements")
+    model = inputs.model(JOINT_MODEL)
     return [
-        dataclasses.replace(
-            csvload.load_table(folder / s.table, s.columns, name=s.key),
-            rig=inputs.rig(folder / s.rig),
-        )
+        run
         for s in STUDIES
+        for run in inputs.on_rig(
+            [csvload.load_table(folder / s.table, s.columns, name=s.key)], folder / s.rig, model
+        )
     ]
+
+
+def joint_command() -> str:
+    """The ``hems diagnose`` call of the joint diagnosis: --columns and --conditions per table."""
+    return " ".join(
+        ["hems diagnose"]
+        + [f"config/measurements/{s.table}" for s in STUDIES]
+        + [f"--columns {s.columns}" for s in STUDIES]
+        + [f"--model {JOINT_MODEL}"]
+        + [f"--conditions config/measurements/{s.rig}" for s in STUDIES]
+    )
 
 
 def run_joint(progress: Callable[[str], None] | None = None) -> Diagnosis:
@@ -208,3 +219,70 @@ def _miss(data: features.FeatureData, prediction, figure: str) -> float:
         if figure in t.figures
     ]
     return float(np.sqrt(np.mean(np.square(r)))) if r else math.nan
+
+
+@dataclass(frozen=True)
+class Pull:
+    """Where one study's table alone takes one candidate, on top of the joint corrected model:
+    each parameter's value and 95 % interval, and those that ended on a published bound."""
+
+    study: Study
+    candidate: str
+    values: dict[str, tuple[float, float, float]]  # key -> (value, lower, upper), SI
+    pinned: tuple[str, ...]
+
+
+def pulls(d: Diagnosis, progress: Callable[[str], None] | None = None) -> list[Pull]:
+    """Every candidate of the joint model, and the stress slopes, refitted on each table alone:
+    chapters whose intervals do not overlap pull that parameter apart."""
+    names = [c.name for c in d.search.final.structure if c.kind != "timing"]
+    names += [n for n in ("stress_slopes",) if n not in names]
+    out = []
+    for study, table in zip(STUDIES, joint_tables()):
+        data = features.prepare([table], [])
+        for name in names:
+            if progress:
+                progress(f"{study.key}: {name} on this table alone")
+            [found] = fit.fit_structures(data, d.corrected, [(candidates.BY_NAME[name],)], {})
+            bounds = intervals.estimate(data, d.corrected, found)
+            values = {}
+            for key, value in zip(bounds.keys, bounds.values):
+                low, high = bounds.of(key)
+                values[key] = (float(value), low, high)
+            out.append(Pull(study, name, values, tuple(found.pinned)))
+    return out
+
+
+def apart(pulled: list[Pull]) -> list[tuple[str, Pull, Pull]]:
+    """(parameter key, pull, pull) of two tables whose 95 % intervals of it do not overlap."""
+    out = []
+    for i, a in enumerate(pulled):
+        for b in pulled[i + 1 :]:
+            if a.candidate != b.candidate or a.study == b.study:
+                continue
+            for key, (_, low_a, high_a) in a.values.items():
+                _, low_b, high_b = b.values[key]
+                if high_a < low_b or high_b < low_a:
+                    out.append((key, a, b))
+    return out
+
+
+@dataclass(frozen=True)
+class Joint:
+    """The joint diagnosis, the figures of its model against the calibrated sets', what each
+    table alone makes of its terms, and its chapter 3 sheath facts."""
+
+    diagnosis: Diagnosis
+    misses: list[FigureMiss]
+    pulls: list[Pull]
+    sheath: SheathCheck
+
+    @property
+    def worse(self) -> list[FigureMiss]:
+        """Figures the calibrated sets meet better than the joint in-bounds model."""
+        return [m for m in self.misses if m.joint > m.calibrated]
+
+
+def joint(progress: Callable[[str], None] | None = None) -> Joint:
+    d = run_joint(progress)
+    return Joint(d, figure_misses(d), pulls(d, progress), sheath_check(d))

@@ -6,13 +6,14 @@ Every problem is a :class:`DiagnosisInputError` whose message is one line.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from pathlib import Path
 
 import yaml
 
 from hems_ros.diagnosis import bagload, candidates, csvload
-from hems_ros.diagnosis.runs import DiagnosisInputError, Run
+from hems_ros.diagnosis.runs import DiagnosisInputError, FeatureRun, Run
 from hems_ros.physics.params import ParamError, UnitParams, load_params
 from hems_ros.physics.yamlload import load_yaml
 
@@ -83,6 +84,38 @@ def rig(path: Path) -> tuple[tuple[str, object], ...]:
         else:
             pairs.append((group, values))
     return tuple(pairs)
+
+
+def per_run(option: str, given: list, n_runs: int) -> list:
+    """An option given once for every run, or once per run in order; None where not given."""
+    if not given:
+        return [None] * n_runs
+    if len(given) == 1:
+        return list(given) * n_runs
+    if len(given) != n_runs:
+        raise DiagnosisInputError(
+            f"{option} given {len(given)} times for {n_runs} run(s): give it once for all, "
+            "or once per RUN then --heldout RUN, in order"
+        )
+    return list(given)
+
+
+def on_rig(runs: list[Run], conditions: Path | None, model: UnitParams) -> list[Run]:
+    """The runs of one RUN argument, tables of tests set on the rig its --conditions give."""
+    if conditions is None:
+        return runs
+    pairs = rig(conditions)
+    for run in runs:
+        if not isinstance(run, FeatureRun):
+            raise DiagnosisInputError(
+                f"--conditions {conditions} for {run.name}: a rig per run applies to tables of "
+                "tests only; give one --conditions for every run of a time series"
+            )
+    try:
+        model.replace(dict(pairs))
+    except (ParamError, TypeError) as error:
+        raise DiagnosisInputError(f"--conditions {conditions}: {error}") from None
+    return [dataclasses.replace(run, rig=pairs) for run in runs]
 
 
 def bounds(path: Path | None) -> dict[str, object]:

@@ -15,7 +15,8 @@ import pytest
 
 from hems_ros.bag import BagWriter, iter_messages
 from hems_ros.cli import diagnose
-from hems_ros.diagnosis import suite
+from hems_ros.diagnosis import features, inputs, suite
+from hems_ros.diagnosis.runs import FeatureTest
 from hems_ros.physics.params import load_params
 
 REPO = Path(__file__).resolve().parents[2]
@@ -37,6 +38,29 @@ def _write_run(path: Path, t: np.ndarray, duty: np.ndarray, x: np.ndarray, f: np
     ]
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+PULSES = "name=name,pulse_length=p:s,current=i:A,peak_displacement=x:mm"
+
+
+def _write_pulses(path: Path, truth=None) -> None:
+    """Four current pulses and the peak displacement ``truth`` reaches (4.0 mm by default)."""
+    rows = [(1.4, 4.0), (1.8, 4.0), (2.2, 3.5), (2.6, 3.5)]
+    if truth is None:
+        peaks = [4.0] * len(rows)
+    else:
+        shells = [
+            FeatureTest(f"r{k}", {"pulse_s": p, "current_a": a}, {})
+            for k, (p, a) in enumerate(rows)
+        ]
+        peaks = [
+            f["peak_displacement"] * 1e3
+            for f in features._pulse_figures([truth], shells, features.PULSE_DT)
+        ]
+    lines = ["name,p,i,x"] + [
+        f"r{k},{p},{a},{x:.6f}" for k, ((p, a), x) in enumerate(zip(rows, peaks))
+    ]
+    path.write_text("\n".join(lines) + "\n")
 
 
 @pytest.fixture(scope="module")
@@ -64,6 +88,11 @@ def folder(tmp_path_factory) -> Path:
     (root / "bad_conditions.yaml").write_text("load: {pretension_n: [1, 2\n")
     (root / "bad_model.yaml").write_text("load:\n  stiffness_n_per_m: -5\n")
     (root / "list.yaml").write_text("- load\n- ambient\n")
+    (root / "rig.yaml").write_text(
+        "load: {kind: hanging_mass, mass_kg: 3.0, stiffness_n_per_m: 0}\n"
+    )
+    (root / "bad_rig.yaml").write_text("load: {mass: 3}\n")
+    _write_pulses(root / "pulses.csv")
     (root / "taken").mkdir()
     (root / "taken" / "notes.txt").write_text("keep me\n")
     return root
@@ -196,6 +225,23 @@ MORE = [
         "heldout missing",
         ["good.csv", "--columns", COLUMNS, "--heldout", "absent.csv"],
         "absent.csv: no such file or folder",
+    ),
+    (
+        "columns twice for three runs",
+        ["good.csv", "good.csv", "good.csv", "--columns", COLUMNS, "--columns", COLUMNS],
+        "--columns given 2 times for 3 run(s): give it once for all, or once per RUN",
+    ),
+    (
+        "a rig for a time series",
+        ["good.csv", "--heldout", "good.csv", "--columns", COLUMNS]
+        + ["--conditions", "rig.yaml", "--conditions", "rig.yaml"],
+        "--conditions rig.yaml for good: a rig per run applies to tables of tests only",
+    ),
+    (
+        "a rig that names no parameter",
+        ["pulses.csv", "pulses.csv", "--columns", PULSES]
+        + ["--conditions", "rig.yaml", "--conditions", "bad_rig.yaml"],
+        "--conditions bad_rig.yaml: replace: unknown parameter load.mass",
     ),
 ]
 
@@ -361,3 +407,39 @@ def test_running_again_replaces_the_report(folder: Path, report) -> None:
     assert [r["candidate"] for r in after["ranking"]] == ["encoder_gain"]
     assert result.stdout.startswith("unexplained: the residual in ")
     assert load_params(out / "corrected.yaml").load.damping_n_s_per_m == 65.0
+
+
+def test_tables_from_two_rigs_recalibrate_one_wire(tmp_path: Path) -> None:
+    """Pulse tables of one wire (As0 80 degC) on a 900 N/m spring and under a 3 kg mass, each
+    given its rig: one As0 meets both."""
+    wire = load_params("table41").replace({"kinetics.as0_c": 80.0, "kinetics.af0_c": 90.0})
+    rigs = {
+        "spring": "load: {kind: bias_spring, mass_kg: 0, stiffness_n_per_m: 900, pretension_n: 12}",
+        "mass": "load: {kind: hanging_mass, mass_kg: 3.0, stiffness_n_per_m: 0, pretension_n: 0}",
+    }
+    args = []
+    for name, text in rigs.items():
+        (tmp_path / f"{name}.yaml").write_text(text + "\n")
+        rig = inputs.rig(tmp_path / f"{name}.yaml")
+        _write_pulses(tmp_path / f"{name}.csv", wire.replace(dict(rig)))
+        args += ["--conditions", f"{name}.yaml"]
+    result = hems(
+        "diagnose",
+        "spring.csv",
+        "mass.csv",
+        "--columns",
+        PULSES,
+        *args,
+        "--candidates",
+        "heating_temperatures",
+        "--quiet",
+        "--out",
+        "joint",
+        cwd=tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "joint" / "summary.json").read_text())
+    assert summary["verdict"] == "recalibrated", result.stdout
+    assert summary["recalibrated"]["kinetics.as0_c"]["value"] == pytest.approx(80.0, abs=0.5)
+    # both tables met (on one rig for both, As0 lands near 78.6 degC with 3.6 mm left)
+    assert summary["gap"]["heldout_after"] < 0.01
