@@ -30,14 +30,18 @@ RUN: a bag folder recorded from the graph (input /hems/<finger>/duty, measuremen
   run in a frame: time, one of duty, current, voltage and prescribed_strain (elongation
                  positive) in; stress or wire_force out (work loops)
   thermal cycle: temperature in (rows in path order, time optional), stress or load_force
-                 (taken row by row where the frame let it wander), strain or
-                 displacement out; a cycle that starts warm and closes is read from
-                 its coldest row
+                 (taken row by row where the frame let it wander), strain, extension
+                 (over the --model wire's length: the gauge length) or displacement
+                 out; rows that still load the wire are left out, and a cycle that
+                 starts warm and closes is read from its coldest row
   table of tests: name, pulse_length, current, energy, cooled_displacement, protocol,
                  controller (conditions); peak_displacement, peak_force, cooling_time,
                  overshoot, rise_time, ss_error, rmse, mean_power (figures; blank = not given)
-  stress and load over the cross-section of the --model wire
-  units: s ms min | % 1 | A mA | V mV | degC K | Pa kPa MPa GPa | N kN mN | m mm um |
+  stress and load over the cross-section of the --model wire (a specimen's diameter and
+  gauge length: --conditions with wire: {diameter_m: ..., length_m: ...})
+  a load frame's export: lines above the header (test method, sample) are read past, rows
+  quoted whole are split, a time printed coarser than the rows come is spread evenly
+  units: s ms min h | % 1 | A mA | V mV | degC K | Pa kPa MPa GPa | N kN mN | m mm um in |
          strain 1 or %; a unit left out is SI (temperatures degC, duty %)
 """
 
@@ -216,10 +220,9 @@ def run(args: argparse.Namespace) -> int:
         model = inputs.model(args.model, shared, args.overrides)
         chosen = inputs.candidate_names(args.candidates)
         bounds = inputs.bounds(args.bounds)
-        area = model.wire.cross_section_m2
         loaded = [
             inputs.on_rig(
-                inputs.load(path, cols, args.fingers, area), None if shared else rig, model
+                inputs.load(path, cols, args.fingers, model.wire), None if shared else rig, model
             )
             for path, cols, rig in zip(paths, columns, rigs)
         ]

@@ -24,6 +24,13 @@ its row with a note, the row's input still driving the model over its interval; 
 ``runs.MAX_BAD_SHARE`` of the rows so refuses the run. Any other cell that is not a finite
 number, in an input column any non-finite one, is an error naming row and column.
 
+A load frame's export: lines above the header (the test method, the sample; up to
+``MAX_METADATA_LINES``) are read past, a row quoted whole is split at its delimiters, and a
+thermal cycle's time printed coarser than its rows come is spread evenly between its stamps;
+an extension becomes strain over the gauge length, rows that still load the wire are left
+out. A file without a header row (every cell of the first line a number) names its columns
+by index. Each leaves a note.
+
 Logs with several rates: in a run with a time column, an empty cell of a measured column is a
 reading not taken at that row (the column is logged more slowly): the column's readings are
 interpolated linearly onto the rows between them, and rows before its first or after its last
@@ -51,13 +58,16 @@ from hems_ros.diagnosis.runs import (
     non_finite_note,
 )
 
-# the HEMS wire, 0.508 mm diameter (hems_ros.physics.params.WireGeometry; not imported: the
-# physics package compiles its kernels on import)
+# the HEMS wire, 0.508 mm diameter and 0.9 m long (hems_ros.physics.params.WireGeometry; not
+# imported: the physics package compiles its kernels on import)
 DEFAULT_CROSS_SECTION_M2 = math.pi * 0.508e-3**2 / 4.0
+DEFAULT_GAUGE_LENGTH_M = 0.9
 MIN_SAMPLES = 20
 MIN_DRIVEN_S = 1.0
 MIN_TESTS = 2
 STRESS_TOLERANCE = 0.02
+#: Lines of a load frame's export above its header (test method, sample, units) read past.
+MAX_METADATA_LINES = 40
 #: A thermal cycle whose last temperature is within this of its first closes (degC).
 CLOSED_C = 1.0
 #: A driven run sampled slower than this (median step) is no record of an electrically heated
@@ -73,6 +83,7 @@ DRIVE_QUANTITIES = ("duty", "current", "voltage")
 OUTPUTS = {
     "displacement": "position",
     "strain": "strain",
+    "extension": "extension",  # a thermal cycle's, turned into strain over the gauge length
     "wire_force": "wire_force",
     "load_force": "load_force",
     "temperature": "temperature",
@@ -140,6 +151,7 @@ class _Table:
     header: list[str]
     rows: list[tuple[int, list[str]]]  # (row number in the file, fields)
     decimal_comma: bool
+    notes: tuple[str, ...] = ()  # how the file was read (metadata lines, no header)
 
     def where(self, row: int, index: int) -> str:
         return f"{self.path}: row {row}, column {self.header[index]}"
@@ -147,6 +159,9 @@ class _Table:
 
 def _split(line: str, delimiter: str | None) -> list[str]:
     fields = line.split() if delimiter is None else next(csv.reader([line], delimiter=delimiter))
+    if delimiter is not None and len(fields) == 1 and delimiter in fields[0]:
+        # a row quoted whole, as some load-frame software exports them
+        fields = next(csv.reader([fields[0]], delimiter=delimiter))
     return [f.strip() for f in fields]
 
 
@@ -156,6 +171,36 @@ def _trim(fields: list[str], width: int) -> list[str]:
     while len(fields) > width and not fields[-1]:
         fields.pop()
     return fields
+
+
+def _delimiter(line: str) -> str | None:
+    counts = {d: line.count(d) for d in (",", ";", "\t")}
+    return max(counts, key=counts.get) if any(counts.values()) else None
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text.replace(",", "."))
+    except ValueError:
+        return False
+    return True
+
+
+def _header_at(lines: list[tuple[int, str]]) -> int | None:
+    """The line of the header under an export's metadata: the first of two or more names, none a
+    number, over a row as wide whose cells are mostly numbers; None when no line is one."""
+    for i in range(min(len(lines) - 1, MAX_METADATA_LINES + 1)):
+        delimiter = _delimiter(lines[i][1])
+        head = _trim(_split(lines[i][1], delimiter), 0)
+        below = _trim(_split(lines[i + 1][1], delimiter), len(head))
+        if (
+            len(head) >= 2
+            and len(below) == len(head)
+            and not any(_is_number(f) for f in head)
+            and 2 * sum(_is_number(f) for f in below) > len(below)
+        ):
+            return i
+    return None
 
 
 def _read(path: Path) -> _Table:
@@ -174,21 +219,32 @@ def _read(path: Path) -> _Table:
     ]
     if not lines:
         raise DiagnosisInputError(f"{path}: empty (no header row)")
-    header_line = lines[0][1]
-    counts = {d: header_line.count(d) for d in (",", ";", "\t")}
-    delimiter = max(counts, key=counts.get) if any(counts.values()) else None
-    header = _trim(_split(header_line, delimiter), 0)
+    notes = []
+    at = _header_at(lines)
+    delimiter = _delimiter(lines[at or 0][1])
+    first = _split(lines[0][1], delimiter)
+    if at is None and all(_is_number(f) for f in first):
+        header, body = [f"#{k}" for k in range(1, len(first) + 1)], lines
+        notes.append("no header row: columns by index (#1, #2 ...)")
+    else:
+        at = at or 0
+        header, body = _trim(_split(lines[at][1], delimiter), 0), lines[at + 1 :]
+        if at:
+            notes.append(
+                f"{at} line(s) above the header (lines {lines[0][0]}-{lines[at - 1][0]}) "
+                "read as the export's metadata"
+            )
     rows = []
-    for number, line in lines[1:]:
+    for number, line in body:
         fields = _trim(_split(line, delimiter), len(header))
         if len(fields) != len(header):
             raise DiagnosisInputError(
-                f"{path}: row {number} has {len(fields)} fields, " f"the header has {len(header)}"
+                f"{path}: row {number} has {len(fields)} fields, the header has {len(header)}"
             )
         rows.append((number, fields))
     if not rows:
         raise DiagnosisInputError(f"{path}: no data rows below the header")
-    return _Table(path, header, rows, decimal_comma=delimiter != ",")
+    return _Table(path, header, rows, delimiter != ",", tuple(notes))
 
 
 def _column_index(table: _Table, quantity: str, column: str) -> int:
@@ -307,16 +363,37 @@ def _check_time(table: _Table, time: np.ndarray, index_text: str) -> None:
         )
 
 
+def _untied(time: np.ndarray, notes: list[str]) -> np.ndarray:
+    """A thermal cycle's time printed coarser than its rows come (a frame's export in hours to
+    three decimals): the rows of each stamp spread evenly up to the next stamp. A time that
+    goes back is left for :func:`_check_time` to refuse."""
+    steps = np.diff(time)
+    if np.all(steps > 0.0) or np.any(steps < 0.0):
+        return time
+    stamps, first, counts = np.unique(time, return_index=True, return_counts=True)
+    ends = np.r_[stamps[1:], stamps[-1] + np.median(np.diff(stamps))]
+    out = time.astype(float)
+    for stamp, i, n, end in zip(stamps, first, counts, ends):
+        out[i : i + n] = stamp + (end - stamp) * np.arange(n) / n
+    notes.append(
+        f"{int(np.sum(steps == 0.0))} row(s) at the time of the row before (time printed to "
+        f"{np.min(np.diff(stamps)):.3g} s): each stamp's rows spread evenly up to the next"
+    )
+    return out
+
+
 def load_table(
     path,
     columns: str | Mapping[str, tuple[str, str | None]],
     name: str | None = None,
     cross_section_m2: float = DEFAULT_CROSS_SECTION_M2,
+    gauge_length_m: float = DEFAULT_GAUGE_LENGTH_M,
 ) -> TimeSeriesRun | FeatureRun:
     """Read a measured table and convert it to SI and the runs' conventions (module docstring).
 
     ``columns`` is a ``--columns`` string or what :func:`parse_columns` returns;
-    ``cross_section_m2`` turns a thermal cycle's load force into stress.
+    ``cross_section_m2`` turns a thermal cycle's load force into stress, ``gauge_length_m``
+    its extension into strain.
     """
     path = Path(path)
     if isinstance(columns, str):
@@ -338,7 +415,7 @@ def load_table(
     if drives:
         return _driven(table, columns, name, drives[0])
     if "temperature" in columns:
-        return _thermal_cycle(table, columns, name, cross_section_m2)
+        return _thermal_cycle(table, columns, name, cross_section_m2, gauge_length_m)
     raise DiagnosisInputError(
         f"{path}: no input column mapped: map one of {', '.join(DRIVE_QUANTITIES)} "
         f"(a driven run) or temperature alone (a thermal cycle), or feature columns "
@@ -358,7 +435,7 @@ def _outputs(
     strain as changes from their mean over the first ``rest`` rows (the run's lead-in at
     rest): one noisy first reading would shift the whole run. With the rows' ``time``, a
     column with empty cells is a slower channel of a log with several rates (:func:`_slower`)."""
-    outputs, keep, notes = {}, np.ones(len(table.rows), dtype=bool), []
+    outputs, keep, notes = {}, np.ones(len(table.rows), dtype=bool), list(table.notes)
     for quantity in quantities:
         if quantity in columns:
             values = _numbers(table, quantity, *columns[quantity], blanks=True, measured=True)
@@ -372,7 +449,7 @@ def _outputs(
             finite = np.isfinite(values)
             notes += non_finite_note(str(table.path), f"column {columns[quantity][0]}", finite)
             keep &= finite
-            if quantity in ("displacement", "strain"):
+            if quantity in ("displacement", "strain", "extension"):
                 lead_in = values[:rest][finite[:rest]]
                 values = values - float(np.mean(lead_in if lead_in.size else values[finite][:1]))
             outputs[OUTPUTS[quantity]] = values
@@ -597,17 +674,19 @@ def _check_plausible(
         )
 
 
-def _wandering(table: _Table, column: str, load: np.ndarray, notes: list[str]) -> bool:
-    """Whether the frame let the stress wander beyond STRESS_TOLERANCE of its mean (the model
-    then takes it row by row)."""
-    mean = float(np.mean(load))
+def _under_tension(table: _Table, column: str, load: np.ndarray) -> None:
     if not np.all(load > 0):
         row = int(np.argmax(~(load > 0)))
         raise DiagnosisInputError(
             f"{table.where(table.rows[row][0], table.header.index(column))}: stress "
-            f"{load[row]:.4g} Pa: a thermal cycle needs "
-            f"the wire under tension in every row"
+            f"{load[row]:.4g} Pa: a thermal cycle needs the wire under tension in every row"
         )
+
+
+def _wandering(load: np.ndarray, notes: list[str]) -> bool:
+    """Whether the frame let the stress wander beyond STRESS_TOLERANCE of its mean (the model
+    then takes it row by row)."""
+    mean = float(np.mean(load))
     if np.max(np.abs(load - mean)) <= STRESS_TOLERANCE * mean:
         return False
     notes.append(
@@ -618,20 +697,30 @@ def _wandering(table: _Table, column: str, load: np.ndarray, notes: list[str]) -
 
 
 def _thermal_cycle(
-    table: _Table, columns: Columns, name: str, cross_section_m2: float
+    table: _Table, columns: Columns, name: str, cross_section_m2: float, gauge_length_m: float
 ) -> TimeSeriesRun:
     path = table.path
     _restrict(
         columns,
-        ("time", "temperature", "strain", "displacement", *LOAD_QUANTITIES),
+        ("time", "temperature", "strain", "displacement", "extension", *LOAD_QUANTITIES),
         "a thermal cycle",
         path,
     )
-    outputs, keep, notes = _outputs(table, columns, ("strain", "displacement"))
+    if "strain" in columns and "extension" in columns:
+        raise DiagnosisInputError(
+            f"{path}: strain and extension both mapped: map one (an extension becomes strain "
+            "over the gauge length, the --model wire's length)"
+        )
+    outputs, keep, notes = _outputs(table, columns, ("strain", "displacement", "extension"))
     if not outputs:
         raise DiagnosisInputError(
-            f"{path}: no output column mapped: a thermal cycle needs "
-            f"strain=<column>[:unit] or displacement=<column>[:unit] in --columns"
+            f"{path}: no output column mapped: a thermal cycle needs strain=<column>[:unit], "
+            f"extension=<column>[:unit] or displacement=<column>[:unit] in --columns"
+        )
+    if "extension" in outputs:
+        outputs["strain"] = outputs.pop("extension") / gauge_length_m
+        notes.append(
+            f"strain from the extension column over a gauge length of {gauge_length_m:.4g} m"
         )
     loads = [q for q in LOAD_QUANTITIES if q in columns]
     if len(loads) != 1:
@@ -647,10 +736,10 @@ def _thermal_cycle(
             f"stress from the {loads[0]} column over a wire cross-section of "
             f"{cross_section_m2:.4g} m2"
         )
-    wandering = _wandering(table, columns[loads[0]][0], load, notes)
+    _under_tension(table, columns[loads[0]][0], load)
     temperature = _numbers(table, "temperature", *columns["temperature"])
     if "time" in columns:
-        time = _numbers(table, "time", *columns["time"])
+        time = _untied(_numbers(table, "time", *columns["time"]), notes)
         _check_time(table, time, "time")
     else:
         # the path's own parameter: a row that does not move the temperature on (a plateau of a
@@ -666,11 +755,12 @@ def _thermal_cycle(
         notes.append("no time column: time is the cumulative temperature change at 1 degC per s")
     time, outputs = _kept(time, outputs, keep)
     temperature, load = temperature[keep], load[keep]
-    order = _from_coldest(temperature, notes)
+    order = _from_coldest(temperature, load, notes)
     if order is not None:
         time = _rotated_time(time, order)
         temperature, load = temperature[order], load[order]
         outputs = {k: v[order] - v[order][0] for k, v in outputs.items()}
+    wandering = _wandering(load, notes)
     require_span(str(path), time, "thermal_cycle")
     return TimeSeriesRun(
         name=name,
@@ -686,22 +776,34 @@ def _thermal_cycle(
     )
 
 
-def _from_coldest(temperature: np.ndarray, notes: list[str]) -> np.ndarray | None:
-    """The rows of a closed cycle that starts warm (a wire cooled first, then heated back), read
-    from its coldest row, where the wire is martensite as the replay starts it: the rows before
-    it follow the last one, the first left out (the cycle closes on it). None when the run
-    starts at its coldest or is not closed (it ends more than CLOSED_C from its start)."""
-    coldest = int(np.argmin(temperature))
-    if temperature[0] - temperature[coldest] <= CLOSED_C:
-        return None
-    if abs(temperature[-1] - temperature[0]) > CLOSED_C:
-        return None
-    notes.append(
-        f"the cycle starts warm ({temperature[0]:.4g} degC) and closes: read from its coldest "
-        f"row ({temperature[coldest]:.4g} degC), the rows before it after the last"
-    )
+def _from_coldest(temperature: np.ndarray, load: np.ndarray, notes: list[str]) -> np.ndarray | None:
+    """The rows to replay of a thermal cycle, in order, or None for all as they come.
+
+    Rows where a frame was still loading the wire (before the load first comes within
+    STRESS_TOLERANCE of where it ends) are left out. A cycle that then starts warm and closes
+    (it ends within CLOSED_C of its start) is read from its coldest row, where the wire is
+    martensite as the replay starts it: the rows before that follow the last one, the first
+    left out (the cycle closes on it)."""
     n = temperature.size
-    return np.r_[np.arange(coldest, n), np.arange(1, coldest + 1)]
+    held = np.abs(load - load[-1]) <= STRESS_TOLERANCE * load[-1]
+    start = int(np.argmax(held))
+    if start:
+        notes.append(
+            f"the first {start} row(s) load the wire ({load[0] / 1e6:.4g} -> "
+            f"{load[start] / 1e6:.4g} MPa at {temperature[0]:.4g} degC): left out, the cycle "
+            "starts once the load is held"
+        )
+    coldest = start + int(np.argmin(temperature[start:]))
+    if (
+        temperature[start] - temperature[coldest] <= CLOSED_C
+        or abs(temperature[-1] - temperature[start]) > CLOSED_C
+    ):
+        return np.arange(start, n) if start else None
+    notes.append(
+        f"the cycle starts warm ({temperature[start]:.4g} degC) and closes: read from its "
+        f"coldest row ({temperature[coldest]:.4g} degC), the rows before it after the last"
+    )
+    return np.r_[np.arange(coldest, n), np.arange(start + 1, coldest + 1)]
 
 
 def _rotated_time(time: np.ndarray, order: np.ndarray) -> np.ndarray:
@@ -752,7 +854,7 @@ def _features(table: _Table, columns: Columns, name: str) -> FeatureRun:
                 figures=given,
             )
         )
-    return FeatureRun(name=name, source=str(path), tests=tuple(tests))
+    return FeatureRun(name=name, source=str(path), tests=tuple(tests), notes=table.notes)
 
 
 def _item(value) -> float | str:

@@ -14,7 +14,7 @@ import yaml
 
 from hems_ros.diagnosis import bagload, candidates, csvload
 from hems_ros.diagnosis.runs import DiagnosisInputError, FeatureRun, Run
-from hems_ros.physics.params import ParamError, UnitParams, load_params
+from hems_ros.physics.params import ParamError, UnitParams, WireGeometry, load_params
 from hems_ros.physics.yamlload import load_yaml
 
 
@@ -150,9 +150,10 @@ def is_bag(path: Path) -> bool:
     )
 
 
-def load(text: str, columns: str | None, fingers: str | None, cross_section_m2: float) -> list[Run]:
+def load(text: str, columns: str | None, fingers: str | None, wire: WireGeometry) -> list[Run]:
     """The runs in one RUN argument: every finger of a bag, or one table (a load column
-    turned into stress, or a stress into force, over the model wire's ``cross_section_m2``)."""
+    turned into stress, or a stress into force, over the model wire's cross-section; an
+    extension into strain over its length)."""
     path = Path(text)
     if not path.exists():
         raise DiagnosisInputError(f"{text}: no such file or folder")
@@ -166,7 +167,11 @@ def load(text: str, columns: str | None, fingers: str | None, cross_section_m2: 
             f"{text}: a table needs --columns quantity=column[:unit],... "
             "(e.g. time=t:s,current=I:A,displacement=x:mm)"
         )
-    return [csvload.load_table(path, columns, cross_section_m2=cross_section_m2)]
+    return [
+        csvload.load_table(
+            path, columns, cross_section_m2=wire.cross_section_m2, gauge_length_m=wire.length_m
+        )
+    ]
 
 
 def stem(text: str) -> str:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from hems_ros.diagnosis import csvload, inputs
+from hems_ros.diagnosis import inputs
 from hems_ros.diagnosis.workflow import Diagnosis, diagnose
 
 
@@ -79,10 +79,11 @@ def run(
     """Diagnose ``study`` on the files under ``folder`` (tests/data/public)."""
     model_name = study.model if "/" not in study.model else str(folder / study.model)
     model = inputs.model(model_name)
-    area = model.wire.cross_section_m2
 
     def load(files: tuple[str, ...]) -> list:
-        return [csvload.load_table(folder / f, study.columns, cross_section_m2=area) for f in files]
+        return [
+            r for f in files for r in inputs.load(str(folder / f), study.columns, None, model.wire)
+        ]
 
     bounds = inputs.bounds(folder / study.bounds) if study.bounds else None
     return diagnose(load(study.runs), load(study.heldout), model, bounds=bounds, progress=progress)

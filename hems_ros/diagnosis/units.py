@@ -14,11 +14,11 @@ import numpy as np
 from hems_ros.diagnosis.runs import DiagnosisInputError
 
 _TIME = {"s": (1.0, 0.0), "ms": (1e-3, 0.0)}
-_LENGTH = {"m": (1.0, 0.0), "mm": (1e-3, 0.0), "um": (1e-6, 0.0)}
+_LENGTH = {"m": (1.0, 0.0), "mm": (1e-3, 0.0), "um": (1e-6, 0.0), "in": (0.0254, 0.0)}
 
 #: quantity -> unit -> (scale, offset) to the default unit, which comes first.
 UNITS: dict[str, dict[str, tuple[float, float]]] = {
-    "time": {**_TIME, "min": (60.0, 0.0)},
+    "time": {**_TIME, "min": (60.0, 0.0), "h": (3600.0, 0.0)},
     "duty": {"%": (1.0, 0.0), "1": (100.0, 0.0)},
     "current": {"A": (1.0, 0.0), "mA": (1e-3, 0.0)},
     "voltage": {"V": (1.0, 0.0), "mV": (1e-3, 0.0)},
@@ -27,6 +27,8 @@ UNITS: dict[str, dict[str, tuple[float, float]]] = {
     "load_force": {"N": (1.0, 0.0), "kN": (1e3, 0.0), "mN": (1e-3, 0.0)},
     "wire_force": {"N": (1.0, 0.0), "kN": (1e3, 0.0), "mN": (1e-3, 0.0)},
     "displacement": dict(_LENGTH),
+    # a load frame's extensometer (elongation positive), strain over the gauge length
+    "extension": dict(_LENGTH),
     "strain": {"1": (1.0, 0.0), "%": (1e-2, 0.0)},
     # the strain a load frame imposes on the wire (an input, elongation positive)
     "prescribed_strain": {"1": (1.0, 0.0), "%": (1e-2, 0.0)},
@@ -54,6 +56,7 @@ _UNIT_ALIASES = {
 }
 _LENGTHS = (
     "displacement",
+    "extension",
     "peak_displacement",
     "overshoot",
     "ss_error",

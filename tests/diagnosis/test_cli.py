@@ -156,7 +156,7 @@ MORE = [
     (
         "unknown unit",
         ["good.csv", "--columns", "time=t,duty=d,displacement=x:furlong"],
-        "unknown unit 'furlong' for displacement (known: m, mm, um)",
+        "unknown unit 'furlong' for displacement (known: m, mm, um, in)",
     ),
     (
         "unknown quantity",

@@ -86,7 +86,7 @@ def test_default_units_and_aliases() -> None:
 def test_unknown_unit_and_quantity() -> None:
     with pytest.raises(DiagnosisInputError) as caught:
         units.to_si("displacement", "furlong", 1.0)
-    assert str(caught.value) == "unknown unit 'furlong' for displacement (known: m, mm, um)"
+    assert str(caught.value) == "unknown unit 'furlong' for displacement (known: m, mm, um, in)"
     with pytest.raises(DiagnosisInputError, match="unknown unit 'mm' for temperature"):
         units.check_unit("temperature", "mm")
     with pytest.raises(DiagnosisInputError, match="unknown quantity 'speed'"):

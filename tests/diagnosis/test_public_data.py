@@ -23,6 +23,8 @@ def test_every_public_file_has_its_source_and_licence() -> None:
         "Copyright 2024 Jacob Mingear and Patrick Walgren"
         in (FOLDER / "nitico" / "LICENSE").read_text()
     )
+    frame = (FOLDER / "frame" / "LICENSE").read_text()
+    assert "Redistribution and use in source and binary forms" in frame
     for study in public_data.STUDIES:
         for name in study.runs + study.heldout:
             assert (FOLDER / name).is_file(), name
@@ -62,3 +64,36 @@ def test_nitico_cycles_are_read_from_their_coldest_row_and_left_unexplained() ->
     # of the library with one eps_L explains that within the bounds
     assert d.verdict == "unexplained" and not d.search.final.structure
     assert {"heating", "transformation", "cooling"} <= set(d.unexplained)
+
+
+def test_a_load_frames_raw_export_loads_with_the_specimen_from_the_conditions(tmp_path) -> None:
+    """An MTS export as the frame wrote it: three metadata lines above the header, every row
+    quoted whole, time in hours to three decimals, load in N and extension in mm, a loading
+    ramp before seven thermal cycles. The area and gauge length come from --conditions."""
+    from hems_ros.diagnosis import inputs
+
+    (tmp_path / "specimen.yaml").write_text("wire: {diameter_m: 0.000762, length_m: 0.45}\n")
+    model = inputs.model("table41", tmp_path / "specimen.yaml")
+    columns = (
+        "time=Time (h):h,temperature=Temperature Chamber (C):degC,"
+        "load_force=Load (N):N,extension=Extension (mm):mm"
+    )
+    [run] = inputs.load(str(FOLDER / "frame" / "isobaric_7cycle.txt"), columns, None, model.wire)
+    notes = " | ".join(run.notes)
+    assert "3 line(s) above the header (lines 1-3) read as the export's metadata" in notes
+    assert "the first 553 row(s) load the wire" in notes
+    assert "strain from the extension column over a gauge length of 0.45 m" in notes
+    # the export's own stress column (MPa) over the same rows: the area the frame used
+    held = np.loadtxt(
+        [
+            line.strip().strip('"')
+            for line in (FOLDER / "frame" / "isobaric_7cycle.txt").read_text().splitlines()[6:]
+        ],
+        delimiter=",",
+    )[553:]
+    assert run.stress_pa / 1e6 == pytest.approx(held[:, 5].mean(), rel=0.002)
+    # seven cycles between -30 and 50 degC over about 5.4 hours
+    assert run.drive_values.min() == pytest.approx(-30.3) and run.drive_values.max() > 49.0
+    assert run.time[-1] == pytest.approx((held[-1, 0] - held[0, 0]) * 3600.0, rel=0.01)
+    extension_range = (held[:, 4].max() - held[:, 4].min()) * 1e-3
+    assert np.ptp(run.outputs["strain"]) == pytest.approx(extension_range / 0.45, rel=2e-3)
