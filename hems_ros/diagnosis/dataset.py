@@ -32,6 +32,9 @@ NOISE_FLOOR = {
 PRIMARY_ORDER = ("position", "strain", "wire_force", "load_force", "temperature")
 
 
+#: A cycle shorter than this gives no floor of its own (the spread of the floor is read from
+#: the cycles' floors).
+MIN_CYCLE_SAMPLES = 100
 #: Lags (samples) of the third differences the noise's correlation is read from.
 NOISE_LAGS = np.array([1, 2, 3])
 #: Correlations tried for the noise: a residual that wanders more slowly than AR(1) at 0.95 is
@@ -126,6 +129,9 @@ class TimeSeriesData:
     segments: list[phase_mod.Segmentation]
     split: Split
     sigma: dict[str, float] = field(default_factory=dict)
+    # standard deviation of the log of a perfect model's cost, from the spread of the noise
+    # floor read cycle by cycle: wide under noise as coloured as a sensor's low-pass filter
+    cost_spread: float = 0.0
 
     @property
     def channels(self) -> list[str]:
@@ -171,17 +177,28 @@ class TimeSeriesData:
         return np.concatenate(parts) if parts else np.zeros(0)
 
     def calibrate_noise(self, start: Prediction) -> None:
-        """Noise floor per channel from the starting model's residual (all runs pooled)."""
+        """Noise floor per channel from the starting model's residual (all runs pooled), and
+        how far a perfect model's cost may stray from 1 because the floor is only estimated
+        (``cost_spread``)."""
+        variances = []
         for name in self.channels:
-            floors = []
-            for run, sim in zip(self.runs, start.outputs):
+            floors, cycles = [], []
+            for run, sim, seg in zip(self.runs, start.outputs, self.segments):
                 if name in run.outputs:
-                    floors.append(
-                        noise_floor(
-                            run.outputs[name] - sim[name], run.resolution.get(name, 0.0), name
-                        )
-                    )
+                    residual = run.outputs[name] - sim[name]
+                    resolution = run.resolution.get(name, 0.0)
+                    floors.append(noise_floor(residual, resolution, name))
+                    cycles += [
+                        noise_floor(residual[seg.cycle == c], resolution, name)
+                        for c in range(seg.n_cycles)
+                        if np.sum(seg.cycle == c) >= MIN_CYCLE_SAMPLES
+                    ]
             self.sigma[name] = float(np.median(floors))
+            if len(cycles) >= phase_mod.MIN_CYCLES:
+                logs = 2.0 * np.log(cycles)
+                variances.append(float(np.var(logs, ddof=1)) / len(logs))
+        # the cost averages the channels: its log varies by the mean of their floors' variances
+        self.cost_spread = float(np.sqrt(np.sum(variances))) / len(variances) if variances else 0.0
 
     def headline(self, start: Prediction) -> str:
         """The output the starting model misses most on held-out data, in noise-floor units."""

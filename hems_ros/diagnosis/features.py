@@ -60,6 +60,7 @@ class FeatureData:
     tests: list[tuple[FeatureRun, FeatureTest]]
     split: Split
     dt: float = PULSE_DT
+    cost_spread: float = 0.0  # a published figure's uncertainty is assumed, not estimated
 
     @property
     def channels(self) -> list[str]:

@@ -35,8 +35,10 @@ from hems_ros.diagnosis.candidates import Candidate
 from hems_ros.diagnosis.fit import Fit, Space, fit_structures
 from hems_ros.physics.params import UnitParams
 
-#: Held-out cost left to explain below which there is nothing to explain.
+#: Held-out cost left to explain below which there is nothing to explain ...
 NOTHING = 0.2
+#: ... widened by this many standard deviations of the noise floor's estimate (one-sided 95 %).
+Z_NOISE = 1.645
 #: A step must lower the held-out cost by at least this much (noise-floor units) ...
 MIN_GAIN = 0.1
 #: ... and the training cost by this share of what is left to explain there.
@@ -187,7 +189,8 @@ def run_search(
         )
         current = chosen
     current, dropped = _eliminate(data, base, current, start, say)
-    return Search(start, steps, current, dropped, _verdict(start, current, steps), findings)
+    verdict = _verdict(start, current, steps, data.cost_spread)
+    return Search(start, steps, current, dropped, verdict, findings)
 
 
 def _eliminate(data, base: UnitParams, current: Fit, start: Fit, say) -> tuple[Fit, list[str]]:
@@ -209,9 +212,15 @@ def _eliminate(data, base: UnitParams, current: Fit, start: Fit, say) -> tuple[F
     return current, dropped
 
 
-def _verdict(start: Fit, final: Fit, steps: list[Step]) -> str:
+def noise_limit(cost_spread: float) -> float:
+    """The held-out cost a model at the noise may show: within NOTHING of the floor, and within
+    what the floor's estimate, spreading ``cost_spread`` in log, lets it stray (one-sided 95 %)."""
+    return (1.0 + NOTHING) * math.exp(Z_NOISE * cost_spread)
+
+
+def _verdict(start: Fit, final: Fit, steps: list[Step], cost_spread: float) -> str:
     if not final.structure:
-        return "none" if start.heldout - 1.0 <= NOTHING else "unexplained"
+        return "none" if start.heldout <= noise_limit(cost_spread) else "unexplained"
     if excess(final.heldout) > EXPLAINED * excess(start.heldout):
         return "unexplained"
     if all(c.kind == "timing" for c in final.structure):

@@ -22,6 +22,7 @@ import numpy as np  # noqa: E402
 from hems_ros.diagnosis import localise  # noqa: E402
 from hems_ros.diagnosis.candidates import PHASES  # noqa: E402
 from hems_ros.diagnosis.dataset import TimeSeriesData  # noqa: E402
+from hems_ros.diagnosis.search import noise_limit  # noqa: E402
 from hems_ros.diagnosis.workflow import Diagnosis  # noqa: E402
 from hems_ros.physics.params import save_params  # noqa: E402
 
@@ -67,6 +68,8 @@ def summary(d: Diagnosis) -> dict:
         "model": d.model_name,
         "heldout": d.data.split.description,
         "noise_floor": _noise(d),
+        # sd of the log of a perfect model's cost: how far the floor's estimate may be off
+        "noise_floor_spread": d.data.cost_spread,
         "ranking": [_fit_entry(f, s.start) for f in (s.steps[0].ranked if s.steps else [])],
         "fit": _convergence(s.final),
         "summary": d.summary_line(),
@@ -163,7 +166,9 @@ def markdown(d: Diagnosis, figures: list[str]) -> str:
         lines += [
             "Noise floor (high-frequency part of the starting model's residual): "
             + ", ".join(f"{c} {v['value']:.3g} {v['unit']}" for c, v in _noise(d).items())
-            + ".",
+            + f". Read cycle by cycle it spreads {d.data.cost_spread:.2g} in log: with no term "
+            f"accepted, a held-out cost up to {noise_limit(d.data.cost_spread):.3g} counts as "
+            "the noise.",
             "",
         ]
     timing = d.timing()

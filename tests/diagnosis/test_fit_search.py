@@ -150,39 +150,51 @@ START = _fit((), 50.0, 40.0)
 
 
 @pytest.mark.parametrize(
-    "start_heldout, verdict",
-    [(1.0, "none"), (1.2, "none"), (1.21, "unexplained"), (0.8, "none"), (40.0, "unexplained")],
+    "start_heldout, spread, verdict",
+    [
+        (1.0, 0.0, "none"),
+        (1.2, 0.0, "none"),
+        (1.21, 0.0, "unexplained"),
+        (0.8, 0.0, "none"),
+        (40.0, 0.0, "unexplained"),
+        # a floor whose estimate spreads 0.3 in log: up to 1.2 e^(1.645 x 0.3) = 1.96 is noise
+        (1.95, 0.3, "none"),
+        (1.97, 0.3, "unexplained"),
+    ],
 )
-def test_verdict_without_terms(start_heldout: float, verdict: str) -> None:
+def test_verdict_without_terms(start_heldout: float, spread: float, verdict: str) -> None:
     start = _fit((), 50.0, start_heldout)
-    assert _verdict(start, start, []) == verdict
+    assert _verdict(start, start, [], spread) == verdict
 
 
 def test_verdict_with_terms() -> None:
     # start 40: excess sqrt(39) = 6.24; explained when the final's excess is at most half of it
     half = 1.0 + (0.5 * math.sqrt(39.0)) ** 2  # 10.75
     damping = _fit(("load_damping",), 1.0, 1.0)
-    assert _verdict(START, damping, [Step([damping], damping, [])]) == "named"
+    assert _verdict(START, damping, [Step([damping], damping, [])], 0.0) == "named"
     worse = _fit(("load_damping",), 1.0, half + 0.01)
-    assert _verdict(START, worse, [Step([worse], worse, [])]) == "unexplained"
+    assert _verdict(START, worse, [Step([worse], worse, [])], 0.0) == "unexplained"
     edge = _fit(("load_damping",), 1.0, half - 1e-9)
-    assert _verdict(START, edge, [Step([edge], edge, [])]) == "named"
+    assert _verdict(START, edge, [Step([edge], edge, [])], 0.0) == "named"
     recal = _fit(("ambient", "convection"), 1.0, 1.1)
-    assert _verdict(START, recal, []) == "recalibrated"
+    assert _verdict(START, recal, [], 0.0) == "recalibrated"
     mixed = _fit(("ambient", "load_damping"), 1.0, 1.1)
-    assert _verdict(START, mixed, []) == "named"
+    assert _verdict(START, mixed, [], 0.0) == "named"
 
 
 def test_verdict_ambiguous_only_for_a_named_effect_with_rivals() -> None:
     damping = _fit(("load_damping",), 1.0, 1.0)
     friction = _fit(("tendon_friction",), 1.02, 1.0)
-    assert _verdict(START, damping, [Step([damping, friction], damping, [friction])]) == "ambiguous"
+    assert (
+        _verdict(START, damping, [Step([damping, friction], damping, [friction])], 0.0)
+        == "ambiguous"
+    )
     # the rival's step chose a term the elimination dropped again: the final is not ambiguous
     both = _fit(("warm_start",), 1.0, 1.0)
-    assert _verdict(START, both, [Step([damping, friction], damping, [friction])]) == "named"
+    assert _verdict(START, both, [Step([damping, friction], damping, [friction])], 0.0) == "named"
     # a step that chose nothing has no rivals that count
     steps = [Step([damping], damping, []), Step([friction], None, [friction])]
-    assert _verdict(START, damping, steps) == "named"
+    assert _verdict(START, damping, steps, 0.0) == "named"
 
 
 def test_better_needs_held_out_gain_training_share_material_bic_and_no_bound() -> None:
@@ -467,6 +479,26 @@ def test_a_late_record_under_coloured_noise_is_timing_not_physics(seed: int) -> 
     assert d.verdict == "timing"
     assert d.timing()["accepted_s"] == pytest.approx(-0.010, abs=5e-4)
     assert d.corrected.replace({"drive.input_delay_s": 0.0}) == BASE
+
+
+def test_the_starting_model_under_noise_as_coloured_as_rho_0_9_is_at_the_noise() -> None:
+    """No lag, no effect: the noise floor read under AR(1) noise at rho 0.9 strays 0.6-1.5
+    times the truth from draw to draw; the verdict allows for what its spread from cycle to
+    cycle says, so the perfect model is `none` in nearly every draw and never names physics."""
+    run = _current_run(BASE, 0)
+    truth = replay.replay(replay.plan(run), [BASE])
+    verdicts = []
+    for seed in range(10):
+        rng = np.random.default_rng(100 + seed)
+        outputs = {
+            "position": truth["position"][0] + _ar1(rng, run.time.size, 0.9, 2e-6),
+            "wire_force": truth["wire_force"][0] + _ar1(rng, run.time.size, 0.9, 0.02),
+        }
+        d = diagnose([dataclasses.replace(run, outputs=outputs)], [], BASE)
+        verdicts.append(d.verdict)
+        assert d.corrected == BASE
+        assert d.data.cost_spread > 0.1
+    assert verdicts.count("none") >= 8, verdicts
 
 
 @pytest.mark.parametrize("rho, low, high", [(0.0, 0.95, 1.05), (0.53, 0.85, 1.15)])
