@@ -20,7 +20,7 @@ from hems_ros.diagnosis.runs import FeatureRun
 from hems_ros.diagnosis.workflow import Diagnosis, diagnose
 from hems_ros.paths import config_path
 from hems_ros.physics import validation
-from hems_ros.physics.params import UnitParams, load_params
+from hems_ros.physics.params import load_params
 
 #: The accepted ranges of the chapter 3 sheath facts (docs/validation.md): the cold-sheath
 #: sheathed/bare displacement ratio at 106.8 J and the sheathed/bare cooling-time ratio.
@@ -189,17 +189,17 @@ class FigureMiss:
     joint: float  # the joint corrected model on the study's rig
 
 
-def in_bounds_slopes(study: Study, table: FeatureRun) -> UnitParams:
+def in_bounds_slopes(study: Study, table: FeatureRun) -> fit.Fit:
     """The study's calibrated set with C_A, C_M refitted to its table within the library's
     bounds (NiTi's band), everything else as calibrated."""
     data = features.prepare([table], [])
     [found] = fit.fit_structures(
         data, load_params(study.calibrated), [(candidates.BY_NAME["stress_slopes"],)], {}
     )
-    return found.params
+    return found
 
 
-def figure_misses(d: Diagnosis, slopes: dict[str, UnitParams]) -> list[FigureMiss]:
+def figure_misses(d: Diagnosis, slopes: dict[str, fit.Fit]) -> list[FigureMiss]:
     """Every study's figures: the calibrated set, the same with its slopes in bounds
     (``slopes``, by study key), and the joint corrected model."""
     out = []
@@ -209,7 +209,7 @@ def figure_misses(d: Diagnosis, slopes: dict[str, UnitParams]) -> list[FigureMis
         calibrated, in_bounds, joint_model = data.predict(
             [
                 load_params(study.calibrated).replace(rig),
-                slopes[study.key].replace(rig),
+                slopes[study.key].params.replace(rig),
                 d.corrected.replace(rig),
             ]
         )
@@ -290,7 +290,7 @@ class Joint:
 
     diagnosis: Diagnosis
     pulls: list[Pull]
-    slopes: dict[str, UnitParams]  # study key -> calibrated set, slopes in bounds
+    slopes: dict[str, fit.Fit]  # study key -> calibrated set, slopes refitted in bounds
     misses: list[FigureMiss]
     sheath: SheathCheck
 

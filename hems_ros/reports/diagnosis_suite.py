@@ -545,8 +545,13 @@ def _joint_section(j: studies_module.Joint) -> list[str]:
     else:
         lines += ["No two tables pull a term apart: their intervals overlap.", ""]
     slopes = "; ".join(
-        f"{study.calibrated} C_A = {j.slopes[study.key].kinetics.ca_pa_per_c / 1e6:.3g}, "
-        f"C_M = {j.slopes[study.key].kinetics.cm_pa_per_c / 1e6:.3g}"
+        f"{study.calibrated} C_A = {j.slopes[study.key].params.kinetics.ca_pa_per_c / 1e6:.3g}, "
+        f"C_M = {j.slopes[study.key].params.kinetics.cm_pa_per_c / 1e6:.3g}"
+        + (
+            " (on a bound: " + ", ".join(j.slopes[study.key].pinned) + ")"
+            if j.slopes[study.key].pinned
+            else ""
+        )
         for study in studies_module.STUDIES
     )
     lines += [

@@ -297,7 +297,9 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         "|---|---|---|---|",
         f"| C_M = C_A, Pa/degC | 6.89e6 | {cal.kinetics.cm_pa_per_c:.3e} | Table 4.1 was "
         f"identified near 12 N (9 degC shift); at 50-70 N its 36-50 degC shift puts As out of "
-        f"reach of a 107 J pulse, while the measured wire moves 15 mm |",
+        f"reach of a 107 J pulse, while the measured wire moves 15 mm; docs/diagnosis.md "
+        f"refits the slope within NiTi's 5-15 MPa/degC to each chapter's table and names the "
+        f"figures that need this one, by how much |",
         f"| eps_L | 0.038 | {cal.constitutive.max_recoverable_strain:.4f} | measured stroke "
         f"saturates at 27.45 mm (3.05 %); 3.8 % saturates at 32 mm |",
         f"| sheath gap resistance, K/W | 1.80 (air film ln(0.66/0.508)/(2 pi k_air L)) | "
