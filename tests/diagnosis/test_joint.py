@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from hems_ros.diagnosis import dissertation, features, inputs
+from hems_ros.diagnosis import dissertation, features, inputs, joint
 from hems_ros.diagnosis.runs import FeatureRun, FeatureTest
 from hems_ros.paths import config_path
 from hems_ros.physics.params import load_params
@@ -55,7 +55,7 @@ def test_every_calibrated_set_already_stands_on_its_tables_rig(study) -> None:
 
 
 def test_the_joint_tables_carry_their_rigs() -> None:
-    tables = dissertation.joint_tables()
+    tables = joint.joint_tables()
     assert [t.name for t in tables] == [s.key for s in dissertation.STUDIES]
     assert [len(t.tests) for t in tables] == [6, 4, 4]
     assert all(t.rig for t in tables)
@@ -64,11 +64,9 @@ def test_the_joint_tables_carry_their_rigs() -> None:
     assert int(data.split.heldout[0].sum()) == 5 and int(data.split.test[0].sum()) == 4
 
 
-def _pull(key: str, value: float, low: float, high: float) -> dissertation.Pull:
+def _pull(key: str, value: float, low: float, high: float) -> joint.Pull:
     study = next(s for s in dissertation.STUDIES if s.key == key)
-    return dissertation.Pull(
-        study, "warm_start", {"start.temperature_offset_c": (value, low, high)}, ()
-    )
+    return joint.Pull(study, "warm_start", {"start.temperature_offset_c": (value, low, high)}, ())
 
 
 def test_tables_whose_intervals_do_not_overlap_pull_a_term_apart() -> None:
@@ -77,7 +75,7 @@ def test_tables_whose_intervals_do_not_overlap_pull_a_term_apart() -> None:
         _pull("chapter_5", 57.0, 56.0, 59.0),
         _pull("table_6_1", 20.0, 15.0, 25.0),
     ]
-    apart = dissertation.apart(pulls)
+    apart = joint.apart(pulls)
     assert [(k, a.study.key, b.study.key) for k, a, b in apart] == [
         ("start.temperature_offset_c", "tables_3_2_3_3", "table_6_1"),
         ("start.temperature_offset_c", "chapter_5", "table_6_1"),
