@@ -27,8 +27,9 @@ RUN: a bag folder recorded from the graph (input /hems/<finger>/duty, measuremen
                  positive), strain (elongation positive), wire_force (alias force),
                  load_force, temperature out; an empty cell of a column logged more
                  slowly is filled between its readings, an empty input cell holds
-  run in a frame: time, one of duty, current, voltage and prescribed_strain (elongation
-                 positive) in; stress or wire_force out (work loops)
+  run in a frame: time, one of duty, current, voltage (or a chamber's temperature, from
+                 below the model's As0) and prescribed_strain (elongation positive)
+                 in; stress or wire_force out (work loops, tensile tests)
   thermal cycle: temperature in (rows in path order, time optional), stress or load_force
                  (taken row by row where the frame let it wander), strain, extension
                  (over the --model wire's length: the gauge length) or displacement

@@ -410,8 +410,14 @@ def load_table(
             f"{path}: more than one input mapped ({', '.join(drives)}): "
             f"a driven run has exactly one of {', '.join(DRIVE_QUANTITIES)}"
         )
-    if drives and "prescribed_strain" in columns:
-        return _prescribed_strain(table, columns, name, drives[0], cross_section_m2)
+    if "prescribed_strain" in columns:
+        heating = drives[0] if drives else "temperature" if "temperature" in columns else None
+        if heating is None:
+            raise DiagnosisInputError(
+                f"{path}: a prescribed-strain run needs what heats the wire: one of "
+                f"{', '.join(DRIVE_QUANTITIES)}, or temperature (a chamber's)"
+            )
+        return _prescribed_strain(table, columns, name, heating, cross_section_m2)
     if drives:
         return _driven(table, columns, name, drives[0])
     if "temperature" in columns:
@@ -590,8 +596,9 @@ def _driven_input(
 def _prescribed_strain(
     table: _Table, columns: Columns, name: str, drive: str, cross_section_m2: float
 ) -> TimeSeriesRun:
-    """A load frame moves the wire's end (prescribed_strain in) while the drive heats it: the
-    wire's force (or stress over the cross-section) comes out."""
+    """A load frame moves the wire's end (prescribed_strain in) while the drive heats it (or a
+    chamber sets its temperature): the wire's force (or stress over the cross-section) comes
+    out."""
     path = table.path
     _restrict(
         columns,
@@ -605,9 +612,11 @@ def _prescribed_strain(
             f"stress=<column>[:unit] or wire_force=<column>[:unit] in --columns"
         )
     time, values, notes = _driven_input(table, columns, drive)
-    _check_plausible(table, columns, time, drive, values)
+    if drive != "temperature":  # a chamber's run may be slow; its checks are the thermal's
+        _check_plausible(table, columns, time, drive, values)
     strain = _numbers(table, "prescribed_strain", *columns["prescribed_strain"])
-    outputs, keep, more = _outputs(table, columns, ("wire_force", "temperature"), time=time)
+    measured = tuple(q for q in ("wire_force", "temperature") if q != drive)
+    outputs, keep, more = _outputs(table, columns, measured, time=time)
     notes += more
     if "stress" in columns:
         stress = _numbers(table, "stress", *columns["stress"], measured=True)

@@ -84,7 +84,7 @@ def _smooth(t: np.ndarray, y: np.ndarray, window_s: float) -> np.ndarray:
 
 def segment(run: TimeSeriesRun) -> Segmentation:
     """Phases and cycles of ``run``."""
-    if run.kind == "thermal_cycle":
+    if run.drive == "temperature":
         return _segment_thermal(run)
     t = run.time
     m = _smooth(t, motion(run), SMOOTHING_S)
@@ -150,8 +150,8 @@ def _number(n: int, starts: list[int]) -> np.ndarray:
 
 
 def _segment_thermal(run: TimeSeriesRun) -> Segmentation:
-    """Thermal cycle: heating / cooling from the temperature, transformation where the
-    strain changes fast; a cycle starts at each temperature minimum."""
+    """A run driven by temperature: heating / cooling from the temperature, transformation
+    where the strain (or force) changes fast; a cycle starts at each temperature minimum."""
     t = run.time
     temp = _smooth(t, run.drive_values, SMOOTHING_S)
     dtemp = np.gradient(temp, t)

@@ -195,8 +195,9 @@ def rig(params: UnitParams, run: TimeSeriesRun) -> UnitParams:
 
 
 def start_temperature(run: TimeSeriesRun) -> float | None:
-    """A thermal cycle starts at its first measured temperature; a driven run at the model's."""
-    return float(run.drive_values[0]) if run.kind == "thermal_cycle" else None
+    """A run driven by temperature starts at its first one; an electrically driven run at the
+    model's ambient."""
+    return float(run.drive_values[0]) if run.drive == "temperature" else None
 
 
 def cannot_start(params: UnitParams, run: TimeSeriesRun) -> str | None:
@@ -204,7 +205,7 @@ def cannot_start(params: UnitParams, run: TimeSeriesRun) -> str | None:
     first = start_temperature(run)
     if first is not None and first >= params.kinetics.as0_c:
         return (
-            f"{run.name}: the thermal cycle starts at {first:g} degC, at or above As0 = "
+            f"{run.name}: the run starts at {first:g} degC, at or above As0 = "
             f"{params.kinetics.as0_c:g} degC of the model; it must start cold, with the "
             f"wire martensite"
         )

@@ -314,6 +314,41 @@ def test_work_loop_in_a_frame_names_a_hidden_sheath(tmp_path) -> None:
     assert gap == pytest.approx(truth.sheath.gap_resistance_k_per_w, rel=0.05)
 
 
+def test_a_chamber_heated_wire_in_a_frame_recalibrates_as0(tmp_path) -> None:
+    """A frame cycles the strain (0.2 % every 30 s) from a 150 MPa preload while a chamber
+    takes the wire from 30 to 120 degC and back three times in 300 s: temperature in, force
+    out. The wire's austenite band lies 4 degC above the model's."""
+    t = np.arange(0.0, 300.0, 0.1)
+    temperature = 75.0 - 45.0 * np.cos(2 * np.pi * t / 100.0)
+    strain = -0.001 * (1 - np.cos(2 * np.pi * t / 30.0))
+    shell = TimeSeriesRun(
+        "chamber",
+        "synthetic",
+        "prescribed_strain",
+        t,
+        "temperature",
+        temperature,
+        {"wire_force": t * 0},
+        stress_pa=150e6,
+        strain_values=strain,
+    )
+    truth = BASE.replace({"kinetics.as0_c": 92.0, "kinetics.af0_c": 102.0})
+    force = replay.replay(replay.plan(shell), [truth])["wire_force"][0]
+    force = force + np.random.default_rng(2).normal(0.0, 0.05, t.size)
+    table = np.column_stack([t, temperature, 100 * strain, force])
+    path = tmp_path / "chamber.csv"
+    np.savetxt(path, table, delimiter=",", header="t,T,eps,F", comments="", fmt="%.9g")
+    run = load_table(
+        path,
+        "time=t:s,temperature=T:degC,prescribed_strain=eps:%,wire_force=F:N",
+        cross_section_m2=BASE.wire.cross_section_m2,
+    )
+    assert run.kind == "prescribed_strain" and run.drive == "temperature"
+    d = diagnose([run], [], BASE, candidates=["heating_temperatures"])
+    assert d.verdict == "recalibrated"
+    assert d.search.final.values[0] == pytest.approx(92.0, abs=0.5)
+
+
 def _damped_with_ripple(amplitude_m: float):
     """150 N s/m of damping and an encoder ripple of ``amplitude_m`` over a 2 mm pole pitch,
     diagnosed with the damping candidate alone."""
