@@ -262,8 +262,9 @@ def prepare(
         test.append(np.isin(seg.cycle, testing))
         train.append(~(select[-1] | test[-1]))
         parts.append(
-            f"{run.name}: cycles {_numbers(selecting)} select, {_numbers(testing)} test, "
-            f"of {seg.n_cycles}"
+            f"{run.name}: cycles {_numbers(selecting)} select"
+            + (f", {_numbers(testing)} test" if testing else "")
+            + f", of {seg.n_cycles}"
         )
     if not any(m.any() for m in select):
         counts = ", ".join(f"{r.name} {s.n_cycles}" for r, s in zip(runs, segments))

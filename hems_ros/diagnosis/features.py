@@ -254,12 +254,12 @@ def prepare(runs: list[FeatureRun], heldout: list[FeatureRun], dt: float = PULSE
         select_rows, test_rows = phases.cycle_roles(len(tests))
         j = np.arange(len(tests))
         select, test = np.isin(j, select_rows), np.isin(j, test_rows)
+        testing = ", ".join(t.name for (_, t), m in zip(tests, test) if m)
         description = (
             "rows held out of the fit: "
             + ", ".join(t.name for (_, t), m in zip(tests, select) if m)
-            + " select the terms; "
-            + (", ".join(t.name for (_, t), m in zip(tests, test) if m) or "none")
-            + " test them"
+            + " select the terms"
+            + (f"; {testing} test them" if testing else "")
         )
     return FeatureData(
         list(runs) + list(heldout),

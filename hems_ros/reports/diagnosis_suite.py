@@ -379,7 +379,9 @@ def _suite_section(outcomes, stats, seed, quick, figure) -> list[str]:
         f"{c['null']['runs']} |",
         f"| whenever named: held-out RMSE beyond the noise floor cut | {_pct(FLOORS['gap_cut'])} | "
         f"at least {_pct(stats['beyond_noise_cut_min'])} |",
-        f"| whenever named: held-out RMSE cut (noise included) | {_pct(FLOORS['gap_cut'])} | at "
+        # the floor is the cut beyond the noise: with the noise in, an effect that leaves the
+        # test cycles little above it cannot be cut by half
+        f"| whenever named: held-out RMSE cut (noise included) | - | at "
         f"least {_pct(stats['gap_cut_min'])} |",
         f"| recovered parameters, low noise: largest error | {_pct(FLOORS['recovery_low'])} | "
         f"{_pct(stats['recovery_error_max_low'])} |",
@@ -420,6 +422,10 @@ def _suite_section(outcomes, stats, seed, quick, figure) -> list[str]:
             f"{_pct(err)} | {', '.join(o.unexplained) or '-'} |"
         )
     return lines + [""]
+
+
+def _sentence(text: str) -> str:
+    return text[0].upper() + text[1:] + "."
 
 
 def _role(select: bool, test: bool) -> str:
@@ -466,6 +472,8 @@ def _study_section(study: studies_module.Study, d: Diagnosis) -> list[str]:
         "",
         f"**{d.summary_line()}**",
         "",
+        _sentence(d.data.split.description),
+        "",
     ]
     lines += _rows(d)
     lines.append("")
@@ -506,7 +514,7 @@ def _joint_section(j: joint_module.Joint) -> list[str]:
         "",
         f"**{d.summary_line()}**",
         "",
-        d.data.split.description[0].upper() + d.data.split.description[1:] + ".",
+        _sentence(d.data.split.description),
         "",
     ]
     lines += _rows(d) + [""]
