@@ -554,14 +554,7 @@ def _joint_section(j: joint_module.Joint) -> list[str]:
     else:
         lines += ["No two tables pull a term apart: their intervals overlap.", ""]
     slopes = "; ".join(
-        f"{study.calibrated} C_A = {j.slopes[study.key].params.kinetics.ca_pa_per_c / 1e6:.3g}, "
-        f"C_M = {j.slopes[study.key].params.kinetics.cm_pa_per_c / 1e6:.3g}"
-        + (
-            " (on a bound: " + ", ".join(j.slopes[study.key].pinned) + ")"
-            if j.slopes[study.key].pinned
-            else ""
-        )
-        for study in studies_module.STUDIES
+        _slopes(study.calibrated, j.slopes[study.key]) for study in studies_module.STUDIES
     )
     lines += [
         "Could an in-bounds slope replace the calibrated sets' C_M = C_A = 33.5 MPa/degC? Each "
@@ -613,6 +606,16 @@ def _joint_section(j: joint_module.Joint) -> list[str]:
         "",
     ]
     return lines + _sheath_lines(j.sheath)
+
+
+def _slopes(name: str, fitted) -> str:
+    """A calibrated set's stress slopes refitted in bounds, those on the band's edge said."""
+    parts = []
+    for par in library.BY_NAME["stress_slopes"].parameters:
+        value = fitted.params.get(par.key)
+        edge = min(abs(value - par.lower), abs(value - par.upper)) <= 1e-3 * par.upper
+        parts.append(f"{par.symbol} = {value / par.scale:.3g}{' (on the edge)' if edge else ''}")
+    return f"{name} " + ", ".join(parts)
 
 
 def _symbol(key: str) -> str:
