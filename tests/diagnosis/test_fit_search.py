@@ -277,35 +277,42 @@ def test_thermal_cycle_whose_stress_wanders_15_percent_loads_and_diagnoses(tmp_p
     assert diagnose([held], [], BASE, candidates=["heating_temperatures"]).verdict == "unexplained"
 
 
+def _frame_table(path, t, drive: str, heating, strain, preload_pa: float, truth, seed: int):
+    """A frame's run of ``truth`` written as a lab table (force with 0.05 N of noise) and read
+    back: ``drive`` (current in A or temperature in degC) and the strain in, the force out."""
+    shell = TimeSeriesRun(
+        "frame",
+        "synthetic",
+        "prescribed_strain",
+        t,
+        drive,
+        heating,
+        {"wire_force": t * 0},
+        stress_pa=preload_pa,
+        strain_values=strain,
+    )
+    force = replay.replay(replay.plan(shell), [truth])["wire_force"][0]
+    assert 0.0 < force.min()  # in tension throughout
+    force = force + np.random.default_rng(seed).normal(0.0, 0.05, t.size)
+    table = np.column_stack([t, heating, 100 * strain, force])
+    np.savetxt(path, table, delimiter=",", header="t,H,eps,F", comments="", fmt="%.9g")
+    unit = "A" if drive == "current" else "degC"
+    return load_table(
+        path,
+        f"time=t:s,{drive}=H:{unit},prescribed_strain=eps:%,wire_force=F:N",
+        cross_section_m2=BASE.wire.cross_section_m2,
+    )
+
+
 def test_work_loop_in_a_frame_names_a_hidden_sheath(tmp_path) -> None:
     # a frame shortens the wire by 0.5 % and lets it back at 0.1 Hz from a 200 MPa preload,
     # 2.5 A while it shortens; the wire was in a Bowden sheath the model does not have
     t = np.arange(0.0, 40.0, 0.01)
     strain = -0.0025 * (1 - np.cos(2 * np.pi * 0.1 * t))
     current = np.where((np.sin(2 * np.pi * 0.1 * t) > 0) & (t >= 1.0), 2.5, 0.0)
-    shell = TimeSeriesRun(
-        "loop",
-        "synthetic",
-        "prescribed_strain",
-        t,
-        "current",
-        current,
-        {"wire_force": t * 0},
-        stress_pa=200e6,
-        strain_values=strain,
-    )
     truth = BASE.replace({"sheath.enabled": True})
-    force = replay.replay(replay.plan(shell), [truth])["wire_force"][0]
-    assert 14.0 < force.min() and force.max() < 42.0  # in tension throughout
-    force = force + np.random.default_rng(1).normal(0.0, 0.05, t.size)
-    table = np.column_stack([t, current, 100 * strain, force])
-    path = tmp_path / "loop.csv"
-    np.savetxt(path, table, delimiter=",", header="t,I,eps,F", comments="", fmt="%.9g")
-    run = load_table(
-        path,
-        "time=t:s,current=I:A,prescribed_strain=eps:%,wire_force=F:N",
-        cross_section_m2=BASE.wire.cross_section_m2,
-    )
+    run = _frame_table(tmp_path / "loop.csv", t, "current", current, strain, 200e6, truth, 1)
+    assert 14.0 < run.outputs["wire_force"].min() and run.outputs["wire_force"].max() < 42.0
     d = diagnose([run], [], BASE)
     assert d.verdict == "named"
     assert [c.name for c in d.search.final.structure] == ["sheath_heat_sink"]
@@ -321,28 +328,9 @@ def test_a_chamber_heated_wire_in_a_frame_recalibrates_as0(tmp_path) -> None:
     t = np.arange(0.0, 300.0, 0.1)
     temperature = 75.0 - 45.0 * np.cos(2 * np.pi * t / 100.0)
     strain = -0.001 * (1 - np.cos(2 * np.pi * t / 30.0))
-    shell = TimeSeriesRun(
-        "chamber",
-        "synthetic",
-        "prescribed_strain",
-        t,
-        "temperature",
-        temperature,
-        {"wire_force": t * 0},
-        stress_pa=150e6,
-        strain_values=strain,
-    )
     truth = BASE.replace({"kinetics.as0_c": 92.0, "kinetics.af0_c": 102.0})
-    force = replay.replay(replay.plan(shell), [truth])["wire_force"][0]
-    force = force + np.random.default_rng(2).normal(0.0, 0.05, t.size)
-    table = np.column_stack([t, temperature, 100 * strain, force])
     path = tmp_path / "chamber.csv"
-    np.savetxt(path, table, delimiter=",", header="t,T,eps,F", comments="", fmt="%.9g")
-    run = load_table(
-        path,
-        "time=t:s,temperature=T:degC,prescribed_strain=eps:%,wire_force=F:N",
-        cross_section_m2=BASE.wire.cross_section_m2,
-    )
+    run = _frame_table(path, t, "temperature", temperature, strain, 150e6, truth, 2)
     assert run.kind == "prescribed_strain" and run.drive == "temperature"
     d = diagnose([run], [], BASE, candidates=["heating_temperatures"])
     assert d.verdict == "recalibrated"
