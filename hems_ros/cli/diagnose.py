@@ -55,7 +55,8 @@ def register(subparsers) -> None:
         "loop), localise the residual by phase and cycle, then explain it: first a recalibration "
         "of the printed model's parameters within published NiTi bounds, then missing effects from "
         "a library of candidates, each fitted (bounded least squares) and kept only if it "
-        "improves data it was not fitted on. Writes a report folder (report.md, figures, "
+        "improves held-out data it was not fitted on; the gap is measured on held-out data "
+        "that chose nothing. Writes a report folder (report.md, figures, "
         "corrected.yaml, summary.json) and prints one summary line. Exit 0 whatever the "
         "verdict, 1 if the run failed, 2 for bad input.",
         epilog=EPILOG,
