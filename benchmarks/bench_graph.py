@@ -15,7 +15,8 @@ The recorder's CPU and memory are printed apart and count toward no floor.
 as a browser or a user's own node would; its CPU is not counted.
 
 Floors: p99 <= 5 ms, missed < 0.5 %; CPU while enabled <= 0.7 cores separate, <= 0.35
-composed, and idle no costlier than enabled; RSS <= 1.2 GB (1,200 MiB) separate, <= 300 MB
+composed, and idle no costlier than enabled (beyond the difference of the two idle windows,
+which is the host's drift alone); RSS <= 1.2 GB (1,200 MiB) separate, <= 300 MB
 composed. Each is printed as a ratio (above 1 misses the floor); a missed floor is named at the
 end and the exit code is 1 (not with ``--smoke``).
 
@@ -172,7 +173,12 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
             if not ok:
                 return {"error": f"could not disable: {graph.with_exits(message)}"}
             client.spin_for(min(SETTLE_S, seconds))
-            idle = mean_cores(idle_before, cpu_used(graph.pids, client, seconds / 4))
+            idle_after = cpu_used(graph.pids, client, seconds / 4)
+            idle = mean_cores(idle_before, idle_after)
+            # the two idle windows differ by the host's drift alone: what an equal cost may read
+            drift = abs(
+                sum(mean_cores(idle_before).values()) - sum(mean_cores(idle_after).values())
+            )
     finally:
         recorder.stop()
         graph.stop()
@@ -195,6 +201,7 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
         "missed_pct": 100 * missed / (len(units) * seconds / 0.01),
         "cpu_cores": sum(enabled.values()),
         "idle_cores": sum(idle.values()),
+        "idle_drift_cores": drift,
         "cpu_by_kind": by_kind,
         "rss_mib": rss,
         "pss_mib": pss,
@@ -250,7 +257,7 @@ def floor_ratios(mode: str, r: dict) -> dict[str, float]:
         "p99": r["p99_ms"] / P99_FLOOR_MS,
         "missed periods": r["missed_pct"] / MISSED_FLOOR_PCT,
         "CPU": r["cpu_cores"] / cpu_floor,
-        "idle CPU": r["idle_cores"] / r["cpu_cores"],
+        "idle CPU": r["idle_cores"] / (r["cpu_cores"] + r["idle_drift_cores"]),
         "RSS": r["rss_mib"] / rss_floor,
     }
 
@@ -280,7 +287,8 @@ def report(mode: str, r: dict) -> None:
             f"{kind} {sum(v):.2f}" + (f" ({len(v)} x {sum(v) / len(v):.3f})" if len(v) > 1 else "")
             for kind, v in sorted(r["cpu_by_kind"].items(), key=lambda kv: -sum(kv[1]))
         )
-        + f"; recorder (apart) {r['recorder'][0]:.2f} cores, {r['recorder'][1]:.0f} MiB"
+        + f"; recorder (apart) {r['recorder'][0]:.2f} cores, {r['recorder'][1]:.0f} MiB; "
+        f"the idle windows before and after differ by {r['idle_drift_cores']:.3f} cores"
     )
     if r["faults"]:
         print(" " * 10 + " supervisor faults: " + "; ".join(r["faults"]))
@@ -329,7 +337,7 @@ def main() -> None:
         print(
             f"floors: p99 <= {P99_FLOOR_MS:g} ms, missed < {MISSED_FLOOR_PCT:g} %, CPU enabled "
             + ", ".join(f"{m} <= {c:g} cores" for m, (c, _) in FLOORS.items())
-            + ", idle <= enabled, RSS "
+            + ", idle <= enabled + the idle windows' difference, RSS "
             + ", ".join(f"{m} <= {r:g} MiB" for m, (_, r) in FLOORS.items())
             + " (a ratio above 1 misses its floor)"
         )
