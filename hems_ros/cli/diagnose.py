@@ -217,15 +217,14 @@ def run(args: argparse.Namespace) -> int:
             raise DiagnosisInputError("no RUN given (a bag folder or a table file with --columns)")
         paths = args.runs + args.heldout
         columns = inputs.per_run("--columns", args.columns, len(paths))
-        rigs = inputs.per_run("--conditions", args.conditions, len(paths))
+        # one --conditions sets the model; one per run, each run's rig
         shared = args.conditions[0] if len(args.conditions) == 1 else None
+        rigs = inputs.per_run("--conditions", [] if shared else args.conditions, len(paths))
         model = inputs.model(args.model, shared, args.overrides)
         chosen = inputs.candidate_names(args.candidates)
         bounds = inputs.bounds(args.bounds)
         loaded = [
-            inputs.on_rig(
-                inputs.load(path, cols, args.fingers, model.wire), None if shared else rig, model
-            )
+            inputs.on_rig(inputs.load(path, cols, args.fingers, model.wire), rig, model)
             for path, cols, rig in zip(paths, columns, rigs)
         ]
         runs = [r for group in loaded[: len(args.runs)] for r in group]

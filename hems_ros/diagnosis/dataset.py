@@ -188,10 +188,10 @@ class TimeSeriesData:
                     residual = run.outputs[name] - sim[name]
                     resolution = run.resolution.get(name, 0.0)
                     floors.append(noise_floor(residual, resolution, name))
+                    sizes = np.bincount(seg.cycle, minlength=seg.n_cycles)
                     cycles += [
                         noise_floor(residual[seg.cycle == c], resolution, name)
-                        for c in range(seg.n_cycles)
-                        if np.sum(seg.cycle == c) >= MIN_CYCLE_SAMPLES
+                        for c in np.flatnonzero(sizes >= MIN_CYCLE_SAMPLES)
                     ]
             self.sigma[name] = float(np.median(floors))
             if len(cycles) >= phase_mod.MIN_CYCLES:

@@ -50,9 +50,13 @@ def joint_command() -> str:
     )
 
 
-def run_joint(progress: Callable[[str], None] | None = None) -> Diagnosis:
+def run_joint(tables: list[FeatureRun], progress: Callable[[str], None] | None = None) -> Diagnosis:
     """One wire (and sheath) for the three tables together, from :data:`JOINT_MODEL`."""
-    return diagnose(joint_tables(), [], inputs.model(JOINT_MODEL), progress=progress)
+    return diagnose(tables, [], inputs.model(JOINT_MODEL), progress=progress)
+
+
+#: Each study with its table on its rig and that table prepared alone.
+Alone = list[tuple[Study, FeatureRun, features.FeatureData]]
 
 
 @dataclass(frozen=True)
@@ -67,22 +71,20 @@ class FigureMiss:
     joint: float  # the joint corrected model on the study's rig
 
 
-def in_bounds_slopes(study: Study, table: FeatureRun) -> fit.Fit:
-    """The study's calibrated set with C_A, C_M refitted to its table within the library's
-    bounds (NiTi's band), everything else as calibrated."""
-    data = features.prepare([table], [])
+def in_bounds_slopes(study: Study, data: features.FeatureData) -> fit.Fit:
+    """The study's calibrated set with C_A, C_M refitted to its table (``data``) within the
+    library's bounds (NiTi's band), everything else as calibrated."""
     [found] = fit.fit_structures(
         data, load_params(study.calibrated), [(candidates.BY_NAME["stress_slopes"],)], {}
     )
     return found
 
 
-def figure_misses(d: Diagnosis, slopes: dict[str, fit.Fit]) -> list[FigureMiss]:
+def figure_misses(d: Diagnosis, slopes: dict[str, fit.Fit], alone: Alone) -> list[FigureMiss]:
     """Every study's figures: the calibrated set, the same with its slopes in bounds
     (``slopes``, by study key), and the joint corrected model."""
     out = []
-    for study, table in zip(STUDIES, joint_tables()):
-        data = features.prepare([table], [])
+    for study, table, data in alone:
         rig = dict(table.rig)
         calibrated, in_bounds, joint_model = data.predict(
             [
@@ -125,14 +127,13 @@ class Pull:
     pinned: tuple[str, ...]
 
 
-def pulls(d: Diagnosis, progress: Callable[[str], None] | None = None) -> list[Pull]:
+def pulls(d: Diagnosis, alone: Alone, progress: Callable[[str], None] | None = None) -> list[Pull]:
     """Every candidate of the joint model, and the stress slopes, refitted on each table alone:
     chapters whose intervals do not overlap pull that parameter apart."""
     names = [c.name for c in d.search.final.structure if c.kind != "timing"]
     names += [n for n in ("stress_slopes",) if n not in names]
     out = []
-    for study, table in zip(STUDIES, joint_tables()):
-        data = features.prepare([table], [])
+    for study, _, data in alone:
         for name in names:
             if progress:
                 progress(f"{study.key}: {name} on this table alone")
@@ -185,9 +186,13 @@ class Joint:
 
 def joint(progress: Callable[[str], None] | None = None) -> Joint:
     say = progress or (lambda message: None)
-    d = run_joint(progress)
+    tables = joint_tables()
+    d = run_joint(tables, progress)
+    alone = [(s, t, features.prepare([t], [])) for s, t in zip(STUDIES, tables)]
     slopes = {}
-    for study, table in zip(STUDIES, joint_tables()):
+    for study, _, data in alone:
         say(f"{study.calibrated}: its stress slopes refitted within NiTi's band")
-        slopes[study.key] = in_bounds_slopes(study, table)
-    return Joint(d, pulls(d, progress), slopes, figure_misses(d, slopes), sheath_check(d))
+        slopes[study.key] = in_bounds_slopes(study, data)
+    return Joint(
+        d, pulls(d, alone, progress), slopes, figure_misses(d, slopes, alone), sheath_check(d)
+    )
