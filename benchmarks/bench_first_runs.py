@@ -33,6 +33,7 @@ from pathlib import Path
 
 import busy as busy_option
 import smoke
+from host import host_line
 
 from hems_ros.rosenv import apply_network_defaults, use_private_domain
 
@@ -204,7 +205,8 @@ def main() -> None:
             )
         print(
             f"first runs: {', '.join(conditions)}; "
-            f"/dev/shm holds {len(os.listdir('/dev/shm'))} files"
+            f"/dev/shm holds {len(os.listdir('/dev/shm'))} files; {host_line()}",
+            flush=True,
         )
         results = {}
         for kind, count, one in (
@@ -231,6 +233,7 @@ def main() -> None:
         print("|---|---|---|---|---|---|---|")
         for kind, runs in results.items():
             print(summary(kind, runs))
+        print(f"after the runs: {host_line()}")
     finally:
         if busy is not None:
             busy.kill()

@@ -35,6 +35,7 @@ from pathlib import Path
 
 import busy as busy_option
 import smoke
+from host import host_line
 
 from hems_ros.rosenv import apply_network_defaults, use_private_domain
 
@@ -209,45 +210,6 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
         "supervisor": state.state_name if state else "no status",
         "faults": list(state.faults) if state else [],
     }
-
-
-def host_speed_s() -> float:
-    """Seconds a fixed pure-Python loop (three million additions) takes now. The speed of a
-    shared host swings by half within minutes; runs are comparable only at similar values."""
-    start, total = time.perf_counter(), 0
-    for i in range(3_000_000):
-        total += i
-    return time.perf_counter() - start
-
-
-def wake_round_trip_us(rounds: int = 5000) -> float:
-    """Mean microseconds for two processes to wake each other once over a pipe: a second
-    reading of the host beside the Python loop, which kept its speed in a phase where the same
-    graph took 1.02-1.29 cores instead of 0.76-0.86."""
-    to_child, from_parent = os.pipe()
-    from_child, to_parent = os.pipe()
-    pid = os.fork()
-    if pid == 0:
-        for _ in range(rounds):
-            os.read(to_child, 1)
-            os.write(to_parent, b"x")
-        os._exit(0)
-    start = time.perf_counter()
-    for _ in range(rounds):
-        os.write(from_parent, b"x")
-        os.read(from_child, 1)
-    elapsed = time.perf_counter() - start
-    os.waitpid(pid, 0)
-    for fd in (to_child, from_parent, from_child, to_parent):
-        os.close(fd)
-    return elapsed / rounds * 1e6
-
-
-def host_line() -> str:
-    return (
-        f"host speed {host_speed_s():.2f} s (a 3-million-addition Python loop; lower is quicker), "
-        f"wake-up round trip {wake_round_trip_us():.1f} us (two processes over a pipe)"
-    )
 
 
 def floor_ratios(mode: str, r: dict) -> dict[str, float]:

@@ -27,7 +27,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import smoke
-from bench_graph import cpu_by_process, host_line  # reserves this run's ROS domain
+from bench_graph import cpu_by_process  # reserves this run's ROS domain
+from host import host_line
 
 from hems_ros.client.graph_client import GraphClient
 from hems_ros.graph import names

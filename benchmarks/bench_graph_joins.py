@@ -33,6 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import busy as busy_option  # noqa: E402
 import smoke  # noqa: E402
+from host import host_line  # noqa: E402
 
 from hems_ros.rosenv import (  # noqa: E402
     apply_network_defaults,
@@ -263,7 +264,9 @@ def main() -> None:
     try:
         for layout in args.layouts.split(","):
             print(
-                f"{layout}: {args.joins} joins" + (", a busy loop on one core" if busy else ""),
+                f"{layout}: {args.joins} joins"
+                + (", a busy loop on one core" if busy else "")
+                + f"; {host_line()}",
                 flush=True,
             )
             results[layout] = run(layout == "composed", args.joins)
@@ -273,6 +276,7 @@ def main() -> None:
         if busy is not None:
             busy.kill()
     text = table(results)
+    print(f"after the joins: {host_line()}")
     print(text)
     if args.markdown is not None:
         args.markdown.write_text(text)
