@@ -372,7 +372,7 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         "Loops move to higher temperature with load and at 5 kg the transformation no longer "
         "completes; the apparent heat capacity on cooling rises above c_p rho V where the reverse "
         "transformation releases latent heat (the plateau). Minor loops nest, and return-point "
-        "memory holds within the issue's 0.02 for every reversal (next section).",
+        "memory holds within 0.02 for every reversal (next section).",
         "",
         "![loops](figures/validation_loops.png)",
         "",
