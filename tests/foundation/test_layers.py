@@ -8,7 +8,7 @@ import ast
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-CORE = ("physics", "control", "diagnosis", "experiments", "bag", "codec", "reports")
+CORE = ("physics", "control", "diagnosis", "experiments", "bag", "codec", "reports", "truth")
 ROS = (
     "rclpy",
     "hems_msgs",
@@ -93,4 +93,12 @@ def test_reports_sit_above_the_analyses() -> None:
     ]
     assert not _offenders(
         paths, lambda n: n == "hems_ros.reports" or n.startswith("hems_ros.reports.")
+    )
+
+
+def test_the_truths_share_no_code_with_the_model_they_test() -> None:
+    """Runs made by the project's own model can only show that the fit agrees with itself."""
+    paths = list((REPO / "hems_ros" / "truth").rglob("*.py"))
+    assert not _offenders(
+        paths, lambda n: n.startswith("hems_ros") and not n.startswith("hems_ros.truth")
     )

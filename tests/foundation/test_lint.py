@@ -36,7 +36,7 @@ def test_the_code_keeps_the_formatters_layout() -> None:
 
 
 def test_mypy_finds_nothing_in_the_core_and_the_client() -> None:
-    """mypy.ini names the packages: physics, control, graph, bag, codec, client."""
+    """mypy.ini names the packages: physics, control, graph, bag, codec, client, truth."""
     done = subprocess.run(
         [sys.executable, "-m", "mypy", "--no-incremental"],
         cwd=REPO,

@@ -1,0 +1,178 @@
+"""A bare SMA wire pulling a mass against a preloaded bias spring, heated by current pulses.
+
+The rig of the dissertation's validation runs (ch. 4: a 0.9 m wire, 900 N/m spring, 65 N s/m
+damping, 4 A pulses), written again with its own equations: Brinson's material
+(``brinson``), a lumped wire temperature with Joule heating, free convection at a constant
+coefficient and the transformation's latent heat, a resistivity that mixes the two phases'
+constant values, and the mass's motion. States: wire temperature, wire elongation and the
+mass's velocity, the two martensite fractions; scipy's LSODA integrates them between the
+current's edges at tolerances of this module.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from hems_ros.truth.brinson import BrinsonMaterial, phase_rates, strain_at, stress
+
+RTOL = 1e-7
+ATOL = np.array([1e-6, 1e-10, 1e-8, 1e-9, 1e-9])  # K, m, m/s, fraction, fraction
+MAX_STEP_S = 0.005  # the fractions' rates switch on and off inside a step
+
+
+@dataclass(frozen=True)
+class WireRig:
+    """SI units; temperatures in degC. Wire and heat data are the dissertation's Table 4.1."""
+
+    material: BrinsonMaterial = field(default_factory=BrinsonMaterial)
+    length_m: float = 0.9
+    diameter_m: float = 0.508e-3
+    density_kg_m3: float = 6450.0
+    heat_capacity_j_kg_k: float = 837.4
+    latent_heat_j_kg: float = 24183.52
+    convection_w_m2_k: float = 37.67
+    resistivity_martensite_ohm_m: float = 94.585e-8
+    resistivity_austenite_ohm_m: float = 90.858e-8
+    ambient_c: float = 20.0
+    mass_kg: float = 0.1
+    spring_n_m: float = 900.0
+    preload_n: float = (
+        35.0  # the spring's pull on the cold wire, near the 0.02 in wire's rated pull
+    )
+    damping_n_s_m: float = 65.0
+
+    @property
+    def section_m2(self) -> float:
+        return math.pi * self.diameter_m**2 / 4.0
+
+    def cold_state(self) -> np.ndarray:
+        """At rest at ambient temperature, all detwinned martensite, pulled by the preload."""
+        mat = self.material
+        sigma = self.preload_n / self.section_m2
+        if sigma <= mat.sigma_f:
+            raise ValueError(
+                f"a preload of {self.preload_n:g} N stresses the wire to {sigma / 1e6:.0f} MPa, "
+                f"under the {mat.sigma_f / 1e6:.0f} MPa that detwins it fully: the cold wire "
+                "would not start as detwinned martensite"
+            )
+        strain = strain_at(mat, sigma, 1.0, 0.0, self.ambient_c)
+        return np.array([self.ambient_c, strain * self.length_m, 0.0, 1.0, 0.0])
+
+
+@dataclass(frozen=True)
+class RigRun:
+    """Samples of a run; ``contraction_m`` is the mass's travel from the cold rest position."""
+
+    time_s: np.ndarray
+    current_a: np.ndarray
+    voltage_v: np.ndarray
+    temperature_c: np.ndarray
+    wire_force_n: np.ndarray
+    contraction_m: np.ndarray
+    martensite_fraction: np.ndarray
+
+
+def _derivatives(rig: WireRig, amps: float, rest_m: float, x: np.ndarray) -> list[float]:
+    mat = rig.material
+    temp, elongation, velocity = x[0], x[1], x[2]
+    xi_s, xi_t = min(max(x[3], 0.0), 1.0), min(max(x[4], 0.0), 1.0 - min(max(x[3], 0.0), 1.0))
+    strain = elongation / rig.length_m
+    volume = rig.section_m2 * rig.length_m
+    heat_capacity = rig.density_kg_m3 * volume * rig.heat_capacity_j_kg_k
+    power = amps**2 * _resistance(rig, xi_s + xi_t)
+    surface = math.pi * rig.diameter_m * rig.length_m
+    heating_rate = (
+        power - rig.convection_w_m2_k * surface * (temp - rig.ambient_c)
+    ) / heat_capacity
+    latent_rise = rig.latent_heat_j_kg / rig.heat_capacity_j_kg_k
+    xs_rate, xt_rate = phase_rates(
+        mat, strain, xi_s, xi_t, temp, velocity / rig.length_m, heating_rate, latent_rise
+    )
+    wire_force = stress(mat, strain, xi_s, xi_t, temp) * rig.section_m2
+    spring_force = rig.preload_n + rig.spring_n_m * (rest_m - elongation)
+    acceleration = (spring_force - wire_force - rig.damping_n_s_m * velocity) / rig.mass_kg
+    return [
+        heating_rate + latent_rise * (xs_rate + xt_rate),
+        velocity,
+        acceleration,
+        xs_rate,
+        xt_rate,
+    ]
+
+
+def _resistance(rig: WireRig, xi: float) -> float:
+    resistivity = (
+        xi * rig.resistivity_martensite_ohm_m + (1.0 - xi) * rig.resistivity_austenite_ohm_m
+    )
+    return resistivity * rig.length_m / rig.section_m2
+
+
+def simulate(
+    rig: WireRig,
+    pulses: Sequence[tuple[float, float, float]],
+    duration_s: float,
+    sample_s: float = 0.01,
+) -> RigRun:
+    """The rig from its cold state for ``duration_s``, sampled every ``sample_s``.
+
+    ``pulses``: (start s, end s, current A), not overlapping; no current between them.
+    """
+    edges = sorted(
+        {0.0, duration_s, *(t for a, b, _ in pulses for t in (a, b) if 0 < t < duration_s)}
+    )
+    times = np.arange(0.0, duration_s + 0.5 * sample_s, sample_s)
+    state = rig.cold_state()
+    rest_m = state[1]
+    rows = []
+    for start, end in zip(edges[:-1], edges[1:]):
+        amps = _current(pulses, start)
+        solution = solve_ivp(
+            lambda t, x, i=amps: _derivatives(rig, i, rest_m, x),
+            (start, end),
+            state,
+            method="LSODA",
+            t_eval=np.append(times[(times >= start) & (times < end)], end),
+            rtol=RTOL,
+            atol=ATOL,
+            max_step=MAX_STEP_S,
+        )
+        if not solution.success:
+            raise RuntimeError(
+                f"the rig's integration failed at {start:g}-{end:g} s: {solution.message}"
+            )
+        rows += [(t, amps, *x) for t, x in zip(solution.t[:-1], solution.y.T[:-1])]
+        state = solution.y[:, -1]
+    if times[-1] > rows[-1][0]:
+        rows.append((times[-1], _current(pulses, times[-1]), *state))
+    return _run(rig, rest_m, np.array(rows))
+
+
+def _current(pulses: Sequence[tuple[float, float, float]], t: float) -> float:
+    return next((amps for start, end, amps in pulses if start <= t < end), 0.0)
+
+
+def _run(rig: WireRig, rest_m: float, rows: np.ndarray) -> RigRun:
+    t, amps, temp, elongation, _, xi_s, xi_t = rows.T
+    mat = rig.material
+    xi = np.clip(xi_s + xi_t, 0.0, 1.0)
+    force = np.array(
+        [
+            stress(mat, e / rig.length_m, s, w, c) * rig.section_m2
+            for e, s, w, c in zip(elongation, xi_s, xi_t, temp)
+        ]
+    )
+    resistance = np.array([_resistance(rig, x) for x in xi])
+    return RigRun(
+        time_s=t,
+        current_a=amps,
+        voltage_v=amps * resistance,
+        temperature_c=temp,
+        wire_force_n=force,
+        contraction_m=rest_m - elongation,
+        martensite_fraction=xi,
+    )

@@ -1,0 +1,108 @@
+"""The independent truth: Brinson's kinetics in rate form, integrated in the wire rig, agree
+with the paper's closed forms along monotonic paths, conserve energy, and refuse a rig they
+cannot start."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from hems_ros.truth.brinson import BrinsonMaterial, phase_rates, stress
+from hems_ros.truth.rig import WireRig, simulate
+
+RIG = WireRig()
+MAT = RIG.material
+PULSE = (1.0, 2.8, 4.0)  # 4 A for 1.8 s, as in the dissertation's validation runs (ch. 4)
+
+
+@pytest.fixture(scope="module")
+def run():
+    return simulate(RIG, [PULSE], 30.0, sample_s=0.002)
+
+
+def test_a_pulse_contracts_the_wire_and_cooling_brings_it_back(run):
+    peak = run.contraction_m.max()
+    least = run.martensite_fraction.min()
+    # the recoverable strain of the transformed share, less the spring's added stretch
+    assert 0.6 * MAT.eps_l * (1 - least) * RIG.length_m < peak < MAT.eps_l * RIG.length_m
+    assert run.temperature_c.max() > MAT.a_s + RIG.preload_n / RIG.section_m2 / MAT.c_a
+    assert run.martensite_fraction[-1] == pytest.approx(1.0, abs=1e-6)
+    # what is left is the thermoelastic term of the still warm wire
+    assert 0.0 < run.contraction_m[-1] < 0.05 * peak
+
+
+def test_heating_follows_the_closed_reverse_law(run):
+    """Brinson (1993): xi = xi0/2 (cos(a_A (T - As - sigma/C_A)) + 1) from xi0 = 1."""
+    sigma = run.wire_force_n / RIG.section_m2
+    phi = math.pi * (run.temperature_c - MAT.a_s - sigma / MAT.c_a) / (MAT.a_f - MAT.a_s)
+    heating = (run.time_s >= PULSE[0]) & (run.time_s < PULSE[1]) & (phi > 0.05)
+    assert heating.sum() > 50
+    closed = 0.5 * (np.cos(phi[heating]) + 1.0)
+    assert np.max(np.abs(run.martensite_fraction[heating] - closed)) < 1e-4
+
+
+def test_cooling_follows_the_closed_forward_law(run):
+    """Brinson (1993), above Ms: xi_s = (1 - xi_s0)/2 cos(psi) + (1 + xi_s0)/2 from the fraction
+    the heating left, psi from sigma - C_M (T - Ms) across the detwinning stresses."""
+    sigma = run.wire_force_n / RIG.section_m2
+    effective = sigma - MAT.c_m * (run.temperature_c - MAT.m_s)
+    psi = math.pi * (effective - MAT.sigma_f) / (MAT.sigma_s - MAT.sigma_f)
+    start = run.martensite_fraction.min()
+    cooling = (run.time_s > PULSE[1]) & (psi < math.pi - 0.05) & (psi > 0.0)
+    cooling &= run.temperature_c > MAT.m_s
+    assert cooling.sum() > 50
+    closed = 0.5 * (1.0 - start) * np.cos(psi[cooling]) + 0.5 * (1.0 + start)
+    assert np.max(np.abs(run.martensite_fraction[cooling] - closed)) < 1e-3
+
+
+def test_the_heat_put_in_is_stored_lost_or_taken_by_the_transformation(run):
+    """At every sample: electrical energy = heat stored + convected - latent heat released."""
+    volume = RIG.section_m2 * RIG.length_m
+    capacity = RIG.density_kg_m3 * volume * RIG.heat_capacity_j_kg_k
+    surface = math.pi * RIG.diameter_m * RIG.length_m
+    dt = np.diff(run.time_s)
+    # the current is constant from each sample to the next (pulse edges fall on samples)
+    electrical = np.concatenate([[0.0], np.cumsum(run.current_a[:-1] * run.voltage_v[:-1] * dt)])
+    convected = RIG.convection_w_m2_k * surface * (run.temperature_c - RIG.ambient_c)
+    lost = np.concatenate([[0.0], np.cumsum(0.5 * (convected[1:] + convected[:-1]) * dt)])
+    stored = capacity * (run.temperature_c - run.temperature_c[0])
+    released = (
+        RIG.density_kg_m3
+        * volume
+        * RIG.latent_heat_j_kg
+        * (run.martensite_fraction - run.martensite_fraction[0])
+    )
+    end_of_pulse = np.searchsorted(run.time_s, PULSE[1])
+    assert released[end_of_pulse] < -5.0  # joules the reverse transformation took
+    assert np.max(np.abs(electrical - (stored + lost - released))) < 0.002 * electrical[-1]
+
+
+def test_cooling_an_unloaded_wire_between_ms_and_mf_follows_the_twinned_law():
+    """Brinson (1993): xi_t = (1 - xi_t0)/2 (cos(a_M (T - Mf)) + 1), here from xi_t0 = 0, at a
+    stress under the detwinning start (no strain: the thermoelastic stress alone)."""
+    cooling = -2.0  # K/s
+
+    def rates(t, x):
+        temp = MAT.m_s + cooling * t
+        return [phase_rates(MAT, 0.0, 0.0, x[0], temp, 0.0, cooling, 0.0)[1]]
+
+    span = (MAT.m_s - MAT.m_f) / -cooling
+    times = np.linspace(0.0, span, 41)[1:-1]
+    solution = solve_ivp(rates, (0.0, span), [0.0], t_eval=times, rtol=1e-9, atol=1e-12)
+    temp = MAT.m_s + cooling * times
+    assert stress(MAT, 0.0, 0.0, 0.0, temp[0]) < MAT.sigma_s
+    closed = 0.5 * (np.cos(math.pi * (temp - MAT.m_f) / (MAT.m_s - MAT.m_f)) + 1.0)
+    assert np.max(np.abs(solution.y[0] - closed)) < 1e-5
+
+
+def test_a_preload_that_cannot_detwin_the_cold_wire_is_refused():
+    with pytest.raises(ValueError, match="under the 170 MPa that detwins it fully"):
+        WireRig(preload_n=12.0).cold_state()
+
+
+def test_a_material_with_its_temperatures_out_of_order_is_refused():
+    with pytest.raises(ValueError, match="transformation temperatures out of order"):
+        BrinsonMaterial(m_s=60.0, m_f=62.0)
