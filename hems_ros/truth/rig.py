@@ -1,12 +1,14 @@
-"""A bare SMA wire pulling a mass against a preloaded bias spring, heated by current pulses.
+"""A bare SMA wire lifting a hanging mass against a pretensioned series spring, heated by
+current pulses.
 
-The rig of the dissertation's validation runs (ch. 4: a 0.9 m wire, 900 N/m spring, 65 N s/m
-damping, 4 A pulses), written again with its own equations: Brinson's material
-(``brinson``), a lumped wire temperature with Joule heating, free convection at a constant
-coefficient and the transformation's latent heat, a resistivity that mixes the two phases'
-constant values, and the mass's motion. States: wire temperature, wire elongation and the
-mass's velocity, the two martensite fractions; scipy's LSODA integrates them between the
-current's edges at tolerances of this module.
+The rig of the dissertation's chapter 3 characterisation (a 30 N mass and a spring
+pretensioned to 20 N, 754 N/m) on the chapter 4 wire (Table 4.1), written again with its own
+equations: Brinson's material (``brinson``), a lumped wire temperature with Joule heating,
+free convection at a constant coefficient and the transformation's latent heat, a
+resistivity that mixes the two phases' constant values, and the mass's motion with viscous
+damping. States: wire temperature, wire elongation, the mass's velocity, the two martensite
+fractions; scipy's LSODA integrates them between the current's edges at tolerances of this
+module.
 """
 
 from __future__ import annotations
@@ -39,24 +41,28 @@ class WireRig:
     resistivity_martensite_ohm_m: float = 94.585e-8
     resistivity_austenite_ohm_m: float = 90.858e-8
     ambient_c: float = 20.0
-    mass_kg: float = 0.1
-    spring_n_m: float = 900.0
-    preload_n: float = (
-        35.0  # the spring's pull on the cold wire, near the 0.02 in wire's rated pull
-    )
+    mass_kg: float = 30.0 / 9.81
+    gravity_m_s2: float = 9.81
+    spring_n_m: float = 754.0
+    preload_n: float = 20.0  # the spring's pull on the cold wire at rest
     damping_n_s_m: float = 65.0
+
+    @property
+    def cold_load_n(self) -> float:
+        """The wire's tension at rest, cold: the mass's weight and the spring's pretension."""
+        return self.mass_kg * self.gravity_m_s2 + self.preload_n
 
     @property
     def section_m2(self) -> float:
         return math.pi * self.diameter_m**2 / 4.0
 
     def cold_state(self) -> np.ndarray:
-        """At rest at ambient temperature, all detwinned martensite, pulled by the preload."""
+        """At rest at ambient temperature, all detwinned martensite, under the cold load."""
         mat = self.material
-        sigma = self.preload_n / self.section_m2
+        sigma = self.cold_load_n / self.section_m2
         if sigma <= mat.sigma_f:
             raise ValueError(
-                f"a preload of {self.preload_n:g} N stresses the wire to {sigma / 1e6:.0f} MPa, "
+                f"a load of {self.cold_load_n:g} N stresses the wire to {sigma / 1e6:.0f} MPa, "
                 f"under the {mat.sigma_f / 1e6:.0f} MPa that detwins it fully: the cold wire "
                 "would not start as detwinned martensite"
             )
@@ -94,8 +100,8 @@ def _derivatives(rig: WireRig, amps: float, rest_m: float, x: np.ndarray) -> lis
         mat, strain, xi_s, xi_t, temp, velocity / rig.length_m, heating_rate, latent_rise
     )
     wire_force = stress(mat, strain, xi_s, xi_t, temp) * rig.section_m2
-    spring_force = rig.preload_n + rig.spring_n_m * (rest_m - elongation)
-    acceleration = (spring_force - wire_force - rig.damping_n_s_m * velocity) / rig.mass_kg
+    load = rig.cold_load_n + rig.spring_n_m * (rest_m - elongation)  # the spring stretches
+    acceleration = (load - wire_force - rig.damping_n_s_m * velocity) / rig.mass_kg
     return [
         heating_rate + latent_rise * (xs_rate + xt_rate),
         velocity,

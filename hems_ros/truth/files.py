@@ -1,0 +1,78 @@
+"""A truth run as a lab hands it over: a CSV log and a YAML note of the rig's conditions.
+
+The log has what a bench records (the commanded current, the encoder's contraction, the load
+cell's wire force), each channel through its :class:`~hems_ros.truth.measurement.Sensor`; the
+conditions name the rig in the layout of ``config/physics/*.yaml`` (load, ambient), as a
+user writes them for ``hems diagnose --conditions``. Nothing about the material goes there:
+finding it is the diagnosis's job.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from hems_ros.truth.measurement import Sensor, measure
+from hems_ros.truth.rig import RigRun, WireRig
+
+#: ``hems diagnose --columns`` for the log :func:`write_run` writes
+COLUMNS = "time=time_s:s,current=current_a:A,displacement=contraction_mm:mm,wire_force=force_n:N"
+
+#: channel -> (column, scale from the run's SI unit to the column's)
+CHANNELS = {"contraction": ("contraction_mm", 1e3), "wire_force": ("force_n", 1.0)}
+
+
+def conditions(rig: WireRig) -> dict:
+    """The rig's conditions in the project's physics-config layout."""
+    return {
+        "ambient_temperature_c": rig.ambient_c,
+        "wire": {"diameter_m": rig.diameter_m, "length_m": rig.length_m},
+        "load": {
+            "kind": "hanging_mass",
+            "mass_kg": rig.mass_kg,
+            "gravity_m_s2": rig.gravity_m_s2,
+            "damping_n_s_per_m": rig.damping_n_s_m,
+            "stiffness_n_per_m": rig.spring_n_m,
+            "pretension_n": rig.preload_n,
+            "pulley_ratio": 1.0,
+        },
+    }
+
+
+def write_run(
+    run: RigRun,
+    rig: WireRig,
+    folder: Path,
+    name: str,
+    sensors: Mapping[str, Sensor],
+    rng: np.random.Generator,
+) -> tuple[Path, Path]:
+    """Write ``<name>.csv`` and ``<name>_conditions.yaml`` into ``folder``; their paths.
+
+    ``sensors``: a :class:`Sensor` per channel of :data:`CHANNELS`, in its column's unit (mm,
+    N); a channel left out is recorded exactly."""
+    unknown = set(sensors) - set(CHANNELS)
+    if unknown:
+        raise ValueError(
+            f"no channel {', '.join(sorted(unknown))}; channels: {', '.join(CHANNELS)}"
+        )
+    folder.mkdir(parents=True, exist_ok=True)
+    sample_s = float(np.median(np.diff(run.time_s)))
+    true = {"contraction": run.contraction_m, "wire_force": run.wire_force_n}
+    columns = {"time_s": run.time_s, "current_a": run.current_a}
+    for channel, (column, scale) in CHANNELS.items():
+        values = true[channel] * scale
+        sensor = sensors.get(channel)
+        columns[column] = values if sensor is None else measure(values, sample_s, sensor, rng)
+    log = folder / f"{name}.csv"
+    with log.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(columns)
+        writer.writerows(zip(*(np.round(v, 9) for v in columns.values())))
+    note = folder / f"{name}_conditions.yaml"
+    note.write_text(yaml.safe_dump(conditions(rig), sort_keys=False))
+    return log, note
