@@ -4,7 +4,7 @@ current pulses.
 The rig of the dissertation's chapter 3 characterisation (a 30 N mass and a spring
 pretensioned to 20 N, 754 N/m) on the chapter 4 wire (Table 4.1), written again with its own
 equations: Brinson's material (``brinson``), a lumped wire temperature with Joule heating,
-free convection at a constant coefficient and the transformation's latent heat, a
+free convection and radiation to still air (``air``), the transformation's latent heat, a
 resistivity that mixes the two phases' constant values, and the mass's motion with viscous
 damping. States: wire temperature, wire elongation, the mass's velocity, the two martensite
 fractions; scipy's LSODA integrates them between the current's edges at tolerances of this
@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from hems_ros.truth.air import heat_loss_w_m2
 from hems_ros.truth.brinson import BrinsonMaterial, phase_rates, strain_at, stress
 
 RTOL = 1e-7
@@ -37,7 +38,7 @@ class WireRig:
     density_kg_m3: float = 6450.0
     heat_capacity_j_kg_k: float = 837.4
     latent_heat_j_kg: float = 24183.52
-    convection_w_m2_k: float = 37.67
+    emissivity: float = 0.1  # bright NiTi: radiation a few per cent of the loss
     resistivity_martensite_ohm_m: float = 94.585e-8
     resistivity_austenite_ohm_m: float = 90.858e-8
     ambient_c: float = 20.0
@@ -93,7 +94,7 @@ def _derivatives(rig: WireRig, amps: float, rest_m: float, x: np.ndarray) -> lis
     power = amps**2 * _resistance(rig, xi_s + xi_t)
     surface = math.pi * rig.diameter_m * rig.length_m
     heating_rate = (
-        power - rig.convection_w_m2_k * surface * (temp - rig.ambient_c)
+        power - surface * heat_loss_w_m2(temp, rig.ambient_c, rig.diameter_m, rig.emissivity)
     ) / heat_capacity
     latent_rise = rig.latent_heat_j_kg / rig.heat_capacity_j_kg_k
     xs_rate, xt_rate = phase_rates(

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from hems_ros.truth.air import heat_loss_w_m2
 from hems_ros.truth.brinson import BrinsonMaterial, phase_rates, stress
 from hems_ros.truth.rig import WireRig, simulate
 
@@ -70,7 +71,12 @@ def test_the_heat_put_in_is_stored_lost_or_taken_by_the_transformation(run):
     dt = np.diff(run.time_s)
     # the current is constant from each sample to the next (pulse edges fall on samples)
     electrical = np.concatenate([[0.0], np.cumsum(run.current_a[:-1] * run.voltage_v[:-1] * dt)])
-    convected = RIG.convection_w_m2_k * surface * (run.temperature_c - RIG.ambient_c)
+    convected = surface * np.array(
+        [
+            heat_loss_w_m2(t, RIG.ambient_c, RIG.diameter_m, RIG.emissivity)
+            for t in run.temperature_c
+        ]
+    )
     lost = np.concatenate([[0.0], np.cumsum(0.5 * (convected[1:] + convected[:-1]) * dt)])
     stored = capacity * (run.temperature_c - run.temperature_c[0])
     released = (
@@ -110,3 +116,12 @@ def test_a_preload_that_cannot_detwin_the_cold_wire_is_refused():
 def test_a_material_with_its_temperatures_out_of_order_is_refused():
     with pytest.raises(ValueError, match="transformation temperatures out of order"):
         BrinsonMaterial(m_s=60.0, m_f=62.0)
+
+
+def test_free_convection_matches_the_dissertations_coefficient_at_its_conditions():
+    """Appendix 4.4: h = 42.51 W/m2K for this wire at 90 degC in air at 22 degC (the same
+    correlation, with air properties of its own)."""
+    h = heat_loss_w_m2(90.0, 22.0, 0.508e-3, emissivity=0.0) / (90.0 - 22.0)
+    assert h == pytest.approx(42.51, rel=0.08)
+    radiation = heat_loss_w_m2(90.0, 22.0, 0.508e-3, 0.1) / (90.0 - 22.0) - h
+    assert 0.0 < radiation < 0.05 * h
