@@ -6,9 +6,9 @@ pretensioned to 20 N, 754 N/m) on the chapter 4 wire (Table 4.1), written again 
 equations: Brinson's material (``brinson``), a lumped wire temperature with Joule heating,
 free convection and radiation to still air (``air``), the transformation's latent heat, a
 resistivity that mixes the two phases' constant values, and the mass's motion with viscous
-damping. States: wire temperature, wire elongation, the mass's velocity, the two martensite
-fractions; scipy's LSODA integrates them between the current's edges at tolerances of this
-module.
+damping; the wire bare or in a Bowden sheath (``sheath``). States: wire temperature, wire
+elongation, the mass's velocity, the two martensite fractions, the sheath's nodes; scipy's
+LSODA integrates them between the current's edges at tolerances of this module.
 """
 
 from __future__ import annotations
@@ -22,9 +22,10 @@ from scipy.integrate import solve_ivp
 
 from hems_ros.truth.air import heat_loss_w_m2
 from hems_ros.truth.brinson import BrinsonMaterial, phase_rates, strain_at, stress
+from hems_ros.truth.sheath import Sheath, SheathNetwork
 
 RTOL = 1e-7
-ATOL = np.array([1e-6, 1e-10, 1e-8, 1e-9, 1e-9])  # K, m, m/s, fraction, fraction
+ATOL = [1e-6, 1e-10, 1e-8, 1e-9, 1e-9]  # K, m, m/s, fraction, fraction; 1e-6 K a node
 MAX_STEP_S = 0.005  # the fractions' rates switch on and off inside a step
 
 
@@ -47,6 +48,12 @@ class WireRig:
     spring_n_m: float = 754.0
     preload_n: float = 20.0  # the spring's pull on the cold wire at rest
     damping_n_s_m: float = 65.0
+    sheath: Sheath | None = None  # a bare wire
+
+    def network(self) -> SheathNetwork | None:
+        if self.sheath is None:
+            return None
+        return SheathNetwork.build(self.sheath, 0.5 * self.diameter_m, self.length_m)
 
     @property
     def cold_load_n(self) -> float:
@@ -68,7 +75,9 @@ class WireRig:
                 "would not start as detwinned martensite"
             )
         strain = strain_at(mat, sigma, 1.0, 0.0, self.ambient_c)
-        return np.array([self.ambient_c, strain * self.length_m, 0.0, 1.0, 0.0])
+        network = self.network()
+        nodes = [] if network is None else [self.ambient_c] * network.capacities.size
+        return np.array([self.ambient_c, strain * self.length_m, 0.0, 1.0, 0.0, *nodes])
 
 
 @dataclass(frozen=True)
@@ -82,20 +91,28 @@ class RigRun:
     wire_force_n: np.ndarray
     contraction_m: np.ndarray
     martensite_fraction: np.ndarray
+    sheath_node_c: np.ndarray  # (samples, nodes), inside out; no columns for a bare wire
 
 
-def _derivatives(rig: WireRig, amps: float, rest_m: float, x: np.ndarray) -> list[float]:
+def _derivatives(
+    rig: WireRig, network: SheathNetwork | None, amps: float, rest_m: float, x: np.ndarray
+) -> list[float]:
     mat = rig.material
     temp, elongation, velocity = x[0], x[1], x[2]
-    xi_s, xi_t = min(max(x[3], 0.0), 1.0), min(max(x[4], 0.0), 1.0 - min(max(x[3], 0.0), 1.0))
+    xi_s = min(max(x[3], 0.0), 1.0)
+    xi_t = min(max(x[4], 0.0), 1.0 - xi_s)
     strain = elongation / rig.length_m
     volume = rig.section_m2 * rig.length_m
     heat_capacity = rig.density_kg_m3 * volume * rig.heat_capacity_j_kg_k
     power = amps**2 * _resistance(rig, xi_s + xi_t)
-    surface = math.pi * rig.diameter_m * rig.length_m
-    heating_rate = (
-        power - surface * heat_loss_w_m2(temp, rig.ambient_c, rig.diameter_m, rig.emissivity)
-    ) / heat_capacity
+    if network is None:
+        surface = math.pi * rig.diameter_m * rig.length_m
+        loss = surface * heat_loss_w_m2(temp, rig.ambient_c, rig.diameter_m, rig.emissivity)
+        node_rates: list[float] = []
+    else:
+        loss, rates = network.flows(temp, x[5:], rig.ambient_c)
+        node_rates = list(rates)
+    heating_rate = (power - loss) / heat_capacity
     latent_rise = rig.latent_heat_j_kg / rig.heat_capacity_j_kg_k
     xs_rate, xt_rate = phase_rates(
         mat, strain, xi_s, xi_t, temp, velocity / rig.length_m, heating_rate, latent_rise
@@ -109,6 +126,7 @@ def _derivatives(rig: WireRig, amps: float, rest_m: float, x: np.ndarray) -> lis
         acceleration,
         xs_rate,
         xt_rate,
+        *node_rates,
     ]
 
 
@@ -134,18 +152,19 @@ def simulate(
     )
     times = np.arange(0.0, duration_s + 0.5 * sample_s, sample_s)
     state = rig.cold_state()
+    network = rig.network()
     rest_m = state[1]
     rows = []
     for start, end in zip(edges[:-1], edges[1:]):
         amps = _current(pulses, start)
         solution = solve_ivp(
-            lambda t, x, i=amps: _derivatives(rig, i, rest_m, x),
+            lambda t, x, i=amps: _derivatives(rig, network, i, rest_m, x),
             (start, end),
             state,
             method="LSODA",
             t_eval=np.append(times[(times >= start) & (times < end)], end),
             rtol=RTOL,
-            atol=ATOL,
+            atol=ATOL + [1e-6] * (state.size - len(ATOL)),
             max_step=MAX_STEP_S,
         )
         if not solution.success:
@@ -164,7 +183,7 @@ def _current(pulses: Sequence[tuple[float, float, float]], t: float) -> float:
 
 
 def _run(rig: WireRig, rest_m: float, rows: np.ndarray) -> RigRun:
-    t, amps, temp, elongation, _, xi_s, xi_t = rows.T
+    t, amps, temp, elongation, _, xi_s, xi_t = rows.T[:7]
     mat = rig.material
     xi = np.clip(xi_s + xi_t, 0.0, 1.0)
     force = np.array(
@@ -182,4 +201,5 @@ def _run(rig: WireRig, rest_m: float, rows: np.ndarray) -> RigRun:
         wire_force_n=force,
         contraction_m=rest_m - elongation,
         martensite_fraction=xi,
+        sheath_node_c=rows[:, 7:],
     )
