@@ -147,6 +147,15 @@ def simulate(
 
     ``pulses``: (start s, end s, current A), not overlapping; no current between them.
     """
+    ordered = sorted(pulses)
+    bad = [p for p in ordered if not 0.0 <= p[0] < p[1]] + [
+        f"{a} and {b}" for a, b in zip(ordered[:-1], ordered[1:]) if b[0] < a[1]
+    ]
+    if bad:
+        raise ValueError(
+            f"pulses must start at 0 s or later, end after they start and not "
+            f"overlap: {', '.join(map(str, bad))}"
+        )
     edges = sorted(
         {0.0, duration_s, *(t for a, b, _ in pulses for t in (a, b) if 0 < t < duration_s)}
     )

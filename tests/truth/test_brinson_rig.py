@@ -125,3 +125,10 @@ def test_free_convection_matches_the_dissertations_coefficient_at_its_conditions
     assert h == pytest.approx(42.51, rel=0.08)
     radiation = heat_loss_w_m2(90.0, 22.0, 0.508e-3, 0.1) / (90.0 - 22.0) - h
     assert 0.0 < radiation < 0.05 * h
+
+
+def test_overlapping_or_backward_pulses_are_refused_naming_them():
+    with pytest.raises(ValueError, match=r"\(1.0, 3.0, 4.0\) and \(2.0, 4.0, 4.0\)"):
+        simulate(RIG, [(1.0, 3.0, 4.0), (2.0, 4.0, 4.0)], 5.0)
+    with pytest.raises(ValueError, match=r"\(3.0, 2.0, 4.0\)"):
+        simulate(RIG, [(3.0, 2.0, 4.0)], 5.0)
