@@ -3,7 +3,9 @@
 At ``HEMS_TEST_HANG_S`` (420 s) the test fails with an exception raised in the main thread, so
 its fixtures still clean up. A test stuck inside C code, where that exception cannot land,
 stops the whole run when it has run 15 % longer: every thread's stack, the processes it
-started killed, and the test's name as the last line of the output.
+started killed, and the test's name as the last line of the output. Both need the
+interpreter; a call that holds it and never returns (a deadlock inside the middleware) is
+stopped by faulthandler's own thread 30 % longer, with every thread's stack.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import pytest
 
 HANG_S = float(os.environ.get("HEMS_TEST_HANG_S", "420"))
 HARD_STOP_S = 1.15 * HANG_S
+LAST_RESORT_S = 1.3 * HANG_S
 
 
 def live_descendants(root: int) -> dict[int, str]:
@@ -73,6 +76,14 @@ def _stop_run(item: pytest.Item) -> None:
     os._exit(3)
 
 
+def _real_stderr(item: pytest.Item) -> int:
+    """The run's own stderr behind pytest's capture (a private attribute, else fd 2): the
+    last resort cannot suspend the capture, and what it writes into it is lost at the exit."""
+    capture = item.config.pluginmanager.getplugin("capturemanager")
+    err = getattr(getattr(capture, "_global_capturing", None), "err", None)
+    return getattr(err, "targetfd_save", 2)
+
+
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_protocol(item: pytest.Item, nextitem):
     previous = signal.signal(signal.SIGALRM, _fail_hung)
@@ -80,9 +91,11 @@ def pytest_runtest_protocol(item: pytest.Item, nextitem):
     hard_stop = threading.Timer(HARD_STOP_S, _stop_run, args=(item,))
     hard_stop.daemon = True
     hard_stop.start()
+    faulthandler.dump_traceback_later(LAST_RESORT_S, exit=True, file=_real_stderr(item))
     try:
         yield
     finally:
+        faulthandler.cancel_dump_traceback_later()
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
         hard_stop.cancel()

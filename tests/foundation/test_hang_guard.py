@@ -17,6 +17,13 @@ def test_sleeps():
 def test_after_it():
     pass
 
+def test_holds_the_interpreter():
+    import ctypes
+    libc = ctypes.PyDLL(None)  # its calls keep the GIL
+    mutex = ctypes.create_string_buffer(64)  # a default pthread mutex is all zeros
+    libc.pthread_mutex_lock(mutex)
+    libc.pthread_mutex_lock(mutex)  # already this thread's: waits for ever, signals or not
+
 def test_will_not_stop():
     while True:
         try:
@@ -40,7 +47,7 @@ def _pytest(folder: Path, *args: str) -> subprocess.CompletedProcess:
 
 def test_a_hung_test_fails_and_the_run_goes_on(tmp_path: Path) -> None:
     (tmp_path / "test_hung.py").write_text(HUNG)
-    result = _pytest(tmp_path, "-k", "not will_not_stop", "test_hung.py")
+    result = _pytest(tmp_path, "-k", "sleeps or after_it", "test_hung.py")
     assert result.returncode == 1, result.stdout
     assert "still running after 1 s: stopped as hung" in result.stdout
     assert "1 failed, 1 passed" in result.stdout
@@ -52,3 +59,10 @@ def test_a_test_that_will_not_stop_ends_the_run_with_its_name_last(tmp_path: Pat
     assert result.returncode == 3
     assert "test_will_not_stop" in result.stderr.strip().splitlines()[-1]
     assert "Thread 0x" in result.stderr or "Current thread" in result.stderr
+
+
+def test_a_call_that_holds_the_interpreter_is_stopped_with_every_stack(tmp_path: Path) -> None:
+    (tmp_path / "test_hung.py").write_text(HUNG)
+    result = _pytest(tmp_path, "test_hung.py::test_holds_the_interpreter")
+    assert result.returncode != 0
+    assert "Timeout (0:00:01" in result.stderr and "test_holds_the_interpreter" in result.stderr
