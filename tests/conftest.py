@@ -20,6 +20,7 @@ from hang_guard import live_descendants, pytest_runtest_protocol  # noqa: F401
 REPO = Path(__file__).resolve().parent.parent
 VENV = REPO / ".venv"
 _domain_lock = None
+RESOURCE_TRACKER = "from multiprocessing.resource_tracker import main"
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -58,7 +59,13 @@ def no_process_outlives_its_module():
     """A node a test module left running would join every later test's graph in this
     domain (a second controller answering the same samples); kill it and say which."""
     yield
-    left = live_descendants(os.getpid())
+    left = {
+        pid: command
+        for pid, command in live_descendants(os.getpid()).items()
+        # multiprocessing's helper of this process (started with Dask's first local cluster)
+        # lives as long as the test run and restarts itself if killed
+        if RESOURCE_TRACKER not in command
+    }
     if not left:
         return
     for pid in left:

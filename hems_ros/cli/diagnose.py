@@ -10,7 +10,7 @@ import sys
 import time
 from pathlib import Path
 
-from hems_ros.cli.numbers import non_negative_int, positive
+from hems_ros.cli.numbers import non_negative_int, positive, positive_int
 
 DEFAULT_MODEL = "table41"
 EPILOG = """\
@@ -165,7 +165,9 @@ def register(subparsers) -> None:
         "candidate, an effect outside the library, nothing at all), at three sensor-noise levels "
         "on two input profiles, each diagnosed from the starting model; plus the dissertation's "
         "own measurements. Writes suite.md, suite.json and the confusion matrix into --out, and "
-        "docs/diagnosis.md with --docs. Seeded: the same seed gives the same result.",
+        "docs/diagnosis.md with --docs. Seeded: the same seed gives the same result, on any "
+        "scheduler. Each finished case is kept in OUT/cases, so a stopped run continues where "
+        "it stopped (remove OUT/cases to start afresh).",
     )
     suite.add_argument(
         "--out", type=Path, default=Path("results/diagnosis-suite"), help="output folder"
@@ -188,7 +190,32 @@ def register(subparsers) -> None:
         action="store_true",
         help="skip the dissertation's measurements (the synthetic suite only)",
     )
+    add_cluster_options(suite)
     suite.set_defaults(func=run_suite)
+
+
+def scheduler(text: str) -> str:
+    if text in ("local", "serial") or (text.startswith("tcp://") and ":" in text[6:]):
+        return text
+    raise argparse.ArgumentTypeError(f"{text!r}: local, serial or tcp://HOST:PORT")
+
+
+def add_cluster_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--scheduler",
+        type=scheduler,
+        default="local",
+        metavar="WHERE",
+        help="where the tasks run: 'local' (default: a Dask LocalCluster of worker processes "
+        "on this machine), 'serial' (in this process, no Dask) or the address of a running "
+        "Dask scheduler, tcp://HOST:PORT ('dask scheduler' and 'dask worker' started by hand)",
+    )
+    parser.add_argument(
+        "--workers",
+        type=positive_int,
+        default=None,
+        help="worker processes of the local cluster (default: one per core)",
+    )
 
 
 def _say(quiet: bool):
@@ -260,6 +287,8 @@ def run_suite(args: argparse.Namespace) -> int:
         quick=args.quick,
         dissertation=not args.no_dissertation,
         progress=say,
+        scheduler=args.scheduler,
+        workers=args.workers,
     )
     if args.docs is not None:
         figures = args.docs.parent / "figures"

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -18,12 +17,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from hems_ros.diagnosis import candidates as library  # noqa: E402
-from hems_ros.diagnosis import dissertation as studies_module  # noqa: E402
-from hems_ros.diagnosis import joint as joint_module  # noqa: E402
 from hems_ros.diagnosis import (
+    cluster,  # noqa: E402
     public_data,  # noqa: E402
     suite,  # noqa: E402
 )
+from hems_ros.diagnosis import dissertation as studies_module  # noqa: E402
+from hems_ros.diagnosis import joint as joint_module  # noqa: E402
 from hems_ros.diagnosis.bagload import load_bag_runs  # noqa: E402
 from hems_ros.diagnosis.workflow import Diagnosis, diagnose  # noqa: E402
 from hems_ros.physics.params import load_params  # noqa: E402
@@ -78,28 +78,50 @@ def grid(seed: int, quick: bool) -> list[tuple[suite.Case, str, str, int]]:
     ]
 
 
+def case_key(case: suite.Case, prof: str, noise: str, seed: int) -> str:
+    """The name of a suite run's task and of its result file."""
+    return f"{case.name}-{prof}-{noise}-seed{seed}"
+
+
+def suite_tasks(rows: list[tuple[suite.Case, str, str, int]]) -> list[cluster.Task]:
+    """One task per (case, profile, noise level, seed) of :func:`grid`."""
+    base = load_params(suite.BASE)
+    duties = {p: suite.profile(p, base) for p in suite.PROFILES}
+    return [
+        cluster.Task(
+            case_key(case, prof, noise, s),
+            suite.run_case,
+            (case, prof, noise, s, base, duties[prof]),
+            cost=1 + len(case.expected),
+        )
+        for case, prof, noise, s in rows
+    ]
+
+
 def run(
     out: Path,
     seed: int = 0,
     quick: bool = False,
     dissertation: bool = True,
     progress: Callable[[str], None] | None = None,
+    scheduler: str = cluster.LOCAL,
+    workers: int | None = None,
 ) -> SuiteResult:
-    """Run the suite (and the dissertation's studies), write the results into ``out``."""
+    """Run the suite (and the dissertation's studies), write the results into ``out``.
+
+    Each case is a task on ``scheduler`` (:mod:`hems_ros.diagnosis.cluster`) whose outcome
+    lands in ``out/cases``: a run stopped half-way continues from there."""
     say = progress or (lambda message: None)
-    base = load_params(suite.BASE)
-    duties = {p: suite.profile(p, base) for p in suite.PROFILES}
-    runs = grid(seed, quick)
-    outcomes = []
-    for k, (case, prof, noise, s) in enumerate(runs, start=1):
-        start = time.perf_counter()
-        o = suite.run_case(case, prof, noise, s, base, duties[prof])
-        outcomes.append(o)
-        say(
-            f"[{k}/{len(runs)}] {case.name} {prof} {noise} seed {s}: {o.verdict} "
-            f"{','.join(o.named) or '-'} ({'right' if o.right else 'WRONG'}, "
-            f"{time.perf_counter() - start:.1f} s)"
-        )
+    tasks = suite_tasks(grid(seed, quick))
+    report = cluster.run_tasks(
+        tasks,
+        Path(out) / "cases",
+        scheduler=scheduler,
+        workers=workers,
+        say=say,
+        describe=_verdict_line,
+    )
+    outcomes = report.results()
     studies = []
     graph = None
     joint = None
@@ -127,7 +149,7 @@ def run(
                 "seed": seed,
                 "quick": quick,
                 "statistics": stats,
-                "runs": [_record(o) for o in outcomes],
+                "runs": [record(o) for o in outcomes],
             },
             indent=1,
         )
@@ -150,7 +172,12 @@ def run(
     return SuiteResult(outcomes, studies, page, headline(stats, len(outcomes)))
 
 
-def _record(o: suite.Outcome) -> dict:
+def _verdict_line(o: suite.Outcome) -> str:
+    right = "right" if o.right else "WRONG"
+    return f"{o.verdict} {','.join(o.named) or '-'} ({right})"
+
+
+def record(o: suite.Outcome) -> dict:
     return {
         "case": o.case.name,
         "category": o.case.category,

@@ -10,13 +10,12 @@ adds.
 from __future__ import annotations
 
 import json
-import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from netns import two_namespaces
 
 from hems_ros.launcher import Graph, GraphOptions, warm_physics_cache
 from hems_ros.processes import stop_processes
@@ -29,43 +28,10 @@ SIDE_A = ("actuation_unit_index", "shoulder_module_index_middle")
 ADDRESS = {"a": "10.231.0.1", "b": "10.231.0.2"}
 
 
-def _ip(*args: str) -> None:
-    subprocess.run(["ip", *args], check=True, capture_output=True, timeout=20)
-
-
-def _links() -> str:
-    return subprocess.run(["ip", "-o", "link"], capture_output=True, text=True, check=True).stdout
-
-
-def _namespaces() -> str:
-    return subprocess.run(
-        ["ip", "netns", "list"], capture_output=True, text=True, check=True
-    ).stdout
-
-
 @pytest.fixture
 def namespaces():
-    if os.geteuid() != 0 or shutil.which("ip") is None:
-        pytest.skip("needs root and iproute2 to create network namespaces")
-    tag = f"{os.getpid() % 100000}"
-    ns = {"a": f"hems_a{tag}", "b": f"hems_b{tag}"}
-    veth = {"a": f"hva{tag}", "b": f"hvb{tag}"}
-    try:
-        _ip("netns", "add", ns["a"])
-        _ip("netns", "add", ns["b"])
-        _ip("link", "add", veth["a"], "type", "veth", "peer", "name", veth["b"])
-        for side in "ab":
-            _ip("link", "set", veth[side], "netns", ns[side])
-            _ip("-n", ns[side], "addr", "add", f"{ADDRESS[side]}/30", "dev", veth[side])
-            _ip("-n", ns[side], "link", "set", "lo", "up")
-            _ip("-n", ns[side], "link", "set", veth[side], "up")
+    with two_namespaces("hems", ADDRESS) as ns:
         yield ns
-    finally:
-        for side in "ab":
-            subprocess.run(["ip", "netns", "del", ns[side]], capture_output=True, timeout=20)
-        subprocess.run(["ip", "link", "del", veth["a"]], capture_output=True, timeout=20)
-    assert ns["a"] not in _namespaces() and ns["b"] not in _namespaces()
-    assert veth["a"] not in _links() and veth["b"] not in _links()
 
 
 def _run(ns: dict[str, str], split: bool) -> dict:
