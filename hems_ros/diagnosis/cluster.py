@@ -179,31 +179,47 @@ def _on_cluster(
                 task.args,
                 threads_per_task,
                 key=f"{task.key}-{attempts[task.key]}",
-                priority=task.cost,
                 pure=False,
             )
 
-        running = {submit(t): t for t in todo}
-        flow = as_completed(list(running))
+        # no more tasks in flight than the cluster has threads: each next task goes to the
+        # first worker that is free, longest first, whatever the scheduler guesses of their
+        # durations (it would queue tasks behind a long one on a busy worker)
+        waiting = list(reversed(todo))
+        running: dict = {}
+        flow = as_completed()
+
+        def top_up() -> None:
+            free = max(1, _threads(client)) - len(running)
+            for _ in range(min(free, len(waiting))):
+                task = waiting.pop()
+                future = submit(task)
+                running[future] = task
+                flow.add(future)
+
+        top_up()
         for future in flow:
             task = running.pop(future)
             if future.status == "finished":
                 finished(task, future.result())
-                continue
-            error = _error(future)
-            line = f"{task.key}: attempt {attempts[task.key]} failed ({_why(error)})"
-            if attempts[task.key] > retries:
-                raise TaskFailed(line) from error
-            retried.append(line)
-            say(line + "; submitted again")
-            again = submit(task)
-            running[again] = task
-            flow.add(again)
+            else:
+                error = _error(future)
+                line = f"{task.key}: attempt {attempts[task.key]} failed ({_why(error)})"
+                if attempts[task.key] > retries:
+                    raise TaskFailed(line) from error
+                retried.append(line)
+                say(line + "; submitted again")
+                waiting.append(task)
+            top_up()
         return n_workers
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _threads(client) -> int:
+    return sum(w["nthreads"] for w in client.scheduler_info()["workers"].values())
 
 
 def _error(future) -> BaseException:

@@ -1,0 +1,88 @@
+"""The hidden-effect suite on one Dask worker and on two, side by side in one run.
+
+Requirement: on this two-core host two workers run the quick subset of the suite at least
+1.7 times as fast as one (each worker's simulation batches on one core; hems_ros/diagnosis/
+cluster.py). Also measured: the same subset serially in this process, where each case's
+batches use both cores, which is what a single worker per core competes with.
+
+Each layout starts from an empty output folder and is timed from the call to the last result,
+cluster start-up included (printed apart); the sum of the task times says how much of the wall
+time the tasks themselves took. Prints measured numbers and ratios; the exit code does not
+depend on the timings.
+
+Run: .venv/bin/python benchmarks/bench_suite_workers.py [--repeat N] [--smoke]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import smoke  # noqa: E402
+from host import host_line  # noqa: E402
+
+from hems_ros.diagnosis import cluster  # noqa: E402
+from hems_ros.reports import diagnosis_suite  # noqa: E402
+
+GOAL = 1.7
+SMOKE_CASES = ("nothing",)
+
+
+def _time(tasks: list[cluster.Task], scheduler: str, workers: int | None) -> tuple[float, float]:
+    """(wall s from the call to the last result, sum of the task times s)."""
+    with tempfile.TemporaryDirectory(prefix="hems-bench-suite-") as folder:
+        start = time.perf_counter()
+        report = cluster.run_tasks(tasks, Path(folder), scheduler=scheduler, workers=workers)
+        wall = time.perf_counter() - start
+    return wall, sum(d.seconds for d in report.done.values())
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeat", type=int, default=2, help="timed runs per layout (median)")
+    parser.add_argument(
+        "--cases",
+        type=int,
+        default=None,
+        help="the first N cases of the full suite instead of the quick subset",
+    )
+    args = smoke.parse_args(parser, repeat=1)
+    rows = diagnosis_suite.grid(0, quick=args.cases is None)[: args.cases]
+    if args.smoke:
+        rows = [r for r in rows if r[0].name in SMOKE_CASES]
+    tasks = diagnosis_suite.suite_tasks(rows)
+    print(host_line())
+    subset = "the quick subset" if args.cases is None else "the full suite's first"
+    print(f"{len(tasks)} suite cases ({subset}{', smoke' if args.smoke else ''})")
+    _time(tasks[:1], cluster.SERIAL, None)  # numba's cache and the first imports, untimed
+    layouts = {
+        "serial": (cluster.SERIAL, None),
+        "1 worker": ("local", 1),
+        "2 workers": ("local", 2),
+    }
+    walls, work = {}, {}
+    for _ in range(args.repeat):
+        for name, (scheduler, workers) in layouts.items():
+            wall, busy = _time(tasks, scheduler, workers)
+            walls.setdefault(name, []).append(wall)
+            work.setdefault(name, []).append(busy)
+    print("| layout | wall s (median) | task time s (sum) | speed-up over 1 worker |")
+    print("|---|---|---|---|")
+    one = statistics.median(walls["1 worker"])
+    for name in layouts:
+        wall = statistics.median(walls[name])
+        print(f"| {name} | {wall:.1f} | {statistics.median(work[name]):.1f} | {one / wall:.2f}x |")
+    ratio = one / statistics.median(walls["2 workers"])
+    print(f"2 workers over 1: {ratio:.2f}x (goal >= {GOAL}x)")
+    print(host_line())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
