@@ -37,6 +37,9 @@ setup(
         "lz4",
         "zstandard",
         "matplotlib",
+        "dask",
+        "distributed",
+        "cloudpickle",
     ],
     extras_require={
         "test": ["pytest", "hypothesis", "rosbags", "mcap-ros2-support", "ruff", "mypy"]

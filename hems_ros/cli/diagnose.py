@@ -155,6 +155,14 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--quiet", action="store_true", help="no progress output, only the summary line"
     )
+    parser.add_argument(
+        "--each",
+        action="store_true",
+        help="a lab's archive: diagnose every RUN on its own as well as all of them together "
+        "(the shared fit), as tasks on --scheduler; a report per run in OUT/<run>, the shared "
+        "one in OUT/all, a table of verdicts in OUT/archive.md",
+    )
+    add_cluster_options(parser)
     parser.set_defaults(func=run)
 
     suite = subparsers.add_parser(
@@ -229,6 +237,7 @@ def _say(quiet: bool):
 
 
 def run(args: argparse.Namespace) -> int:
+    from hems_ros.cli import diagnose_archive as archive
     from hems_ros.diagnosis import candidates, inputs
     from hems_ros.diagnosis.runs import DiagnosisInputError
     from hems_ros.diagnosis.workflow import diagnose
@@ -258,16 +267,13 @@ def run(args: argparse.Namespace) -> int:
         heldout = [r for group in loaded[len(args.runs) :] for r in group]
         out = args.out or Path("results", "diagnosis", inputs.stem(args.runs[0]))
         inputs.check_output(out)
-        diagnosis = diagnose(
-            runs,
-            heldout,
-            model,
-            candidates=chosen,
-            bounds=bounds,
-            timing_range_s=args.timing_range,
-            dt=args.dt,
-            progress=say,
+        options = dict(
+            candidates=chosen, bounds=bounds, timing_range_s=args.timing_range, dt=args.dt
         )
+        if args.each:
+            groups = [(inputs.stem(p), group) for p, group in zip(args.runs, loaded)]
+            return archive.diagnose_each(groups, heldout, model, options, out, args, say)
+        diagnosis = diagnose(runs, heldout, model, progress=say, **options)
     except (DiagnosisInputError, ParamError) as error:
         print(f"hems diagnose: {error}", file=sys.stderr)
         return 2

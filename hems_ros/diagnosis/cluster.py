@@ -24,6 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+import cloudpickle
+
 SERIAL = "serial"
 LOCAL = "local"
 SUFFIX = ".pkl"
@@ -270,5 +272,5 @@ def _save(folder: Path, key: str, done: Done) -> None:
     path = _path(folder, key)
     part = path.with_suffix(".part")
     with part.open("wb") as f:
-        pickle.dump(done, f)
+        cloudpickle.dump(done, f)  # results may hold lambdas (a diagnosis's candidates)
     os.replace(part, path)

@@ -179,11 +179,13 @@ def stem(text: str) -> str:
     return path.stem if path.suffix else path.name
 
 
+ARCHIVE_TABLE = "archive.md"  # what marks a folder of per-run reports (hems diagnose --each)
+
+
 def check_output(out: Path) -> None:
     """Refuse a report folder that would overwrite something other than a report."""
-    if out.exists() and (
-        not out.is_dir() or (any(out.iterdir()) and not (out / "summary.json").is_file())
-    ):
+    is_report = (out / "summary.json").is_file() or (out / ARCHIVE_TABLE).is_file()
+    if out.exists() and (not out.is_dir() or (any(out.iterdir()) and not is_report)):
         raise DiagnosisInputError(f"--out {out}: exists and is not a diagnosis report folder")
     parent = out.resolve().parent
     while not parent.exists():

@@ -443,3 +443,27 @@ def test_tables_from_two_rigs_recalibrate_one_wire(tmp_path: Path) -> None:
     assert summary["recalibrated"]["kinetics.as0_c"]["value"] == pytest.approx(80.0, abs=0.5)
     # both tables met (on one rig for both, As0 lands near 78.6 degC with 3.6 mm left)
     assert summary["gap"]["heldout_after"] < 0.01
+
+
+def test_an_archive_is_diagnosed_run_by_run_and_together_on_a_cluster(folder: Path) -> None:
+    (folder / "second").mkdir(exist_ok=True)
+    (folder / "second" / "good.csv").write_text((folder / "good.csv").read_text())
+    common = ["good.csv", "second/good.csv", "--columns", COLUMNS, "--candidates"]
+    common += ["load_damping,encoder_gain", "--each"]
+    cluster = hems("diagnose", *common, "--workers", "2", "--out", "archive", cwd=folder)
+    assert cluster.returncode == 0, cluster.stderr[-3000:]
+    lines = cluster.stdout.splitlines()
+    assert [line.split(": ", 1)[0] for line in lines] == ["good", "good-2", "all"]
+    assert all(line.split(": ", 2)[1] == "named" for line in lines), lines
+    assert "2 workers at tcp://127.0.0.1:" in cluster.stderr
+    table = (folder / "archive" / "archive.md").read_text()
+    assert "| [good-2](good-2/report.md) | named: load_damping" in table
+    serial = hems("diagnose", *common, "--scheduler", "serial", "--out", "serial", cwd=folder)
+    assert serial.returncode == 0 and serial.stdout == cluster.stdout
+    for key in ("good", "good-2", "all"):
+        assert json.loads((folder / "archive" / key / "summary.json").read_text()) == json.loads(
+            (folder / "serial" / key / "summary.json").read_text()
+        )
+    again = hems("diagnose", *common, "--scheduler", "serial", "--out", "serial", cwd=folder)
+    assert again.returncode == 0 and "resuming: 3 of 3 tasks already done" in again.stderr
+    assert again.stdout == cluster.stdout
