@@ -212,6 +212,28 @@ def cannot_start(params: UnitParams, run: TimeSeriesRun) -> str | None:
     return None
 
 
+BEYOND_RANGE_SHARE = 0.01
+
+
+def beyond_sensor(params: UnitParams, run: TimeSeriesRun) -> str | None:
+    """Why the model's force sensor could not have read ``run``'s wire force, or None: a
+    reading above its range shows that the lab's load cell is another one."""
+    force = run.outputs.get("wire_force")
+    if run.kind != "driven":  # a frame's or a chamber rig's own load cell read it
+        return None
+    top = params.force_sensor.range_max_n
+    # a few noisy readings just past the range are the sensor's noise at its limit
+    if force is None or not force.size or np.mean(force > top) <= BEYOND_RANGE_SHARE:
+        return None
+    return (
+        f"{run.name}: the wire force reaches {float(np.max(force)):.4g} N "
+        f"({np.mean(force > top):.0%} of the samples), above the model's "
+        f"force sensor range of {top:g} N (force_sensor.range_max_n), where its readings stop; "
+        "give the load cell's range in --conditions (force_sensor: {range_max_n: ...}) or "
+        "with --set force_sensor.range_max_n=..."
+    )
+
+
 def physics_key(params: UnitParams) -> UnitParams:
     """``params`` with the sensor errors at their defaults: what the simulation depends on."""
     return params.replace({key: (1.0 if key == "encoder.gain" else 0.0) for key in SENSOR_KEYS})

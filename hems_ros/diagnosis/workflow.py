@@ -238,13 +238,11 @@ def diagnose(
     ``timing_range_s``: the largest input delay either way that driven runs are searched
     for (default TIMING_PERIODS sample periods)."""
     say = progress or (lambda message: None)
+    series = [run for run in list(runs) + list(heldout) if isinstance(run, TimeSeriesRun)]
     reasons = [
         r
-        for r in (
-            replay.cannot_start(model, run)
-            for run in list(runs) + list(heldout)
-            if isinstance(run, TimeSeriesRun)
-        )
+        for check in (replay.cannot_start, replay.beyond_sensor)
+        for r in (check(model, run) for run in series)
         if r
     ]
     if reasons:

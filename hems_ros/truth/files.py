@@ -22,6 +22,9 @@ from hems_ros.truth.rig import RigRun, WireRig
 #: ``hems diagnose --columns`` for the log :func:`write_run` writes
 COLUMNS = "time=time_s:s,current=current_a:A,displacement=contraction_mm:mm,wire_force=force_n:N"
 
+#: the bench's load cell reads 0-200 N (the project's own force sensor stops at 50 N)
+LOAD_CELL_RANGE_N = 200.0
+
 #: channel -> (column, scale from the run's SI unit to the column's)
 CHANNELS = {"contraction": ("contraction_mm", 1e3), "wire_force": ("force_n", 1.0)}
 
@@ -40,6 +43,7 @@ def conditions(rig: WireRig) -> dict:
             "pretension_n": rig.preload_n,
             "pulley_ratio": 1.0,
         },
+        "force_sensor": {"range_max_n": LOAD_CELL_RANGE_N},
     }
 
 

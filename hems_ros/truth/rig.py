@@ -6,9 +6,13 @@ pretensioned to 20 N, 754 N/m) on the chapter 4 wire (Table 4.1), written again 
 equations: Brinson's material (``brinson``), a lumped wire temperature with Joule heating,
 free convection and radiation to still air (``air``), the transformation's latent heat, a
 resistivity that mixes the two phases' constant values, and the mass's motion with viscous
-damping; the wire bare or in a Bowden sheath (``sheath``). States: wire temperature, wire
-elongation, the mass's velocity, the two martensite fractions, the sheath's nodes; scipy's
-LSODA integrates them between the current's edges at tolerances of this module.
+damping; the wire bare or in a Bowden sheath (``sheath``). Two effects in forms of their
+own: dry friction on the mass's guide with pre-sliding (Dahl 1968: the friction force F
+follows dF/dx = sigma0 (1 - F/Fc sgn(v)), so it builds up over a short travel instead of
+jumping to Fc), and a bias spring given by a force-extension table (linear between its
+points) instead of a rate. States: wire temperature, wire elongation, the mass's velocity,
+the two martensite fractions, the friction force, the sheath's nodes; scipy's LSODA
+integrates them between the current's edges at tolerances of this module.
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ from hems_ros.truth.brinson import BrinsonMaterial, phase_rates, strain_at, stre
 from hems_ros.truth.sheath import Sheath, SheathNetwork
 
 RTOL = 1e-7
-ATOL = [1e-6, 1e-10, 1e-8, 1e-9, 1e-9]  # K, m, m/s, fraction, fraction; 1e-6 K a node
+ATOL = [1e-6, 1e-10, 1e-8, 1e-9, 1e-9, 1e-6]  # K, m, m/s, fraction, fraction, N; 1e-6 K a node
 MAX_STEP_S = 0.005  # the fractions' rates switch on and off inside a step
 
 
@@ -49,6 +53,26 @@ class WireRig:
     preload_n: float = 20.0  # the spring's pull on the cold wire at rest
     damping_n_s_m: float = 65.0
     sheath: Sheath | None = None  # a bare wire
+    friction_n: float = 0.0  # Dahl's Coulomb level Fc on the mass's guide; 0: none
+    friction_stiffness_n_m: float = 2.0e4  # Dahl's sigma0: Fc is reached over about Fc/sigma0
+    # (extension from the cold rest position m, spring force change N) points, rising; the
+    # spring then pulls ``preload_n`` plus the table's value instead of spring_n_m * extension
+    spring_table: tuple[tuple[float, float], ...] | None = None
+
+    def __post_init__(self) -> None:
+        if self.friction_n < 0.0 or self.friction_stiffness_n_m <= 0.0:
+            raise ValueError("friction_n must be >= 0 and friction_stiffness_n_m > 0")
+        if self.spring_table is not None:
+            ext = [e for e, _ in self.spring_table]
+            if len(ext) < 2 or any(b <= a for a, b in zip(ext[:-1], ext[1:])):
+                raise ValueError("spring_table needs two or more points of rising extension")
+
+    def spring_force_n(self, extension_m: float) -> float:
+        """The spring's pull beyond its pretension at ``extension_m`` past the cold rest."""
+        if self.spring_table is None:
+            return self.spring_n_m * extension_m
+        ext, force = zip(*self.spring_table)
+        return float(np.interp(extension_m, ext, force, left=None, right=None))
 
     def network(self) -> SheathNetwork | None:
         if self.sheath is None:
@@ -77,7 +101,7 @@ class WireRig:
         strain = strain_at(mat, sigma, 1.0, 0.0, self.ambient_c)
         network = self.network()
         nodes = [] if network is None else [self.ambient_c] * network.capacities.size
-        return np.array([self.ambient_c, strain * self.length_m, 0.0, 1.0, 0.0, *nodes])
+        return np.array([self.ambient_c, strain * self.length_m, 0.0, 1.0, 0.0, 0.0, *nodes])
 
 
 @dataclass(frozen=True)
@@ -101,6 +125,7 @@ def _derivatives(
     temp, elongation, velocity = x[0], x[1], x[2]
     xi_s = min(max(x[3], 0.0), 1.0)
     xi_t = min(max(x[4], 0.0), 1.0 - xi_s)
+    friction = x[5]
     strain = elongation / rig.length_m
     volume = rig.section_m2 * rig.length_m
     heat_capacity = rig.density_kg_m3 * volume * rig.heat_capacity_j_kg_k
@@ -110,7 +135,7 @@ def _derivatives(
         loss = surface * heat_loss_w_m2(temp, rig.ambient_c, rig.diameter_m, rig.emissivity)
         node_rates: list[float] = []
     else:
-        loss, rates = network.flows(temp, x[5:], rig.ambient_c)
+        loss, rates = network.flows(temp, x[6:], rig.ambient_c)
         node_rates = list(rates)
     heating_rate = (power - loss) / heat_capacity
     latent_rise = rig.latent_heat_j_kg / rig.heat_capacity_j_kg_k
@@ -118,16 +143,26 @@ def _derivatives(
         mat, strain, xi_s, xi_t, temp, velocity / rig.length_m, heating_rate, latent_rise
     )
     wire_force = stress(mat, strain, xi_s, xi_t, temp) * rig.section_m2
-    load = rig.cold_load_n + rig.spring_n_m * (rest_m - elongation)  # the spring stretches
-    acceleration = (load - wire_force - rig.damping_n_s_m * velocity) / rig.mass_kg
+    load = rig.cold_load_n + rig.spring_force_n(rest_m - elongation)  # the spring stretches
+    # the guide's friction opposes the mass's motion; velocity > 0 is the wire lengthening
+    acceleration = (load - wire_force - rig.damping_n_s_m * velocity - friction) / rig.mass_kg
+    friction_rate = _dahl_rate(rig, friction, velocity)
     return [
         heating_rate + latent_rise * (xs_rate + xt_rate),
         velocity,
         acceleration,
         xs_rate,
         xt_rate,
+        friction_rate,
         *node_rates,
     ]
+
+
+def _dahl_rate(rig: WireRig, friction: float, velocity: float) -> float:
+    if rig.friction_n == 0.0:
+        return 0.0
+    direction = 1.0 if velocity >= 0.0 else -1.0
+    return rig.friction_stiffness_n_m * (1.0 - friction / rig.friction_n * direction) * velocity
 
 
 def _resistance(rig: WireRig, xi: float) -> float:
@@ -192,7 +227,7 @@ def _current(pulses: Sequence[tuple[float, float, float]], t: float) -> float:
 
 
 def _run(rig: WireRig, rest_m: float, rows: np.ndarray) -> RigRun:
-    t, amps, temp, elongation, _, xi_s, xi_t = rows.T[:7]
+    t, amps, temp, elongation, _, xi_s, xi_t, _ = rows.T[:8]
     mat = rig.material
     xi = np.clip(xi_s + xi_t, 0.0, 1.0)
     force = np.array(
@@ -210,5 +245,5 @@ def _run(rig: WireRig, rest_m: float, rows: np.ndarray) -> RigRun:
         wire_force_n=force,
         contraction_m=rest_m - elongation,
         martensite_fraction=xi,
-        sheath_node_c=rows[:, 7:],
+        sheath_node_c=rows[:, 8:],
     )

@@ -79,6 +79,8 @@ def folder(tmp_path_factory) -> Path:
     (root / "backwards.csv").write_text("\n".join(text[:11] + [text[9]] + text[12:]) + "\n")
     (root / "short.csv").write_text("\n".join(text[:11]) + "\n")
     _write_run(root / "one_pulse.csv", t[:1000], d[:1000], x[:1000], f[:1000])
+    # read by a larger load cell than the model's 50 N sensor
+    _write_run(root / "heavy.csv", t, d, x, f + 40.0)
     with BagWriter(root / "empty_bag"):
         pass
     # a bag of the simulation's truth only: no measured topic in it
@@ -148,6 +150,12 @@ BAD = [
 # the rest in this process, through the verb's own parser and run()
 MORE = [
     ("no run", [], "no RUN given"),
+    (
+        "force beyond the model's sensor",
+        ["heavy.csv", "--columns", COLUMNS],
+        "heavy: the wire force reaches 82.99 N (100% of the samples), above the model's force "
+        "sensor range of 50 N (force_sensor.range_max_n)",
+    ),
     (
         "unknown column",
         ["good.csv", "--columns", "time=t,duty=d,displacement=zz"],

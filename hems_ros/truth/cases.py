@@ -1,0 +1,166 @@
+"""The blind suite's truths: Brinson-family rigs with one effect in a form of its own, at
+several sizes, read through sensors at three noise levels, written as a lab hands runs over.
+
+Every truth is a :class:`~hems_ros.truth.rig.WireRig` (another SMA model family than the
+project's, so that the starting model never equals it) driven by current pulses: a training
+run and a held-out run with other pulse lengths and currents, each with its own noise draw.
+``expected`` names the library candidates that count as naming the effect; the null truth
+expects nothing named, an effect outside the library an ``unexplained`` or ``partial``
+verdict. Nothing here knows the library: the names are what the diagnosis should say.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from hems_ros.truth.files import write_run
+from hems_ros.truth.measurement import Sensor
+from hems_ros.truth.rig import WireRig, simulate
+from hems_ros.truth.sheath import Sheath, Shell
+
+PERIOD_S = 20.0  # a pulse every 20 s: the wire cools back to martensite in between
+TRAIN_PULSES = ((1.2, 4.0), (1.6, 4.0), (2.0, 4.0), (1.4, 4.5), (1.8, 4.5), (1.0, 5.0))
+HELDOUT_PULSES = ((1.5, 4.0), (1.9, 4.0), (1.3, 4.5), (1.2, 5.0))
+SAMPLE_S = 0.01
+#: (contraction sensor in mm, force sensor in N) per noise level: coloured noise, latency,
+#: spikes and the encoder's 1 um and the load cell's 0.01 N resolution
+NOISE = {
+    "low": (
+        Sensor(noise_sd=0.002, rho=0.3, quantum=0.001),
+        Sensor(noise_sd=0.02, rho=0.3, quantum=0.01),
+    ),
+    "mid": (
+        Sensor(noise_sd=0.02, rho=0.6, latency_samples=1, quantum=0.001),
+        Sensor(noise_sd=0.1, rho=0.6, latency_samples=1, quantum=0.01),
+    ),
+    "high": (
+        Sensor(
+            noise_sd=0.1,
+            rho=0.9,
+            latency_samples=2,
+            spike_share=0.001,
+            spike_size=0.5,
+            quantum=0.001,
+        ),
+        Sensor(noise_sd=0.4, rho=0.9, latency_samples=2, quantum=0.01),
+    ),
+}
+
+
+@dataclass(frozen=True)
+class Effect:
+    """A truth family: what it changes at a size, and what the diagnosis should say."""
+
+    name: str
+    kind: str  # "effect", "null" or "outside"
+    expected: tuple[str, ...]  # candidates that name it (an effect); empty otherwise
+    sizes: tuple[float, ...]
+    unit: str  # of the sizes
+    rig: Callable[[float], WireRig]
+    sensors: Callable[[float, tuple[Sensor, Sensor]], tuple[Sensor, Sensor]] = (
+        lambda size, sensors: sensors
+    )
+    description: str = ""
+
+
+def _sheathed(scale: float) -> WireRig:
+    base = Sheath()
+
+    def scaled(shell: Shell) -> Shell:
+        return replace(shell, heat_capacity_j_m3_k=shell.heat_capacity_j_m3_k * scale)
+
+    return WireRig(sheath=replace(base, liner=scaled(base.liner), helix=scaled(base.helix)))
+
+
+def sheath_capacity_j_k(scale: float) -> float:
+    """The sheath's heat capacity at a capacity ``scale`` of the dissertation's sheath."""
+    rig = _sheathed(scale)
+    network = rig.network()
+    assert network is not None
+    return float(network.capacities.sum())
+
+
+def _stiffening(share: float) -> WireRig:
+    rig = WireRig()
+    k = rig.spring_n_m
+    # the rate grows by ``share`` over 30 mm of extension, from the rest position on
+    points = np.linspace(-0.01, 0.04, 11)
+    force = [k * e * (1.0 + share * max(e, 0.0) / 0.03 / 2.0) for e in points]
+    return replace(rig, spring_table=tuple(zip(points.tolist(), force)))
+
+
+def _drifting(drift_um_s: float, sensors: tuple[Sensor, Sensor]) -> tuple[Sensor, Sensor]:
+    contraction, force = sensors
+    return replace(contraction, drift_per_s=drift_um_s * 1e-3), force
+
+
+EFFECTS = (
+    Effect(
+        "none",
+        "null",
+        (),
+        (0.0,),
+        "-",
+        lambda size: WireRig(),
+        description="the Brinson rig as it is",
+    ),
+    Effect(
+        "bowden_sheath",
+        "effect",
+        ("sheath_heat_sink",),
+        (0.25, 0.5, 1.0),
+        "x Table 3.1 C_s",
+        _sheathed,
+        description="radial conduction through PTFE liner and steel helix sub-shells",
+    ),
+    Effect(
+        "dahl_friction",
+        "effect",
+        ("tendon_friction", "capstan_friction"),
+        (0.5, 1.0, 2.0, 4.0),
+        "N",
+        lambda size: WireRig(friction_n=size),
+        description="dry friction with pre-sliding (Dahl) on the mass's guide",
+    ),
+    Effect(
+        "stiffening_spring",
+        "effect",
+        ("spring_stiffening",),
+        (0.1, 0.25, 0.5),
+        "rate rise",
+        _stiffening,
+        description="bias spring from a force-extension table, stiffening with extension",
+    ),
+    Effect(
+        "encoder_drift",
+        "outside",
+        (),
+        (2.0, 5.0, 10.0),
+        "um/s",
+        lambda size: WireRig(),
+        sensors=_drifting,
+        description="the contraction sensor's zero creeping (no candidate has it)",
+    ),
+)
+BY_NAME = {e.name: e for e in EFFECTS}
+
+
+def pulses(plan: tuple[tuple[float, float], ...]) -> list[tuple[float, float, float]]:
+    return [(1.0 + PERIOD_S * k, 1.0 + PERIOD_S * k + s, a) for k, (s, a) in enumerate(plan)]
+
+
+def write_case(effect: Effect, size: float, noise: str, seed: int, folder: Path) -> dict:
+    """The training and held-out runs of one truth in ``folder``: their CSV and conditions."""
+    rig = effect.rig(size)
+    contraction, force = effect.sensors(size, NOISE[noise])
+    sensors = {"contraction": contraction, "wire_force": force}
+    rng = np.random.default_rng([seed, int(1000 * size), len(effect.name)])
+    out = {}
+    for role, plan in (("train", TRAIN_PULSES), ("heldout", HELDOUT_PULSES)):
+        run = simulate(rig, pulses(plan), PERIOD_S * len(plan), SAMPLE_S)
+        out[role] = write_run(run, rig, folder, role, sensors, rng)
+    return out
