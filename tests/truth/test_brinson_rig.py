@@ -132,3 +132,34 @@ def test_overlapping_or_backward_pulses_are_refused_naming_them():
         simulate(RIG, [(1.0, 3.0, 4.0), (2.0, 4.0, 4.0)], 5.0)
     with pytest.raises(ValueError, match=r"\(3.0, 2.0, 4.0\)"):
         simulate(RIG, [(3.0, 2.0, 4.0)], 5.0)
+
+
+def test_dahl_friction_holds_the_wire_force_apart_by_twice_its_level_between_the_strokes():
+    """Lifting, the wire pulls the load plus the guide's friction; lowering, the load less it:
+    at the same contraction the two forces differ by 2 Fc once the friction has built up."""
+    rubbing = simulate(WireRig(friction_n=3.0), [PULSE], 30.0, sample_s=0.002)
+    free = simulate(RIG, [PULSE], 30.0, sample_s=0.002)
+
+    def spread(run) -> float:
+        up = (run.time_s > PULSE[0]) & (run.time_s < PULSE[1])
+        down = run.time_s > PULSE[1] + 1.0
+        level = 0.5 * run.contraction_m.max()
+        f_up = np.interp(level, run.contraction_m[up], run.wire_force_n[up])
+        order = np.argsort(run.contraction_m[down])
+        return f_up - np.interp(
+            level, run.contraction_m[down][order], run.wire_force_n[down][order]
+        )
+
+    # the damping's share of the spread is in both; friction adds 2 Fc
+    assert spread(rubbing) - spread(free) == pytest.approx(6.0, abs=0.5)
+    assert rubbing.contraction_m.max() < free.contraction_m.max()
+
+
+def test_a_linear_spring_table_is_the_spring_rate():
+    k = RIG.spring_n_m
+    table = WireRig(spring_table=((-0.05, -0.05 * k), (0.0, 0.0), (0.05, 0.05 * k)))
+    a = simulate(table, [PULSE], 10.0)
+    b = simulate(RIG, [PULSE], 10.0)
+    assert np.max(np.abs(a.contraction_m - b.contraction_m)) < 1e-9
+    with pytest.raises(ValueError, match="rising extension"):
+        WireRig(spring_table=((0.0, 0.0), (0.0, 1.0)))

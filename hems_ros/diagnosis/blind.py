@@ -1,0 +1,133 @@
+"""The blind suite: truths the fit never runs (:mod:`hems_ros.truth`), diagnosed from the files
+a lab would hand over, scored against what each truth should give.
+
+Each row is one truth (an effect at a size), one noise level and one seed: its training and
+held-out runs are written as CSV with their conditions, loaded as ``hems diagnose`` loads them
+and diagnosed from ``table41`` with the whole library. The rows are split once by seed: seed
+0 is the tuning half (what thresholds may be set on), the other seeds the evaluation half
+(what the page reports); nothing in the diagnosis reads either.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from hems_ros.diagnosis import inputs
+from hems_ros.diagnosis.workflow import diagnose
+from hems_ros.truth import cases
+from hems_ros.truth.files import COLUMNS
+
+MODEL = "table41"
+TUNING_SEEDS = (0,)
+EVALUATION_SEEDS = (1, 2)
+QUICK = (("none", 0.0, "low", 1), ("dahl_friction", 4.0, "low", 1))
+
+
+@dataclass(frozen=True)
+class Row:
+    effect: str
+    size: float
+    noise: str
+    seed: int
+
+    @property
+    def key(self) -> str:
+        return f"{self.effect}-{self.size:g}-{self.noise}-seed{self.seed}"
+
+    @property
+    def half(self) -> str:
+        return "tuning" if self.seed in TUNING_SEEDS else "evaluation"
+
+
+def grid(quick: bool = False, seeds: tuple[int, ...] = TUNING_SEEDS + EVALUATION_SEEDS):
+    """Every row of the suite (or the quick subset that ``make test`` runs)."""
+    if quick:
+        return [Row(*q) for q in QUICK]
+    return [
+        Row(effect.name, size, noise, seed)
+        for effect in cases.EFFECTS
+        for size in effect.sizes
+        for noise in cases.NOISE
+        for seed in seeds
+    ]
+
+
+def run_row(row: Row) -> dict:
+    """Write the row's truth runs, diagnose them blind; the record of what it said."""
+    effect = cases.BY_NAME[row.effect]
+    with tempfile.TemporaryDirectory(prefix="hems-blind-") as folder:
+        files = cases.write_case(effect, row.size, row.noise, row.seed, Path(folder))
+        model = inputs.model(MODEL, files["train"][1])
+
+        def load(role: str):
+            return inputs.load(str(files[role][0]), COLUMNS, None, model.wire)
+
+        d = diagnose(load("train"), load("heldout"), model)
+    named = [n["effect"] for n in d.named()]
+    ranking = [f.structure[-1].name for f in d.search.steps[0].ranked] if d.search.steps else []
+    return {
+        "effect": row.effect,
+        "kind": effect.kind,
+        "size": row.size,
+        "noise": row.noise,
+        "seed": row.seed,
+        "half": row.half,
+        "verdict": d.verdict,
+        "named": named,
+        "recalibrated": sorted(d.recalibrated()),
+        "first": ranking[0] if ranking else None,
+        "right": right(effect, d.verdict, named),
+        "ranked_first": bool(ranking) and ranking[0] in effect.expected,
+        "gap_metric": d.gap.metric,
+        "gap_unit": d.gap.unit,
+        "gap_before": _finite(d.gap.heldout_before),
+        "gap_after": _finite(d.gap.heldout_after),
+        "summary": d.summary_line(),
+    }
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def right(effect: cases.Effect, verdict: str, named: list[str]) -> bool:
+    if effect.kind == "null":
+        return verdict == "none"
+    if effect.kind == "outside":
+        return verdict in ("unexplained", "partial")
+    return any(name in effect.expected for name in named)
+
+
+def detection_limits(records: list[dict]) -> dict[tuple[str, str], float | None]:
+    """(effect, noise) -> the smallest size from which every seed at it and at every larger
+    size was right; None where the largest size was missed."""
+    limits: dict[tuple[str, str], float | None] = {}
+    for effect in cases.EFFECTS:
+        if effect.kind != "effect":
+            continue
+        for noise in cases.NOISE:
+            rows = [r for r in records if r["effect"] == effect.name and r["noise"] == noise]
+            if not rows:
+                continue
+            limit = None
+            for size in sorted(effect.sizes, reverse=True):
+                at = [r["right"] for r in rows if r["size"] == size]
+                if not at or not all(at):
+                    break
+                limit = size
+            limits[(effect.name, noise)] = limit
+    return limits
+
+
+def rates(records: list[dict]) -> dict[str, tuple[int, int]]:
+    """Per kind (and for effects, ranked first): (right, runs)."""
+    out = {}
+    for kind in ("effect", "null", "outside"):
+        rows = [r for r in records if r["kind"] == kind]
+        out[kind] = (sum(r["right"] for r in rows), len(rows))
+    effects = [r for r in records if r["kind"] == "effect"]
+    out["ranked_first"] = (sum(r["ranked_first"] for r in effects), len(effects))
+    return out

@@ -1,0 +1,86 @@
+"""The blind suite's bookkeeping: the tuning and evaluation halves never share a row, what
+counts as right for each kind of truth, the detection limit, and the committed page against
+a row diagnosed again here."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from hems_ros.diagnosis import blind
+from hems_ros.reports import blind as page
+from hems_ros.truth import cases
+
+REPO = Path(__file__).resolve().parents[2]
+PAGE = REPO / "docs" / "diagnosis-blind.md"
+
+
+def test_the_halves_split_the_rows_by_seed_and_share_none():
+    tuning = blind.grid(seeds=blind.TUNING_SEEDS)
+    evaluation = blind.grid(seeds=blind.EVALUATION_SEEDS)
+    assert {r.half for r in tuning} == {"tuning"} and {r.half for r in evaluation} == {"evaluation"}
+    assert not {r.key for r in tuning} & {r.key for r in evaluation}
+    everything = blind.grid()
+    assert len({r.key for r in everything}) == len(everything) == len(tuning) + len(evaluation)
+    # every effect at every size and noise level in both halves
+    assert {(r.effect, r.size, r.noise) for r in tuning} == {
+        (r.effect, r.size, r.noise) for r in evaluation
+    }
+
+
+def test_what_counts_as_right():
+    friction = cases.BY_NAME["dahl_friction"]
+    assert blind.right(friction, "named", ["tendon_friction"])
+    assert blind.right(friction, "partial", ["capstan_friction", "supply_sag"])
+    assert not blind.right(friction, "recalibrated", [])
+    assert not blind.right(friction, "named", ["encoder_gain"])
+    assert blind.right(cases.BY_NAME["none"], "none", [])
+    assert not blind.right(cases.BY_NAME["none"], "recalibrated", [])
+    drift = cases.BY_NAME["encoder_drift"]
+    assert blind.right(drift, "unexplained", []) and blind.right(drift, "partial", ["ambient"])
+    assert not blind.right(drift, "named", ["force_sensor_drift"])
+
+
+def _record(size: float, right: bool, noise: str = "mid") -> dict:
+    return {
+        "effect": "dahl_friction",
+        "kind": "effect",
+        "size": size,
+        "noise": noise,
+        "right": right,
+        "ranked_first": right,
+        "verdict": "named" if right else "unexplained",
+        "named": ["tendon_friction"] if right else [],
+    }
+
+
+def test_the_detection_limit_is_the_smallest_size_from_which_every_run_is_right():
+    records = [
+        _record(4.0, True),
+        _record(4.0, True),
+        _record(2.0, True),
+        _record(1.0, False),
+        _record(0.5, True),
+        _record(4.0, False, "high"),
+    ]
+    limits = blind.detection_limits(records)
+    # 0.5 N was right, but 1 N was not: the limit is where it holds from there up
+    assert limits[("dahl_friction", "mid")] == 2.0
+    assert limits[("dahl_friction", "high")] is None
+    assert ("dahl_friction", "low") not in limits
+    text = page.render(records, [30.0, 40.0], "f.png")
+    assert "| dahl_friction (" in text and "| - | 2 N | not named up to 4 N |" in text
+
+
+@pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis-blind.md not generated")
+def test_the_committed_page_shows_what_a_row_diagnosed_here_gives():
+    row = blind.Row(*blind.QUICK[0])
+    record = blind.run_row(row)
+    line = next(
+        line
+        for line in PAGE.read_text().splitlines()
+        if re.match(rf"\| {row.effect} \| {row.size:g} \S+ \| {row.noise} \|", line)
+    )
+    assert f"{record['verdict']} (" in line
