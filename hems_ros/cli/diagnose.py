@@ -357,10 +357,9 @@ def run_blind(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         workers=args.workers,
         say=say,
-        describe=lambda r: f"{r['verdict']} {','.join(r['named']) or '-'} "
-        f"({'right' if r['right'] else 'WRONG'})",
+        describe=lambda r: f"{r['verdict']} {','.join(r['named']) or '-'}",
     ).done
-    records = [d.result for d in done.values()]
+    records = blind.scored([d.result for d in done.values()])
     seconds = [d.seconds for d in done.values()]
     (args.out / "blind.json").write_text(json.dumps({"runs": records}, indent=1) + "\n")
     page.figure(records, args.out / "blind.png")

@@ -79,8 +79,6 @@ def run_row(row: Row) -> dict:
         "named": named,
         "recalibrated": sorted(d.recalibrated()),
         "first": ranking[0] if ranking else None,
-        "right": right(effect, d.verdict, named),
-        "ranked_first": bool(ranking) and ranking[0] in effect.expected,
         "gap_metric": d.gap.metric,
         "gap_unit": d.gap.unit,
         "gap_before": _finite(d.gap.heldout_before),
@@ -93,9 +91,28 @@ def _finite(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
+def scored(records: list[dict]) -> list[dict]:
+    """The records with ``right`` and ``ranked_first`` (scored here, not when a row ran, so
+    that the rules read the same over every stored result)."""
+    out = []
+    for record in records:
+        effect = cases.BY_NAME[record["effect"]]
+        out.append(
+            record
+            | {
+                "right": right(effect, record["verdict"], record["named"]),
+                "ranked_first": record["first"] in effect.expected,
+            }
+        )
+    return out
+
+
 def right(effect: cases.Effect, verdict: str, named: list[str]) -> bool:
+    """An effect named by one of its candidates; for a truth with nothing hidden, no effect
+    named (its wire's parameters may be recalibrated: it is another model family); for an
+    effect outside the library, a verdict that says the model still misses something."""
     if effect.kind == "null":
-        return verdict == "none"
+        return not named
     if effect.kind == "outside":
         return verdict in ("unexplained", "partial")
     return any(name in effect.expected for name in named)

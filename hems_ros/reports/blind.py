@@ -59,7 +59,7 @@ def render(records: list[dict], seconds: list[float], figure: str) -> str:
         f"| an effect, named (another model family) | {_pct(*r['effect'])} | "
         f"{FLOORS['effect']:.0%} |",
         f"| an effect, ranked first | {_pct(*r['ranked_first'])} | |",
-        f"| nothing hidden: verdict none | {_pct(*r['null'])} | {FLOORS['null']:.0%} |",
+        f"| nothing hidden: no effect named | {_pct(*r['null'])} | {FLOORS['null']:.0%} |",
         f"| outside the library: unexplained or partial | {_pct(*r['outside'])} | "
         f"{FLOORS['outside']:.0%} |",
         "",

@@ -37,7 +37,8 @@ def test_what_counts_as_right():
     assert not blind.right(friction, "recalibrated", [])
     assert not blind.right(friction, "named", ["encoder_gain"])
     assert blind.right(cases.BY_NAME["none"], "none", [])
-    assert not blind.right(cases.BY_NAME["none"], "recalibrated", [])
+    assert blind.right(cases.BY_NAME["none"], "recalibrated", [])
+    assert not blind.right(cases.BY_NAME["none"], "partial", ["sheath_heat_sink"])
     drift = cases.BY_NAME["encoder_drift"]
     assert blind.right(drift, "unexplained", []) and blind.right(drift, "partial", ["ambient"])
     assert not blind.right(drift, "named", ["force_sensor_drift"])
