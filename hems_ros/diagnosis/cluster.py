@@ -84,6 +84,8 @@ def run_tasks(
     keys = [t.key for t in tasks]
     if len(set(keys)) != len(keys):
         raise ValueError("task keys must be unique")
+    if scheduler not in (SERIAL, LOCAL) and not scheduler.startswith("tcp://"):
+        raise ValueError(f"scheduler {scheduler!r}: serial, local or tcp://HOST:PORT")
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
@@ -103,6 +105,8 @@ def run_tasks(
         for task in todo:
             finished(task, _call(task.function, task.args, None))
         n_workers = 1
+    elif not todo:  # everything was done: no cluster to start
+        n_workers = 0
     else:
         n_workers = _on_cluster(
             todo, scheduler, workers, threads_per_task, retries, finished, retried, say
@@ -149,7 +153,7 @@ def _on_cluster(
     import dask
     from distributed import Client, LocalCluster, as_completed
 
-    if scheduler == LOCAL:
+    if scheduler == LOCAL:  # else a tcp:// address (run_tasks checked)
         # a worker that dies with a task fails that task at once, so that it is reported
         # and submitted again here, instead of being retried unseen by the scheduler
         with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
@@ -166,8 +170,6 @@ def _on_cluster(
         if not client.scheduler_info()["workers"]:
             say(f"waiting up to {WORKER_WAIT_S:.0f} s for a worker to join {scheduler}")
             client.wait_for_workers(1, timeout=WORKER_WAIT_S)
-    else:
-        raise ValueError(f"scheduler {scheduler!r}: serial, local or tcp://HOST:PORT")
     try:
         n_workers = len(client.scheduler_info()["workers"])
         say(f"{n_workers} workers at {client.scheduler.address}")
