@@ -162,7 +162,7 @@ def _on_cluster(
                 threads_per_worker=1,
                 processes=True,
                 host="127.0.0.1",
-                dashboard_address=None,
+                dashboard_address="127.0.0.1:0",  # its status page: loopback, any free port
             )
         client = Client(cluster)
     elif scheduler.startswith("tcp://"):
