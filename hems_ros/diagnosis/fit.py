@@ -373,6 +373,8 @@ def _at_bounds(space: Space, u: np.ndarray, within: float) -> list[tuple[int, Co
     out = []
     for j, (c, x, off) in enumerate(zip(space.coords, u, space.off())):
         for bound, name in ((0.0, "lower"), (1.0, "upper")):
+            if name == "lower" and c.parameter.lower_is_limit:
+                continue
             if abs(x - bound) <= within and abs(off - bound) > within:
                 side = f"{name} bound {c.parameter.display(c.value(bound)):.4g} {c.parameter.unit}"
                 out.append((j, c, side.rstrip()))

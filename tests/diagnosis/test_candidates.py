@@ -62,6 +62,7 @@ def test_recalibration_bounds_contain_table_4_1(candidate: lib.Candidate) -> Non
         "kinetics.cm_pa_per_c": 6.89e6,
         "constitutive.max_recoverable_strain": 0.038,
         "thermal.h0_w_m2_c": 37.67,
+        "thermal.h2_w_m2_c3": 0.01,
         "ambient_temperature_c": 22.0,
     }
     for par, (lo, hi) in zip(candidate.parameters, candidate.bounds(TABLE41)):
