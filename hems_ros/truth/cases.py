@@ -113,7 +113,7 @@ EFFECTS = (
         "effect",
         ("sheath_heat_sink",),
         (0.25, 0.5, 1.0),
-        "x Table 3.1 C_s",
+        f"x the {sheath_capacity_j_k(1.0):.1f} J/K sheath",
         _sheathed,
         description="radial conduction through PTFE liner and steel helix sub-shells",
     ),
