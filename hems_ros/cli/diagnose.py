@@ -235,9 +235,11 @@ def register(subparsers) -> None:
 
 
 def scheduler(text: str) -> str:
-    if text in ("local", "serial") or (text.startswith("tcp://") and ":" in text[6:]):
-        return text
-    raise argparse.ArgumentTypeError(f"{text!r}: local, serial or tcp://HOST:PORT")
+    from hems_ros.diagnosis.cluster import scheduler_error
+
+    if (error := scheduler_error(text)) is not None:
+        raise argparse.ArgumentTypeError(error)
+    return text
 
 
 def add_cluster_options(parser: argparse.ArgumentParser) -> None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import sys
 from pathlib import Path
 from typing import Callable
 
@@ -51,14 +52,18 @@ def diagnose_each(
         for key, (_, group) in zip(keys, groups)
     ]
     tasks.append(cluster.Task(SHARED, run, (everything, heldout, model), cost=len(everything)))
-    done = cluster.run_tasks(
-        tasks,
-        out / ".tasks",
-        scheduler=args.scheduler,
-        workers=args.workers,
-        say=say,
-        describe=lambda d: d.verdict,
-    ).done
+    try:
+        done = cluster.run_tasks(
+            tasks,
+            out / ".tasks",
+            scheduler=args.scheduler,
+            workers=args.workers,
+            say=say,
+            describe=lambda d: d.verdict,
+        ).done
+    except cluster.TaskFailed as error:
+        print(f"hems diagnose: {error}", file=sys.stderr)
+        return 1
     for key, d in done.items():
         report.write(d.result, out / key)
     (out / ARCHIVE_TABLE).write_text(_table({key: d.result for key, d in done.items()}))

@@ -70,6 +70,15 @@ class Report:
         return [d.result for d in self.done.values()]
 
 
+def scheduler_error(scheduler: str) -> str | None:
+    """What is wrong with a scheduler's name, or None."""
+    if scheduler in (SERIAL, LOCAL) or (
+        scheduler.startswith("tcp://") and ":" in scheduler.removeprefix("tcp://")
+    ):
+        return None
+    return f"scheduler {scheduler!r}: serial, local or tcp://HOST:PORT"
+
+
 def run_tasks(
     tasks: Sequence[Task],
     folder: Path,
@@ -84,8 +93,8 @@ def run_tasks(
     keys = [t.key for t in tasks]
     if len(set(keys)) != len(keys):
         raise ValueError("task keys must be unique")
-    if scheduler not in (SERIAL, LOCAL) and not scheduler.startswith("tcp://"):
-        raise ValueError(f"scheduler {scheduler!r}: serial, local or tcp://HOST:PORT")
+    if (error := scheduler_error(scheduler)) is not None:
+        raise ValueError(error)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()

@@ -89,6 +89,8 @@ def test_a_result_file_cut_short_is_run_again(tmp_path):
 def test_bad_schedulers_and_keys_are_refused(tmp_path):
     with pytest.raises(ValueError, match="scheduler 'mpi': serial, local or tcp://HOST:PORT"):
         cluster.run_tasks(cluster_tasks.squares(1), tmp_path, scheduler="mpi")
+    assert cluster.scheduler_error("tcp://10.0.0.1") is not None  # no port
+    assert cluster.scheduler_error("tcp://10.0.0.1:8786") is None
     twice = [cluster.Task("same", cluster_tasks.square, (1,))] * 2
     with pytest.raises(ValueError, match="task keys must be unique"):
         cluster.run_tasks(twice, tmp_path)
