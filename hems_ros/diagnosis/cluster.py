@@ -34,7 +34,7 @@ WORKER_WAIT_S = 120.0
 
 
 class TaskFailed(RuntimeError):
-    """A task failed on every attempt."""
+    """A task was lost with its worker on every attempt."""
 
 
 @dataclass(frozen=True)
@@ -89,7 +89,9 @@ def run_tasks(
     say: Callable[[str], None] = lambda message: None,
     describe: Callable[[Any], str] = lambda result: "",
 ) -> Report:
-    """Run every task whose result is not yet in ``folder``; every task's :class:`Done`."""
+    """Run every task whose result is not yet in ``folder``; every task's :class:`Done`.
+
+    ``retries``: how often a task lost with its worker is submitted again."""
     keys = [t.key for t in tasks]
     if len(set(keys)) != len(keys):
         raise ValueError("task keys must be unique")
@@ -217,6 +219,8 @@ def _on_cluster(
                 finished(task, future.result())
             else:
                 error = _error(future)
+                if not _lost(error):  # the task's own error: its inputs would raise it again
+                    raise error
                 line = f"{task.key}: attempt {attempts[task.key]} failed ({_why(error)})"
                 if attempts[task.key] > retries:
                     raise TaskFailed(line) from error
@@ -240,6 +244,11 @@ def _error(future) -> BaseException:
         return future.exception()
     except BaseException as error:  # noqa: BLE001 - a cancelled future raises its reason
         return error
+
+
+def _lost(error: BaseException) -> bool:
+    """The task was lost with its worker (or the connection to it), not failed by itself."""
+    return type(error).__name__ in ("KilledWorker", "CancelledError", "FutureCancelledError")
 
 
 def _why(error: BaseException) -> str:
