@@ -219,9 +219,7 @@ def beyond_sensor(params: UnitParams, run: TimeSeriesRun) -> str | None:
     """Why the model's force sensor could not have read ``run``'s wire force, or None: a
     reading above its range shows that the lab's load cell is another one."""
     force = run.outputs.get("wire_force")
-    if run.kind != "driven":  # a frame's or a chamber rig's own load cell read it
-        return None
-    top = params.force_sensor.range_max_n
+    top = rig(params, run).force_sensor.range_max_n  # a frame's load cell reads any force
     # a few noisy readings just past the range are the sensor's noise at its limit
     if force is None or not force.size or np.mean(force > top) <= BEYOND_RANGE_SHARE:
         return None
