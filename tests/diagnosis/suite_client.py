@@ -10,7 +10,7 @@ from pathlib import Path
 from hems_ros.diagnosis import cluster
 from hems_ros.reports import diagnosis_suite
 
-CASES = (("load_damping", "pulses", "mid"), ("as_shifted", "pulses", "low"))
+CASES = (("load_damping", "pulses", "mid"),)
 
 
 def tasks() -> list[cluster.Task]:
