@@ -217,7 +217,7 @@ def register(subparsers) -> None:
     )
     blind.add_argument(
         "--half",
-        choices=("evaluation", "tuning", "all"),
+        choices=("evaluation", "tuning", "all"),  # the keys of blind.HALVES
         default="evaluation",
         help="which seeds: the evaluation half (default, what the page reports), the tuning "
         "half (what thresholds may be set on) or both",
@@ -331,10 +331,7 @@ def run_suite(args: argparse.Namespace) -> int:
         workers=args.workers,
     )
     if args.docs is not None:
-        figures = args.docs.parent / "figures"
-        figures.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(args.out / "confusion.png", figures / "diagnosis_confusion.png")
-        args.docs.write_text(result.page)
+        _publish(args.docs, result.page, args.out / "confusion.png", "diagnosis_confusion.png")
         say(f"wrote {args.docs}")
     print(result.headline)
     return 0
@@ -347,12 +344,7 @@ def run_blind(args: argparse.Namespace) -> int:
     from hems_ros.reports import blind as page
 
     say = _say(False)
-    seeds = {
-        "evaluation": blind.EVALUATION_SEEDS,
-        "tuning": blind.TUNING_SEEDS,
-        "all": blind.TUNING_SEEDS + blind.EVALUATION_SEEDS,
-    }[args.half]
-    rows = blind.grid(args.quick, seeds)
+    rows = blind.grid(args.quick, blind.HALVES[args.half])
     done = cluster.run_tasks(
         [cluster.Task(row.key, blind.run_row, (row,)) for row in rows],
         args.out / "cases",
@@ -367,11 +359,21 @@ def run_blind(args: argparse.Namespace) -> int:
     page.figure(records, args.out / "blind.png")
     (args.out / "blind.md").write_text(page.render(records, seconds, "blind.png"))
     if args.docs is not None:
-        figures = args.docs.parent / "figures"
-        figures.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(args.out / "blind.png", figures / "diagnosis_blind.png")
-        args.docs.write_text(page.render(records, seconds, "figures/diagnosis_blind.png"))
+        text = page.render(records, seconds, f"{FIGURES}/diagnosis_blind.png")
+        _publish(args.docs, text, args.out / "blind.png", "diagnosis_blind.png")
         say(f"wrote {args.docs}")
     r = blind.rates(records)
     print("; ".join(f"{kind} {right}/{runs}" for kind, (right, runs) in r.items()))
     return 0
+
+
+FIGURES = "figures"  # beside a generated page, where its figures go
+
+
+def _publish(page_path: Path, text: str, figure: Path, figure_name: str) -> None:
+    """A generated page and its figure into the docs folder (the page links
+    ``figures/<figure_name>``)."""
+    figures = page_path.parent / FIGURES
+    figures.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(figure, figures / figure_name)
+    page_path.write_text(text)

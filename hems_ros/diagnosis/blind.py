@@ -23,6 +23,11 @@ from hems_ros.truth.files import COLUMNS
 MODEL = "table41"
 TUNING_SEEDS = (0,)
 EVALUATION_SEEDS = (1, 2)
+HALVES = {
+    "evaluation": EVALUATION_SEEDS,
+    "tuning": TUNING_SEEDS,
+    "all": TUNING_SEEDS + EVALUATION_SEEDS,
+}
 QUICK = (("none", 0.0, "low", 1), ("dahl_friction", 4.0, "low", 1))
 
 
@@ -42,7 +47,7 @@ class Row:
         return "tuning" if self.seed in TUNING_SEEDS else "evaluation"
 
 
-def grid(quick: bool = False, seeds: tuple[int, ...] = TUNING_SEEDS + EVALUATION_SEEDS):
+def grid(quick: bool = False, seeds: tuple[int, ...] = HALVES["all"]):
     """Every row of the suite (or the quick subset that ``make test`` runs)."""
     if quick:
         return [Row(*q) for q in QUICK]

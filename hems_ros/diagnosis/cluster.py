@@ -176,7 +176,7 @@ def _on_cluster(
                 dashboard_address="127.0.0.1:0",  # its status page: loopback, any free port
             )
         client = Client(cluster)
-    elif scheduler.startswith("tcp://"):
+    else:
         cluster, client = None, Client(scheduler, timeout=CONNECT_S)
         if not client.scheduler_info()["workers"]:
             say(f"waiting up to {WORKER_WAIT_S:.0f} s for a worker to join {scheduler}")
