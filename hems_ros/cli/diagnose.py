@@ -362,8 +362,11 @@ def run_blind(args: argparse.Namespace) -> int:
         text = page.render(records, seconds, f"{FIGURES}/diagnosis_blind.png")
         _publish(args.docs, text, args.out / "blind.png", "diagnosis_blind.png")
         say(f"wrote {args.docs}")
-    r = blind.rates(records)
-    print("; ".join(f"{kind} {right}/{runs}" for kind, (right, runs) in r.items()))
+    for label, (right, runs), floor in page.headline(records):
+        if runs:
+            print(
+                f"{label}: {right} of {runs}" + ("" if floor is None else f" (floor {floor:.0%})")
+            )
     return 0
 
 

@@ -28,11 +28,12 @@ HALVES = {
     "tuning": TUNING_SEEDS,
     "all": TUNING_SEEDS + EVALUATION_SEEDS,
 }
-QUICK = (("none", 0.0, "low", 1), ("dahl_friction", 4.0, "low", 1))
+QUICK = (("dissertation", "dahl_friction", 1.0, "low", 1), ("brinson", "none", 0.0, "low", 1))
 
 
 @dataclass(frozen=True)
 class Row:
+    family: str
     effect: str
     size: float
     noise: str
@@ -40,7 +41,7 @@ class Row:
 
     @property
     def key(self) -> str:
-        return f"{self.effect}-{self.size:g}-{self.noise}-seed{self.seed}"
+        return f"{self.family}-{self.effect}-{self.size:g}-{self.noise}-seed{self.seed}"
 
     @property
     def half(self) -> str:
@@ -52,7 +53,8 @@ def grid(quick: bool = False, seeds: tuple[int, ...] = HALVES["all"]):
     if quick:
         return [Row(*q) for q in QUICK]
     return [
-        Row(effect.name, size, noise, seed)
+        Row(family, effect.name, size, noise, seed)
+        for family in cases.FAMILIES
         for effect in cases.EFFECTS
         for size in effect.sizes
         for noise in cases.NOISE
@@ -64,7 +66,7 @@ def run_row(row: Row) -> dict:
     """Write the row's truth runs, diagnose them blind; the record of what it said."""
     effect = cases.BY_NAME[row.effect]
     with tempfile.TemporaryDirectory(prefix="hems-blind-") as folder:
-        files = cases.write_case(effect, row.size, row.noise, row.seed, Path(folder))
+        files = cases.write_case(row.family, effect, row.size, row.noise, row.seed, Path(folder))
         model = inputs.model(MODEL, files["train"][1])
 
         def load(role: str):
@@ -74,6 +76,7 @@ def run_row(row: Row) -> dict:
     named = [n["effect"] for n in d.named()]
     ranking = [f.structure[-1].name for f in d.search.steps[0].ranked] if d.search.steps else []
     return {
+        "family": row.family,
         "effect": row.effect,
         "kind": effect.kind,
         "size": row.size,
@@ -123,33 +126,44 @@ def right(effect: cases.Effect, verdict: str, named: list[str]) -> bool:
     return any(name in effect.expected for name in named)
 
 
-def detection_limits(records: list[dict]) -> dict[tuple[str, str], float | None]:
-    """(effect, noise) -> the smallest size from which every seed at it and at every larger
-    size was right; None where the largest size was missed."""
-    limits: dict[tuple[str, str], float | None] = {}
-    for effect in cases.EFFECTS:
-        if effect.kind != "effect":
-            continue
-        for noise in cases.NOISE:
-            rows = [r for r in records if r["effect"] == effect.name and r["noise"] == noise]
-            if not rows:
+def detection_limits(records: list[dict]) -> dict[tuple[str, str, str], float | None]:
+    """(family, effect, noise) -> the smallest size from which every seed at it and at every
+    larger size was right; None where the largest size was missed."""
+    limits: dict[tuple[str, str, str], float | None] = {}
+    for family in cases.FAMILIES:
+        for effect in cases.EFFECTS:
+            if effect.kind != "effect":
                 continue
-            limit = None
-            for size in sorted(effect.sizes, reverse=True):
-                at = [r["right"] for r in rows if r["size"] == size]
-                if not at or not all(at):
-                    break
-                limit = size
-            limits[(effect.name, noise)] = limit
+            for noise in cases.NOISE:
+                rows = [
+                    r
+                    for r in records
+                    if (r["family"], r["effect"], r["noise"]) == (family, effect.name, noise)
+                ]
+                if rows:
+                    limits[(family, effect.name, noise)] = _limit(effect, rows)
     return limits
 
 
-def rates(records: list[dict]) -> dict[str, tuple[int, int]]:
-    """Per kind (and for effects, ranked first): (right, runs)."""
-    out = {}
-    for kind in ("effect", "null", "outside"):
-        rows = [r for r in records if r["kind"] == kind]
-        out[kind] = (sum(r["right"] for r in rows), len(rows))
-    effects = [r for r in records if r["kind"] == "effect"]
-    out["ranked_first"] = (sum(r["ranked_first"] for r in effects), len(effects))
-    return out
+def _limit(effect: cases.Effect, rows: list[dict]) -> float | None:
+    limit = None
+    for size in sorted(effect.sizes, reverse=True):
+        at = [r["right"] for r in rows if r["size"] == size]
+        if not at or not all(at):
+            break
+        limit = size
+    return limit
+
+
+def tally(
+    records: list[dict],
+    family: str,
+    kind: str,
+    score: str = "right",
+    noises: tuple[str, ...] = tuple(cases.NOISE),
+) -> tuple[int, int]:
+    """(runs scored ``score``, runs) of one family's truths of one kind at ``noises``."""
+    rows = [
+        r for r in records if r["family"] == family and r["kind"] == kind and r["noise"] in noises
+    ]
+    return sum(r[score] for r in rows), len(rows)

@@ -46,12 +46,51 @@ class BrinsonMaterial:
     sigma_s: float = 100e6  # detwinning starts
     sigma_f: float = 170e6  # detwinning ends
     t_ref: float = 20.0  # temperature of zero thermal stress
+    resistivity_martensite_ohm_m: float = 94.585e-8  # each phase's constant value
+    resistivity_austenite_ohm_m: float = 90.858e-8
+
+    #: solver tolerances of the states: the detwinned and the twinned fraction
+    state_atol = (1e-9, 1e-9)
 
     def __post_init__(self) -> None:
         if not (self.m_f < self.m_s and self.a_s < self.a_f):
             raise ValueError(f"transformation temperatures out of order: {self}")
         if not self.sigma_s < self.sigma_f:
             raise ValueError(f"critical stresses out of order: {self}")
+
+    # The rig's view of a material (shared with ``duhem.DuhemMaterial``): states (xi_s, xi_t).
+    def cold(self, sigma: float, temp: float) -> tuple[float, tuple[float, float]]:
+        """(strain, states) of fully detwinned martensite at rest under ``sigma``."""
+        if sigma <= self.sigma_f:
+            raise ValueError(
+                f"the cold load stresses the wire to {sigma / 1e6:.0f} MPa, under the "
+                f"{self.sigma_f / 1e6:.0f} MPa that detwins it fully: the cold wire would not "
+                "start as detwinned martensite"
+            )
+        return strain_at(self, sigma, 1.0, 0.0, temp), (1.0, 0.0)
+
+    def stress_pa(self, strain: float, states, temp: float) -> float:
+        return stress(self, strain, *self._fractions(states), temp)
+
+    def martensite(self, states) -> float:
+        return sum(self._fractions(states))
+
+    def resistivity(self, xi: float, temp: float, sigma: float) -> float:
+        return (
+            xi * self.resistivity_martensite_ohm_m + (1.0 - xi) * self.resistivity_austenite_ohm_m
+        )
+
+    def rates(self, strain, states, temp, strain_rate, heating_rate, latent_rise):
+        """(d states/dt, d xi/dt): :func:`phase_rates` and their sum."""
+        xs_rate, xt_rate = phase_rates(
+            self, strain, *self._fractions(states), temp, strain_rate, heating_rate, latent_rise
+        )
+        return [xs_rate, xt_rate], xs_rate + xt_rate
+
+    @staticmethod
+    def _fractions(states) -> tuple[float, float]:
+        xi_s = min(max(states[0], 0.0), 1.0)
+        return xi_s, min(max(states[1], 0.0), 1.0 - xi_s)
 
 
 def modulus(mat: BrinsonMaterial, xi: float) -> float:

@@ -1,9 +1,12 @@
-"""The blind suite's truths: Brinson-family rigs with one effect in a form of its own, at
-several sizes, read through sensors at three noise levels, written as a lab hands runs over.
+"""The blind suite's truths: wire rigs with one effect in a form of its own, at several
+sizes, read through sensors at three noise levels, written as a lab hands runs over.
 
-Every truth is a :class:`~hems_ros.truth.rig.WireRig` (another SMA model family than the
-project's, so that the starting model never equals it) driven by current pulses: a training
-run and a held-out run with other pulse lengths and currents, each with its own noise draw.
+Every truth is a :class:`~hems_ros.truth.rig.WireRig` of one of two families (``FAMILIES``):
+Brinson's material, another SMA model family than the project's, so that the starting model
+never equals it; or the dissertation's own law written again (``duhem``), where only the
+effect's form and the solver differ from the model. Each is driven by current pulses: a
+training run and a held-out run with other pulse lengths and currents, each with its own
+noise draw.
 ``expected`` names the library candidates that count as naming the effect; the null truth
 expects nothing named, an effect outside the library an ``unexplained`` or ``partial``
 verdict. Nothing here knows the library: the names are what the diagnosis should say.
@@ -17,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hems_ros.truth.duhem import DuhemMaterial
 from hems_ros.truth.files import write_run
 from hems_ros.truth.measurement import Sensor
 from hems_ros.truth.rig import WireRig, simulate
@@ -51,6 +55,13 @@ NOISE = {
 }
 
 
+#: family -> the bare rig every effect of that family is added to
+FAMILIES = {
+    "dissertation": WireRig(material=DuhemMaterial(), convection_h0_h2=(37.67, 0.01)),
+    "brinson": WireRig(),
+}
+
+
 @dataclass(frozen=True)
 class Effect:
     """A truth family: what it changes at a size, and what the diagnosis should say."""
@@ -60,32 +71,31 @@ class Effect:
     expected: tuple[str, ...]  # candidates that name it (an effect); empty otherwise
     sizes: tuple[float, ...]
     unit: str  # of the sizes
-    rig: Callable[[float], WireRig]
+    rig: Callable[[WireRig, float], WireRig]  # (a family's bare rig, size)
     sensors: Callable[[float, tuple[Sensor, Sensor]], tuple[Sensor, Sensor]] = (
         lambda size, sensors: sensors
     )
     description: str = ""
 
 
-def _sheathed(scale: float) -> WireRig:
+def _sheathed(bare: WireRig, scale: float) -> WireRig:
     base = Sheath()
 
     def scaled(shell: Shell) -> Shell:
         return replace(shell, heat_capacity_j_m3_k=shell.heat_capacity_j_m3_k * scale)
 
-    return WireRig(sheath=replace(base, liner=scaled(base.liner), helix=scaled(base.helix)))
+    return replace(bare, sheath=replace(base, liner=scaled(base.liner), helix=scaled(base.helix)))
 
 
 def sheath_capacity_j_k(scale: float) -> float:
     """The sheath's heat capacity at a capacity ``scale`` of the dissertation's sheath."""
-    rig = _sheathed(scale)
+    rig = _sheathed(WireRig(), scale)
     network = rig.network()
     assert network is not None
     return float(network.capacities.sum())
 
 
-def _stiffening(share: float) -> WireRig:
-    rig = WireRig()
+def _stiffening(rig: WireRig, share: float) -> WireRig:
     k = rig.spring_n_m
     # the rate grows by ``share`` over 30 mm of extension, from the rest position on
     points = np.linspace(-0.01, 0.04, 11)
@@ -105,8 +115,8 @@ EFFECTS = (
         (),
         (0.0,),
         "-",
-        lambda size: WireRig(),
-        description="the Brinson rig as it is",
+        lambda bare, size: bare,
+        description="the rig as it is",
     ),
     Effect(
         "bowden_sheath",
@@ -123,7 +133,7 @@ EFFECTS = (
         ("tendon_friction", "capstan_friction"),
         (0.5, 1.0, 2.0, 4.0),
         "N",
-        lambda size: WireRig(friction_n=size),
+        lambda bare, size: replace(bare, friction_n=size),
         description="dry friction with pre-sliding (Dahl) on the mass's guide",
     ),
     Effect(
@@ -141,7 +151,7 @@ EFFECTS = (
         (),
         (2.0, 5.0, 10.0),
         "um/s",
-        lambda size: WireRig(),
+        lambda bare, size: bare,
         sensors=_drifting,
         description="the contraction sensor's zero creeping (no candidate has it)",
     ),
@@ -153,9 +163,11 @@ def pulses(plan: tuple[tuple[float, float], ...]) -> list[tuple[float, float, fl
     return [(1.0 + PERIOD_S * k, 1.0 + PERIOD_S * k + s, a) for k, (s, a) in enumerate(plan)]
 
 
-def write_case(effect: Effect, size: float, noise: str, seed: int, folder: Path) -> dict:
+def write_case(
+    family: str, effect: Effect, size: float, noise: str, seed: int, folder: Path
+) -> dict:
     """The training and held-out runs of one truth in ``folder``: their CSV and conditions."""
-    rig = effect.rig(size)
+    rig = effect.rig(FAMILIES[family], size)
     contraction, force = effect.sensors(size, NOISE[noise])
     sensors = {"contraction": contraction, "wire_force": force}
     rng = np.random.default_rng([seed, int(1000 * size), len(effect.name)])

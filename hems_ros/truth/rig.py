@@ -11,8 +11,9 @@ own: dry friction on the mass's guide with pre-sliding (Dahl 1968: the friction 
 follows dF/dx = sigma0 (1 - F/Fc sgn(v)), so it builds up over a short travel instead of
 jumping to Fc), and a bias spring given by a force-extension table (linear between its
 points) instead of a rate. States: wire temperature, wire elongation, the mass's velocity,
-the two martensite fractions, the friction force, the sheath's nodes; scipy's LSODA
-integrates them between the current's edges at tolerances of this module.
+the friction force, the material's two states (Brinson's two martensite fractions, or the
+fraction and the stress of the dissertation's own law, ``duhem``), the sheath's nodes;
+scipy's LSODA integrates them between the current's edges at tolerances of this module.
 """
 
 from __future__ import annotations
@@ -25,11 +26,13 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from hems_ros.truth.air import heat_loss_w_m2
-from hems_ros.truth.brinson import BrinsonMaterial, phase_rates, strain_at, stress
+from hems_ros.truth.brinson import BrinsonMaterial
+from hems_ros.truth.duhem import DuhemMaterial
 from hems_ros.truth.sheath import Sheath, SheathNetwork
 
 RTOL = 1e-7
-ATOL = [1e-6, 1e-10, 1e-8, 1e-9, 1e-9, 1e-6]  # K, m, m/s, fraction, fraction, N; 1e-6 K a node
+ATOL = [1e-6, 1e-10, 1e-8, 1e-6]  # K, m, m/s, N; then the material's states; 1e-6 K a node
+MATERIAL_STATES = 4  # where the material's two states start
 MAX_STEP_S = 0.005  # the fractions' rates switch on and off inside a step
 
 
@@ -37,15 +40,16 @@ MAX_STEP_S = 0.005  # the fractions' rates switch on and off inside a step
 class WireRig:
     """SI units; temperatures in degC. Wire and heat data are the dissertation's Table 4.1."""
 
-    material: BrinsonMaterial = field(default_factory=BrinsonMaterial)
+    material: BrinsonMaterial | DuhemMaterial = field(default_factory=BrinsonMaterial)
     length_m: float = 0.9
     diameter_m: float = 0.508e-3
     density_kg_m3: float = 6450.0
     heat_capacity_j_kg_k: float = 837.4
     latent_heat_j_kg: float = 24183.52
     emissivity: float = 0.1  # bright NiTi: radiation a few per cent of the loss
-    resistivity_martensite_ohm_m: float = 94.585e-8
-    resistivity_austenite_ohm_m: float = 90.858e-8
+    # (h0 W/m2K, h2 W/m2K3) of eq. 4.10's h(T) = h0 + h2 T^2 for the bare wire's loss;
+    # None: free convection and radiation to still air (``air``)
+    convection_h0_h2: tuple[float, float] | None = None
     ambient_c: float = 20.0
     mass_kg: float = 30.0 / 9.81
     gravity_m_s2: float = 9.81
@@ -89,19 +93,19 @@ class WireRig:
         return math.pi * self.diameter_m**2 / 4.0
 
     def cold_state(self) -> np.ndarray:
-        """At rest at ambient temperature, all detwinned martensite, under the cold load."""
-        mat = self.material
-        sigma = self.cold_load_n / self.section_m2
-        if sigma <= mat.sigma_f:
-            raise ValueError(
-                f"a load of {self.cold_load_n:g} N stresses the wire to {sigma / 1e6:.0f} MPa, "
-                f"under the {mat.sigma_f / 1e6:.0f} MPa that detwins it fully: the cold wire "
-                "would not start as detwinned martensite"
-            )
-        strain = strain_at(mat, sigma, 1.0, 0.0, self.ambient_c)
+        """At rest at ambient temperature, all (detwinned) martensite, under the cold load."""
+        strain, states = self.material.cold(self.cold_load_n / self.section_m2, self.ambient_c)
         network = self.network()
         nodes = [] if network is None else [self.ambient_c] * network.capacities.size
-        return np.array([self.ambient_c, strain * self.length_m, 0.0, 1.0, 0.0, 0.0, *nodes])
+        return np.array([self.ambient_c, strain * self.length_m, 0.0, 0.0, *states, *nodes])
+
+    def bare_loss_w(self, temp: float) -> float:
+        """Heat the bare wire gives the room at ``temp``, W."""
+        surface = math.pi * self.diameter_m * self.length_m
+        if self.convection_h0_h2 is None:
+            return surface * heat_loss_w_m2(temp, self.ambient_c, self.diameter_m, self.emissivity)
+        h0, h2 = self.convection_h0_h2
+        return surface * (h0 + h2 * temp * temp) * (temp - self.ambient_c)
 
 
 @dataclass(frozen=True)
@@ -122,38 +126,36 @@ def _derivatives(
     rig: WireRig, network: SheathNetwork | None, amps: float, rest_m: float, x: np.ndarray
 ) -> list[float]:
     mat = rig.material
-    temp, elongation, velocity = x[0], x[1], x[2]
-    xi_s = min(max(x[3], 0.0), 1.0)
-    xi_t = min(max(x[4], 0.0), 1.0 - xi_s)
-    friction = x[5]
+    temp, elongation, velocity, friction = x[0], x[1], x[2], x[3]
+    states = x[MATERIAL_STATES : MATERIAL_STATES + 2]
     strain = elongation / rig.length_m
+    sigma = mat.stress_pa(strain, states, temp)
     volume = rig.section_m2 * rig.length_m
     heat_capacity = rig.density_kg_m3 * volume * rig.heat_capacity_j_kg_k
-    power = amps**2 * _resistance(rig, xi_s + xi_t)
+    contraction = rest_m - elongation
+    power = amps**2 * _resistance(rig, mat.martensite(states), temp, sigma, contraction)
     if network is None:
-        surface = math.pi * rig.diameter_m * rig.length_m
-        loss = surface * heat_loss_w_m2(temp, rig.ambient_c, rig.diameter_m, rig.emissivity)
+        loss = rig.bare_loss_w(temp)
         node_rates: list[float] = []
     else:
-        loss, rates = network.flows(temp, x[6:], rig.ambient_c)
+        loss, rates = network.flows(temp, x[MATERIAL_STATES + 2 :], rig.ambient_c)
         node_rates = list(rates)
     heating_rate = (power - loss) / heat_capacity
     latent_rise = rig.latent_heat_j_kg / rig.heat_capacity_j_kg_k
-    xs_rate, xt_rate = phase_rates(
-        mat, strain, xi_s, xi_t, temp, velocity / rig.length_m, heating_rate, latent_rise
+    state_rates, xi_rate = mat.rates(
+        strain, states, temp, velocity / rig.length_m, heating_rate, latent_rise
     )
-    wire_force = stress(mat, strain, xi_s, xi_t, temp) * rig.section_m2
+    wire_force = sigma * rig.section_m2
     load = rig.cold_load_n + rig.spring_force_n(rest_m - elongation)  # the spring stretches
     # the guide's friction opposes the mass's motion; velocity > 0 is the wire lengthening
     acceleration = (load - wire_force - rig.damping_n_s_m * velocity - friction) / rig.mass_kg
     friction_rate = _dahl_rate(rig, friction, velocity)
     return [
-        heating_rate + latent_rise * (xs_rate + xt_rate),
+        heating_rate + latent_rise * xi_rate,
         velocity,
         acceleration,
-        xs_rate,
-        xt_rate,
         friction_rate,
+        *state_rates,
         *node_rates,
     ]
 
@@ -165,11 +167,9 @@ def _dahl_rate(rig: WireRig, friction: float, velocity: float) -> float:
     return rig.friction_stiffness_n_m * (1.0 - friction / rig.friction_n * direction) * velocity
 
 
-def _resistance(rig: WireRig, xi: float) -> float:
-    resistivity = (
-        xi * rig.resistivity_martensite_ohm_m + (1.0 - xi) * rig.resistivity_austenite_ohm_m
-    )
-    return resistivity * rig.length_m / rig.section_m2
+def _resistance(rig: WireRig, xi: float, temp: float, sigma: float, contraction: float) -> float:
+    """R = rho l / S (eq. 4.2) over the wire's current length: it shortens as it contracts."""
+    return rig.material.resistivity(xi, temp, sigma) * (rig.length_m - contraction) / rig.section_m2
 
 
 def simulate(
@@ -208,7 +208,7 @@ def simulate(
             method="LSODA",
             t_eval=np.append(times[(times >= start) & (times < end)], end),
             rtol=RTOL,
-            atol=ATOL + [1e-6] * (state.size - len(ATOL)),
+            atol=ATOL + list(rig.material.state_atol) + [1e-6] * (state.size - len(ATOL) - 2),
             max_step=MAX_STEP_S,
         )
         if not solution.success:
@@ -227,23 +227,23 @@ def _current(pulses: Sequence[tuple[float, float, float]], t: float) -> float:
 
 
 def _run(rig: WireRig, rest_m: float, rows: np.ndarray) -> RigRun:
-    t, amps, temp, elongation, _, xi_s, xi_t, _ = rows.T[:8]
+    t, amps, temp, elongation = rows.T[:4]
+    states = rows[:, 2 + MATERIAL_STATES : 4 + MATERIAL_STATES]
     mat = rig.material
-    xi = np.clip(xi_s + xi_t, 0.0, 1.0)
-    force = np.array(
-        [
-            stress(mat, e / rig.length_m, s, w, c) * rig.section_m2
-            for e, s, w, c in zip(elongation, xi_s, xi_t, temp)
-        ]
+    xi = np.array([mat.martensite(s) for s in states])
+    sigma = np.array(
+        [mat.stress_pa(e / rig.length_m, s, c) for e, s, c in zip(elongation, states, temp)]
     )
-    resistance = np.array([_resistance(rig, x) for x in xi])
+    force = sigma * rig.section_m2
+    contraction = rest_m - elongation
+    resistance = np.array([_resistance(rig, *row) for row in zip(xi, temp, sigma, contraction)])
     return RigRun(
         time_s=t,
         current_a=amps,
         voltage_v=amps * resistance,
         temperature_c=temp,
         wire_force_n=force,
-        contraction_m=rest_m - elongation,
+        contraction_m=contraction,
         martensite_fraction=xi,
-        sheath_node_c=rows[:, 8:],
+        sheath_node_c=rows[:, 4 + MATERIAL_STATES :],
     )

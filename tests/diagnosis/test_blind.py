@@ -46,6 +46,7 @@ def test_what_counts_as_right():
 
 def _record(size: float, right: bool, noise: str = "mid") -> dict:
     return {
+        "family": "brinson",
         "effect": "dahl_friction",
         "kind": "effect",
         "size": size,
@@ -68,11 +69,13 @@ def test_the_detection_limit_is_the_smallest_size_from_which_every_run_is_right(
     ]
     limits = blind.detection_limits(records)
     # 0.5 N was right, but 1 N was not: the limit is where it holds from there up
-    assert limits[("dahl_friction", "mid")] == 2.0
-    assert limits[("dahl_friction", "high")] is None
-    assert ("dahl_friction", "low") not in limits
+    assert limits[("brinson", "dahl_friction", "mid")] == 2.0
+    assert limits[("brinson", "dahl_friction", "high")] is None
+    assert ("brinson", "dahl_friction", "low") not in limits
     text = page.render(records, [30.0, 40.0], "f.png")
-    assert "| dahl_friction (" in text and "| - | 2 N | not named up to 4 N |" in text
+    assert "| another model family | dahl_friction (" in text
+    assert "| - | 2 N | not named up to 4 N |" in text
+    assert "| another model family: an effect, named | 67% (4 of 6) | 70% |" in text
 
 
 @pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis-blind.md not generated")
@@ -82,6 +85,10 @@ def test_the_committed_page_shows_what_a_row_diagnosed_here_gives():
     line = next(
         line
         for line in PAGE.read_text().splitlines()
-        if re.match(rf"\| {row.effect} \| {row.size:g} \S+ \| {row.noise} \|", line)
+        if re.match(
+            rf"\| {page.TIERS[row.family]} \| {row.effect} \| {row.size:g} \S+ \| {row.noise} \|",
+            line,
+        )
     )
     assert f"{record['verdict']} (" in line
+    assert all(f"{name} (" in line for name in record["named"])
