@@ -42,7 +42,6 @@ The encoder, force, duty and status topics carry serialized messages (hems_ros.n
 
 from __future__ import annotations
 
-import math
 from dataclasses import fields
 
 from hems_msgs.msg import (
@@ -58,7 +57,8 @@ from hems_msgs.msg import (
 from hems_ros.control import STRATEGIES, make_controller, mode_gains
 from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
 from hems_ros.graph import names, transmission
-from hems_ros.graph.setpoints import MODES, Setpoint, SetpointError, SetpointLimits, validate
+from hems_ros.graph.finger_loop import FingerLoop
+from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits
 from hems_ros.graph.thermal_guard import ThermalGuard
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import now_ns, stamp_now
@@ -69,7 +69,6 @@ from hems_ros.nodes.wire import codec, stamp_ns
 from hems_ros.physics import load_params
 
 DUTY, STATUS = codec(DutyCommand), codec(ControllerStatus)
-NO_STAMP = (0, 0)
 
 PARAMETERS = [
     Spec(
@@ -161,52 +160,44 @@ PARAMETERS = [
 ]
 
 
-def lag_ns(later: tuple[int, int], earlier: tuple[int, int]) -> int:
-    """Nanoseconds from stamp ``earlier`` to stamp ``later``, both (sec, nanosec)."""
-    return (later[0] - earlier[0]) * 1_000_000_000 + later[1] - earlier[1]
-
-
 def nan_if_none(value: float | None) -> float:
     return float("nan") if value is None else value
 
 
 class FingerControllerNode(LeanNode):
-    """Per-finger BPID/PID/PI-PD controller."""
+    """Per-finger BPID/PID/PI-PD controller: the middleware around a FingerLoop."""
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__("finger_controller", namespace=names.NAMESPACE, **node_kwargs)
         self.graph_ns = self.get_namespace()
         p = declare(self, PARAMETERS)
-        self.mode_gains = {mode: self._declare_gains(p["strategy"], mode) for mode in MODES}
+        mode_gains = {mode: self._declare_gains(p["strategy"], mode) for mode in MODES}
         self.finger = p["finger"]
-        self.ratio = p["pulley_ratio"]
-        self.limits = SetpointLimits(p["max_position_m"], p["max_force_n"])
-        self.controller = make_controller(
-            p["strategy"], p["mode"], self.mode_gains[p["mode"]], ts=p["ts"], n_filter=p["n_filter"]
-        )
-        self.setpoint = Setpoint(p["mode"], 0.0)
-        self.enabled = False
-        self.wire_position: float | None = None
-        self.encoder_stamp = NO_STAMP  # (sec, nanosec) of the latest reading
-        self.force_stamp = NO_STAMP
-        self.wire_force: float | None = None
-        self.duty = 0.0
-        self.rejected = 0
-        self.last_rejection = ""
-        self.sequence = 0
-        self.status_sequence = 0
-        self.status_every = p["status_every"]
-        self.feedback_lag_ns = int(round(p["feedback_lag_s"] * 1e9))
         try:
-            physics = load_params(p["physics_config"])
-            self.guard = ThermalGuard(
-                physics, p["cut_temperature_c"], p["resume_temperature_c"], p["ts"]
+            guard = ThermalGuard(
+                load_params(p["physics_config"]),
+                p["cut_temperature_c"],
+                p["resume_temperature_c"],
+                p["ts"],
             )
         except (OSError, ValueError) as error:
             raise ValueError(
                 f"parameters 'physics_config', 'cut_temperature_c', 'resume_temperature_c': "
                 f"{error}"
             ) from None
+        self.loop = FingerLoop(
+            make_controller(
+                p["strategy"], p["mode"], mode_gains[p["mode"]], ts=p["ts"], n_filter=p["n_filter"]
+            ),
+            mode_gains,
+            SetpointLimits(p["max_position_m"], p["max_force_n"]),
+            p["pulley_ratio"],
+            p["feedback_lag_s"],
+            guard,
+        )
+        self.sequence = 0
+        self.status_sequence = 0
+        self.status_every = p["status_every"]
         self._steps_since_status = 0
         self._reported: tuple | None = None
         self.duty_pub = self.create_publisher(
@@ -274,7 +265,7 @@ class FingerControllerNode(LeanNode):
         return type(default)(**{name.split(".", 1)[1]: value for name, value in values.items()})
 
     def _other_feedback(self):
-        return self.feedback["force" if self.setpoint.mode == "position" else "position"]
+        return self.feedback[self.loop.other_mode]
 
     def _poll_other_feedback(self) -> None:
         """The stream of the other mode only feeds the status: taken when a status goes out
@@ -288,30 +279,20 @@ class FingerControllerNode(LeanNode):
 
     # inputs -------------------------------------------------------------------
     def on_setpoint(self, message: FingerSetpoint) -> None:
+        if message.mode != self.loop.setpoint.mode and message.mode in self.feedback:
+            # a switch carries the output over from that mode's latest reading
+            self.drain(self.feedback[message.mode])
         try:
-            setpoint = validate(message.mode, message.value, self.limits)
+            setpoint = self.loop.set_point(message.mode, message.value)
         except SetpointError as error:
-            self.rejected += 1
-            self.last_rejection = str(error)
+            kept = self.loop.setpoint
             self.get_logger().error(
-                f"{self.finger}: setpoint rejected: {error}; keeping "
-                f"{self.setpoint.mode} {self.setpoint.value:g}"
+                f"{self.finger}: setpoint rejected: {error}; keeping {kept.mode} {kept.value:g}"
             )
             self.record(message, False, str(error))
             self.publish_status()
             return
         self.record(message, True, "")
-        if setpoint.mode != self.controller.mode:
-            self.drain(self._other_feedback())
-            measurement = self._wire_measurement(setpoint.mode)
-            self.controller.set_mode(
-                setpoint.mode,
-                0.0 if measurement is None else measurement,
-                self.mode_gains[setpoint.mode],
-            )
-            if measurement is None:
-                self.controller.reset()  # nothing measured yet in that mode: nothing to carry over
-        self.setpoint = setpoint
         self._poll_other_feedback()
         self.get_logger().info(f"{self.finger}: setpoint {setpoint.mode} {setpoint.value:g}")
 
@@ -330,35 +311,22 @@ class FingerControllerNode(LeanNode):
         self.commands_pub.publish(record)
 
     def on_supervisor(self, message) -> None:
-        enabled = message.state == SupervisorStatus.ENABLED
-        if enabled and not self.enabled:
-            self.controller.reset()
-        self.enabled = enabled
+        self.loop.supervisor(message.state == SupervisorStatus.ENABLED)
 
     def on_encoder(self, message) -> None:
         """The unit's packet: the encoder reading, and the drive's measurement over the period
         that ended, which the thermal guard takes before any duty is computed from it."""
-        self.guard.reading(message.duty_percent, message.on_current, message.on_voltage)
-        self.wire_position = message.position
-        self.encoder_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
-        if self.setpoint.mode == "position":
-            self.control(self.encoder_stamp)
+        self.loop.guard.reading(message.duty_percent, message.on_current, message.on_voltage)
+        stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
+        if self.loop.reading("position", message.position, stamp):
+            self.control(stamp)
 
     def on_force(self, message) -> None:
-        self.wire_force = message.force
-        self.force_stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
-        if self.setpoint.mode == "force":
-            self.control(self.force_stamp)
+        stamp = (message.header_stamp_sec, message.header_stamp_nanosec)
+        if self.loop.reading("force", message.force, stamp):
+            self.control(stamp)
 
     # control ------------------------------------------------------------------
-    def _wire_measurement(self, mode: str) -> float | None:
-        return self.wire_position if mode == "position" else self.wire_force
-
-    def _wire_reference(self) -> float:
-        if self.setpoint.mode == "position":
-            return transmission.wire_position(self.setpoint.value, self.ratio)
-        return transmission.wire_force(self.setpoint.value, self.ratio)
-
     def on_idle(self) -> None:
         self.drain(self.supervisor_sub)
         self.publish_status()
@@ -368,15 +336,10 @@ class FingerControllerNode(LeanNode):
         status_due = self._steps_since_status >= self.status_every
         if status_due:
             self.drain(self.supervisor_sub)
-        if self.setpoint.mode == "force":
+        if self.loop.setpoint.mode == "force":
             # the unit's packets, polled in force mode, still feed the thermal guard every step
             self.drain(self.feedback["position"])
-        if self.enabled and self._other_fresh(measurement_stamp) and not self.guard.limited:
-            self.duty = self.controller.update(
-                self._wire_reference(), self._wire_measurement(self.setpoint.mode)
-            )
-        else:
-            self.duty = 0.0
+        duty = self.loop.step(self.loop.enabled and self._other_fresh(measurement_stamp))
         self.sequence += 1
         sec, nanosec = stamp_ns(now_ns(self))
         self.duty_pub.publish(
@@ -386,7 +349,7 @@ class FingerControllerNode(LeanNode):
                     header_stamp_nanosec=nanosec,
                     header_frame_id="",
                     finger=self.finger,
-                    duty_percent=self.duty,
+                    duty_percent=duty,
                     measurement_stamp_sec=measurement_stamp[0],
                     measurement_stamp_nanosec=measurement_stamp[1],
                     sequence=self.sequence,
@@ -397,45 +360,25 @@ class FingerControllerNode(LeanNode):
         # period, not at every step, where it cost a second pass of the spin loop
         if self.idle_timer.time_until_next_call() < self.idle_push_ns:
             self.idle_timer.reset()
-        if status_due or self._status_key() != self._reported:
+        if status_due or self.loop.status_key() != self._reported:
             self.publish_status()
 
     def _other_fresh(self, measurement_stamp: tuple[int, int]) -> bool:
-        """The other mode's latest reading is at most feedback_lag_s older than the feedback
-        sample, both on the unit's stamps, so the host's timing does not enter: a force sensor
-        (or encoder) that stopped must not leave the wire heating blind to over-force."""
-        other = self.force_stamp if self.setpoint.mode == "position" else self.encoder_stamp
-        if other == NO_STAMP:
-            return False
-        reading = self.wire_force if self.setpoint.mode == "position" else self.wire_position
-        if reading is None or not math.isfinite(reading):
-            return False  # a failed sensor says nothing about over-force or over-travel
-        if lag_ns(measurement_stamp, other) > self.feedback_lag_ns:
-            self.drain(self._other_feedback())  # polled at the statuses: take what came meanwhile
-            other = self.force_stamp if self.setpoint.mode == "position" else self.encoder_stamp
-        return lag_ns(measurement_stamp, other) <= self.feedback_lag_ns
-
-    def _status_key(self) -> tuple:
-        return (
-            self.setpoint.mode,
-            self.setpoint.value,
-            self.enabled,
-            self.controller.fault,
-            self.guard.limited,
-        )
+        """The other mode's stream is polled at the statuses: when its latest reading looks
+        stale, take what came meanwhile before deciding."""
+        if self.loop.other_fresh(measurement_stamp):
+            return True
+        self.drain(self._other_feedback())
+        return self.loop.other_fresh(measurement_stamp)
 
     def publish_status(self) -> None:
         self.drain(self._other_feedback())
-        measurement = self._wire_measurement(self.setpoint.mode)
-        if measurement is None:
-            tendon = float("nan")
-        elif self.setpoint.mode == "position":
-            tendon = transmission.tendon_position(measurement, self.ratio)
-        else:
-            tendon = transmission.tendon_force(measurement, self.ratio)
+        loop = self.loop
+        tendon = loop.tendon_measurement()
+        position, force = loop.readings["position"], loop.readings["force"]
         self.status_sequence += 1
         self._steps_since_status = 0
-        self._reported = self._status_key()
+        self._reported = loop.status_key()
         sec, nanosec = stamp_ns(now_ns(self))
         self.status_pub.publish(
             STATUS.encode(
@@ -444,24 +387,24 @@ class FingerControllerNode(LeanNode):
                     header_stamp_nanosec=nanosec,
                     header_frame_id="",
                     finger=self.finger,
-                    strategy=self.controller.strategy,
-                    mode=self.setpoint.mode,
-                    active=self.enabled,
-                    setpoint=self.setpoint.value,
+                    strategy=loop.controller.strategy,
+                    mode=loop.setpoint.mode,
+                    active=loop.enabled,
+                    setpoint=loop.setpoint.value,
                     measurement=tendon,
-                    error=self.setpoint.value - tendon,
-                    duty_percent=self.duty,
-                    fault=self.controller.fault or "",
-                    encoder_stamp_sec=self.encoder_stamp[0],
-                    encoder_stamp_nanosec=self.encoder_stamp[1],
-                    wire_position=nan_if_none(self.wire_position),
-                    force_stamp_sec=self.force_stamp[0],
-                    force_stamp_nanosec=self.force_stamp[1],
-                    wire_force=nan_if_none(self.wire_force),
-                    rejected_setpoints=self.rejected,
-                    last_rejection=self.last_rejection,
-                    wire_temperature_c=self.guard.estimate_c,
-                    thermal_limited=self.guard.limited,
+                    error=loop.setpoint.value - tendon,
+                    duty_percent=loop.duty,
+                    fault=loop.controller.fault or "",
+                    encoder_stamp_sec=position.stamp[0],
+                    encoder_stamp_nanosec=position.stamp[1],
+                    wire_position=nan_if_none(position.value),
+                    force_stamp_sec=force.stamp[0],
+                    force_stamp_nanosec=force.stamp[1],
+                    wire_force=nan_if_none(force.value),
+                    rejected_setpoints=loop.rejected,
+                    last_rejection=loop.last_rejection,
+                    wire_temperature_c=loop.guard.estimate_c,
+                    thermal_limited=loop.guard.limited,
                     sequence=self.status_sequence,
                 )
             )

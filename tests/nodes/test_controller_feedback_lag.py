@@ -13,49 +13,46 @@ def _stamp(seconds: float) -> tuple[int, int]:
 
 
 def test_duty_is_zero_while_the_other_sensor_lags_and_back_when_it_returns(context):
-    from hems_ros.graph.setpoints import Setpoint
+    from hems_ros.graph.finger_loop import Reading
     from hems_ros.nodes.finger_controller import FingerControllerNode
 
     node = FingerControllerNode(context=context)
+    loop = node.loop
     try:
-        node.enabled = True
-        node.setpoint = Setpoint("position", 0.02)
-        node.wire_position, node.wire_force = 0.0, 4.0
+        loop.supervisor(True)
+        loop.set_point("position", 0.02)
         t0 = 1000.0
-        node.force_stamp = _stamp(t0)  # the module's last reading
+        loop.reading("force", 4.0, _stamp(t0))  # the module's last reading
         duties = []
         for sample in range(1, 6):
-            node.encoder_stamp = _stamp(t0 + 0.01 * sample)
-            node.control(node.encoder_stamp)
-            duties.append(node.duty)
+            loop.reading("position", 0.0, _stamp(t0 + 0.01 * sample))
+            node.control(_stamp(t0 + 0.01 * sample))
+            duties.append(loop.duty)
         assert duties == [100.0, 100.0, 0.0, 0.0, 0.0]  # 30 ms behind (unit clock): 0 %
-        node.force_stamp = _stamp(t0 + 0.05)  # the sensor is back
-        node.encoder_stamp = _stamp(t0 + 0.06)
-        node.control(node.encoder_stamp)
-        assert node.duty == 100.0
-        node.force_stamp = (0, 0)  # never a force reading: no heating either
+        loop.reading("force", 4.0, _stamp(t0 + 0.05))  # the sensor is back
+        node.control(_stamp(t0 + 0.06))
+        assert loop.duty == 100.0
+        loop.readings["force"] = Reading()  # never a force reading: no heating either
         node.control(_stamp(t0 + 0.07))
-        assert node.duty == 0.0
+        assert loop.duty == 0.0
     finally:
         node.destroy_node()
 
 
 def test_in_force_mode_the_encoder_is_the_other_sensor(context):
-    from hems_ros.graph.setpoints import Setpoint
     from hems_ros.nodes.finger_controller import FingerControllerNode
 
     node = FingerControllerNode(context=context)
+    loop = node.loop
     try:
-        node.enabled = True
-        node.setpoint = Setpoint("force", 10.0)
-        node.controller.set_mode("force", 4.0, node.mode_gains["force"])
-        node.wire_position, node.wire_force = 0.0, 4.0
-        node.encoder_stamp = _stamp(2000.0)
-        node.force_stamp = _stamp(2000.2)
-        node.control(node.force_stamp)  # encoder 200 ms behind the force feedback
-        assert node.duty == 0.0
-        node.encoder_stamp = _stamp(2000.2)
-        node.control(node.force_stamp)
-        assert node.duty > 0.0
+        loop.supervisor(True)
+        loop.reading("force", 4.0, _stamp(2000.2))
+        loop.set_point("force", 10.0)
+        loop.reading("position", 0.0, _stamp(2000.0))
+        node.control(_stamp(2000.2))  # encoder 200 ms behind the force feedback
+        assert loop.duty == 0.0
+        loop.reading("position", 0.0, _stamp(2000.2))
+        node.control(_stamp(2000.2))
+        assert loop.duty > 0.0
     finally:
         node.destroy_node()

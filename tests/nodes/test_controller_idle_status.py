@@ -37,16 +37,16 @@ def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context, 
     node = FingerControllerNode(context=context)
     helper = rclpy.create_node("force_sender", context=context)
     try:
-        assert node.setpoint.mode == "position" and node.status_every == 2
+        assert node.loop.setpoint.mode == "position" and node.status_every == 2
         publisher = matched_publisher(helper, WireForce, "/hems/index/wire_force", qos.SENSOR)
-        node.wire_position = 0.0
+        node.loop.reading("position", 0.0, (0, 0))
         node.control((0, 0))  # the first step reports at once (a new status key)
         publisher.publish(WireForce(finger="index", force=7.5))
         time.sleep(0.05)
         node.control((0, 0))  # no status at this step: the force stays queued
-        assert node.wire_force is None
+        assert node.loop.readings["force"].value is None
         node.control((0, 0))  # the second step since the last status sends one, with the force
-        assert node.wire_force == 7.5
+        assert node.loop.readings["force"].value == 7.5
     finally:
         helper.destroy_node()
         node.destroy_node()
@@ -68,18 +68,18 @@ def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_statu
         publisher = matched_publisher(
             helper, SupervisorStatus, "/hems/supervisor/status", qos.STATUS
         )
-        node.wire_position = 0.0
+        node.loop.reading("position", 0.0, (0, 0))
         node.control((0, 0))  # reports the new key: the next status is due two steps on
         publisher.publish(SupervisorStatus(state=SupervisorStatus.ENABLED))
         time.sleep(0.05)
         node.control((0, 0))
-        assert not node.enabled
+        assert not node.loop.enabled
         node.control((0, 0))  # a status step: taken before the duty is computed
-        assert node.enabled and node.status_sequence >= 2
+        assert node.loop.enabled and node.status_sequence >= 2
         publisher.publish(SupervisorStatus(state=SupervisorStatus.ESTOP))
         time.sleep(0.05)
         node.on_idle()  # with no feedback the idle status takes it
-        assert not node.enabled and node.duty == 0.0
+        assert not node.loop.enabled and node.loop.duty == 0.0
     finally:
         helper.destroy_node()
         node.destroy_node()
@@ -104,7 +104,7 @@ def test_after_a_pause_the_controller_reports_the_queued_encoder_reading_not_the
 
     def recording_status() -> None:
         publish_status()
-        reported.append(node.encoder_stamp)
+        reported.append(node.loop.readings["position"].stamp)
 
     node.publish_status = recording_status
     try:
@@ -116,14 +116,14 @@ def test_after_a_pause_the_controller_reports_the_queued_encoder_reading_not_the
         publisher.publish(reading)
         time.sleep(0.05)
         one_round(node)
-        assert node.encoder_stamp == (1, 0)
+        assert node.loop.readings["position"].stamp == (1, 0)
         reading.header.stamp.sec, reading.sequence = 2, 2
         publisher.publish(reading)
         time.sleep(0.15)  # longer than the 0.1 s idle period
         assert node.idle_timer.is_ready()
         reported.clear()
         one_round(node)
-        assert node.encoder_stamp == (2, 0)
+        assert node.loop.readings["position"].stamp == (2, 0)
         assert (1, 0) not in reported
     finally:
         helper.destroy_node()

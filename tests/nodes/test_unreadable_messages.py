@@ -41,8 +41,8 @@ def test_controller_module_and_supervisor_drop_unreadable_messages(context, capf
         deliver(controller, "/hems/index/encoder", GARBAGE)
         deliver(controller, "/hems/index/wire_force", GARBAGE)
         assert (
-            controller.wire_position is None
-            and controller.wire_force is None
+            controller.loop.readings["position"].value is None
+            and controller.loop.readings["force"].value is None
             and controller.sequence == 0
         )
         deliver(module, "/hems/sim/index/wire_tension", GARBAGE)
