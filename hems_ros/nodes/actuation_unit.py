@@ -54,6 +54,7 @@ from hems_msgs.msg import (
 from hems_ros.graph import names
 from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.lockstep_clock import STALL_S
+from hems_ros.graph.sensor_faults import ENCODER_FAULTS, FaultySensor
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.nodes import qos
 from hems_ros.nodes.clock_time import seconds, stamp_now
@@ -66,9 +67,6 @@ from hems_ros.physics import ActuationUnit, load_params
 
 LOCKSTEP_POLL_S = 0.0002
 ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))
-#: Encoder faults a test can inject at run time (``ros2 param set ... sensor_fault stuck_encoder``).
-SENSOR_FAULTS = ("", "stuck_encoder", "encoder_jump", "nan_encoder")
-JUMP_M = 5e-3
 
 PARAMETERS = [
     Spec(
@@ -149,7 +147,7 @@ PARAMETERS = [
         "encoder fault injected from now on, for fault tests: '' (none), stuck_encoder "
         "(fresh samples, frozen reading), encoder_jump (+5 mm), nan_encoder (NaN position); "
         "settable while running",
-        one_of(*SENSOR_FAULTS),
+        one_of(*ENCODER_FAULTS),
     ),
 ]
 
@@ -196,7 +194,7 @@ class ActuationUnitNode(LeanNode):
         self.encoder_pub = self.create_publisher(
             EncoderReading, names.topic(self.finger, "encoder", self.graph_ns), qos.SENSOR
         )
-        self.frozen: tuple[int, float] | None = None
+        self.encoder_sensor = FaultySensor()
         self.tension_pub = self.create_publisher(
             WireForce, names.sim_topic(self.finger, "wire_tension", self.graph_ns), qos.SENSOR
         )
@@ -371,20 +369,14 @@ class ActuationUnitNode(LeanNode):
             )
 
     def encoder_reading(self, sample) -> tuple[int, float]:
-        """(counts, position m) the encoder reports, with the injected fault if one is set."""
-        fault = self.params["sensor_fault"]
-        if fault != "stuck_encoder":
-            self.frozen = None
-        if fault == "stuck_encoder":
-            if self.frozen is None:
-                self.frozen = sample.encoder_counts, sample.encoder_position_m
-            return self.frozen
-        if fault == "encoder_jump":
-            jump = int(round(JUMP_M / self.resolution))
-            return sample.encoder_counts + jump, (sample.encoder_counts + jump) * self.resolution
-        if fault == "nan_encoder":
-            return sample.encoder_counts, float("nan")
-        return sample.encoder_counts, sample.encoder_position_m
+        """(counts, position m) the encoder reports, with the injected fault if one is set
+        (``ros2 param set ... sensor_fault stuck_encoder``)."""
+        return self.encoder_sensor.encoder(
+            self.params["sensor_fault"],
+            sample.encoder_counts,
+            sample.encoder_position_m,
+            self.resolution,
+        )
 
     def publish_state(self) -> None:
         r = self.driver.last_result

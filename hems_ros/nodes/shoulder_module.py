@@ -16,6 +16,7 @@ from __future__ import annotations
 from hems_msgs.msg import WireForce
 
 from hems_ros.graph import names
+from hems_ros.graph.sensor_faults import FORCE_FAULTS, FaultySensor, noise_scale
 from hems_ros.nodes import qos
 from hems_ros.nodes.lean_node import LeanNode
 from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
@@ -26,8 +27,6 @@ from hems_ros.physics.params import ForceSensor
 
 _SENSOR = ForceSensor()
 WIRE_FORCE = codec(WireForce)
-SENSOR_FAULTS = ("", "stuck_force", "force_saturation", "force_noise_burst", "nan_force")
-NOISE_BURST = 50.0
 
 
 PARAMETERS = [
@@ -63,7 +62,7 @@ PARAMETERS = [
         "force-sensor fault injected from now on, for fault tests: '' (none), stuck_force "
         "(fresh samples, frozen reading), force_saturation (reads its range), force_noise_burst "
         "(noise x50), nan_force; settable while running",
-        one_of(*SENSOR_FAULTS),
+        one_of(*FORCE_FAULTS),
     ),
     Spec(
         "fault_finger",
@@ -87,12 +86,13 @@ class ShoulderModuleNode(LeanNode):
         self.publishers_ = {}
         self.sequences = {}
         self.rngs = {}
-        self.frozen: dict[str, tuple[float, bool]] = {}
+        self.sensors: dict[str, FaultySensor] = {}
         for index, finger in enumerate(names.MODULES[p["module"]]):
             self.publishers_[finger] = self.create_publisher(
                 WireForce, names.topic(finger, "wire_force", self.graph_ns), qos.SENSOR
             )
             self.sequences[finger] = 0
+            self.sensors[finger] = FaultySensor()
             self.rngs[finger] = sensors.noise_generator(p["seed"] + index)
             self.subscribe_serialized(
                 WireForce,
@@ -109,22 +109,11 @@ class ShoulderModuleNode(LeanNode):
     def on_tension(self, finger: str, tension) -> None:
         p = self.params
         fault = self.fault(finger)
-        noise = (
-            self.rngs[finger].standard_normal()
-            * p["noise_std_n"]
-            * (NOISE_BURST if fault == "force_noise_burst" else 1.0)
-        )
+        noise = self.rngs[finger].standard_normal() * p["noise_std_n"] * noise_scale(fault)
         force, saturated = sensors.force_reading(
             tension.force, noise, p["range_max_n"], p["resolution_n"]
         )
-        if fault != "stuck_force":
-            self.frozen.pop(finger, None)
-        if fault == "stuck_force":
-            force, saturated = self.frozen.setdefault(finger, (force, saturated))
-        elif fault == "force_saturation":
-            force, saturated = p["range_max_n"], True
-        elif fault == "nan_force":
-            force = float("nan")
+        force, saturated = self.sensors[finger].force(fault, force, saturated, p["range_max_n"])
         self.sequences[finger] += 1
         self.publishers_[finger].publish(
             WIRE_FORCE.encode(
