@@ -8,7 +8,17 @@ import ast
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-CORE = ("physics", "control", "diagnosis", "experiments", "bag", "codec", "reports", "truth")
+CORE = (
+    "physics",
+    "control",
+    "graph",
+    "diagnosis",
+    "experiments",
+    "bag",
+    "codec",
+    "reports",
+    "truth",
+)
 ROS = (
     "rclpy",
     "hems_msgs",
