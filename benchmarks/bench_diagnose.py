@@ -158,7 +158,7 @@ def make_truth(cycles: int) -> Truth:
 
 def encoders() -> dict[str, tuple[type, Callable[[tuple], bytes]]]:
     """Per message type: a named tuple of its leaf fields (nested names joined by ``_``, as
-    hems_ros.nodes.wire names them) and the CDR encoder of such a tuple."""
+    hems_ros.ros.wire names them) and the CDR encoder of such a tuple."""
     out = {}
     for name in (
         "EncoderReading",

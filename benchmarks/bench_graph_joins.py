@@ -51,7 +51,7 @@ from hems_ros.client.graph_client import GraphClient  # noqa: E402
 from hems_ros.graph import names  # noqa: E402
 from hems_ros.graph.supervisor_logic import parse_gaps  # noqa: E402
 from hems_ros.launcher import Graph, GraphOptions  # noqa: E402
-from hems_ros.nodes import qos  # noqa: E402
+from hems_ros.ros import qos  # noqa: E402
 
 SETTLE_S = 1.5  # after each command, before judging it
 HOLD_M = 0.010
@@ -62,7 +62,7 @@ KINDS = ("setpoint", "status", "enable", "reset", "topic pub")
 TOPIC_PUB = """
 import sys, time, rclpy
 from hems_msgs.msg import FingerSetpoint
-from hems_ros.nodes import qos
+from hems_ros.ros import qos
 rclpy.init()
 node = rclpy.create_node("topic_pub_once")
 pub = node.create_publisher(FingerSetpoint, sys.argv[1], qos.COMMAND)

@@ -1,6 +1,6 @@
 """Per-message CPU of typed and serialized messages between two processes.
 
-The graph's nodes publish and take their hot topics serialized (hems_ros/nodes/wire.py)
+The graph's nodes publish and take their hot topics serialized (hems_ros/ros/wire.py)
 instead of as rclpy message objects. This benchmark measures both ways side by side on the
 graph's busiest message, EncoderReading, over the graph's sensor QoS: a subscriber process
 (lean_spin, as in the nodes) takes ``--count`` messages while this process publishes them
@@ -38,8 +38,8 @@ def subscriber(serialized: bool, count: int) -> None:
     import rclpy
     from hems_msgs.msg import EncoderReading
 
-    from hems_ros.nodes import lean_spin, qos
-    from hems_ros.nodes.wire import codec
+    from hems_ros.ros import lean_spin, qos
+    from hems_ros.ros.wire import codec
 
     rclpy.init()
     node = rclpy.create_node("bench_messages_subscriber")
@@ -74,8 +74,8 @@ def publish(serialized: bool, count: int) -> dict:
     import rclpy
     from hems_msgs.msg import EncoderReading
 
-    from hems_ros.nodes import qos
-    from hems_ros.nodes.wire import codec
+    from hems_ros.ros import qos
+    from hems_ros.ros.wire import codec
 
     child = subprocess.Popen(
         [

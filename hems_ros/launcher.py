@@ -14,9 +14,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from hems_ros.graph import names
-from hems_ros.nodes.runner import NO_PARAMETER_SERVICES_FLAG
 from hems_ros.paths import config_path
 from hems_ros.processes import exit_description, stop_processes
+from hems_ros.ros.runner import NO_PARAMETER_SERVICES_FLAG
 from hems_ros.rosenv import child_environment, die_with_parent
 
 
@@ -43,7 +43,7 @@ class GraphOptions:
     extra_ros_args: tuple[str, ...] = ()
     log_level: str = "info"
     # False: the separate processes start without parameter services (no `ros2 param`), which
-    # makes a process joining the domain cost them less (hems_ros.nodes.runner); the composed
+    # makes a process joining the domain cost them less (hems_ros.ros.runner); the composed
     # process, one participant, keeps them
     parameter_services: bool = True
 

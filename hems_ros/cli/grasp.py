@@ -108,8 +108,8 @@ class GraspListener:
         from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
         from sensor_msgs.msg import JointState
 
-        from hems_ros.nodes import qos
-        from hems_ros.nodes.clock_time import from_msg
+        from hems_ros.ros import qos
+        from hems_ros.ros.clock_time import from_msg
 
         self.seconds = from_msg
         self.node = client.node

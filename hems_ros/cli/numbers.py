@@ -2,7 +2,7 @@
 
 A bad number stops the command before it starts a node or a simulation, with argparse's
 usual ``argument --rate: ...`` message naming the option and the value. The range checks
-are the node parameters' (:mod:`hems_ros.nodes.params`), so a value reads the same on the
+are the node parameters' (:mod:`hems_ros.ros.params`), so a value reads the same on the
 command line as in a params file; float("nan") and float("inf") parse, which is why each
 asks for a finite value (a NaN rate had left ``hems replay`` waiting forever for a message
 due at NaN seconds).
@@ -14,7 +14,7 @@ import argparse
 import math
 from typing import Callable
 
-from hems_ros.nodes import params
+from hems_ros.ros import params
 
 
 def _number(convert: Callable[[str], float], kind: str, check: Callable[[float], str | None]):

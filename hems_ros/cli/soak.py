@@ -182,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
     from hems_ros.bag.recording import RecorderProcess
     from hems_ros.bag.selection import record_regex
     from hems_ros.client.graph_client import GraphClient
-    from hems_ros.nodes import qos
+    from hems_ros.ros import qos
 
     graph = Graph(options)
     graph.start()

@@ -23,8 +23,8 @@ from std_srvs.srv import Trigger
 
 from hems_ros.client import DISCOVERY_S
 from hems_ros.graph import names
-from hems_ros.nodes import qos
-from hems_ros.nodes.clock_time import from_msg
+from hems_ros.ros import qos
+from hems_ros.ros.clock_time import from_msg
 
 RETRY_S = 2.0  # a service call unanswered this long is sent again
 CLOCK_STALL_S = 5.0  # /clock standing still this long (wall) means the graph's clock is gone

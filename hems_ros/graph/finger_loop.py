@@ -110,10 +110,9 @@ class FingerLoop:
     def step(self, other_fresh: bool) -> float:
         """The duty for the feedback sample just taken, percent: 0 unless enabled, the other
         mode's reading fresh and the thermal guard not limiting."""
-        if self.enabled and other_fresh and not self.guard.limited:
-            self.duty = self.controller.update(
-                self._wire_reference(), self.readings[self.setpoint.mode].value
-            )
+        measurement = self.readings[self.setpoint.mode].value
+        if self.enabled and other_fresh and not self.guard.limited and measurement is not None:
+            self.duty = self.controller.update(self._wire_reference(), measurement)
         else:
             self.duty = 0.0
         return self.duty

@@ -92,7 +92,7 @@ class MonitorLimits:
     # benchmarks/bench_graph_startup.py), at 200 ms once in 10 starts for 210 ms without
     # commands: about as long as a reliable reader held later samples back behind a lost
     # one until its repair (why the controller status and the duty commands are best
-    # effort, nodes/qos.py), the likely cause, not confirmed.
+    # effort, ros/qos.py), the likely cause, not confirmed.
     watchdog_hold_s: float = 0.5
     # units and controllers take a new state from the status that follows it (20 ms); this
     # is how long one of them may report otherwise while ENABLED, on a busy host

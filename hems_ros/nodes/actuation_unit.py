@@ -34,7 +34,7 @@ those the clock has made sure were sent, so a run's figures do not depend on the
 pace. On wall-clock time the ticks also fall on the clock's grid at the shoulder module's phase
 (hems_ros.graph.cadence.tick_delay).
 
-The duty, encoder, tension and state topics carry serialized messages (hems_ros.nodes.wire).
+The duty, encoder, tension and state topics carry serialized messages (hems_ros.ros.wire).
 """
 
 from __future__ import annotations
@@ -56,14 +56,14 @@ from hems_ros.graph.cadence import Cadence, tick_delay
 from hems_ros.graph.lockstep_clock import STALL_S
 from hems_ros.graph.sensor_faults import ENCODER_FAULTS, FaultySensor
 from hems_ros.graph.unit_driver import UnitDriver
-from hems_ros.nodes import qos
-from hems_ros.nodes.clock_time import seconds, stamp_now
-from hems_ros.nodes.grid_timer import create_grid_timer
-from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.params import PERIOD_LIMIT, WINDOW_LIMIT, Spec, declare, one_of
-from hems_ros.nodes.runner import run_node
-from hems_ros.nodes.wire import codec, seconds_of, stamp
 from hems_ros.physics import ActuationUnit, load_params
+from hems_ros.ros import qos
+from hems_ros.ros.clock_time import seconds, stamp_now
+from hems_ros.ros.grid_timer import create_grid_timer
+from hems_ros.ros.lean_node import LeanNode
+from hems_ros.ros.params import PERIOD_LIMIT, WINDOW_LIMIT, Spec, declare, one_of
+from hems_ros.ros.runner import run_node
+from hems_ros.ros.wire import codec, seconds_of, stamp
 
 LOCKSTEP_POLL_S = 0.0002
 ENCODER, TENSION, STATE = (codec(t) for t in (EncoderReading, WireForce, ActuatorState))

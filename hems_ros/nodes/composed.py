@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import sys
 
-from hems_ros.nodes import lean_spin
-from hems_ros.nodes.runner import freeze_long_lived_objects
+from hems_ros.ros import lean_spin
+from hems_ros.ros.runner import freeze_long_lived_objects
 from hems_ros.rosenv import apply_network_defaults, skip_code_generators
 
 NODE_CLASSES = {

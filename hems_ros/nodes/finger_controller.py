@@ -37,7 +37,7 @@ Outside ENABLED, after a controller fault (non-finite input), or while the other
 readings lag the feedback by more than ``feedback_lag_s`` (on the unit's stamps), or while
 the wire temperature estimated from the drive board's readings is at ``cut_temperature_c``
 (until it is back below ``resume_temperature_c``), the duty sent is 0.
-The encoder, force, duty and status topics carry serialized messages (hems_ros.nodes.wire).
+The encoder, force, duty and status topics carry serialized messages (hems_ros.ros.wire).
 """
 
 from __future__ import annotations
@@ -60,13 +60,13 @@ from hems_ros.graph import names, transmission
 from hems_ros.graph.finger_loop import FingerLoop
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits
 from hems_ros.graph.thermal_guard import ThermalGuard
-from hems_ros.nodes import qos
-from hems_ros.nodes.clock_time import now_ns, stamp_now
-from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, non_negative, one_of, positive
-from hems_ros.nodes.runner import run_node
-from hems_ros.nodes.wire import codec, stamp_ns
 from hems_ros.physics import load_params
+from hems_ros.ros import qos
+from hems_ros.ros.clock_time import now_ns, stamp_now
+from hems_ros.ros.lean_node import LeanNode
+from hems_ros.ros.params import PERIOD_LIMIT, Spec, declare, non_negative, one_of, positive
+from hems_ros.ros.runner import run_node
+from hems_ros.ros.wire import codec, stamp_ns
 
 DUTY, STATUS = codec(DutyCommand), codec(ControllerStatus)
 

@@ -12,7 +12,7 @@ from hems_msgs.msg import DutyCommand, EncoderReading
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-from hems_ros.nodes.runner import run_node
+from hems_ros.ros.runner import run_node
 
 REQUEST_TOPIC = "/hems/ping/request"
 REPLY_TOPIC = "/hems/ping/reply"

@@ -48,7 +48,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from hems_ros.bag import BagWriter, TopicSelection, offered_qos
 from hems_ros.bag.selection import DEFAULT_RECORD_REGEX
-from hems_ros.nodes import lean_spin
+from hems_ros.ros import lean_spin
 
 READY_PREFIX = "recording "
 BATCH_S = 0.02  # recorder loop: pause after each round, so that rounds find batches
@@ -299,7 +299,7 @@ def spin_until_expired(node: Recorder) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from hems_ros.nodes.runner import run_node
+    from hems_ros.ros.runner import run_node
 
     return run_node(Recorder, argv, spin=spin_until_expired, config_errors=(ValueError, OSError))
 

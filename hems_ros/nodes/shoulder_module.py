@@ -8,7 +8,7 @@ Publishes   /hems/<finger>/wire_force        hems_msgs/WireForce  best effort, o
 
 Each reading carries ``saturated`` (clipped at 0 or the range) and ``over_force``
 (reading at or above ``over_force_n``). Both topics carry serialized messages
-(hems_ros.nodes.wire).
+(hems_ros.ros.wire).
 """
 
 from __future__ import annotations
@@ -17,13 +17,13 @@ from hems_msgs.msg import WireForce
 
 from hems_ros.graph import names
 from hems_ros.graph.sensor_faults import FORCE_FAULTS, FaultySensor, noise_scale
-from hems_ros.nodes import qos
-from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.params import Spec, declare, non_negative, one_of, positive
-from hems_ros.nodes.runner import run_node
-from hems_ros.nodes.wire import codec
 from hems_ros.physics import sensors
 from hems_ros.physics.params import ForceSensor
+from hems_ros.ros import qos
+from hems_ros.ros.lean_node import LeanNode
+from hems_ros.ros.params import Spec, declare, non_negative, one_of, positive
+from hems_ros.ros.runner import run_node
+from hems_ros.ros.wire import codec
 
 _SENSOR = ForceSensor()
 WIRE_FORCE = codec(WireForce)

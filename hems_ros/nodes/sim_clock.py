@@ -23,12 +23,12 @@ from rosgraph_msgs.msg import Clock
 
 from hems_ros.graph import names
 from hems_ros.graph.lockstep_clock import STALL_S, LockstepClock
-from hems_ros.nodes import qos
-from hems_ros.nodes.clock_time import from_msg, to_msg
-from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, non_negative
-from hems_ros.nodes.runner import run_node
-from hems_ros.nodes.wire import seconds_of
+from hems_ros.ros import qos
+from hems_ros.ros.clock_time import from_msg, to_msg
+from hems_ros.ros.lean_node import LeanNode
+from hems_ros.ros.params import PERIOD_LIMIT, Spec, declare, non_negative
+from hems_ros.ros.runner import run_node
+from hems_ros.ros.wire import seconds_of
 
 
 def _fingers(value) -> str | None:

@@ -25,7 +25,7 @@ ENABLED a unit or controller that has not taken ENABLED within enable_grace_s (0
 also waits for every unit's state and for its controller's commands to reach it (watchdog flag not
 held). Heating is allowed only in ENABLED: the units and controllers drop every duty to 0 as soon
 as they see any other state. FAULT and ESTOP latch until reset. The controller status and
-state topics are taken serialized (hems_ros.nodes.wire), at each check rather than on
+state topics are taken serialized (hems_ros.ros.wire), at each check rather than on
 arrival (a wake-up per message cost more than the message).
 """
 
@@ -48,12 +48,12 @@ from hems_ros.graph.supervisor_logic import (
     SupervisorLogic,
     gap_entries,
 )
-from hems_ros.nodes import qos
-from hems_ros.nodes.clock_time import seconds, stamp_now
-from hems_ros.nodes.grid_timer import create_grid_timer
-from hems_ros.nodes.lean_node import LeanNode
-from hems_ros.nodes.params import PERIOD_LIMIT, Spec, declare, positive
-from hems_ros.nodes.runner import run_node
+from hems_ros.ros import qos
+from hems_ros.ros.clock_time import seconds, stamp_now
+from hems_ros.ros.grid_timer import create_grid_timer
+from hems_ros.ros.lean_node import LeanNode
+from hems_ros.ros.params import PERIOD_LIMIT, Spec, declare, positive
+from hems_ros.ros.runner import run_node
 
 _LIMITS = MonitorLimits()
 

@@ -60,7 +60,7 @@ def main() -> int:
     if args.until_taken:
         from hems_msgs.msg import ControllerStatus
 
-        from hems_ros.nodes import qos
+        from hems_ros.ros import qos
 
         node.create_subscription(
             ControllerStatus,

@@ -67,7 +67,7 @@ class ControllerReplay:
         )
         from rclpy.executors import SingleThreadedExecutor
 
-        from hems_ros.nodes import qos
+        from hems_ros.ros import qos
 
         self.finger = finger
         self.context = rclpy.Context()
@@ -156,7 +156,7 @@ def as_installed(raw) -> bytes:
     bags' encoder readings predate the drive board's measurement in the same packet: those
     fields come as NaN, which the thermal guard takes as no heating."""
     from hems_ros.codec import cdr, msgdefs
-    from hems_ros.nodes.wire import codec
+    from hems_ros.ros.wire import codec
 
     if raw.definition.strip() == msgdefs.full_definition(raw.type).strip():
         return raw.data

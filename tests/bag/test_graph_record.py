@@ -71,7 +71,7 @@ def test_ten_seconds_of_the_graph_every_message_decoded_equal(
 
     from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
-    from hems_ros.nodes import qos
+    from hems_ros.ros import qos
 
     kinds = {
         "encoder": EncoderReading,

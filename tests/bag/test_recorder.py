@@ -186,7 +186,7 @@ def listener(ros_domain_id: int):
     from hems_msgs.msg import FingerSetpoint
     from rclpy.context import Context
 
-    from hems_ros.nodes import qos
+    from hems_ros.ros import qos
 
     context = Context()
     rclpy.init(context=context)

@@ -28,7 +28,7 @@ def matrix_graph(ros_domain_id):
     from hems_ros.client.graph_client import GraphClient
     from hems_ros.graph import names
     from hems_ros.launcher import Graph, GraphOptions
-    from hems_ros.nodes import qos
+    from hems_ros.ros import qos
 
     graph = Graph(GraphOptions(fingers=(FINGER,), composed=False, log_level="error"))
     graph.start()

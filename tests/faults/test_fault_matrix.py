@@ -112,7 +112,7 @@ def _flood(topic: str, kind: str, count: int = 20000) -> None:
     script = f"""
 import rclpy
 from hems_msgs.msg import {kind}
-from hems_ros.nodes import qos
+from hems_ros.ros import qos
 rclpy.init()
 node = rclpy.create_node("flood")
 pub = node.create_publisher({kind}, "{topic}", qos.SENSOR)

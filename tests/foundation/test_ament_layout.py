@@ -85,7 +85,7 @@ def test_every_node_starts_and_stops_cleanly_on_sigint_and_sigterm(venv, name, t
 def test_a_node_help_lists_every_parameter_with_its_default(name):
     import importlib
 
-    from hems_ros.nodes.runner import node_help
+    from hems_ros.ros.runner import node_help
 
     module = importlib.import_module(f"hems_ros.nodes.{name}")
     node_class = next(

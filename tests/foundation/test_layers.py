@@ -58,6 +58,17 @@ def test_the_core_imports_no_ros() -> None:
     assert not _offenders(paths, lambda n: n.split(".")[0] in ROS)
 
 
+def test_graph_client_and_benchmarks_import_no_node() -> None:
+    """The rclpy helpers live in hems_ros.ros; a node module is imported only to run it."""
+    paths = [
+        *(REPO / "hems_ros" / "graph").rglob("*.py"),
+        *(REPO / "hems_ros" / "client").rglob("*.py"),
+        *(REPO / "hems_ros" / "ros").rglob("*.py"),
+        *(REPO / "benchmarks").glob("*.py"),
+    ]
+    assert not _offenders(paths, lambda n: n == "hems_ros.nodes" or n.startswith("hems_ros.nodes."))
+
+
 def test_library_code_imports_no_verb() -> None:
     paths = [
         p

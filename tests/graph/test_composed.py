@@ -16,8 +16,8 @@ from hems_msgs.msg import EncoderReading, SupervisorStatus
 from recording import Recorder
 
 from hems_ros.graph import names, transmission
-from hems_ros.nodes import qos
-from hems_ros.nodes.clock_time import from_msg
+from hems_ros.ros import qos
+from hems_ros.ros.clock_time import from_msg
 
 pytestmark = pytest.mark.slow
 

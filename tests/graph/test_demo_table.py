@@ -22,7 +22,7 @@ from sensor_msgs.msg import JointState
 from hems_ros.bag import iter_messages, load_bag
 from hems_ros.graph import names
 from hems_ros.graph.grasp import FingerTrace, GraspPlan, PhaseTracker, summarize
-from hems_ros.nodes.clock_time import from_msg
+from hems_ros.ros.clock_time import from_msg
 
 pytestmark = pytest.mark.slow
 

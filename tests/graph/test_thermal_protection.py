@@ -44,7 +44,7 @@ def test_a_stuck_encoder_cannot_overheat_the_wire(ros_domain_id):
 
     from hems_ros.client.graph_client import GraphClient
     from hems_ros.launcher import Graph, GraphOptions
-    from hems_ros.nodes import qos
+    from hems_ros.ros import qos
 
     graph = Graph(GraphOptions(fingers=(FINGER,), composed=False, log_level="warn"))
     graph.start()

@@ -13,7 +13,7 @@ from hems_msgs.msg import ControllerStatus, EncoderReading
 
 from hems_ros.client.graph_client import GraphClient
 from hems_ros.graph import names
-from hems_ros.nodes import qos
+from hems_ros.ros import qos
 
 FINGER, TARGET_M = "index", 0.015
 

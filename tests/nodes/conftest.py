@@ -39,8 +39,8 @@ def matched_publisher():
 @pytest.fixture
 def one_round(context):
     """one_round(node): wait once on ``node``'s subscriptions and timers in the nodes' spin
-    loop (hems_ros.nodes.lean_spin) and run what is ready, as a node process does."""
-    from hems_ros.nodes import lean_spin
+    loop (hems_ros.ros.lean_spin) and run what is ready, as a node process does."""
+    from hems_ros.ros import lean_spin
 
     def run(node) -> None:
         rounds = iter([True])

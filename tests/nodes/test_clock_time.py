@@ -1,4 +1,4 @@
-"""A node's clock read through hems_ros.nodes.clock_time: the system clock without sim time,
+"""A node's clock read through hems_ros.ros.clock_time: the system clock without sim time,
 the /clock time once ROS time is active."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ def test_now_ns_is_the_system_clock_until_ros_time_is_active(context):
     import rclpy
     from rclpy.time import Time
 
-    from hems_ros.nodes.clock_time import now_ns, seconds, stamp_now
+    from hems_ros.ros.clock_time import now_ns, seconds, stamp_now
 
     node = rclpy.create_node("clock_reader", context=context)
     try:

@@ -14,9 +14,9 @@ def test_unit_and_supervisor_in_one_process_wake_only_for_work(context):
     from rclpy.executors import ExternalShutdownException
     from rclpy.parameter import Parameter
 
-    from hems_ros.nodes import lean_spin
     from hems_ros.nodes.actuation_unit import ActuationUnitNode
     from hems_ros.nodes.supervisor import SupervisorNode
+    from hems_ros.ros import lean_spin
 
     nodes = [
         SupervisorNode(

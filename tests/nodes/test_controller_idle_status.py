@@ -31,8 +31,8 @@ def test_the_other_modes_feedback_is_taken_only_when_a_status_goes_out(context, 
     import rclpy
     from hems_msgs.msg import WireForce
 
-    from hems_ros.nodes import qos
     from hems_ros.nodes.finger_controller import FingerControllerNode
+    from hems_ros.ros import qos
 
     node = FingerControllerNode(context=context)
     helper = rclpy.create_node("force_sender", context=context)
@@ -58,8 +58,8 @@ def test_the_supervisor_status_is_taken_with_the_status_steps_and_the_idle_statu
     import rclpy
     from hems_msgs.msg import SupervisorStatus
 
-    from hems_ros.nodes import qos
     from hems_ros.nodes.finger_controller import FingerControllerNode
+    from hems_ros.ros import qos
 
     node = FingerControllerNode(context=context)
     helper = rclpy.create_node("supervisor_stand_in", context=context)
@@ -94,8 +94,8 @@ def test_after_a_pause_the_controller_reports_the_queued_encoder_reading_not_the
     import rclpy
     from hems_msgs.msg import EncoderReading
 
-    from hems_ros.nodes import qos
     from hems_ros.nodes.finger_controller import FingerControllerNode
+    from hems_ros.ros import qos
 
     node = FingerControllerNode(context=context)
     helper = rclpy.create_node("encoder_stand_in", context=context)

@@ -13,8 +13,8 @@ def test_the_controller_status_is_offered_best_effort_and_a_best_effort_reader_g
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import ReliabilityPolicy
 
-    from hems_ros.nodes import qos
     from hems_ros.nodes.finger_controller import FingerControllerNode
+    from hems_ros.ros import qos
 
     node = FingerControllerNode(context=context)
     helper = rclpy.create_node("status_reader", context=context)

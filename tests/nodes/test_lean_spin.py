@@ -1,4 +1,4 @@
-"""The nodes' spin loop (hems_ros/nodes/lean_spin.py) against a regular rclpy node over DDS."""
+"""The nodes' spin loop (hems_ros/ros/lean_spin.py) against a regular rclpy node over DDS."""
 
 from __future__ import annotations
 
@@ -20,8 +20,8 @@ def spun(name: str, build):
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
     from rclpy.node import Node
 
-    from hems_ros.nodes import lean_spin
-    from hems_ros.nodes.lean_node import LeanNode
+    from hems_ros.ros import lean_spin
+    from hems_ros.ros.lean_node import LeanNode
 
     served, other = Context(), Context()
     rclpy.init(context=served)
@@ -113,8 +113,8 @@ def test_nodes_with_clients_are_left_to_rclpy(ros_domain_id: int) -> None:
     from rclpy.context import Context
     from std_srvs.srv import Trigger
 
-    from hems_ros.nodes import lean_spin
-    from hems_ros.nodes.lean_node import LeanNode
+    from hems_ros.ros import lean_spin
+    from hems_ros.ros.lean_node import LeanNode
 
     context = Context()
     rclpy.init(context=context)
@@ -154,7 +154,7 @@ def test_a_queued_message_runs_before_a_timer_ready_at_the_same_wake_up(
     import rclpy
     from std_msgs.msg import Int32
 
-    from hems_ros.nodes.lean_node import LeanNode
+    from hems_ros.ros.lean_node import LeanNode
 
     order = []
     node = LeanNode("lean_spin_order", context=context)

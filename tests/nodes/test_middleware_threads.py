@@ -1,6 +1,6 @@
 """A node process runs Fast DDS's listener and event threads under SCHED_BATCH (they do not
 preempt the sender of the message they wake for) and its own main thread under the default
-policy (hems_ros.nodes.middleware_threads)."""
+policy (hems_ros.ros.middleware_threads)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import subprocess
 import time
 
 from hems_ros.launcher import executable_path
-from hems_ros.nodes.middleware_threads import THREAD_PREFIXES
+from hems_ros.ros.middleware_threads import THREAD_PREFIXES
 from hems_ros.rosenv import child_environment
 
 

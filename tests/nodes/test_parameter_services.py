@@ -1,4 +1,4 @@
-"""`--no-parameter-services` (hems_ros.nodes.runner): a node started with it offers no
+"""`--no-parameter-services` (hems_ros.ros.runner): a node started with it offers no
 parameter services, one started without it offers the six that `ros2 param` calls; both
 keep their own services."""
 

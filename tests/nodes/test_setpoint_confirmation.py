@@ -20,7 +20,7 @@ class StandInController:
         from hems_msgs.msg import ControllerStatus, FingerSetpoint
         from rclpy.executors import SingleThreadedExecutor
 
-        from hems_ros.nodes import qos
+        from hems_ros.ros import qos
 
         self.received = 0
         self.mode, self.setpoint, self.rejected, self.last_rejection = "position", 0.0, 0, ""

@@ -13,9 +13,9 @@ def test_enable_judges_the_reports_received_since_the_last_check(context, matche
     from rclpy.parameter import Parameter
     from std_srvs.srv import Trigger
 
-    from hems_ros.nodes import qos
-    from hems_ros.nodes.clock_time import to_msg
     from hems_ros.nodes.supervisor import SupervisorNode
+    from hems_ros.ros import qos
+    from hems_ros.ros.clock_time import to_msg
 
     supervisor = SupervisorNode(
         context=context, parameter_overrides=[Parameter("fingers", value=["index"])]

@@ -26,9 +26,9 @@ def one_finger(context):
 
     from hems_ros.nodes.actuation_unit import ActuationUnitNode
     from hems_ros.nodes.finger_controller import FingerControllerNode
-    from hems_ros.nodes.lean_spin import spin_nodes
     from hems_ros.nodes.shoulder_module import ShoulderModuleNode
     from hems_ros.nodes.supervisor import SupervisorNode
+    from hems_ros.ros.lean_spin import spin_nodes
 
     nodes, threads = [], []
 

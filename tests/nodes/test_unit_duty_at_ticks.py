@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from hems_ros.nodes.wire import stamp
+from hems_ros.ros.wire import stamp
 
 
 def unit(context, use_sim_time: bool = False, require_supervisor: bool = False):
@@ -60,7 +60,7 @@ def test_a_duty_taken_at_the_tick_counts_from_its_reception_and_acts_from_its_sa
     from builtin_interfaces.msg import Time
     from hems_msgs.msg import DutyCommand
 
-    from hems_ros.nodes import qos
+    from hems_ros.ros import qos
 
     node = unit(context)
     helper = rclpy.create_node("duty_sender", context=context)
@@ -113,7 +113,7 @@ def test_duty_commands_that_came_before_a_supervisor_status_act_before_it(
     from hems_msgs.msg import DutyCommand, SupervisorStatus
     from rclpy.duration import Duration
 
-    from hems_ros.nodes import qos
+    from hems_ros.ros import qos
 
     node = unit(context, require_supervisor=True)
     helper = rclpy.create_node("duty_sender", context=context)
@@ -157,7 +157,7 @@ def test_a_command_and_an_estop_taken_at_one_tick_act_in_the_order_they_came(
     from builtin_interfaces.msg import Time
     from hems_msgs.msg import DutyCommand, SupervisorStatus
 
-    from hems_ros.nodes import qos
+    from hems_ros.ros import qos
 
     node = unit(context, require_supervisor=True)
     helper = rclpy.create_node("command_sender", context=context)

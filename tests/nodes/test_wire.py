@@ -17,7 +17,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 
 from hems_ros.codec.cdr import CdrError
 from hems_ros.codec.msgdefs import DefinitionError
-from hems_ros.nodes.wire import codec, seconds_of, stamp
+from hems_ros.ros.wire import codec, seconds_of, stamp
 
 HOT_TYPES = (EncoderReading, WireForce, DutyCommand, ControllerStatus, ActuatorState)
 

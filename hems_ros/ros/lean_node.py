@@ -18,8 +18,8 @@ from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallba
 from rclpy.node import Node
 
 from hems_ros.codec.cdr import CdrError
-from hems_ros.nodes import lean_spin
-from hems_ros.nodes.wire import codec
+from hems_ros.ros import lean_spin
+from hems_ros.ros.wire import codec
 
 
 class LeanNode(Node):
@@ -120,7 +120,7 @@ class LeanNode(Node):
         )
 
     def subscribe_serialized(self, msg_type, topic: str, callback, qos_profile, on_unreadable=None):
-        """Subscribe to ``topic`` taking serialized messages (hems_ros.nodes.wire): ``callback``
+        """Subscribe to ``topic`` taking serialized messages (hems_ros.ros.wire): ``callback``
         gets the message as the type's named tuple. A message that cannot be read (a raw
         publisher can send any bytes on a typed topic) is logged, at most once a second per
         topic so a bad stream neither floods the log nor hides another topic's, and dropped;

@@ -8,7 +8,7 @@ does not preempt on wake-up: it runs once the sender sleeps (the trace's senders
 about 0.2-0.7 ms on average) or at once on an idle core. The nodes' main threads keep the default
 policy, so a node woken for its data still preempts whatever runs. Five alternating 20 s runs of the
 separate graph: 1.15-1.25 against 1.22-1.32 cores, each run lower. Node processes started
-by :func:`hems_ros.nodes.runner.run_node` do this; the composed process does not (its nodes
+by :func:`hems_ros.ros.runner.run_node` do this; the composed process does not (its nodes
 share one participant and reach each other without a listener thread).
 """
 

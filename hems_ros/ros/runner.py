@@ -7,7 +7,7 @@ import os
 import sys
 from collections.abc import Callable
 
-from hems_ros.nodes.middleware_threads import defer_middleware_threads
+from hems_ros.ros.middleware_threads import defer_middleware_threads
 from hems_ros.rosenv import apply_network_defaults, skip_code_generators
 
 # Every rclpy node offers six parameter services (twelve DDS endpoints, more than half of a
@@ -58,7 +58,7 @@ def run_node(
         freeze_long_lived_objects()
         defer_middleware_threads()
         if spin is None:
-            from hems_ros.nodes import lean_spin
+            from hems_ros.ros import lean_spin
 
             spin = lean_spin.spin if lean_spin.can_spin(node) else rclpy.spin
         spin(node)

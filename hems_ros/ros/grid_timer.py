@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import time
 
-from hems_ros.nodes.clock_time import seconds
+from hems_ros.ros.clock_time import seconds
 
 PHASE_TOLERANCE_S = 0.0005
 ATTEMPTS = 100

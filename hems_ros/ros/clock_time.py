@@ -4,7 +4,7 @@ import time
 
 from builtin_interfaces.msg import Time
 
-from hems_ros.nodes.wire import seconds_of, stamp, stamp_ns
+from hems_ros.ros.wire import seconds_of, stamp, stamp_ns
 
 
 def now_ns(node) -> int:
