@@ -16,7 +16,7 @@ Anti-windup (acts through Ki, so only when Ki != 0)
     limit but never past it, and a proportional or derivative term that saturates the
     output on its own (e.g. the derivative kick of a step) neither inflates nor drains the
     integral. The recursions are velocity forms whose memory is the past output; the
-    weights of eq 5.5 on u(k-1) and u(k-2) sum to 1, so shifting both by the same amount
+    weights of eq. 5.5 on u(k-1) and u(k-2) sum to 1, so shifting both by the same amount
     moves only the integral level and keeps the P and filtered-D states. Clamping the
     memory itself (the textbook velocity-form scheme) was rejected: after a clipped
     derivative kick the decaying kick would pull the duty to 0 while the error is large.
@@ -55,7 +55,7 @@ DEFAULT_TS = 0.01
 DEFAULT_N_FILTER = 20.0
 """Derivative filter N in rad/s (not printed in the dissertation).
 
-The derivative term of eqs 5.5-5.10 is Kd N s / (s + N): N is the filter pole and
+The derivative term of eqs. 5.5-5.10 is Kd N s / (s + N): N is the filter pole and
 Kd N the derivative gain at high frequency. N = 20 rad/s gives a filter time constant of
 50 ms = 5 Ts at 100 Hz: 6x above the fastest reference (0.5 Hz = 3.1 rad/s) and the
 wire's thermal bandwidth (time constants about 1 s), so the derivative acts where the loop

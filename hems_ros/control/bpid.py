@@ -1,7 +1,7 @@
-"""Four-term bilinear PID (eqs 5.22-5.36).
+"""Four-term bilinear PID (eqs. 5.22-5.36).
 
 The plant model is first-order bilinear, dy/dt = -a0 y + b0 u + rho0 u y, whose static gain
-falls as y grows. Eq 5.36 compensates by multiplying the PID output of eq 5.5 by
+falls as y grows. Eq. 5.36 compensates by multiplying the PID output of eq. 5.5 by
 
     (1 + Kb r(k)) / (1 + Kb y(k-1)),   Kb = rho0d / b0d,
 
@@ -21,12 +21,12 @@ from hems_ros.control.pid import PIDController
 
 
 def bilinear_factor(kb: float, r: float, y_prev: float) -> float:
-    """(1 + Kb r(k)) / (1 + Kb y(k-1)) of eq 5.36, r and y clipped at 0."""
+    """(1 + Kb r(k)) / (1 + Kb y(k-1)) of eq. 5.36, r and y clipped at 0."""
     return (1.0 + kb * max(r, 0.0)) / (1.0 + kb * max(y_prev, 0.0))
 
 
 class BPIDController(PIDController):
-    """Eq 5.36 on the scaled error; Table 5.1: Kp 0.8, Ki 0, Kd 0.05, Kb 1."""
+    """Eq. 5.36 on the scaled error; Table 5.1: Kp 0.8, Ki 0, Kd 0.05, Kb 1."""
 
     strategy = "bpid"
     gains_type = BPIDGains

@@ -97,7 +97,7 @@ class _Gains:
 
 @dataclass(frozen=True, kw_only=True)
 class PIDGains(_Gains):
-    """PID with filtered derivative (eqs 5.5-5.10)."""
+    """PID with filtered derivative (eqs. 5.5-5.10)."""
 
     kp: float
     ki: float
@@ -106,7 +106,7 @@ class PIDGains(_Gains):
 
 @dataclass(frozen=True, kw_only=True)
 class BPIDGains(_Gains):
-    """Four-term bilinear PID (eq 5.36): PID gains plus the bilinear gain Kb = rho0d / b0d."""
+    """Four-term bilinear PID (eq. 5.36): PID gains plus the bilinear gain Kb = rho0d / b0d."""
 
     kp: float
     ki: float
@@ -116,7 +116,7 @@ class BPIDGains(_Gains):
 
 @dataclass(frozen=True, kw_only=True)
 class PIPDGains(_Gains):
-    """PI-PD with commuted feed-forward (eqs 5.11-5.21); ``u_ff`` is in % duty."""
+    """PI-PD with commuted feed-forward (eqs. 5.11-5.21); ``u_ff`` is in % duty."""
 
     kp_pi: float
     ki_pi: float

@@ -1,12 +1,12 @@
-"""PID with filtered derivative, discretised by backward Euler (eqs 5.5-5.10).
+"""PID with filtered derivative, discretised by backward Euler (eqs. 5.5-5.10).
 
     C(s) = Kp + Ki / s + Kd N s / (s + N),   s -> (1 - z^-1) / Ts
 
-gives the recursion of eq 5.5
+gives the recursion of eq. 5.5
 
     u(k) = -(a1/a0) u(k-1) - (a2/a0) u(k-2) + (b0/a0) e(k) + (b1/a0) e(k-1) + (b2/a0) e(k-2)
 
-with the coefficients of eq 5.8 (see :func:`pid_coefficients`). Its denominator is
+with the coefficients of eq. 5.8 (see :func:`pid_coefficients`). Its denominator is
 (1 - z^-1)(a0 - z^-1): a velocity form whose memory u(k-1) integrates, which is where the
 anti-windup of :mod:`hems_ros.control.base` acts.
 """
@@ -22,7 +22,7 @@ from hems_ros.control.gains import PIDGains
 def pid_coefficients(
     kp: float, ki: float, kd: float, n: float, ts: float
 ) -> tuple[float, float, float, float, float, float]:
-    """(a0, a1, a2, b0, b1, b2) of eq 5.8."""
+    """(a0, a1, a2, b0, b1, b2) of eq. 5.8."""
     nts = n * ts
     a0 = 1.0 + nts
     a1 = -(2.0 + nts)
@@ -34,7 +34,7 @@ def pid_coefficients(
 
 
 class PIDController(Controller):
-    """Eq 5.5 on the scaled error; Table 5.1: Kp 0.8, Ki 0, Kd 0.05."""
+    """Eq. 5.5 on the scaled error; Table 5.1: Kp 0.8, Ki 0, Kd 0.05."""
 
     strategy = "pid"
     gains_type: type[Any] = PIDGains
@@ -57,7 +57,7 @@ class PIDController(Controller):
         self._e2 = 0.0
 
     def _advance(self, e: float) -> float:
-        """Eq 5.5 for error ``e``; returns u(k) and shifts the history."""
+        """Eq. 5.5 for error ``e``; returns u(k) and shifts the history."""
         u = (
             self._c1 * self._u1
             + self._c2 * self._u2

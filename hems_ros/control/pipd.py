@@ -1,14 +1,14 @@
-"""PI-PD with commuted feed-forward (eqs 5.11-5.21).
+"""PI-PD with commuted feed-forward (eqs. 5.11-5.21).
 
 Two first-order recursions share the memory u_c(k-1):
 
-* PI while the reference changes, r(k) != r(k-1) (backward Euler, coefficients eq 5.15)::
+* PI while the reference changes, r(k) != r(k-1) (backward Euler, coefficients eq. 5.15)::
 
       u_c(k) = -(a1/a0) u_c(k-1) + (b0/a0) e(k) + (b1/a0) e(k-1),
       a0 = 1, a1 = -1, b0 = Kp + Ki Ts, b1 = -Kp
 
 * PD with filtered derivative while it is constant (Kp + Kd N s / (s + N), coefficients
-  eq 5.19), same recursion with::
+  eq. 5.19), same recursion with::
 
       a0 = 1 + N Ts, a1 = -1, b0 = Kp (1 + N Ts) + Kd N, b1 = -(Kp + Kd N)
 
@@ -30,12 +30,12 @@ from hems_ros.control.gains import PIPDGains
 
 
 def pi_coefficients(kp: float, ki: float, ts: float) -> tuple[float, float, float, float]:
-    """(a0, a1, b0, b1) of the PI part, eq 5.15."""
+    """(a0, a1, b0, b1) of the PI part, eq. 5.15."""
     return 1.0, -1.0, kp + ki * ts, -kp
 
 
 def pd_coefficients(kp: float, kd: float, n: float, ts: float) -> tuple[float, float, float, float]:
-    """(a0, a1, b0, b1) of the PD part with filtered derivative, eq 5.19."""
+    """(a0, a1, b0, b1) of the PD part with filtered derivative, eq. 5.19."""
     nts = n * ts
     return 1.0 + nts, -1.0, kp * (1.0 + nts) + kd * n, -(kp + kd * n)
 

@@ -10,7 +10,7 @@ returns data, and :mod:`hems_ros.reports.findings` states the claims and renders
   target, then zero duty; how fast the wire arrives and how far it travels with the heater
   off. Travel with the heater off is overshoot no controller of an only-pulling actuator
   can take back.
-* :func:`bilinear_activity`: how often the eq 5.36 factor changes BPID's output, i.e. the
+* :func:`bilinear_activity`: how often the eq. 5.36 factor changes BPID's output, i.e. the
   samples with an unsaturated duty and a factor away from 1.
 * :func:`rate_check`: the chapter 5 step and staircase with BPID on
   ``ch5_straight_40n_table32``, the wire refitted to Table 3.2's displacement per pulse
@@ -104,7 +104,7 @@ def coast_after_cutoff(params: UnitParams, target_m: float, dt: float = 1e-3) ->
 
 
 def bilinear_activity(run: LockstepRun, kb: float | None = None, tol: float = 0.01) -> float:
-    """Fraction of samples where BPID's duty is unsaturated and its eq 5.36 factor is off
+    """Fraction of samples where BPID's duty is unsaturated and its eq. 5.36 factor is off
     1 by > ``tol``."""
     gains = TABLE_5_1["bpid"]
     kb = gains.kb if kb is None else kb
@@ -157,7 +157,7 @@ def wire_mass_mode(params: UnitParams) -> dict[str, float]:
     """Undamped frequency (Hz) and damping ratio of the hanging mass on the martensitic wire.
 
     Wire stiffness S E_M / L (the stiffest the wire gets while it holds martensite), the
-    load's mass and damper b of eq 4.33.
+    load's mass and damper b of eq. 4.33.
     """
     k = params.wire.cross_section_m2 * params.constitutive.e_martensite_pa / params.wire.length_m
     m, b = params.load.mass_kg, params.load.damping_n_s_per_m
@@ -180,7 +180,8 @@ def cold_start_floor(
     controller and no plant with that band and heat capacity does better: the wire starts
     at ambient, takes the drive's ceiling V I (dissertation chapter 6: 20 V, 4 A, at most 80 W)
     from the first sample the reference leaves its base, loses no heat and takes no latent
-    heat (eq. 4.7 without Q_out and the dH term: T = T_amb + P t / (rho V c_p)), turns to
+    heat (the heat balance of eqs. 4.7-4.12 without Q_out and the dH term:
+    T = T_amb + P t / (rho V c_p)), turns to
     austenite along the major heating branch with the stress-free As0, Af0 (eq. 4.21; stress
     only raises them, eq. 4.25) and gives the full recoverable stroke eps_L L for it.
     Returns the floor, its ratio to Table 6.1 and how long the bound's wire takes to catch up

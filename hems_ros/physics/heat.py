@@ -21,13 +21,13 @@ APPENDIX_AIR_CONDUCTIVITY = 0.0257
 
 @jit
 def convection_coefficient(temperature_c, h0, h2):
-    """h(T) = h0 + h2 T^2, T in degC (eq. 4.10); h(22) = 42.51 W/m2K with Table 4.1."""
+    """h(T) = h0 + h2 T^2, T in degC (eqs. 4.7-4.12); h(22) = 42.51 W/m2K with Table 4.1."""
     return h0 + h2 * temperature_c * temperature_c
 
 
 @jit
 def convection_loss(temperature_c, ambient_c, h0, h2, area_m2):
-    """Q = h(T) A (T - T_amb) (eq. 4.9)."""
+    """Q = h(T) A (T - T_amb) (eqs. 4.7-4.12)."""
     return convection_coefficient(temperature_c, h0, h2) * area_m2 * (temperature_c - ambient_c)
 
 
@@ -76,7 +76,8 @@ def lossless_temperature_c(
 ) -> float:
     """Wire temperature after ``energy_j`` of heating with no heat loss at all, degC.
 
-    Eq. 4.7 integrated with Q_out = 0 from a cold, fully martensitic wire at ambient:
+    The heat balance of eqs. 4.7-4.12 integrated with Q_out = 0 from a cold, fully martensitic
+    wire at ambient:
     C (T - T_amb) = E - f L, where ``transformed_fraction`` f of the wire has turned to
     austenite and taken f L of latent heat (``latent_heat_j`` = rho V dH for the whole wire,
     ``heat_capacity_j_per_k`` = rho V c_p). Every real loss lowers T, so a transformation

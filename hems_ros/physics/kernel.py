@@ -8,8 +8,8 @@ Order inside one step (dissertation chapter 4): electrical (R, drive) and heat f
 of the step -> elastic trial (no transformation: heat balance, constitutive increment at
 fixed strain, implicit wire + load solve) whose effective-temperature change picks heating,
 cooling or neither (kinetics.py) -> the martensite increment dxi solved together with its
-consequences: dT = ((P - Q) dt + L dxi) / C (eq. 4.10, latent heat), the constitutive
-increment (4.26) and the load solve (loads.py) give u_A, u_M at the end of the step, and dxi
+consequences: dT = ((P - Q) dt + L dxi) / C (eqs. 4.7-4.12, latent heat), the constitutive
+increment (eq. 4.26) and the load solve (loads.py) give u_A, u_M at the end of the step, and dxi
 must put xi on the kinetics' branch at that u -> sheath node -> energy accumulators.
 The coupled update is a scalar root, taken as one Newton step from the elastic trial (a
 linearly implicit Euler step, see :func:`step`).
@@ -191,7 +191,7 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
         q_ha = 0.0
     net = power - q_air - q_sh
 
-    # eq. 4.10: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT.
+    # eqs. 4.7-4.12: C dT = (P - Q) dt + L dxi; eq. 4.26 at fixed strain: Omega dxi + Theta dT.
     # A temperature drive imposes dT (its row has P_TPX = 0: pack).
     inv_cw = p[pk + P_INV_CW * n]
     if drive_kind == electrical.DRIVE_TEMPERATURE:

@@ -112,7 +112,7 @@ def slider_velocity(w0, c_in, g_in, c_out, g_out):
 
 @jit
 def load_force(v_new, v_old, x_new, dt, mass_n, damping_n, stiffness_n, static_force, cubic_n=0.0):
-    """Force the load receives (load coordinates), from its own equation of motion (4.33),
+    """Force the load receives (load coordinates), from its own equation of motion (eq. 4.33),
     with the load as :func:`referred_load` gives it and the static force m g + F_0.
 
     The cubic term is the exact law at the end of the step: the step solved it linearised

@@ -128,7 +128,7 @@ class Electrical(_Group):
 
 @dataclass(frozen=True)
 class Thermal(_Group):
-    """Wire heat balance (eqs. 4.10-4.12): density, c_p, latent heat, h(T) = h0 + h2 T^2."""
+    """Wire heat balance (eqs. 4.7-4.12): density, c_p, latent heat, h(T) = h0 + h2 T^2."""
 
     _GROUP = "thermal"
     density_kg_m3: float = 6450.0
@@ -470,12 +470,12 @@ class UnitParams:
 
     @property
     def wire_heat_capacity_j_per_k(self) -> float:
-        """rho V c_p of the whole wire (eq. 4.7; Table 4.1: 0.985 J/K)."""
+        """rho V c_p of the whole wire (eqs. 4.7-4.12; Table 4.1: 0.985 J/K)."""
         return self.thermal.density_kg_m3 * self.wire.volume_m3 * self.thermal.specific_heat_j_kg_c
 
     @property
     def wire_latent_heat_j(self) -> float:
-        """rho V dH, the latent heat of the whole wire's transformation (eq. 4.7;
+        """rho V dH, the latent heat of the whole wire's transformation (eqs. 4.7-4.12;
         Table 4.1: 28.45 J)."""
         return self.thermal.density_kg_m3 * self.wire.volume_m3 * self.thermal.latent_heat_j_kg
 

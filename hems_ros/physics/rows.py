@@ -197,7 +197,9 @@ def pack(params: UnitParams, temperature_drive: bool = False) -> np.ndarray:
     p[P_INV_CW], p[P_INV_L0], p[P_INV_S] = 1.0 / p[P_CW], 1.0 / w.length_m, 1.0 / w.cross_section_m2
     if temperature_drive:
         p[P_LAT] = 0.0
-    p[P_TPX] = p[P_LAT] * p[P_INV_CW]  # temperature rise per unit of martensite formed (eq. 4.10)
+    p[P_TPX] = (
+        p[P_LAT] * p[P_INV_CW]
+    )  # temperature rise per unit of martensite formed (eqs. 4.7-4.12)
     p[P_INV_CM], p[P_INV_CA] = 1.0 / ki.cm_pa_per_c, 1.0 / ki.ca_pa_per_c
     cap = params.capstan
     capstan = (

@@ -230,7 +230,7 @@ def ch5_findings(ch5: dict, params: UnitParams) -> list[Finding]:
     rmse_ok = all(_leads(ch5, p, "rmse", "bpid", highest=False) for p in STEP_PROTOCOLS)
     spread = perturbation_spread(ch5, params)
     why_bpid = (
-        "Not a plant difference alone: the eq 5.36 factor (1 + Kb r)/(1 + Kb y(k-1)) with Kb "
+        "Not a plant difference alone: the eq. 5.36 factor (1 + Kb r)/(1 + Kb y(k-1)) with Kb "
         "= 1/um is about r/y, so it is far from 1 only while y is far below r, where the error "
         "exceeds the 125 um that already saturates the duty at Kp = 0.8 %/um; in the unsaturated "
         "band it is 1 within 1 %. The factor changed BPID's output on "

@@ -47,7 +47,7 @@ class WireRig:
     heat_capacity_j_kg_k: float = 837.4
     latent_heat_j_kg: float = 24183.52
     emissivity: float = 0.1  # bright NiTi: radiation a few per cent of the loss
-    # (h0 W/m2K, h2 W/m2K3) of eq. 4.10's h(T) = h0 + h2 T^2 for the bare wire's loss;
+    # (h0 W/m2K, h2 W/m2K3) of the h(T) = h0 + h2 T^2 of eqs. 4.7-4.12 for the bare wire's loss;
     # None: free convection and radiation to still air (``air``)
     convection_h0_h2: tuple[float, float] | None = None
     ambient_c: float = 20.0

@@ -1,4 +1,4 @@
-"""Four-term bilinear PID, eq 5.36, against hand-computed sequences."""
+"""Four-term bilinear PID, eq. 5.36, against hand-computed sequences."""
 
 import pytest
 
@@ -28,7 +28,7 @@ def test_proportional_times_factor_uses_previous_measurement():
 
 def test_sequence_with_filtered_derivative():
     c = make_controller("bpid", "position", BPIDGains(kp=0.8, ki=0, kd=0.05, kb=0.1))
-    # PID part as eq 5.5 with a0 1.2, a1 -2.2, a2 1, b0 1.96, b1 -3.76, b2 1.8 (N 20, Ts 0.01)
+    # PID part as eq. 5.5 with a0 1.2, a1 -2.2, a2 1, b0 1.96, b1 -3.76, b2 1.8 (N 20, Ts 0.01)
     # r = 10 um, y = 0, 5, 8 um -> e = 10, 5, 2
     p0 = 1.96 * 10 / 1.2
     p1 = (2.2 * p0 + 1.96 * 5 - 3.76 * 10) / 1.2

@@ -1,4 +1,4 @@
-"""PID with filtered derivative, eqs 5.5-5.10, against hand-computed sequences."""
+"""PID with filtered derivative, eqs. 5.5-5.10, against hand-computed sequences."""
 
 import pytest
 

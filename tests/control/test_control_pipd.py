@@ -1,4 +1,4 @@
-"""PI-PD with commuted feed-forward, eqs 5.11-5.21, against hand-computed sequences."""
+"""PI-PD with commuted feed-forward, eqs. 5.11-5.21, against hand-computed sequences."""
 
 import pytest
 

@@ -59,7 +59,7 @@ def spread(ch5_runs):
 @pytest.mark.parametrize("protocol", STEPS)
 def test_bpid_runs_the_pid_loop(ch5_runs, ch5_found, spread, protocol):
     # Not reproduced: BPID clearly highest MACSI / lowest RMSE. With Table 5.1 gains in um
-    # the eq 5.36 factor almost never acts, so BPID and PID differ by no more than two runs
+    # the eq. 5.36 factor almost never acts, so BPID and PID differ by no more than two runs
     # of one controller can (each moves by up to the perturbation spread)
     assert not ch5_found["bpid_lowest_rmse"].reproduced
     assert not ch5_found["bpid_highest_macsi"].reproduced

@@ -26,7 +26,7 @@ def run():
 def test_the_family_is_the_dissertations_law_with_its_convection():
     assert isinstance(MAT, DuhemMaterial)
     assert RIG.convection_h0_h2 == (37.67, 0.01)
-    # eq. 4.10 at 22 degC: 42.51 W/m2K
+    # h(T) of eqs. 4.7-4.12 at 22 degC: 42.51 W/m2K
     assert RIG.bare_loss_w(22.0) / (math.pi * RIG.diameter_m * RIG.length_m) / (
         22.0 - RIG.ambient_c
     ) == pytest.approx(42.51, abs=0.01)
