@@ -156,7 +156,8 @@ def _verdicts(family: str, effect: cases.Effect, size: float, noise: str, rows) 
 
 
 def _reading(records: list[dict]) -> list[str]:
-    """What the null truths' verdicts say about the outside-library rows of their tier."""
+    """What the null truths' verdicts say about the outside-library rows of their tier, and
+    which outside-library truths were judged to hold nothing at all."""
     lines = []
     for family in cases.FAMILIES:
         null = [x for x in records if x["family"] == family and x["kind"] == "null"]
@@ -166,7 +167,7 @@ def _reading(records: list[dict]) -> list[str]:
         short = verdicts["partial"] + verdicts["unexplained"]
         mix = ", ".join(f"{v} ({c})" for v, c in verdicts.most_common())
         lines.append(
-            f"With nothing hidden in the {TIERS[family]} tier the verdicts were {mix}"
+            f"With nothing hidden ({TIERS[family]}) the verdicts were {mix}"
             + (
                 f": in {short} of {len(null)} the corrected model still left more than the "
                 "noise, so an outside-library truth of this tier that ends partial or "
@@ -175,6 +176,17 @@ def _reading(records: list[dict]) -> list[str]:
                 else "."
             )
         )
+        missed: dict[tuple, list[str]] = {}
+        for x in records:
+            if x["family"] == family and x["kind"] == "outside" and not x["right"]:
+                missed.setdefault((x["effect"], x["size"], x["noise"]), []).append(x["verdict"])
+        for (name, size, noise), verdicts_there in missed.items():
+            said = ", ".join(f"{v} ({c})" for v, c in Counter(verdicts_there).most_common())
+            lines.append(
+                f"Outside the library, {name} of {size:g} {cases.BY_NAME[name].unit} at {noise} "
+                f"noise ({TIERS[family]}) was judged {said}: the data showed nothing beyond "
+                "their noise."
+            )
     return [" ".join(lines), ""] if lines else []
 
 

@@ -92,3 +92,23 @@ def test_the_committed_page_shows_what_a_row_diagnosed_here_gives():
     )
     assert f"{record['verdict']} (" in line
     assert all(f"{name} (" in line for name in record["named"])
+
+
+@pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis-blind.md not generated")
+def test_the_committed_page_holds_the_independent_tier_and_the_null_floors():
+    """The floors the evaluation half meets. Below their floors and not asserted here: the
+    other model family's effects (friction and the spring are not named there) and the
+    independent form's outside-library row (the smallest drift under the highest noise is
+    judged to hold nothing)."""
+    shares = {
+        m.group(1): (int(m.group(2)), int(m.group(3)))
+        for m in re.finditer(r"^\| ([^|]+) \| \d+% \((\d+) of (\d+)\) \|", PAGE.read_text(), re.M)
+    }
+    held = (
+        ("independent form: an effect, ranked first, low and mid noise", 0.8),
+        ("independent form: nothing hidden: no effect named", 0.9),
+        ("another model family: nothing hidden: no effect named", 0.9),
+    )
+    for label, floor in held:
+        right, runs = shares[label]
+        assert runs >= 6 and right >= floor * runs, (label, right, runs)
