@@ -27,6 +27,12 @@ class FaultySensor:
     def __init__(self) -> None:
         self._held: tuple | None = None  # the reading a stuck sensor repeats
 
+    @property
+    def faulty(self) -> bool:
+        """Whether a stuck reading is still held: the readings must pass through the sensor
+        once more, with the fault cleared, before they may bypass it."""
+        return self._held is not None
+
     def _stuck(self, stuck: bool, reading: tuple) -> tuple:
         if not stuck:
             self._held = None

@@ -109,11 +109,15 @@ class ShoulderModuleNode(LeanNode):
     def on_tension(self, finger: str, tension) -> None:
         p = self.params
         fault = self.fault(finger)
-        noise = self.rngs[finger].standard_normal() * p["noise_std_n"] * noise_scale(fault)
+        noise = self.rngs[finger].standard_normal() * p["noise_std_n"]
+        if fault:
+            noise *= noise_scale(fault)
         force, saturated = sensors.force_reading(
             tension.force, noise, p["range_max_n"], p["resolution_n"]
         )
-        force, saturated = self.sensors[finger].force(fault, force, saturated, p["range_max_n"])
+        sensor = self.sensors[finger]
+        if fault or sensor.faulty:  # a healthy sensor's reading passes at no cost
+            force, saturated = sensor.force(fault, force, saturated, p["range_max_n"])
         self.sequences[finger] += 1
         self.publishers_[finger].publish(
             WIRE_FORCE.encode(
