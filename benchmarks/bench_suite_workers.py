@@ -27,8 +27,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import smoke  # noqa: E402
 from host import host_line  # noqa: E402
 
-from hems_ros.diagnosis import cluster  # noqa: E402
-from hems_ros.reports import diagnosis_suite  # noqa: E402
+from hems_ros.diagnosis import (
+    cluster,  # noqa: E402
+    suite_runs,  # noqa: E402
+)
 
 GOAL = 1.7
 SMOKE_CASES = ("nothing",)
@@ -53,10 +55,10 @@ def main() -> int:
         help="the first N cases of the full suite instead of the quick subset",
     )
     args = smoke.parse_args(parser, repeat=1)
-    rows = diagnosis_suite.grid(0, quick=args.cases is None)[: args.cases]
+    rows = suite_runs.grid(0, quick=args.cases is None)[: args.cases]
     if args.smoke:
         rows = [r for r in rows if r[0].name in SMOKE_CASES]
-    tasks = diagnosis_suite.suite_tasks(rows)
+    tasks = suite_runs.suite_tasks(rows)
     print(host_line())
     subset = "the quick subset" if args.cases is None else "the full suite's first"
     print(f"{len(tasks)} suite cases ({subset}{', smoke' if args.smoke else ''})")

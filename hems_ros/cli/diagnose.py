@@ -318,10 +318,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_suite(args: argparse.Namespace) -> int:
+    from hems_ros.diagnosis import suite_runs
     from hems_ros.reports import diagnosis_suite as suite_report
 
     say = _say(False)
-    result = suite_report.run(
+    runs = suite_runs.run(
         args.out,
         seed=args.seed,
         quick=args.quick,
@@ -330,6 +331,7 @@ def run_suite(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         workers=args.workers,
     )
+    result = suite_report.write(runs, args.out, seed=args.seed, quick=args.quick)
     if args.docs is not None:
         _publish(args.docs, result.page, args.out / "confusion.png", "diagnosis_confusion.png")
         say(f"wrote {args.docs}")

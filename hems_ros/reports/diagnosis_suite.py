@@ -1,5 +1,5 @@
-"""``hems diagnose-suite``: run the hidden-effect suite and the dissertation's studies, and
-render suite.md / suite.json / the confusion matrix and the page docs/diagnosis.md.
+"""The hidden-effect suite's pages: suite.md / suite.json / the confusion matrix of a run and
+docs/diagnosis.md, rendered from what :mod:`hems_ros.diagnosis.suite_runs` found.
 """
 
 from __future__ import annotations
@@ -8,7 +8,6 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import matplotlib
 
@@ -17,43 +16,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from hems_ros.diagnosis import candidates as library  # noqa: E402
-from hems_ros.diagnosis import (
-    cluster,  # noqa: E402
-    public_data,  # noqa: E402
-    suite,  # noqa: E402
-)
 from hems_ros.diagnosis import dissertation as studies_module  # noqa: E402
 from hems_ros.diagnosis import joint as joint_module  # noqa: E402
-from hems_ros.diagnosis.bagload import load_bag_runs  # noqa: E402
-from hems_ros.diagnosis.workflow import Diagnosis, diagnose  # noqa: E402
+from hems_ros.diagnosis import public_data, suite, suite_runs  # noqa: E402
+from hems_ros.diagnosis.suite_runs import FLOORS, GRAPH_BAG, GRAPH_MODEL  # noqa: E402
+from hems_ros.diagnosis.workflow import Diagnosis  # noqa: E402
 from hems_ros.physics.params import load_params  # noqa: E402
 
 DPI = 80
-#: Seeds per case: single effects twice, the null five times (its rate is the one measured).
-SEEDS = {"single": 2, "null": 5}
-QUICK = (
-    ("load_damping", "pulses", "mid"),
-    ("supply_sag", "staircase", "high"),
-    ("as_shifted", "pulses", "low"),
-    ("nothing", "pulses", "high"),
-    ("encoder_ripple", "staircase", "mid"),
-    ("friction_and_sag", "pulses", "low"),
-)
-#: What the suite must show (the floors of the workflow's acceptance).
-FLOORS = {
-    "single_low": 0.9,
-    "single_high": 0.8,
-    "null": 0.9,
-    "gap_cut": 0.5,
-    "recovery_low": 0.15,
-    "coverage": 0.85,
-}
-
-
-#: The committed bag recorded from the graph with a hidden effect (bags/README.md), in a checkout.
-GRAPH_BAG = Path(__file__).resolve().parents[2] / "bags" / "diagnose_index_damping"
-GRAPH_MODEL = "ch6_hems_index"
-PUBLIC_DATA = Path(__file__).resolve().parents[2] / "tests" / "data" / "public"
 
 
 @dataclass
@@ -64,84 +34,13 @@ class SuiteResult:
     headline: str
 
 
-def grid(seed: int, quick: bool) -> list[tuple[suite.Case, str, str, int]]:
-    """Every (case, profile, noise level, seed) the suite runs."""
-    by_name = {c.name: c for c in suite.CASES}
-    if quick:
-        return [(by_name[c], p, n, seed) for c, p, n in QUICK]
-    return [
-        (case, prof, noise, seed + k)
-        for case in suite.CASES
-        for prof in suite.PROFILES
-        for noise in suite.NOISE
-        for k in range(SEEDS.get(case.category, 1))
-    ]
-
-
-def case_key(case: suite.Case, prof: str, noise: str, seed: int) -> str:
-    """The name of a suite run's task and of its result file."""
-    return f"{case.name}-{prof}-{noise}-seed{seed}"
-
-
-def suite_tasks(rows: list[tuple[suite.Case, str, str, int]]) -> list[cluster.Task]:
-    """One task per (case, profile, noise level, seed) of :func:`grid`."""
-    base = load_params(suite.BASE)
-    duties = {p: suite.profile(p, base) for p in suite.PROFILES}
-    return [
-        cluster.Task(
-            case_key(case, prof, noise, s),
-            suite.run_case,
-            (case, prof, noise, s, base, duties[prof]),
-            cost=1 + len(case.expected),
-        )
-        for case, prof, noise, s in rows
-    ]
-
-
-def run(
-    out: Path,
-    seed: int = 0,
-    quick: bool = False,
-    dissertation: bool = True,
-    progress: Callable[[str], None] | None = None,
-    scheduler: str = cluster.LOCAL,
-    workers: int | None = None,
-) -> SuiteResult:
-    """Run the suite (and the dissertation's studies), write the results into ``out``.
-
-    Each case is a task on ``scheduler`` (:mod:`hems_ros.diagnosis.cluster`) whose outcome
-    lands in ``out/cases``: a run stopped half-way continues from there."""
-    say = progress or (lambda message: None)
-    tasks = suite_tasks(grid(seed, quick))
-    report = cluster.run_tasks(
-        tasks,
-        Path(out) / "cases",
-        scheduler=scheduler,
-        workers=workers,
-        say=say,
-        describe=_verdict_line,
-    )
-    outcomes = report.results()
-    studies = []
-    graph = None
-    joint = None
-    public = []
-    if dissertation:
-        for study in studies_module.STUDIES:
-            say(f"study {study.key}: {study.command}")
-            studies.append((study, studies_module.run(study, progress=lambda m: say("  " + m))))
-        say("the three tables together, each on its rig")
-        joint = joint_module.joint(progress=lambda m: say("  " + m))
-        if GRAPH_BAG.is_dir():
-            say(f"graph run: {GRAPH_BAG}")
-            graph = diagnose(load_bag_runs(GRAPH_BAG), [], load_params(GRAPH_MODEL))
-        if PUBLIC_DATA.is_dir():
-            for item in public_data.STUDIES:
-                say(f"public data {item.key}: {item.command(str(PUBLIC_DATA))}")
-                public.append((item, public_data.run(item, PUBLIC_DATA)))
+def write(runs: suite_runs.SuiteRuns, out: Path, seed: int = 0, quick: bool = False) -> SuiteResult:
+    """suite.json, suite.md and the confusion figure in ``out``; the page's text (its figure
+    under docs/figures) and the headline."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    stats = statistics(outcomes)
+    outcomes = runs.outcomes
+    stats = suite_runs.statistics(outcomes)
     _confusion_figure(outcomes, out / "confusion.png")
     (out / "suite.json").write_text(
         json.dumps(
@@ -149,100 +48,16 @@ def run(
                 "seed": seed,
                 "quick": quick,
                 "statistics": stats,
-                "runs": [record(o) for o in outcomes],
+                "runs": [suite_runs.record(o) for o in outcomes],
             },
             indent=1,
         )
         + "\n"
     )
-    page = render(
-        outcomes,
-        stats,
-        studies,
-        graph,
-        seed,
-        quick,
-        figure="figures/diagnosis_confusion.png",
-        public=public,
-        joint=joint,
-    )
-    (out / "suite.md").write_text(
-        render(outcomes, stats, studies, graph, seed, quick, "confusion.png", public, joint)
-    )
-    return SuiteResult(outcomes, studies, page, headline(stats, len(outcomes)))
-
-
-def _verdict_line(o: suite.Outcome) -> str:
-    right = "right" if o.right else "WRONG"
-    return f"{o.verdict} {','.join(o.named) or '-'} ({right})"
-
-
-def record(o: suite.Outcome) -> dict:
-    return {
-        "case": o.case.name,
-        "category": o.case.category,
-        "profile": o.profile,
-        "noise": o.noise,
-        "seed": o.seed,
-        "verdict": o.verdict,
-        "named": list(o.named),
-        "first": o.first,
-        "ranking": list(o.ranking),
-        "right": o.right,
-        "errors": o.errors,
-        "covered": o.covered,
-        "gap_before": o.gap_before,
-        "gap_after": o.gap_after,
-        "beyond_noise_before": o.beyond_before,
-        "beyond_noise_after": o.beyond_after,
-        "unexplained": list(o.unexplained),
-    }
-
-
-def _rate(items: list[bool]) -> float:
-    return float(np.mean(items)) if items else math.nan
-
-
-def statistics(outcomes: list[suite.Outcome]) -> dict:
-    """The suite's figures against its floors."""
-    single = [o for o in outcomes if o.case.category == "single"]
-    named = [
-        o for o in outcomes if o.verdict in ("named", "ambiguous", "partial") and o.case.expected
-    ]
-    cuts = [1.0 - o.gap_after / o.gap_before for o in named if o.gap_before > 0]
-    beyond = [1.0 - o.beyond_after / o.beyond_before for o in named if o.beyond_before > 0]
-    short = sorted(
-        {
-            f"{o.case.name} ({o.profile}, {o.noise})"
-            for o in named
-            if o.gap_before > 0 and o.gap_after > 0.5 * o.gap_before
-        }
-    )
-    low_errors = [e for o in outcomes if o.noise == "low" and o.right for e in o.errors.values()]
-    # calibration of the intervals: every recovered value of a right answer
-    covered = [c for o in outcomes if o.right for c in o.covered.values()]
-    by = {}
-    for level in suite.NOISE:
-        group = [o for o in single if o.noise == level]
-        by[level] = {
-            "ranked_first": _rate([o.ranked_first for o in group]),
-            "right": _rate([o.right for o in group]),
-            "runs": len(group),
-        }
-    cat = {}
-    for category in ("structural", "pair", "parameter", "outside", "null"):
-        group = [o for o in outcomes if o.case.category == category]
-        cat[category] = {"right": _rate([o.right for o in group]), "runs": len(group)}
-    return {
-        "single": by,
-        "categories": cat,
-        "gap_cut_min": float(min(cuts)) if cuts else math.nan,
-        "beyond_noise_cut_min": float(min(beyond)) if beyond else math.nan,
-        "gap_cut_short": short,
-        "recovery_error_max_low": float(max(low_errors)) if low_errors else math.nan,
-        "coverage": _rate(covered),
-        "coverage_values": len(covered),
-    }
+    args = (outcomes, stats, runs.studies, runs.graph, seed, quick)
+    page = render(*args, "figures/diagnosis_confusion.png", runs.public, runs.joint)
+    (out / "suite.md").write_text(render(*args, "confusion.png", runs.public, runs.joint))
+    return SuiteResult(outcomes, runs.studies, page, headline(stats, len(outcomes)))
 
 
 def headline(stats: dict, n: int) -> str:

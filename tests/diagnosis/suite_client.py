@@ -7,15 +7,14 @@ import json
 import sys
 from pathlib import Path
 
-from hems_ros.diagnosis import cluster
-from hems_ros.reports import diagnosis_suite
+from hems_ros.diagnosis import cluster, suite_runs
 
 CASES = (("load_damping", "pulses", "mid"),)
 
 
 def tasks() -> list[cluster.Task]:
-    rows = diagnosis_suite.grid(0, quick=True)
-    return diagnosis_suite.suite_tasks([r for r in rows if (r[0].name, *r[1:3]) in CASES])
+    rows = suite_runs.grid(0, quick=True)
+    return suite_runs.suite_tasks([r for r in rows if (r[0].name, *r[1:3]) in CASES])
 
 
 def run(scheduler: str, folder: Path, workers: int | None = None) -> cluster.Report:
@@ -23,7 +22,7 @@ def run(scheduler: str, folder: Path, workers: int | None = None) -> cluster.Rep
 
 
 def records(report: cluster.Report) -> list[dict]:
-    return [diagnosis_suite.record(o) for o in report.results()]
+    return [suite_runs.record(o) for o in report.results()]
 
 
 if __name__ == "__main__":

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from hems_ros.diagnosis import candidates, csvload, dissertation, inputs, suite
+from hems_ros.diagnosis import candidates, csvload, dissertation, inputs, suite, suite_runs
 from hems_ros.paths import config_path
 from hems_ros.reports import diagnosis_suite as suite_report
 
@@ -19,12 +19,13 @@ PAGE = REPO / "docs" / "diagnosis.md"
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("suite")
-    return out, suite_report.run(out, quick=True, dissertation=False)
+    runs = suite_runs.run(out, quick=True, dissertation=False)
+    return out, suite_report.write(runs, out, quick=True)
 
 
 def test_the_quick_subset_gets_every_verdict_right(quick) -> None:
     _, result = quick
-    assert len(result.outcomes) == len(suite_report.QUICK)
+    assert len(result.outcomes) == len(suite_runs.QUICK)
     wrong = [
         (o.case.name, o.profile, o.noise, o.verdict, o.named)
         for o in result.outcomes
