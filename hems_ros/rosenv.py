@@ -43,7 +43,7 @@ def skip_code_generators() -> None:
     some 3 MB and 40 modules a process) and goes on without it when that import fails, as
     a missing module in ``sys.modules`` makes it. The graph generates no code at run time.
     """
-    sys.modules.setdefault("rosidl_generator_py.generate_py_impl", None)  # type: ignore[assignment]
+    sys.modules.setdefault("rosidl_generator_py.generate_py_impl", None)  # type: ignore[arg-type]
 
 
 def apply_network_defaults(env: dict[str, str] | os._Environ | None = None):

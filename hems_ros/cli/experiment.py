@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
     if args.docs is not None:
         (args.docs / "figures").mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    results = {}
+    results: dict[str, tuple] = {}
     if args.chapter in ("ch5", "all"):
         print(
             "chapter 5: 5 references x 3 controllers, 40 N mass (plant 1 kHz, control 100 Hz)",
@@ -82,12 +82,12 @@ def run(args: argparse.Namespace) -> int:
         results["ch5"] = (runs, f5)
     if args.chapter in ("ch6", "all"):
         print("chapter 6: BPID, index unit, 4 position + 4 force references", flush=True)
-        runs = chapters.run_ch6(progress=lambda m: print(m, flush=True))
+        runs6 = chapters.run_ch6(progress=lambda m: print(m, flush=True))
         print("checking the chapter 6 claims (a miss runs its evidence) ...", flush=True)
-        results["ch6"] = (runs, findings.ch6_findings(runs))
-    for chapter, (runs, found) in results.items():
+        results["ch6"] = (runs6, findings.ch6_findings(runs6))
+    for chapter, (chapter_runs, found) in results.items():
         folder = _folder(args, chapter)
-        figs = report.write_chapter(chapter, runs, found, folder)
+        figs = report.write_chapter(chapter, chapter_runs, found, folder)
         print(f"wrote {folder / (chapter + '.md')} and {len(figs)} figures")
         for f in found:
             print(f"  {'ok  ' if f.reproduced else 'MISS'} {f.claim}: {f.ours}")
@@ -97,13 +97,8 @@ def run(args: argparse.Namespace) -> int:
                 "'Not reproduced, and why'"
             )
     if args.docs is not None:
-        path = report.write_docs(
-            *results["ch5"][:1],
-            *results["ch6"][:1],
-            results["ch5"][1],
-            results["ch6"][1],
-            args.docs,
-        )
+        (ch5, f5), (ch6, f6) = results["ch5"], results["ch6"]
+        path = report.write_docs(ch5, ch6, f5, f6, args.docs)
         print(f"wrote {path}")
     print(f"done in {time.perf_counter() - start:.1f} s")
     return 0

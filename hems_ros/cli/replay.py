@@ -10,6 +10,7 @@ from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -161,7 +162,7 @@ def replay(
     rclpy.init(args=[])
     node = Node("replay", namespace="/hems", enable_rosout=False)
     try:
-        publishers = {}
+        publishers: dict[str, Any] = {}
         for message in messages:
             if message.topic not in publishers:
                 publishers[message.topic] = node.create_publisher(

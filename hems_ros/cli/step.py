@@ -134,7 +134,8 @@ def run(args: argparse.Namespace) -> int:
                         return 1
                     in_force.append(result.in_force_s)
                 # each phase lasts its length from the sample its setpoint acted from
-                since = max(in_force) if None not in in_force else None
+                known = [t for t in in_force if t is not None]
+                since = max(known) if len(known) == len(in_force) else None
                 client.spin_graph_time(seconds, since_s=since)
             state = client.snapshot(options.fingers, 0.3).supervisor
             client.call("disable")

@@ -18,6 +18,7 @@ from __future__ import annotations
 import inspect
 import time
 from contextlib import ExitStack
+from typing import Any
 
 from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
@@ -72,7 +73,7 @@ def spin_nodes(nodes) -> None:
             )
     timers = [t for node in nodes for t in node.timers]
     services = [s for node in nodes for s in node.services]
-    current: dict[str, tuple] = {}
+    current: dict[str, Any] = {}
 
     def entities() -> tuple:
         if current.get("changes") != _polled_changes:
@@ -136,6 +137,7 @@ def loop(context, entities, on_ready=None, keep_going=None, pause_s: float = 0.0
                         timers,
                         [s for s in services if s not in introspection],
                     )
+                assert waiting is not None  # built in the first round
                 waiting.wait(WAIT_TIMEOUT_NS)
                 if not handle.ok():
                     break

@@ -94,9 +94,9 @@ def declare(node: Node, specs: list[Spec]) -> dict[str, Any]:
                 else ""
             )
             raise ValueError(f"parameter '{spec.name}': wrong type: {error}{hint}") from None
-        error = _error(spec, values[spec.name])
-        if error:
-            raise ValueError(error)
+        problem = _error(spec, values[spec.name])
+        if problem:
+            raise ValueError(problem)
 
     def on_set(parameters) -> SetParametersResult:
         for parameter in parameters:

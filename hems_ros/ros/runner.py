@@ -6,6 +6,7 @@ import gc
 import os
 import sys
 from collections.abc import Callable
+from typing import Any
 
 from hems_ros.ros.middleware_threads import defer_middleware_threads
 from hems_ros.rosenv import apply_network_defaults, skip_code_generators
@@ -20,9 +21,9 @@ NO_PARAMETER_SERVICES_FLAG = "--no-parameter-services"
 
 
 def run_node(
-    make_node: Callable[[], object],
+    make_node: Callable[..., Any],
     argv: list[str] | None = None,
-    spin: Callable[[object], None] | None = None,
+    spin: Callable[[Any], None] | None = None,
     config_errors: tuple[type[Exception], ...] = (ValueError,),
 ) -> int:
     """Initialise rclpy, spin the node until Ctrl-C or SIGTERM, shut down cleanly.

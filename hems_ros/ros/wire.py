@@ -18,6 +18,7 @@ from collections import namedtuple
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 from hems_ros.codec import cdr, msgdefs
 
@@ -26,7 +27,7 @@ NS_PER_S = 1_000_000_000
 
 @dataclass(frozen=True)
 class Codec:
-    fields: type  # named tuple of the leaf fields, in CDR order
+    fields: Any  # named tuple class of the leaf fields, in CDR order
     encode: Callable[[tuple], bytes]  # CdrError names the type and the bad value
     _decode: Callable[[bytes], tuple]
 
@@ -45,7 +46,7 @@ def codec(msg_type: type) -> Codec:
         encode = cdr.build_encoder(type_name, types).encode
     except msgdefs.DefinitionError as error:
         encode = _unencodable(error)  # read-only here: a type with sequences
-    fields = namedtuple(
+    fields = namedtuple(  # type: ignore[misc]  # a class per message type, named at run time
         msg_type.__name__ + "Fields", [c.name.replace(".", "_") for c in decoder.columns]
     )
     return Codec(fields, encode, decoder.decode)
