@@ -3,10 +3,11 @@ current pulses.
 
 The rig of the dissertation's chapter 3 characterisation (a 30 N mass and a spring
 pretensioned to 20 N, 754 N/m) on the chapter 4 wire (Table 4.1), written again with its own
-equations: Brinson's material (``brinson``), a lumped wire temperature with Joule heating,
-free convection and radiation to still air (``air``), the transformation's latent heat, a
-resistivity that mixes the two phases' constant values, and the mass's motion with viscous
-damping; the wire bare or in a Bowden sheath (``sheath``). Two effects in forms of their
+equations: a material (Brinson's, ``brinson``, or the dissertation's own law written again,
+``duhem``) that gives the stress, the transformation and the resistivity, a lumped wire
+temperature with Joule heating over the wire's current length, free convection and radiation
+to still air (``air``) or the h(T) of eqs. 4.7-4.12, the transformation's latent heat, and
+the mass's motion with viscous damping; the wire bare or in a Bowden sheath (``sheath``). Two effects in forms of their
 own: dry friction on the mass's guide with pre-sliding (Dahl 1968: the friction force F
 follows dF/dx = sigma0 (1 - F/Fc sgn(v)), so it builds up over a short travel instead of
 jumping to Fc), and a bias spring given by a force-extension table (linear between its
