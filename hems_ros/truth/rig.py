@@ -8,13 +8,14 @@ equations: a material (Brinson's, ``brinson``, or the dissertation's own law wri
 temperature with Joule heating over the wire's current length, free convection and radiation
 to still air (``air``) or the h(T) of eqs. 4.7-4.12, the transformation's latent heat, and
 the mass's motion with viscous damping; the wire bare or in a Bowden sheath (``sheath``).
-Two effects in forms of their own: dry friction on the mass's guide with pre-sliding (Dahl 1968: the friction force F
-follows dF/dx = sigma0 (1 - F/Fc sgn(v)), so it builds up over a short travel instead of
-jumping to Fc), and a bias spring given by a force-extension table (linear between its
-points) instead of a rate. States: wire temperature, wire elongation, the mass's velocity,
-the friction force, the material's two states (Brinson's two martensite fractions, or the
-fraction and the stress of the dissertation's own law, ``duhem``), the sheath's nodes;
-scipy's LSODA integrates them between the current's edges at tolerances of this module.
+Two effects in forms of their own: dry friction on the mass's guide with pre-sliding (Dahl
+1968: the friction force F follows dF/dx = sigma0 (1 - F/Fc sgn(v)), so it builds up over a
+short travel instead of jumping to Fc), and a bias spring given by a force-extension table
+(linear between its points) instead of a rate. States: wire temperature, wire elongation,
+the mass's velocity, the friction force, the material's two states (Brinson's two martensite
+fractions, or the fraction and the stress of the dissertation's own law, ``duhem``), the
+sheath's nodes; scipy's LSODA integrates them between the current's edges at tolerances of
+this module.
 """
 
 from __future__ import annotations
