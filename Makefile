@@ -20,7 +20,7 @@ MSG_SOURCES := $(wildcard hems_msgs/msg/*.msg hems_msgs/srv/*.srv) hems_msgs/CMa
 EXT_SUFFIX := $(shell $(PYTHON) -c "import sysconfig; print(sysconfig.get_config_var('EXT_SUFFIX'))" 2>/dev/null)
 AOT_KERNEL := hems_ros/physics/_kernel_aot$(EXT_SUFFIX)
 
-.PHONY: setup demo test test-quick test-graph test-faults bench clean check-system
+.PHONY: setup demo test test-quick test-graph test-faults bench lint typecheck clean check-system
 
 setup: check-system $(VENV)/.stamp-hems_ros $(AOT_KERNEL)
 
@@ -60,6 +60,14 @@ demo: setup
 
 test: setup
 	tools/run_pytest.sh $(PY) tests $(PYTEST_ARGS)
+
+# make test runs both of these too (tests/foundation/test_lint.py)
+lint: setup
+	$(VENV)/bin/ruff check hems_ros tests benchmarks tools
+	$(VENV)/bin/ruff format --check hems_ros tests benchmarks tools
+
+typecheck: setup
+	$(PY) -m mypy
 
 test-quick: setup
 	tools/run_pytest.sh $(PY) tests -m "not slow" $(PYTEST_ARGS)

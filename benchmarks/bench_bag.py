@@ -13,16 +13,13 @@ Run: python benchmarks/bench_bag.py [--messages N] [--smoke]
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import smoke
 
-import smoke  # noqa: E402
-
-from hems_ros.bag import BagWriter, bag_info, load_bag, offered_qos  # noqa: E402
+from hems_ros.bag import BagWriter, bag_info, load_bag, offered_qos
 
 WRITE_FLOOR = 50_000
 READ_FLOOR = 200_000

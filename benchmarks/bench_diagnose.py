@@ -47,21 +47,18 @@ from pathlib import Path
 
 import numba
 import numpy as np
+import smoke
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-import smoke  # noqa: E402
-
-from hems_ros.bag import BagWriter, offered_qos  # noqa: E402
-from hems_ros.codec import cdr, msgdefs  # noqa: E402
-from hems_ros.diagnosis import batching, dataset, replay, search  # noqa: E402
-from hems_ros.diagnosis import candidates as library  # noqa: E402
-from hems_ros.diagnosis import fit as fit_module  # noqa: E402
-from hems_ros.diagnosis.bagload import load_bag_runs  # noqa: E402
-from hems_ros.diagnosis.workflow import diagnose, prepare  # noqa: E402
-from hems_ros.experiments.lockstep import simulate_loop  # noqa: E402
-from hems_ros.graph import names  # noqa: E402
-from hems_ros.physics import load_params, rows, sensors, simulate  # noqa: E402
+from hems_ros.bag import BagWriter, offered_qos
+from hems_ros.codec import cdr, msgdefs
+from hems_ros.diagnosis import batching, dataset, replay, search
+from hems_ros.diagnosis import candidates as library
+from hems_ros.diagnosis import fit as fit_module
+from hems_ros.diagnosis.bagload import load_bag_runs
+from hems_ros.diagnosis.workflow import diagnose, prepare
+from hems_ros.experiments.lockstep import simulate_loop
+from hems_ros.graph import names
+from hems_ros.physics import load_params, rows, sensors, simulate
 
 GOAL_S = 60.0  # for a 120 s bag; a shorter one (--cycles) is held to the same ratio
 GOAL_RUN_S = 120.0

@@ -14,14 +14,11 @@ import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import smoke
 
-import smoke  # noqa: E402
-
-from hems_ros.experiments import chapters  # noqa: E402
-from hems_ros.rosenv import child_environment  # noqa: E402
+from hems_ros.experiments import chapters
+from hems_ros.rosenv import child_environment
 
 FLOOR_S = 20.0
 

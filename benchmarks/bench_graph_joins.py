@@ -29,13 +29,11 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import busy as busy_option
+import smoke
+from host import host_line
 
-import busy as busy_option  # noqa: E402
-import smoke  # noqa: E402
-from host import host_line  # noqa: E402
-
-from hems_ros.rosenv import (  # noqa: E402
+from hems_ros.rosenv import (
     apply_network_defaults,
     child_environment,
     use_private_domain,
@@ -107,7 +105,7 @@ def command(kind: str, i: int) -> tuple[list[str], str | None, float | None]:
     return hems + [kind], None, None
 
 
-def run(composed: bool, joins: int) -> dict:
+def run(composed: bool, joins: int) -> dict:  # noqa: C901 -- one join of each kind in turn
     graph = Graph(GraphOptions(composed=composed, log_level="error"))
     graph.start()
     faults: list[tuple[float, str]] = []

@@ -19,13 +19,10 @@ import os
 import subprocess
 import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import smoke
 
-import smoke  # noqa: E402
-
-from hems_ros.rosenv import apply_network_defaults, use_private_domain  # noqa: E402
+from hems_ros.rosenv import apply_network_defaults, use_private_domain
 
 apply_network_defaults()
 DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it

@@ -26,17 +26,13 @@ import math
 import os
 import sys
 import time
-from pathlib import Path
 
 import numba
 import numpy as np
+import smoke
+from scipy.integrate import solve_ivp
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-import smoke  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
-
-from hems_ros.physics import (  # noqa: E402
+from hems_ros.physics import (
     ActuationUnit,
     constitutive,
     electrical,
@@ -47,9 +43,9 @@ from hems_ros.physics import (  # noqa: E402
     sheath,
     simulate,
 )
-from hems_ros.physics import kernel as K  # noqa: E402
-from hems_ros.physics.batch import CHANNELS  # noqa: E402
-from hems_ros.physics.electrical import DRIVE_NAMES  # noqa: E402
+from hems_ros.physics import kernel as K
+from hems_ros.physics.batch import CHANNELS
+from hems_ros.physics.electrical import DRIVE_NAMES
 
 
 def current_profile(total_s: float, dt: float) -> np.ndarray:

@@ -13,20 +13,17 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import smoke
 
-import smoke  # noqa: E402
-
-from hems_ros.bag import bag_info  # noqa: E402
-from hems_ros.bag.recording import RecorderProcess  # noqa: E402
-from hems_ros.graph import names  # noqa: E402
-from hems_ros.launcher import Graph, GraphOptions  # noqa: E402
-from hems_ros.rosenv import apply_network_defaults  # noqa: E402
+from hems_ros.bag import bag_info
+from hems_ros.bag.recording import RecorderProcess
+from hems_ros.graph import names
+from hems_ros.launcher import Graph, GraphOptions
+from hems_ros.rosenv import apply_network_defaults
 
 CEILING = 0.20
 TICKS = os.sysconf("SC_CLK_TCK")

@@ -16,11 +16,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import smoke
 
-import smoke  # noqa: E402
-
-from hems_ros.rosenv import (  # noqa: E402
+from hems_ros.rosenv import (
     apply_network_defaults,
     child_environment,
     use_private_domain,

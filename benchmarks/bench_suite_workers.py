@@ -22,14 +22,12 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-import smoke  # noqa: E402
-from host import host_line  # noqa: E402
+import smoke
+from host import host_line
 
 from hems_ros.diagnosis import (
-    cluster,  # noqa: E402
-    suite_runs,  # noqa: E402
+    cluster,
+    suite_runs,
 )
 
 GOAL = 1.7

@@ -1026,7 +1026,7 @@ def _copy_top(b, j, s):
 
 
 @jit
-def _run_block(
+def _run_block(  # noqa: C901 -- one numba loop over a block's steps; its branches are the drives
     params, states, drive_kind, drives, dt, record_every, channels, records, failed_at, first, count
 ):
     """Sets first .. first + count - 1 of run_batch (count <= BLOCK) through every step."""

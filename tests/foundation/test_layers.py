@@ -69,6 +69,12 @@ def test_graph_client_and_benchmarks_import_no_node() -> None:
     assert not _offenders(paths, lambda n: n == "hems_ros.nodes" or n.startswith("hems_ros.nodes."))
 
 
+def test_benchmarks_import_the_installed_package_not_a_patched_path() -> None:
+    assert not [
+        p.name for p in (REPO / "benchmarks").glob("*.py") if "sys.path.insert" in p.read_text()
+    ]
+
+
 def test_library_code_imports_no_verb() -> None:
     paths = [
         p

@@ -1,6 +1,6 @@
 """ruff (ruff.toml: pyflakes, pycodestyle with lines of at most 100 characters, import order,
-bugbear, and its formatter's layout) holds over the code, and mypy (mypy.ini) over the
-plain-Python core, the codec and the client."""
+bugbear, a cyclomatic complexity of at most 15, and its formatter's layout) holds over the
+code, and mypy (mypy.ini) over the packages it names (`make lint`, `make typecheck`)."""
 
 from __future__ import annotations
 
