@@ -48,8 +48,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-DUTY_MIN = 0.0
-DUTY_MAX = 100.0
+from hems_ros.duty import DUTY_MAX, DUTY_MIN
+
 MODES = ("position", "force")
 DEFAULT_TS = 0.01
 DEFAULT_N_FILTER = 20.0

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 
+from hems_ros.duty import DUTY_MAX, DUTY_MIN
 from hems_ros.physics import ActuationUnit
 from hems_ros.physics.params import UnitParams
 
@@ -45,7 +46,7 @@ class ThermalGuard:
     def reading(self, duty_percent: float, on_current_a: float, on_voltage_v: float) -> float:
         """One board reading: advance the model over the period at the applied duty, correct it
         with the measured resistance, update the cut-off; the estimate, degC."""
-        duty = min(max(duty_percent, 0.0), 100.0) if math.isfinite(duty_percent) else 0.0
+        duty = min(max(duty_percent, DUTY_MIN), DUTY_MAX) if math.isfinite(duty_percent) else 0.0
         self.model.advance(duty=duty, steps=self.steps)
         estimate, xi, slider_m = self.model.wire()
         if math.isfinite(on_current_a) and math.isfinite(on_voltage_v) and on_current_a > 0.0:

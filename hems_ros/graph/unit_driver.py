@@ -34,6 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from hems_ros.duty import valid_duty
 from hems_ros.physics import ActuationUnit, StepResult
 
 MAX_STEPS_PER_ADVANCE = 500  # a stalled process catches up over several ticks, not at once
@@ -55,10 +56,6 @@ def _last_step_by(start_s: float, first: int, last: int, dt: float, limit: float
     while k > first and _step_end(start_s, k, dt) > limit:
         k -= 1
     return k
-
-
-def _valid_duty(duty_percent: float) -> bool:
-    return math.isfinite(duty_percent) and 0.0 <= duty_percent <= 100.0
 
 
 class Sample(NamedTuple):
@@ -141,7 +138,7 @@ class UnitDriver:
         afterwards: a command answering the latest sample rewinds the physics to that sample
         (see the module documentation).
         """
-        if not _valid_duty(duty_percent):
+        if not valid_duty(duty_percent):
             self.reject()
             raise ValueError(
                 f"duty command {duty_percent!r} % rejected: must be finite and within 0-100 %"
@@ -182,7 +179,7 @@ class UnitDriver:
         answers that sample, and the next one does not fall due by ``now_s`` (1 us to spare for
         the rounding of epoch times). Integrating up to ``now_s`` before it is then wasted."""
         return (
-            _valid_duty(duty_percent)
+            valid_duty(duty_percent)
             and self._answers_latest_sample(measurement_stamp_s)
             and now_s < self._next_sample_due_s() - 1e-6
         )

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hems_ros.duty import valid_duty
 from hems_ros.physics import compiled, rows, sensors
 from hems_ros.physics.electrical import DRIVE_NAMES, select_drive
 from hems_ros.physics.params import UnitParams
@@ -58,7 +59,7 @@ def check_drive(kind: str, value: float) -> None:
     """Raise ValueError for a non-finite drive or a duty outside 0-100 %."""
     if not math.isfinite(value):
         raise ValueError(f"{kind} = {value!r}: drive input must be finite")
-    if kind == "duty" and not 0.0 <= value <= 100.0:
+    if kind == "duty" and not valid_duty(value):
         raise ValueError(
             f"duty = {value!r} %: must be within 0-100 % (the controller clamps, not the plant)"
         )
