@@ -57,11 +57,11 @@ from hems_ros.diagnosis.runs import (
     TimeSeriesRun,
     non_finite_note,
 )
+from hems_ros.physics.params import WireGeometry
 
-# the HEMS wire, 0.508 mm diameter and 0.9 m long (hems_ros.physics.params.WireGeometry; not
-# imported: the physics package compiles its kernels on import)
-DEFAULT_CROSS_SECTION_M2 = math.pi * 0.508e-3**2 / 4.0
-DEFAULT_GAUGE_LENGTH_M = 0.9
+# the HEMS wire of Table 4.1 (the parameters load without the physics kernels)
+DEFAULT_CROSS_SECTION_M2 = WireGeometry().cross_section_m2
+DEFAULT_GAUGE_LENGTH_M = WireGeometry().length_m
 MIN_SAMPLES = 20
 MIN_DRIVEN_S = 1.0
 MIN_TESTS = 2
