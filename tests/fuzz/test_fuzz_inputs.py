@@ -93,7 +93,8 @@ def test_a_fuzzed_setpoint_changes_nothing_unless_valid_and_heats_nothing_while_
     from hems_msgs.msg import FingerSetpoint
 
     _count("controller setpoints")
-    before, rejected = controller.setpoint, controller.rejected
+    loop = controller.loop
+    before, rejected = loop.setpoint, loop.rejected
     message = FingerSetpoint(mode=mode if mode.isascii() else "x", value=float(value))
     controller.on_setpoint(message)
     try:
@@ -102,14 +103,14 @@ def test_a_fuzzed_setpoint_changes_nothing_unless_valid_and_heats_nothing_while_
     except SetpointError:
         valid = False
     if valid:
-        assert controller.setpoint.value == message.value
+        assert loop.setpoint.value == message.value
     else:
-        assert controller.setpoint == before and controller.rejected == rejected + 1
-        assert controller.last_rejection
-    controller.wire_position, controller.wire_force = 0.0, 4.0
-    controller.encoder_stamp = controller.force_stamp = (1, 0)
+        assert loop.setpoint == before and loop.rejected == rejected + 1
+        assert loop.last_rejection
+    loop.reading("position", 0.0, (1, 0))
+    loop.reading("force", 4.0, (1, 0))
     controller.control((1, 0))
-    assert controller.duty == 0.0  # not ENABLED: nothing heats, whatever came in
+    assert loop.duty == 0.0  # not ENABLED: nothing heats, whatever came in
 
 
 @fuzz(2000)
