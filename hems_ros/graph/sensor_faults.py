@@ -27,12 +27,6 @@ class FaultySensor:
     def __init__(self) -> None:
         self._held: tuple | None = None  # the reading a stuck sensor repeats
 
-    @property
-    def faulty(self) -> bool:
-        """Whether a stuck reading is still held: the readings must pass through the sensor
-        once more, with the fault cleared, before they may bypass it."""
-        return self._held is not None
-
     def _stuck(self, stuck: bool, reading: tuple) -> tuple:
         if not stuck:
             self._held = None
@@ -45,6 +39,8 @@ class FaultySensor:
         self, fault: str, counts: int, position_m: float, resolution_m: float
     ) -> tuple[int, float]:
         """(counts, position m) the encoder reports."""
+        if not fault and self._held is None:  # a healthy encoder: the reading as it is
+            return counts, position_m
         counts, position_m = self._stuck(fault == "stuck_encoder", (counts, position_m))
         if fault == "encoder_jump":
             counts += int(round(JUMP_M / resolution_m))
@@ -57,6 +53,8 @@ class FaultySensor:
         self, fault: str, force_n: float, saturated: bool, range_max_n: float
     ) -> tuple[float, bool]:
         """(force N, saturated) the load cell reports."""
+        if not fault and self._held is None:  # a healthy load cell: the reading as it is
+            return force_n, saturated
         force_n, saturated = self._stuck(fault == "stuck_force", (force_n, saturated))
         if fault == "force_saturation":
             return range_max_n, True

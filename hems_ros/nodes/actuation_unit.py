@@ -371,11 +371,11 @@ class ActuationUnitNode(LeanNode):
     def encoder_reading(self, sample) -> tuple[int, float]:
         """(counts, position m) the encoder reports, with the injected fault if one is set
         (``ros2 param set ... sensor_fault stuck_encoder``)."""
-        fault = self.params["sensor_fault"]
-        if not fault and not self.encoder_sensor.faulty:
-            return sample.encoder_counts, sample.encoder_position_m
         return self.encoder_sensor.encoder(
-            fault, sample.encoder_counts, sample.encoder_position_m, self.resolution
+            self.params["sensor_fault"],
+            sample.encoder_counts,
+            sample.encoder_position_m,
+            self.resolution,
         )
 
     def publish_state(self) -> None:

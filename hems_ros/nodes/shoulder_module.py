@@ -115,9 +115,7 @@ class ShoulderModuleNode(LeanNode):
         force, saturated = sensors.force_reading(
             tension.force, noise, p["range_max_n"], p["resolution_n"]
         )
-        sensor = self.sensors[finger]
-        if fault or sensor.faulty:  # a healthy sensor's reading passes at no cost
-            force, saturated = sensor.force(fault, force, saturated, p["range_max_n"])
+        force, saturated = self.sensors[finger].force(fault, force, saturated, p["range_max_n"])
         self.sequences[finger] += 1
         self.publishers_[finger].publish(
             WIRE_FORCE.encode(
