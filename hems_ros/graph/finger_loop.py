@@ -35,6 +35,10 @@ class Reading:
     stamp: tuple[int, int] = NO_STAMP
 
 
+def _nan_if_none(value: float | None) -> float:
+    return math.nan if value is None else value
+
+
 class FingerLoop:
     """One finger: setpoint, mode, permission, readings and the duty they give."""
 
@@ -130,6 +134,33 @@ class FingerLoop:
             self.enabled,
             self.controller.fault,
             self.guard.limited,
+        )
+
+    def status_fields(self) -> dict[str, object]:
+        """What the controller status reports (hems_msgs/ControllerStatus's fields but the
+        header and sequence): setpoint and measurement tendon side, readings wire side with
+        the unit's stamps, NaN for a reading not yet received."""
+        tendon = self.tendon_measurement()
+        position, force = self.readings["position"], self.readings["force"]
+        return dict(
+            strategy=self.controller.strategy,
+            mode=self.setpoint.mode,
+            active=self.enabled,
+            setpoint=self.setpoint.value,
+            measurement=tendon,
+            error=self.setpoint.value - tendon,
+            duty_percent=self.duty,
+            fault=self.controller.fault or "",
+            encoder_stamp_sec=position.stamp[0],
+            encoder_stamp_nanosec=position.stamp[1],
+            wire_position=_nan_if_none(position.value),
+            force_stamp_sec=force.stamp[0],
+            force_stamp_nanosec=force.stamp[1],
+            wire_force=_nan_if_none(force.value),
+            rejected_setpoints=self.rejected,
+            last_rejection=self.last_rejection,
+            wire_temperature_c=self.guard.estimate_c,
+            thermal_limited=self.guard.limited,
         )
 
     def tendon_measurement(self) -> float:

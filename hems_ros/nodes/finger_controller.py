@@ -42,8 +42,6 @@ The encoder, force, duty and status topics carry serialized messages (hems_ros.r
 
 from __future__ import annotations
 
-from dataclasses import fields
-
 from hems_msgs.msg import (
     CommandRecord,
     ControllerStatus,
@@ -54,114 +52,19 @@ from hems_msgs.msg import (
     WireForce,
 )
 
-from hems_ros.control import STRATEGIES, make_controller, mode_gains
-from hems_ros.control.base import DEFAULT_N_FILTER, DEFAULT_TS
-from hems_ros.graph import names, transmission
-from hems_ros.graph.finger_loop import FingerLoop
-from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits
-from hems_ros.graph.thermal_guard import ThermalGuard
-from hems_ros.physics import load_params
+from hems_ros.graph import names
+from hems_ros.graph.setpoints import SetpointError
+from hems_ros.nodes.finger_controller_parameters import PARAMETERS, declare_loop
 from hems_ros.ros import qos
 from hems_ros.ros.clock_time import now_ns, stamp_now
 from hems_ros.ros.lean_node import LeanNode
-from hems_ros.ros.params import PERIOD_LIMIT, Spec, declare, non_negative, one_of, positive
 from hems_ros.ros.runner import run_node
 from hems_ros.ros.wire import codec, stamp_ns
 
+# PARAMETERS: the node's --help lists them (hems_ros.ros.runner.node_help)
+__all__ = ["PARAMETERS", "FingerControllerNode", "main"]
+
 DUTY, STATUS = codec(DutyCommand), codec(ControllerStatus)
-
-PARAMETERS = [
-    Spec(
-        "finger",
-        "index",
-        "finger this controller drives: " + ", ".join(names.FINGERS),
-        one_of(*names.FINGERS),
-        True,
-    ),
-    Spec("strategy", "bpid", "control law: bpid | pid | pipd", one_of(*STRATEGIES), True),
-    Spec(
-        "mode",
-        "position",
-        "initial mode: position | force (setpoints may switch it)",
-        one_of(*MODES),
-        True,
-    ),
-    Spec("ts", DEFAULT_TS, "control period Ts, s", PERIOD_LIMIT, True),
-    Spec("n_filter", DEFAULT_N_FILTER, "derivative filter pole N, rad/s", positive, True),
-    Spec(
-        "pulley_ratio",
-        transmission.PULLEY_RATIO,
-        "tendon / wire displacement ratio of the slider pulley",
-        positive,
-        True,
-    ),
-    Spec(
-        "max_position_m",
-        SetpointLimits.max_position_m,
-        "largest accepted tendon position setpoint, m",
-        positive,
-        True,
-    ),
-    Spec(
-        "max_force_n",
-        SetpointLimits.max_force_n,
-        "largest accepted tendon force setpoint, N",
-        positive,
-        True,
-    ),
-    Spec(
-        "idle_status_period_s",
-        0.1,
-        "status period while no feedback arrives, s (otherwise one per duty)",
-        PERIOD_LIMIT,
-        True,
-    ),
-    Spec(
-        "status_every",
-        2,
-        "publish the status with every n-th duty (and whenever mode, setpoint, activity or "
-        "fault change): 50 Hz keeps the supervisor's 50 ms stream checks fed at half the messages",
-        positive,
-        True,
-    ),
-    Spec(
-        "feedback_lag_s",
-        0.025,
-        "0 % duty while the other mode's readings (force in position mode, encoder in "
-        "force mode) are older than this against the feedback's, on the unit's stamps, s: without "
-        "them over-force and over-travel cannot be seen; a shoulder module that stops stops a "
-        "position loop within three samples (30 ms)",
-        PERIOD_LIMIT,
-        True,
-    ),
-    Spec(
-        "physics_config",
-        "ch6_hems_index",
-        "physics parameter set of the unit (a config/physics name or a "
-        "YAML path): the model the wire temperature is estimated with",
-        None,
-        True,
-    ),
-    Spec(
-        "cut_temperature_c",
-        150.0,
-        "estimated wire temperature at which the duty is held at 0, degC "
-        "(from the drive board's readings, hems_ros.graph.thermal_guard)",
-        positive,
-        True,
-    ),
-    Spec(
-        "resume_temperature_c",
-        140.0,
-        "estimated wire temperature below which heating may resume, degC",
-        positive,
-        True,
-    ),
-]
-
-
-def nan_if_none(value: float | None) -> float:
-    return float("nan") if value is None else value
 
 
 class FingerControllerNode(LeanNode):
@@ -170,31 +73,8 @@ class FingerControllerNode(LeanNode):
     def __init__(self, **node_kwargs) -> None:
         super().__init__("finger_controller", namespace=names.NAMESPACE, **node_kwargs)
         self.graph_ns = self.get_namespace()
-        p = declare(self, PARAMETERS)
-        mode_gains = {mode: self._declare_gains(p["strategy"], mode) for mode in MODES}
+        p, self.loop = declare_loop(self)
         self.finger = p["finger"]
-        try:
-            guard = ThermalGuard(
-                load_params(p["physics_config"]),
-                p["cut_temperature_c"],
-                p["resume_temperature_c"],
-                p["ts"],
-            )
-        except (OSError, ValueError) as error:
-            raise ValueError(
-                f"parameters 'physics_config', 'cut_temperature_c', 'resume_temperature_c': "
-                f"{error}"
-            ) from None
-        self.loop = FingerLoop(
-            make_controller(
-                p["strategy"], p["mode"], mode_gains[p["mode"]], ts=p["ts"], n_filter=p["n_filter"]
-            ),
-            mode_gains,
-            SetpointLimits(p["max_position_m"], p["max_force_n"]),
-            p["pulley_ratio"],
-            p["feedback_lag_s"],
-            guard,
-        )
         self.sequence = 0
         self.status_sequence = 0
         self.status_every = p["status_every"]
@@ -243,26 +123,6 @@ class FingerControllerNode(LeanNode):
         # wake-up of a sleeping process costs more than the status it would send
         self.idle_timer = self.create_timer(p["idle_status_period_s"], self.on_idle)
         self.idle_push_ns = int(p["idle_status_period_s"] * 1e9) // 2
-
-    def _declare_gains(self, strategy: str, mode: str):
-        """The ``gains.*`` (position) or ``force_gains.*`` parameters, defaults from the core."""
-        default = mode_gains(strategy, mode)
-        prefix = "gains" if mode == "position" else "force_gains"
-        values = declare(
-            self,
-            [
-                Spec(
-                    f"{prefix}.{f.name}",
-                    float(getattr(default, f.name)),
-                    f"{strategy} {mode}-mode gain {f.name} (default hems_ros.control.mode_gains; "
-                    f"errors scaled per the gains' {mode}_scale)",
-                    non_negative,
-                    True,
-                )
-                for f in fields(default)
-            ],
-        )
-        return type(default)(**{name.split(".", 1)[1]: value for name, value in values.items()})
 
     def _other_feedback(self):
         return self.feedback[self.loop.other_mode]
@@ -373,12 +233,9 @@ class FingerControllerNode(LeanNode):
 
     def publish_status(self) -> None:
         self.drain(self._other_feedback())
-        loop = self.loop
-        tendon = loop.tendon_measurement()
-        position, force = loop.readings["position"], loop.readings["force"]
         self.status_sequence += 1
         self._steps_since_status = 0
-        self._reported = loop.status_key()
+        self._reported = self.loop.status_key()
         sec, nanosec = stamp_ns(now_ns(self))
         self.status_pub.publish(
             STATUS.encode(
@@ -387,25 +244,8 @@ class FingerControllerNode(LeanNode):
                     header_stamp_nanosec=nanosec,
                     header_frame_id="",
                     finger=self.finger,
-                    strategy=loop.controller.strategy,
-                    mode=loop.setpoint.mode,
-                    active=loop.enabled,
-                    setpoint=loop.setpoint.value,
-                    measurement=tendon,
-                    error=loop.setpoint.value - tendon,
-                    duty_percent=loop.duty,
-                    fault=loop.controller.fault or "",
-                    encoder_stamp_sec=position.stamp[0],
-                    encoder_stamp_nanosec=position.stamp[1],
-                    wire_position=nan_if_none(position.value),
-                    force_stamp_sec=force.stamp[0],
-                    force_stamp_nanosec=force.stamp[1],
-                    wire_force=nan_if_none(force.value),
-                    rejected_setpoints=loop.rejected,
-                    last_rejection=loop.last_rejection,
-                    wire_temperature_c=loop.guard.estimate_c,
-                    thermal_limited=loop.guard.limited,
                     sequence=self.status_sequence,
+                    **self.loop.status_fields(),
                 )
             )
         )

@@ -103,3 +103,24 @@ def test_the_status_key_changes_with_mode_setpoint_permission_and_fault(loop):
     loop.step(True)  # a non-finite measurement trips the controller
     keys.add(loop.status_key())
     assert len(keys) == 4 and loop.controller.fault and loop.duty == 0.0
+
+
+def test_the_status_reports_tendon_side_setpoint_and_wire_side_readings(loop):
+    before = loop.status_fields()
+    assert math.isnan(before["measurement"]) and math.isnan(before["wire_position"])
+    assert before["encoder_stamp_sec"] == 0 and before["fault"] == ""
+    loop.set_point("position", 0.02)
+    loop.supervisor(True)
+    duty = _sample(loop, 1010, 0.004, force_n=12.0)
+    status = loop.status_fields()
+    # 4 mm of wire is 8 mm of tendon through the 2x pulley; the error is tendon side too
+    assert status["measurement"] == pytest.approx(0.008)
+    assert status["error"] == pytest.approx(0.012)
+    assert status["wire_position"] == 0.004 and status["wire_force"] == 12.0
+    assert (status["encoder_stamp_sec"], status["encoder_stamp_nanosec"]) == (1, 10 * MS)
+    assert status["duty_percent"] == duty > 0.0 and status["active"] is True
+    assert status["strategy"] == "bpid" and status["mode"] == "position"
+    with pytest.raises(SetpointError):
+        loop.set_point("position", -1.0)
+    assert loop.status_fields()["rejected_setpoints"] == 1
+    assert loop.status_fields()["last_rejection"]
