@@ -44,11 +44,10 @@ DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
 
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 
-from hems_ros.bag.recording import RecorderProcess  # noqa: E402
-from hems_ros.bag.selection import record_regex  # noqa: E402
 from hems_ros.client.graph_client import GraphClient  # noqa: E402
+from hems_ros.client.session import recorded_graph  # noqa: E402
 from hems_ros.graph import names  # noqa: E402
-from hems_ros.launcher import Graph, GraphOptions  # noqa: E402
+from hems_ros.launcher import GraphOptions  # noqa: E402
 
 FLOORS = {  # layout: (CPU cores while enabled, RSS MiB)
     "separate": (0.7, 1200.0),
@@ -123,18 +122,15 @@ def node_kind(pid: int) -> str:
 
 def run(composed: bool, seconds: float, bag: Path) -> dict:
     # the units' latency statistics then cover the measured interval, not the start-up
-    graph = Graph(
-        GraphOptions(
-            composed=composed,
-            log_level="error",
-            extra_ros_args=("-p", f"latency_window_s:={float(seconds)!r}"),
-        )
+    options = GraphOptions(
+        composed=composed,
+        log_level="error",
+        extra_ros_args=("-p", f"latency_window_s:={float(seconds)!r}"),
     )
-    graph.start()
-    recorder = RecorderProcess(bag, regex=record_regex(names.NAMESPACE))
     latest: dict[str, dict[str, str]] = {}
     try:
-        with GraphClient("hems_bench") as client:
+        with recorded_graph(options, bag, "hems_bench", 90.0) as session:
+            graph, recorder, client = session.graph, session.recorder, session.client
             client.node.create_subscription(
                 DiagnosticArray,
                 names.DIAGNOSTICS_TOPIC,
@@ -180,9 +176,8 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
             drift = abs(
                 sum(mean_cores(idle_before).values()) - sum(mean_cores(idle_after).values())
             )
-    finally:
-        recorder.stop()
-        graph.stop()
+    except (TimeoutError, RuntimeError) as error:
+        return {"error": f"the graph did not come up: {error}"}
     by_kind: dict[str, list[float]] = {}
     for pid, used in enabled.items():
         by_kind.setdefault(kinds.get(pid, "?"), []).append(used)

@@ -18,17 +18,14 @@ import argparse
 import collections
 import shutil
 import tempfile
-import time
 from pathlib import Path
 
 import smoke
 from bench_graph_joins import fault_kind  # reserves this run's ROS domain
 
-from hems_ros.bag.recording import RecorderProcess
-from hems_ros.client.graph_client import GraphClient
-from hems_ros.client.recording import wait_until_recording
+from hems_ros.client.session import recorded_graph
 from hems_ros.graph import names
-from hems_ros.launcher import Graph, GraphOptions
+from hems_ros.launcher import GraphOptions
 
 READY_TIMEOUT_S = 90.0
 
@@ -36,25 +33,17 @@ READY_TIMEOUT_S = 90.0
 def start_once(composed: bool, heat_s: float, bag: Path) -> str | None:
     """One start; the supervisor's first fault (or state) if it was not ENABLED at the end,
     None if it was. RuntimeError when the graph did not come up."""
-    graph = Graph(GraphOptions(composed=composed, log_level="error"))
-    graph.start()
-    recorder = RecorderProcess(bag)
-    try:
-        with GraphClient("hems_bench_startup") as client:
-            wait_until_recording(
-                client, recorder, names.FINGERS, time.monotonic() + READY_TIMEOUT_S
-            )
-            ok, message = client.enable_when_ready(READY_TIMEOUT_S, retry_s=0.5)
-            if not ok:
-                raise RuntimeError(f"could not enable: {graph.with_exits(message)}")
-            for finger in names.FINGERS:
-                client.send_setpoint(finger, "position", 0.02)
-            client.spin_for(heat_s)
-            status = client.snapshot(seconds=0.2).supervisor
-            client.call("disable")
-    finally:
-        recorder.stop()
-        graph.stop()
+    options = GraphOptions(composed=composed, log_level="error")
+    with recorded_graph(options, bag, "hems_bench_startup", READY_TIMEOUT_S) as session:
+        client = session.client
+        ok, message = client.enable_when_ready(READY_TIMEOUT_S, retry_s=0.5)
+        if not ok:
+            raise RuntimeError(f"could not enable: {session.graph.with_exits(message)}")
+        for finger in names.FINGERS:
+            client.send_setpoint(finger, "position", 0.02)
+        client.spin_for(heat_s)
+        status = client.snapshot(seconds=0.2).supervisor
+        client.call("disable")
     if status is None:
         return "no supervisor status"
     return (

@@ -1,6 +1,7 @@
 """``hems demo``: the main end-to-end job (`make demo`).
 
-Brings the 16-node graph up as separate processes, enables it, runs the scripted grasp on
+Brings the 16-node graph up (composed in one process; a process per node with
+``--separate``), enables it, runs the scripted grasp on
 all six fingers (position approach, force hold, release), prints the per-finger summary,
 writes a PNG plot and shuts everything down. The run is recorded into a bag
 (``bags/demo_<date>_<time>/`` unless ``--record DIR``) whose path and message counts are
@@ -11,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 from hems_ros.cli import grasp
@@ -24,8 +24,6 @@ from hems_ros.cli.up import (
     layout_text,
     stop_recorder,
 )
-from hems_ros.client.recording import wait_until_recording
-from hems_ros.launcher import Graph
 
 
 def register(subparsers) -> None:
@@ -62,55 +60,48 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as error:
         print(f"demo: {error}", file=sys.stderr)
         return 2
-    from hems_ros.bag.recording import RecorderProcess
-    from hems_ros.bag.selection import record_regex
-    from hems_ros.client.graph_client import GraphClient
+    from hems_ros.client.session import recorded_graph
 
-    graph = Graph(options)
-    graph.start()
-    recorder = RecorderProcess(record, regex=record_regex(options.namespace))
     print(
-        f"demo: started the graph ({layout_text(options)}), recording into {record}; waiting for "
-        f"every stream",
+        f"demo: starting the graph ({layout_text(options)}), recording into {record}; waiting "
+        f"for every stream",
         flush=True,
     )
+    run_ = None
     try:
-        with GraphClient(
-            "hems_demo", sim_time=options.sim_time, namespace=options.namespace
-        ) as client:
-            try:
-                wait_until_recording(
-                    client, recorder, options.fingers, time.monotonic() + args.ready_timeout
-                )
-            except (TimeoutError, RuntimeError) as error:
-                print(f"demo: {error}", file=sys.stderr)
-                return 1
-            try:
-                traces, phase_starts, statuses = grasp.enabled_grasp(
-                    client, plan, options.fingers, args.ready_timeout, "demo"
-                )
-            except grasp.EnableRefused as error:
-                print(
-                    f"demo: could not enable the graph: {graph.with_exits(str(error))}",
-                    file=sys.stderr,
-                )
-                return 1
-            except RuntimeError as error:
-                print(f"demo: {graph.with_exits(str(error))}", file=sys.stderr)
-                return 1
-            print(f"demo: {gap_line(client.snapshot(fingers=(), seconds=0.2))}", flush=True)
-        rows = grasp.report(traces, plan, phase_starts, args.plot)
-        problem = grasp.fault_report(statuses) or grasp.tracking_report(rows, plan, options.fingers)
-        if problem:
-            print(f"demo: not a valid run: {problem}", file=sys.stderr)
-            return 1
-        crashed = graph.exited()
-        if crashed:
-            print(f"demo: nodes exited during the run: {crashed}", file=sys.stderr)
-            return 1
-        return 0
+        with recorded_graph(options, record, "hems_demo", args.ready_timeout) as run_:
+            code = _grasp(run_, plan, options.fingers, args)
+            recorded = stop_recorder("demo", run_.recorder)
+    except (TimeoutError, RuntimeError) as error:
+        print(f"demo: {error}", file=sys.stderr)
+        return 1
     finally:
-        stop_recorder("demo", recorder)
-        started = time.monotonic()
-        graph.stop()
-        print(f"demo: graph stopped in {time.monotonic() - started:.2f} s")
+        if run_ is not None:
+            print(f"demo: graph stopped in {run_.stop_s:.2f} s")
+    return code if recorded else 1
+
+
+def _grasp(run_, plan, fingers, args: argparse.Namespace) -> int:
+    """The enabled grasp on the running graph: 0 if it was a valid run."""
+    graph, client = run_.graph, run_.client
+    try:
+        traces, phase_starts, statuses = grasp.enabled_grasp(
+            client, plan, fingers, args.ready_timeout, "demo"
+        )
+    except grasp.EnableRefused as error:
+        print(f"demo: could not enable the graph: {graph.with_exits(str(error))}", file=sys.stderr)
+        return 1
+    except RuntimeError as error:
+        print(f"demo: {graph.with_exits(str(error))}", file=sys.stderr)
+        return 1
+    print(f"demo: {gap_line(client.snapshot(fingers=(), seconds=0.2))}", flush=True)
+    rows = grasp.report(traces, plan, phase_starts, args.plot)
+    problem = grasp.fault_report(statuses) or grasp.tracking_report(rows, plan, fingers)
+    if problem:
+        print(f"demo: not a valid run: {problem}", file=sys.stderr)
+        return 1
+    crashed = graph.exited()
+    if crashed:
+        print(f"demo: nodes exited during the run: {crashed}", file=sys.stderr)
+        return 1
+    return 0

@@ -10,13 +10,21 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from hems_ros.cli.numbers import non_negative_int, positive
-from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder
-from hems_ros.client.recording import wait_until_recording
+from hems_ros.cli.up import (
+    add_graph_arguments,
+    bag_folder,
+    graph_options,
+    layout_text,
+    stop_recorder,
+)
 from hems_ros.graph import names, soak
-from hems_ros.launcher import Graph
 from hems_ros.rosenv import child_environment
+
+if TYPE_CHECKING:
+    from hems_ros.client.session import RecordedGraph
 
 MEMORY_EVERY_S = 10.0
 PROGRESS_EVERY_S = 60.0
@@ -85,14 +93,9 @@ def _join(i: int, rng: random.Random) -> list[str]:
 
 
 class _Soak:
-    def __init__(self, args: argparse.Namespace, graph: Graph, recorder, client, fingers) -> None:
-        self.args, self.graph, self.recorder, self.client, self.fingers = (
-            args,
-            graph,
-            recorder,
-            client,
-            fingers,
-        )
+    def __init__(self, args: argparse.Namespace, session: RecordedGraph, fingers) -> None:
+        self.args, self.fingers = args, fingers
+        self.graph, self.recorder, self.client = session.graph, session.recorder, session.client
         self.rng = random.Random(args.seed)
         self.memory = soak.MemoryLog()
         self.faults: list[str] = []
@@ -179,44 +182,35 @@ def run(args: argparse.Namespace) -> int:
     from hems_msgs.msg import SupervisorStatus
 
     from hems_ros.bag.reader import load_bag
-    from hems_ros.bag.recording import RecorderProcess
-    from hems_ros.bag.selection import record_regex
-    from hems_ros.client.graph_client import GraphClient
+    from hems_ros.client.session import recorded_graph
     from hems_ros.ros import qos
 
-    graph = Graph(options)
-    graph.start()
-    recorder = RecorderProcess(folder, regex=record_regex(options.namespace))
     print(
-        f"hems soak: {len(graph.processes)} processes, recording into {recorder.output}, "
-        f"{args.minutes:g} min",
+        f"hems soak: {layout_text(options)}, recording into {folder}, {args.minutes:g} min",
         flush=True,
     )
-    try:
-        with GraphClient("hems_soak", namespace=options.namespace) as client:
-            wait_until_recording(client, recorder, options.fingers, time.monotonic() + 120.0)
-            ok, message = client.enable_when_ready(120.0, reset=True, retry_s=1.0)
-            if not ok:
-                print(
-                    f"hems soak: could not enable the graph: {graph.with_exits(message)}",
-                    file=sys.stderr,
-                )
-                return 1
-            run_ = _Soak(args, graph, recorder, client, options.fingers)
-            client.node.create_subscription(
-                SupervisorStatus,
-                names.supervisor_status_topic(options.namespace),
-                run_.on_status,
-                qos.STATUS,
+    with recorded_graph(options, folder, "hems_soak", 120.0) as session:
+        client = session.client
+        ok, message = client.enable_when_ready(120.0, reset=True, retry_s=1.0)
+        if not ok:
+            print(
+                f"hems soak: could not enable the graph: {session.graph.with_exits(message)}",
+                file=sys.stderr,
             )
-            run_.run()
-            for finger in options.fingers:
-                client.send_setpoint(finger, "position", 0.0, confirm_s=2.0)
-            client.call("disable")
-            client.spin_for(0.5)
-    finally:
-        recorded = stop_recorder("hems soak", recorder)
-        graph.stop()
+            return 1
+        run_ = _Soak(args, session, options.fingers)
+        client.node.create_subscription(
+            SupervisorStatus,
+            names.supervisor_status_topic(options.namespace),
+            run_.on_status,
+            qos.STATUS,
+        )
+        run_.run()
+        for finger in options.fingers:
+            client.send_setpoint(finger, "position", 0.0, confirm_s=2.0)
+        client.call("disable")
+        client.spin_for(0.5)
+        recorded = stop_recorder("hems soak", session.recorder)
     if not recorded:
         return 1
     bag = load_bag(folder)

@@ -11,15 +11,17 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from hems_ros.cli.numbers import non_negative, positive, positive_int
-from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, stop_recorder
-from hems_ros.client.recording import wait_until_recording
+from hems_ros.cli.up import add_graph_arguments, bag_folder, graph_options, print_bag
 from hems_ros.client.step_figures import step_figures
 from hems_ros.graph import transmission
 from hems_ros.physics.params import load_params
+
+if TYPE_CHECKING:
+    from hems_ros.client.session import RecordedGraph
 
 # A setpoint the controller status does not show within this long ends the run: the figures
 # would otherwise describe a step the controller never took.
@@ -79,10 +81,6 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hems_ros.bag.recording import RecorderProcess
-    from hems_ros.bag.selection import record_regex
-    from hems_ros.cli.up import print_bag
-
     try:
         options = graph_options(args)
         if args.physics_config:
@@ -97,57 +95,17 @@ def run(args: argparse.Namespace) -> int:
     if args.physics_config:
         overrides += ["-p", f"physics_config:={args.physics_config}"]
     options.extra_ros_args = tuple(overrides)
-    from hems_ros.client.graph_client import GraphClient
-    from hems_ros.launcher import Graph
+    from hems_ros.client.session import recorded_graph
 
-    graph = Graph(options)
-    graph.start()
-    recorder = RecorderProcess(record, regex=record_regex(options.namespace))
-    finished = None
     try:
-        with GraphClient(
-            "hems_step", sim_time=options.sim_time, namespace=options.namespace
-        ) as client:
-            wait_until_recording(
-                client, recorder, options.fingers, time.monotonic() + args.ready_timeout
-            )
-            ok, message = client.enable_when_ready(args.ready_timeout)
-            if not ok:
-                print(
-                    f"step: could not enable the graph: {graph.with_exits(message)}",
-                    file=sys.stderr,
-                )
+        with recorded_graph(options, record, "hems_step", args.ready_timeout) as session:
+            ran, state = _steps(session, options.fingers, args)
+            if not ran:
                 return 1
-            cycle = ((0.0, args.before_s), (args.step_mm * 1e-3, args.step_s), (0.0, args.after_s))
-            for value, seconds in cycle * args.cycles:
-                print(f"step: position {value * 1e3:g} mm for {seconds:g} s", flush=True)
-                in_force = []
-                for finger in options.fingers:
-                    result = client.send_setpoint(
-                        finger, "position", value, confirm_s=SETPOINT_CONFIRM_S
-                    )
-                    if not result:
-                        print(
-                            f"step: {finger}: position setpoint {value:g} m: {result.message}",
-                            file=sys.stderr,
-                        )
-                        return 1
-                    in_force.append(result.in_force_s)
-                # each phase lasts its length from the sample its setpoint acted from
-                known = [t for t in in_force if t is not None]
-                since = max(known) if len(known) == len(in_force) else None
-                client.spin_graph_time(seconds, since_s=since)
-            state = client.snapshot(options.fingers, 0.3).supervisor
-            client.call("disable")
-            client.spin_for(0.3)
-        finished = recorder.stop()
+            finished = session.recorder.stop()
     except (TimeoutError, RuntimeError) as error:
         print(f"step: {error}", file=sys.stderr)
         return 1
-    finally:
-        if finished is None:
-            stop_recorder("step", recorder)
-        graph.stop()
     print_bag("step", finished)
     for finger in options.fingers:
         try:
@@ -166,3 +124,38 @@ def run(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
+
+
+def _steps(session: RecordedGraph, fingers, args: argparse.Namespace):
+    """Enable the graph and run the step cycles on every finger: (True, the supervisor's status
+    at the end, None if silent), or (False, None) with why printed when the graph could not be
+    enabled or a setpoint was not taken."""
+    client = session.client
+    ok, message = client.enable_when_ready(args.ready_timeout)
+    if not ok:
+        print(
+            f"step: could not enable the graph: {session.graph.with_exits(message)}",
+            file=sys.stderr,
+        )
+        return False, None
+    cycle = ((0.0, args.before_s), (args.step_mm * 1e-3, args.step_s), (0.0, args.after_s))
+    for value, seconds in cycle * args.cycles:
+        print(f"step: position {value * 1e3:g} mm for {seconds:g} s", flush=True)
+        in_force = []
+        for finger in fingers:
+            result = client.send_setpoint(finger, "position", value, confirm_s=SETPOINT_CONFIRM_S)
+            if not result:
+                print(
+                    f"step: {finger}: position setpoint {value:g} m: {result.message}",
+                    file=sys.stderr,
+                )
+                return False, None
+            in_force.append(result.in_force_s)
+        # each phase lasts its length from the sample its setpoint acted from
+        known = [t for t in in_force if t is not None]
+        since = max(known) if len(known) == len(in_force) else None
+        client.spin_graph_time(seconds, since_s=since)
+    state = client.snapshot(fingers, 0.3).supervisor
+    client.call("disable")
+    client.spin_for(0.3)
+    return True, state
