@@ -43,7 +43,7 @@ def make_controller(
     n_filter: float = DEFAULT_N_FILTER,
     transfer_tau: float = DEFAULT_TRANSFER_TAU,
 ) -> Controller:
-    """Controller ``strategy`` ("bpid", "pid", "pipd") in ``mode`` ("position", "force").
+    """Make the ``strategy`` controller ("bpid", "pid", "pipd") in ``mode`` ("position", "force").
 
     ``gains`` defaults to the Table 5.1 set of the strategy; ``ts`` is the sample period in
     s, ``n_filter`` the derivative filter pole N in rad/s, ``transfer_tau`` the decay time

@@ -86,6 +86,7 @@ def integral_cut(out: float, inc: float) -> float:
 
 
 def check_mode(mode: str) -> str:
+    """Return ``mode`` if it is a control mode, else raise ValueError naming the modes."""
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     return mode

@@ -140,6 +140,9 @@ Ki in %/(10 mN s), Kb in 1/(10 mN). Position mode keeps Table 5.1."""
 
 
 def mode_gains(strategy: str, mode: str):
-    """Default gains of ``strategy`` in ``mode``: Table 5.1, except BPID in force mode
-    (:data:`FORCE_MODE_BPID`); PID and PI-PD have no force-mode set of their own."""
+    """Return the default gains of ``strategy`` in ``mode``.
+
+    Table 5.1, except BPID in force mode (:data:`FORCE_MODE_BPID`); PID and PI-PD have no
+    force-mode set of their own.
+    """
     return FORCE_MODE_BPID if (strategy, mode) == ("bpid", "force") else TABLE_5_1[strategy]

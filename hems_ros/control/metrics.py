@@ -127,8 +127,10 @@ def _past_level(y, seg: StepSegment):
 
 
 def overshoot(y, seg: StepSegment) -> float:
-    """First peak of y past the new level (>= 0): the largest excursion from the first
-    sample at or beyond the level to the next sample back short of it (or the segment's end).
+    """Return the first peak of y past the new level (>= 0).
+
+    The peak is the largest excursion from the first sample at or beyond the level to the
+    next sample back short of it (or the segment's end).
 
     A response that stays beyond the level (an SMA wire held there by its hysteresis) counts
     in full; a later ripple about the level once it came back does not (:func:`hold_excursion`).
@@ -157,7 +159,7 @@ def steady_state_error(t, r, y, seg: StepSegment, window: float = 1.0) -> float:
 
 
 def ascending_mask(r):
-    """True where the reference rises: r(k) > r(k-1); the first sample is False."""
+    """Mark where the reference rises, r(k) > r(k-1); the first sample is False."""
     (r,) = _arrays(r)
     mask = np.zeros(r.size, dtype=bool)
     mask[1:] = r[1:] > r[:-1]
@@ -165,7 +167,7 @@ def ascending_mask(r):
 
 
 def stationary_mask(t, r, settle: float = 1.0, min_level: float | None = None):
-    """True where the reference has been constant for at least ``settle`` seconds.
+    """Mark where the reference has been constant for at least ``settle`` seconds.
 
     The start of the record counts as a change, so the first ``settle`` seconds are
     excluded. ``min_level`` keeps only samples with r > min_level, e.g. the raised

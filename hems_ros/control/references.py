@@ -64,7 +64,7 @@ def sine(
     duration: float = SINE_DURATION,
     base: float = 0.0,
 ):
-    """``base + p2p/2 (1 - cos 2 pi f t)``: starts at ``base`` at rest, peaks at base + p2p."""
+    """Return (t, ``base + p2p/2 (1 - cos 2 pi f t)``): from ``base`` at rest to base + p2p."""
     t = time_base(duration, ts)
     return t, base + 0.5 * peak_to_peak * (1.0 - np.cos(2.0 * np.pi * frequency * t))
 
@@ -137,6 +137,7 @@ class Protocol:
     make: Callable[[float], tuple[np.ndarray, np.ndarray]]
 
     def generate(self, ts: float = DEFAULT_TS) -> tuple[np.ndarray, np.ndarray]:
+        """Return the protocol's (t, reference) sampled every ``ts`` seconds."""
         return self.make(ts)
 
 

@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import yaml
+from typing_extensions import override
 
 from hems_ros.paths import config_path
 from hems_ros.physics.yamlload import load_yaml
@@ -67,7 +68,7 @@ class _Group:
         self.check()
 
     def check(self) -> None:
-        """Group-specific rules; the default has none."""
+        """Raise ParamError naming the field that breaks the group's own rules (none here)."""
 
     def _prefix(self) -> str:
         return f"{getattr(self, '_GROUP', '')}."
@@ -89,6 +90,7 @@ class WireGeometry(_Group):
     diameter_m: float = 0.508e-3
     length_m: float = 0.9
 
+    @override
     def check(self) -> None:
         self._pos("diameter_m", "length_m")
 
@@ -122,6 +124,7 @@ class Electrical(_Group):
     drho_dsigma_martensite_ohm_m_per_pa: float = 1.5e-17
     drho_dsigma_austenite_ohm_m_per_pa: float = 0.5e-17
 
+    @override
     def check(self) -> None:
         self._pos("rho0_martensite_ohm_m", "rho0_austenite_ohm_m")
 
@@ -137,6 +140,7 @@ class Thermal(_Group):
     h0_w_m2_c: float = 37.67
     h2_w_m2_c3: float = 0.01
 
+    @override
     def check(self) -> None:
         self._pos("density_kg_m3", "specific_heat_j_kg_c")
         self._nonneg("latent_heat_j_kg", "h0_w_m2_c", "h2_w_m2_c3")
@@ -154,6 +158,7 @@ class Kinetics(_Group):
     cm_pa_per_c: float = 6.89e6
     ca_pa_per_c: float = 6.89e6
 
+    @override
     def check(self) -> None:
         if not self.af0_c > self.as0_c:
             raise ParamError(
@@ -180,6 +185,7 @@ class Constitutive(_Group):
     max_recoverable_strain: float = 0.038
     poisson_ratio: float = 0.33
 
+    @override
     def check(self) -> None:
         self._pos("e_martensite_pa", "e_austenite_pa", "max_recoverable_strain")
         if not 0 <= self.poisson_ratio < 0.5:
@@ -190,8 +196,7 @@ class Constitutive(_Group):
 
 @dataclass(frozen=True)
 class Drive(_Group):
-    """HEMS PWM stage: one MOSFET per actuator, 20 V supply, 4 A current limit
-    (dissertation chapter 6).
+    """HEMS PWM stage (dissertation chapter 6): one MOSFET per actuator, 20 V, 4 A limit.
 
     ``source_resistance_ohm``: supply sag, the resistance in series with the wire while the
     MOSFET conducts (supply output, MOSFET, leads, contacts). A measured current below
@@ -210,6 +215,7 @@ class Drive(_Group):
     source_resistance_ohm: float = 0.0
     input_delay_s: float = 0.0
 
+    @override
     def check(self) -> None:
         self._pos("supply_voltage_v", "current_limit_a")
         self._nonneg("source_resistance_ohm")
@@ -242,6 +248,7 @@ class Load(_Group):
     gravity_m_s2: float = 9.81
     cubic_stiffness_n_per_m3: float = 0.0
 
+    @override
     def check(self) -> None:
         if self.kind not in LOAD_KINDS:
             raise ParamError(f"load.kind = {self.kind!r}: must be one of {', '.join(LOAD_KINDS)}")
@@ -305,6 +312,7 @@ class Sheath(_Group):
     helix_heat_capacity_j_per_k: float = 0.0
     liner_helix_resistance_k_per_w: float = 0.0
 
+    @override
     def check(self) -> None:
         self._pos(
             "ptfe_inner_diameter_m",
@@ -344,6 +352,7 @@ class Capstan(_Group):
     friction_coefficient: float = 0.04
     bend_angle_rad: float = math.pi
 
+    @override
     def check(self) -> None:
         self._nonneg("friction_coefficient", "bend_angle_rad")
 
@@ -356,6 +365,7 @@ class GloveFriction(_Group):
     enabled: bool = False
     force_n: float = 1.0
 
+    @override
     def check(self) -> None:
         self._nonneg("force_n")
 
@@ -372,6 +382,7 @@ class Encoder(_Group):
     resolution_m: float = 1e-6
     gain: float = 1.0
 
+    @override
     def check(self) -> None:
         self._pos("resolution_m", "gain")
 
@@ -393,6 +404,7 @@ class ForceSensor(_Group):
     offset_n: float = 0.0
     drift_n_per_s: float = 0.0
 
+    @override
     def check(self) -> None:
         self._pos("range_max_n", "resolution_n")
         self._nonneg("noise_std_n")
@@ -412,6 +424,7 @@ class Start(_Group):
     _GROUP = "start"
     temperature_offset_c: float = 0.0
 
+    @override
     def check(self) -> None:
         self._nonneg("temperature_offset_c")
 
@@ -455,6 +468,7 @@ class UnitParams:
     start: Start = field(default_factory=Start)
 
     def __post_init__(self) -> None:
+        """Check the fields outside the groups (each group checks itself)."""
         t = self.ambient_temperature_c
         if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t):
             raise ParamError(f"ambient_temperature_c = {t!r}: must be a finite number")
@@ -470,13 +484,15 @@ class UnitParams:
 
     @property
     def wire_heat_capacity_j_per_k(self) -> float:
-        """rho V c_p of the whole wire (eqs. 4.7-4.12; Table 4.1: 0.985 J/K)."""
+        """Heat capacity rho V c_p of the whole wire (eqs. 4.7-4.12; Table 4.1: 0.985 J/K)."""
         return self.thermal.density_kg_m3 * self.wire.volume_m3 * self.thermal.specific_heat_j_kg_c
 
     @property
     def wire_latent_heat_j(self) -> float:
-        """rho V dH, the latent heat of the whole wire's transformation (eqs. 4.7-4.12;
-        Table 4.1: 28.45 J)."""
+        """Latent heat rho V dH of the whole wire's transformation, J.
+
+        Eqs. 4.7-4.12; Table 4.1: 28.45 J.
+        """
         return self.thermal.density_kg_m3 * self.wire.volume_m3 * self.thermal.latent_heat_j_kg
 
     # ----------------------------------------------------------------- conversion

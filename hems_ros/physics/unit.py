@@ -84,8 +84,11 @@ class ActuationUnit:
         self.reset()
 
     def reset(self) -> None:
-        """Back to t = 0: martensitic wire at rest at the start temperature (ambient plus
-        ``params.start``), sensor noise generator re-seeded."""
+        """Go back to t = 0.
+
+        The wire is martensitic and at rest at the start temperature (ambient plus
+        ``params.start``); the sensor noise generator is re-seeded.
+        """
         self._s = rows.initial_state(self.params)
         self._out[:] = 0.0
         self._steps = 0
@@ -132,9 +135,11 @@ class ActuationUnit:
         return {name: float(self._s[i]) for i, name in enumerate(rows.STATE_NAMES)}
 
     def wire(self) -> tuple[float, float, float]:
-        """(wire temperature degC, martensite fraction, slider position m) now: the part of
-        :attr:`state` a controller's thermal guard reads at every control step, without
-        building the rest."""
+        """Return (wire temperature degC, martensite fraction, slider position m) now.
+
+        The part of :attr:`state` a controller's thermal guard reads at every control step,
+        without building the rest.
+        """
         s = self._s
         return float(s[rows.S_T]), float(s[rows.S_XI]), float(s[rows.S_X])
 
@@ -164,9 +169,11 @@ class ActuationUnit:
         *,
         temperature: float | None = None,
     ) -> None:
-        """:meth:`step` without building its result, ``steps`` times with the same drive in one
-        kernel call: a node integrating at 1 kHz reads only the steps that end on a sensor
-        sample (:meth:`result`), and the drive changes only with a command."""
+        """Advance like :meth:`step`, ``steps`` times at one drive, without building a result.
+
+        One kernel call: a node integrating at 1 kHz reads only the steps that end on a sensor
+        sample (:meth:`result`), and the drive changes only with a command.
+        """
         kind, value = select_drive(duty, current, voltage, temperature)
         value = float(value)
         check_drive(kind, value)
@@ -187,16 +194,20 @@ class ActuationUnit:
             )
 
     def readings(self) -> tuple[int, float, float]:
-        """(encoder counts, encoder position m, wire force N) after the last step: the part of
-        :meth:`result` a node publishes at every encoder sample, without building the rest
-        (a fifth of a unit node's Python time per tick went into the whole result)."""
+        """Return (encoder counts, encoder position m, wire force N) after the last step.
+
+        The part of :meth:`result` a node publishes at every encoder sample, without building
+        the rest (a fifth of a unit node's Python time per tick went into the whole result).
+        """
         enc = self.params.encoder
         counts = sensors.encoder_counts(float(self._s[rows.S_X]), enc.resolution_m, enc.gain)
         return counts, counts * enc.resolution_m, float(self._out[rows.O_FW])
 
     def electrical(self) -> tuple[float, float]:
-        """(resistance ohm, mean current A) of the last step: what a drive board measures, without
-        building the rest of :meth:`result`."""
+        """Return (resistance ohm, mean current A) of the last step.
+
+        What a drive board measures, without building the rest of :meth:`result`.
+        """
         return float(self._out[rows.O_R]), float(self._out[rows.O_I])
 
     def result(self) -> StepResult:
