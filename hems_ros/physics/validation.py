@@ -6,19 +6,26 @@
 - :func:`sheath_facts` — cold-sheath 106.8 J displacement ratio, controlled-displacement
   cooling times, heat build-up over repeated cycles;
 - :func:`sweep` — the Table 3.2/3.3 pulse sweep on the calibrated sheathed rig;
+- :func:`sweep_traces` — the same sweep's time series, for its figure;
 - :func:`onset_bounds` — how hot the measured wires can have been where they had moved
-  (energy balance with no loss) against where the model's heating branch is.
+  (energy balance with no loss) against where the model's heating branch is;
+- :func:`closed_form` — the closed-form quantities the dissertation prints (convection,
+  sheath resistances, capstan ratio).
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from hems_ros.physics import heat, kinetics, scenarios
 from hems_ros.physics.batch import SimResult, simulate
+from hems_ros.physics.friction import capstan_ratio
 from hems_ros.physics.params import UnitParams, load_params
+from hems_ros.physics.sheath import SheathResistances, sheath_resistances
 
 DT = 1e-3
 
@@ -212,6 +219,19 @@ def sweep(
     return scenarios.pulse_responses([rig] * len(pulses), list(pulses), DT)
 
 
+def sweep_traces(
+    params: UnitParams | None = None, pulses=tuple(scenarios.TABLE_32_33)
+) -> SimResult:
+    """Slider position and wire force over the 16 s of each :func:`sweep` pulse, one row each."""
+    rig = scenarios.characterization_rig(params or load_params("sheathed_calibrated"), True)
+    return simulate(
+        [rig] * len(pulses),
+        DT,
+        current=np.stack([scenarios.pulse_train(p, 16.0, DT) for p in pulses]),
+        channels=["slider_position_m", "wire_force_n"],
+    )
+
+
 @dataclass
 class OnsetBound:
     """One measured short pulse on the 50 N characterization rig, and what it says of the wire."""
@@ -286,9 +306,33 @@ def onset_bounds(params: UnitParams | None = None) -> list[OnsetBound]:
     return out
 
 
-def earliest_onset(bounds: list[OnsetBound], source: str) -> OnsetBound:
+def earliest_onset(bounds: Sequence[OnsetBound], source: str) -> OnsetBound:
     """The shortest pulse of ``source`` among ``bounds``: the earliest the measured wire moved."""
     return min((b for b in bounds if b.source == source), key=lambda b: b.pulse_s)
 
 
-# ------------------------------------------------------------------ report
+# ------------------------------------------------------------------ closed form
+@dataclass(frozen=True)
+class ClosedForm:
+    h_22_w_m2k: float  # h(22 degC) with Table 4.1's h0, h2
+    churchill_chu_nusselt: float  # at the appendix 4.4 conditions
+    churchill_chu_h_w_m2k: float
+    sheath: SheathResistances  # Table 3.1, of the calibrated set's sheath
+    capstan_ratio: float  # mu 0.04 over Theta pi
+
+
+def closed_form(
+    table41: UnitParams | None = None, calibrated: UnitParams | None = None
+) -> ClosedForm:
+    """The printed closed-form quantities from the model's functions: convection from Table 4.1,
+    the sheath's resistances from the calibrated set."""
+    t41 = table41 or load_params("table41")
+    cal = calibrated or load_params("sheathed_calibrated")
+    nusselt, h_cc = heat.appendix_free_convection()
+    return ClosedForm(
+        heat.convection_coefficient(22.0, t41.thermal.h0_w_m2_c, t41.thermal.h2_w_m2_c3),
+        nusselt,
+        h_cc,
+        sheath_resistances(cal.sheath, cal.wire.length_m),
+        capstan_ratio(0.04, math.pi),
+    )

@@ -1,28 +1,53 @@
-"""The ``hems validate`` report: docs/validation.md and its PNG figures, from the validation
-scenarios of :mod:`hems_ros.physics.validation` (every number comes from there)."""
+"""The ``hems validate`` report: docs/validation.md and its PNG figures. :func:`run` gathers the
+scenarios of :mod:`hems_ros.physics.validation` (every number comes from there) into a
+:class:`ValidationResult`; :func:`markdown` writes the page from it, one function per section."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
-
-from hems_ros.physics import calibration, heat, scenarios, sheath
-from hems_ros.physics.batch import simulate
-from hems_ros.physics.friction import capstan_ratio
+from hems_ros.physics import calibration, scenarios
+from hems_ros.physics.batch import SimResult
 from hems_ros.physics.params import UnitParams, load_params
+from hems_ros.physics.scenarios import PulseResponse
 from hems_ros.physics.validation import (
     DT,
+    ClosedForm,
+    MassLoops,
+    OnsetBound,
+    Runaway,
+    SheathFacts,
+    SixPulses,
+    closed_form,
     earliest_onset,
     mass_loops,
     onset_bounds,
     sheath_facts,
     six_pulses,
     sweep,
+    sweep_traces,
     voltage_runaway,
 )
+
+
+@dataclass(frozen=True)
+class ValidationResult:
+    """What the page and its figures show, as the scenarios returned it."""
+
+    params: UnitParams  # the set validated: sheathed_calibrated unless run was given another
+    calibration_objective: float  # calibration.objective of params
+    closed_form: ClosedForm
+    sweep: tuple[PulseResponse, ...]  # Table 3.2/3.3 on params' sheathed rig
+    sweep_table41: tuple[PulseResponse, ...]  # the same with Table 4.1 and the default sheath
+    sweep_traces: SimResult  # the sweep's time series, for its figure
+    sheath_facts: SheathFacts
+    mass_loops: MassLoops  # Table 4.1, bare wire
+    six_pulses: SixPulses  # Table 4.1, 12 N spring
+    runaway: Runaway
+    onset_bounds: tuple[OnsetBound, ...]
 
 
 def run(
@@ -44,67 +69,60 @@ def run(
     cal = params or load_params("sheathed_calibrated")
 
     progress("[1/6] closed-form checks (h, Churchill-Chu, sheath resistances, capstan)")
-    nu, h_cc = heat.appendix_free_convection()
-    r = sheath.sheath_resistances(cal.sheath, cal.wire.length_m)
-    h_22 = heat.convection_coefficient(22.0, t41.thermal.h0_w_m2_c, t41.thermal.h2_w_m2_c3)
-    checks = [
-        (
-            "h(22 degC), W/m2K",
-            f"{h_22:.2f}",
-            "42.51",
-        ),
-        ("Churchill-Chu Nu (appendix 4.4)", f"{nu:.4f}", "0.8403"),
-        ("Churchill-Chu h, W/m2K", f"{h_cc:.2f}", "42.51"),
-        ("PTFE conduction, K/W", f"{r.ptfe_conduction:.4f}", "0.4038"),
-        ("steel conduction, K/W", f"{r.steel_conduction:.2e}", "4.73e-3"),
-        ("steel convection, K/W", f"{r.outer_convection:.2f}", "7.48"),
-        ("sheathed total, K/W", f"{r.sheathed_total:.2f}", "7.89"),
-        (
-            "capstan ratio, mu 0.04, Theta pi",
-            f"{capstan_ratio(0.04, math.pi):.3f}",
-            "0.88 (0.84 measured)",
-        ),
-    ]
-
+    checks = closed_form(t41, cal)
     progress("[2/6] Table 3.2/3.3 sweep, calibrated sheathed rig (and Table 4.1 for comparison)")
-    sw = sweep(cal)
-    sw41 = sweep(t41.replace({"sheath.enabled": True}))
+    swept = tuple(sweep(cal))
+    swept41 = tuple(sweep(t41.replace({"sheath.enabled": True})))
     progress(
         "[3/6] sheath facts: cold-sheath 106.8 J, controlled-displacement cooling, repeated cycles"
     )
-    sf = sheath_facts(cal)
+    facts = sheath_facts(cal)
     progress("[4/6] hanging masses 1/3/5 kg, 4 A x 1.8 s (Table 4.1)")
-    ml = mass_loops(t41)
+    loops = mass_loops(t41)
     progress("[5/6] six pulses with the 12 N spring (Table 4.1): minor loops")
-    sp = six_pulses(t41)
+    minor = six_pulses(t41)
     progress("[6/6] constant-voltage drive, bare vs sheathed; transformation onset bounds; figures")
-    ru = voltage_runaway(cal)
-    ob = onset_bounds(cal)
-
-    _figures(plt, fig_dir, cal, sw, ml, sp, ru, sf)
-    md = _markdown(
-        checks, sw, sw41, sf, ml, sp, ru, ob, cal, calibration.objective(calibration.metrics(cal))
+    result = ValidationResult(
+        params=cal,
+        calibration_objective=calibration.objective(calibration.metrics(cal)),
+        closed_form=checks,
+        sweep=swept,
+        sweep_table41=swept41,
+        sweep_traces=sweep_traces(cal),
+        sheath_facts=facts,
+        mass_loops=loops,
+        six_pulses=minor,
+        runaway=voltage_runaway(cal),
+        onset_bounds=tuple(onset_bounds(cal)),
     )
+
+    _figures(plt, fig_dir, result)
     path = out_dir / "validation.md"
-    path.write_text(md)
+    path.write_text(markdown(result))
     progress(f"wrote {path} and {len(list(fig_dir.glob('validation_*.png')))} figures in {fig_dir}")
     return path
 
 
-def _figures(plt, fig_dir, cal, sw, ml, sp, ru, sf):
-    t = np.arange(1, int(round(16.0 / DT)) + 1) * DT
-    rig = scenarios.characterization_rig(cal, True)
-    pulses = [r.pulse_s for r in sw]
-    res = simulate(
-        [rig] * len(pulses),
-        DT,
-        current=np.stack([scenarios.pulse_train(p, 16.0, DT) for p in pulses]),
-        channels=["slider_position_m", "wire_force_n", "wire_temperature_c"],
-    )
+def _figures(plt, fig_dir: Path, result: ValidationResult) -> None:
+    for draw, name in (
+        (_pulses_figure, "validation_pulses.png"),
+        (_loops_figure, "validation_loops.png"),
+        (_minor_loops_figure, "validation_minor_loops_resistance.png"),
+        (_sheath_figure, "validation_sheath.png"),
+    ):
+        fig = draw(plt, result)
+        fig.tight_layout()
+        fig.savefig(fig_dir / name, dpi=110)
+        plt.close(fig)
+
+
+def _pulses_figure(plt, result: ValidationResult):
+    traces = result.sweep_traces
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
-    for i, p in enumerate(pulses):
-        ax[0].plot(t, res.slider_position_m[i] * 1e3, label=f"{p:.1f} s")
-        ax[1].plot(t, res.wire_force_n[i], label=f"{p:.1f} s")
+    for i, response in enumerate(result.sweep):
+        p = response.pulse_s
+        ax[0].plot(traces.time, traces.slider_position_m[i] * 1e3, label=f"{p:.1f} s")
+        ax[1].plot(traces.time, traces.wire_force_n[i], label=f"{p:.1f} s")
         ax[0].plot(
             [0, 16],
             [scenarios.TABLE_32_33[p][1]] * 2,
@@ -120,16 +138,19 @@ def _figures(plt, fig_dir, cal, sw, ml, sp, ru, sf):
     )
     ax[1].set(xlabel="time, s", ylabel="wire force, N", title="wire force (50 N preload)")
     ax[0].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(fig_dir / "validation_pulses.png", dpi=110)
-    plt.close(fig)
+    return fig
 
+
+def _loops_figure(plt, result: ValidationResult):
+    loops = result.mass_loops
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
-    for i, m in enumerate(ml.masses_kg):
+    for i, m in enumerate(loops.masses_kg):
         ax[0].plot(
-            ml.result.wire_temperature_c[i], ml.result.martensite_fraction[i], label=f"{m:g} kg"
+            loops.result.wire_temperature_c[i],
+            loops.result.martensite_fraction[i],
+            label=f"{m:g} kg",
         )
-        ax[1].plot(ml.result.time, ml.result.wire_temperature_c[i], label=f"{m:g} kg")
+        ax[1].plot(loops.result.time, loops.result.wire_temperature_c[i], label=f"{m:g} kg")
     ax[0].set(
         xlabel="wire temperature, degC",
         ylabel="martensite fraction",
@@ -141,60 +162,75 @@ def _figures(plt, fig_dir, cal, sw, ml, sp, ru, sf):
         title="temperature (latent-heat plateau on cooling)",
     )
     ax[0].legend()
-    fig.tight_layout()
-    fig.savefig(fig_dir / "validation_loops.png", dpi=110)
-    plt.close(fig)
+    return fig
 
+
+def _minor_loops_figure(plt, result: ValidationResult):
+    minor, loops = result.six_pulses, result.mass_loops
     fig, ax = plt.subplots(1, 3, figsize=(15, 4))
-    ax[0].plot(sp.result.wire_temperature_c[0], sp.result.martensite_fraction[0])
+    ax[0].plot(minor.result.wire_temperature_c[0], minor.result.martensite_fraction[0])
     ax[0].set(
         xlabel="wire temperature, degC",
         ylabel="martensite fraction",
         title="six pulses, 12 N spring: minor loops",
     )
-    ax[1].plot(sp.effective_temperature_c, sp.result.martensite_fraction[0])
+    ax[1].plot(minor.effective_temperature_c, minor.result.martensite_fraction[0])
     ax[1].set(
         xlabel="effective temperature T - sigma/C_A, degC",
         ylabel="martensite fraction",
         title="same in the kinetics' input: loops close at the reversal points",
     )
-    ax[2].plot(ml.result.wire_temperature_c[0], ml.result.resistance_ohm[0])
+    ax[2].plot(loops.result.wire_temperature_c[0], loops.result.resistance_ohm[0])
     ax[2].set(
         xlabel="wire temperature, degC",
         ylabel="resistance, ohm",
         title="resistance hysteresis (1 kg)",
     )
-    fig.tight_layout()
-    fig.savefig(fig_dir / "validation_minor_loops_resistance.png", dpi=110)
-    plt.close(fig)
+    return fig
 
+
+def _sheath_figure(plt, result: ValidationResult):
+    runaway, cycles = result.runaway, result.sheath_facts.cycles
     fig, ax = plt.subplots(1, 3, figsize=(14, 4))
     for i, lab in enumerate(("bare", "sheathed")):
-        ax[0].plot(ru.result.time, ru.result.electrical_power_w[i], label=lab)
-        ax[1].plot(ru.result.time, ru.result.wire_temperature_c[i], label=lab)
-    ax[0].set(xlabel="time, s", ylabel="power, W", title=f"constant {ru.voltage_v:g} V drive")
+        ax[0].plot(runaway.result.time, runaway.result.electrical_power_w[i], label=lab)
+        ax[1].plot(runaway.result.time, runaway.result.wire_temperature_c[i], label=lab)
+    ax[0].set(xlabel="time, s", ylabel="power, W", title=f"constant {runaway.voltage_v:g} V drive")
     ax[1].set(xlabel="time, s", ylabel="wire temperature, degC")
     ax[0].legend()
-    n = sf.cycles.time.size
-    ax[2].plot(sf.cycles.time, sf.cycles.sheath_temperature_c[0], label="sheath")
-    ax[2].plot(sf.cycles.time, sf.cycles.wire_temperature_c[0], lw=0.6, label="wire")
+    ax[2].plot(cycles.time, cycles.sheath_temperature_c[0], label="sheath")
+    ax[2].plot(cycles.time, cycles.wire_temperature_c[0], lw=0.6, label="wire")
     ax[2].set(
         xlabel="time, s",
         ylabel="temperature, degC",
-        title=f"repeated 1.6 s pulses ({n * DT:.0f} s)",
+        title=f"repeated 1.6 s pulses ({cycles.time.size * DT:.0f} s)",
     )
     ax[2].legend()
-    fig.tight_layout()
-    fig.savefig(fig_dir / "validation_sheath.png", dpi=110)
-    plt.close(fig)
+    return fig
 
 
 def _fmt(v: float, spec: str = ".2f") -> str:
     return "-" if not math.isfinite(v) else format(v, spec)
 
 
-def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
-    L = [
+def markdown(result: ValidationResult) -> str:
+    """docs/validation.md: its sections in page order, each ending in a blank line."""
+    sections = (
+        _introduction,
+        _closed_form_checks,
+        _sweep,
+        _transformation_onset,
+        _calibrated_parameters,
+        _sheath_facts,
+        _dissertation_model,
+        _departures,
+        _phase_kinetics,
+    )
+    return "\n".join(line for section in sections for line in section(result))
+
+
+def _introduction(result: ValidationResult) -> list[str]:
+    return [
         "# Physics validation (generated by `hems validate`)",
         "",
         "Model: `hems_ros/physics` (dissertation chapter 4 wire model + sheath, friction, "
@@ -203,28 +239,52 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         "`config/physics/sheathed_calibrated.yaml` (calibrated, below). Step 1 ms. "
         "Regenerate with `hems validate` (add `--calibrate` to refit the calibrated sets).",
         "",
+    ]
+
+
+def _closed_form_checks(result: ValidationResult) -> list[str]:
+    checks = result.closed_form
+    sheath = checks.sheath
+    rows = [
+        ("h(22 degC), W/m2K", f"{checks.h_22_w_m2k:.2f}", "42.51"),
+        ("Churchill-Chu Nu (appendix 4.4)", f"{checks.churchill_chu_nusselt:.4f}", "0.8403"),
+        ("Churchill-Chu h, W/m2K", f"{checks.churchill_chu_h_w_m2k:.2f}", "42.51"),
+        ("PTFE conduction, K/W", f"{sheath.ptfe_conduction:.4f}", "0.4038"),
+        ("steel conduction, K/W", f"{sheath.steel_conduction:.2e}", "4.73e-3"),
+        ("steel convection, K/W", f"{sheath.outer_convection:.2f}", "7.48"),
+        ("sheathed total, K/W", f"{sheath.sheathed_total:.2f}", "7.89"),
+        (
+            "capstan ratio, mu 0.04, Theta pi",
+            f"{checks.capstan_ratio:.3f}",
+            "0.88 (0.84 measured)",
+        ),
+    ]
+    return [
         "## Closed-form checks",
         "",
         "| quantity | model | dissertation |",
         "|---|---|---|",
-    ]
-    L += [f"| {a} | {b} | {c} |" for a, b, c in checks]
-    L += [
+        *(f"| {quantity} | {model} | {printed} |" for quantity, model, printed in rows),
         "",
+    ]
+
+
+def _sweep(result: ValidationResult) -> list[str]:
+    lines = [
         "## Table 3.2 / 3.3 sweep (4 A pulses, 30 N mass + 20 N spring, sheathed, cold start)",
         "",
         "| pulse s | energy J model / diss. | max displ. mm model / diss. | ratio | max force N "
         "model / diss. | cooling s model / diss. | Table 4.1 wire + default sheath, displ. mm |",
         "|---|---|---|---|---|---|---|",
     ]
-    for r, r41 in zip(sw, sw41):
+    for r, r41 in zip(result.sweep, result.sweep_table41):
         e, x, f, tc = scenarios.TABLE_32_33[r.pulse_s]
-        L.append(
+        lines.append(
             f"| {r.pulse_s:.1f} | {r.energy_j:.1f} / {e:.2f} | {r.max_displacement_m * 1e3:.2f} "
             f"/ {x:.2f} | {r.max_displacement_m * 1e3 / x:.2f} | {r.max_force_n:.1f} / {f:.2f} | "
             f"{_fmt(r.cooling_time_s)} / {tc:.2f} | {r41.max_displacement_m * 1e3:.2f} |"
         )
-    L += [
+    return lines + [
         "",
         "Displacement rises with pulse length and saturates; pulses >= 1.6 s are within 25 % of "
         "the dissertation (ratio column). The 1.0 s pulse barely starts the transformation in the "
@@ -236,6 +296,15 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         "",
         "![pulses](figures/validation_pulses.png)",
         "",
+    ]
+
+
+def _transformation_onset(result: ValidationResult) -> list[str]:
+    bounds, kinetics = result.onset_bounds, result.params.kinetics
+    late = [b for b in bounds if b.lossless_c < b.branch_unloaded_c]
+    hems = earliest_onset(bounds, "section 5")
+    cooled = [r.cooled_temperature_c for r in result.sweep if math.isfinite(r.cooled_temperature_c)]
+    return [
         "## Transformation onset: the short pulses against the energy balance",
         "",
         "How hot can the measured wire have been where it had moved? Moving a fraction f of its "
@@ -252,46 +321,48 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         "model branch at f, degC, 50 N (unloaded) | model displ. mm (4 A) | start at least, "
         "degC, 50 N |",
         "|---|---|---|---|---|---|---|---|",
-    ]
-    L += [
-        f"| {b.source} | {b.pulse_s:.1f} | {b.energy_j:.2f} | {b.displacement_mm:.2f} "
-        f"({b.fraction:.2f}) | {b.lossless_c:.1f} | {b.branch_c:.1f} ({b.branch_unloaded_c:.1f}) | "
-        f"{b.model_displacement_mm:.2f} | {b.start_c:.1f} |"
-        for b in ob
-    ]
-    late = [b for b in ob if b.lossless_c < b.branch_unloaded_c]
-    hems = earliest_onset(ob, "section 5")
-    cooled = [r.cooled_temperature_c for r in sw if math.isfinite(r.cooled_temperature_c)]
-    L += [
+        *(
+            f"| {b.source} | {b.pulse_s:.1f} | {b.energy_j:.2f} | {b.displacement_mm:.2f} "
+            f"({b.fraction:.2f}) | {b.lossless_c:.1f} | {b.branch_c:.1f} "
+            f"({b.branch_unloaded_c:.1f}) | {b.model_displacement_mm:.2f} | {b.start_c:.1f} |"
+            for b in bounds
+        ),
         "",
-        f"Where the bound is below the branch even unloaded ({len(late)} of {len(ob)} rows), no "
-        f"wire with Table 4.1's transformation temperatures (As0 {cal.kinetics.as0_c:g}, Af0 "
-        f"{cal.kinetics.af0_c:g} degC) and heat constants can move as early as the measured one "
+        f"Where the bound is below the branch even unloaded ({len(late)} of {len(bounds)} rows), "
+        f"no wire with Table 4.1's transformation temperatures (As0 {kinetics.as0_c:g}, Af0 "
+        f"{kinetics.af0_c:g} degC) and heat constants can move as early as the measured one "
         f"did, whatever its sheath and losses: the measured wires start transforming at lower "
         f"temperatures, took more energy than the printed pulse energy, or were warmer than "
         f"ambient when the pulse began. The chapter 6 unit is the extreme: it moved "
         f"{hems.displacement_mm:g} mm on {hems.energy_j:g} J, which leaves it at most "
-        f"{hems.lossless_c:.0f} degC, below even Table 4.1's Mf0 = {cal.kinetics.mf0_c:g} degC. "
+        f"{hems.lossless_c:.0f} degC, below even Table 4.1's Mf0 = {kinetics.mf0_c:g} degC. "
         f"The calibration keeps Table 4.1's temperatures and fits the pulses of 1.6 s and more; "
         f"the model's wire therefore starts later than both measured wires, which shows as a dead "
         f"time at full duty in the closed-loop runs (docs/experiments.md).",
         "",
         "The last column is the third reading: the coldest start from which the same lossless wire "
         "reaches the model's branch under the 50 N preload, T_branch - (bound - T_amb). Every row "
-        f"needs at most {max(b.start_c for b in ob):.0f} degC. Tables 3.2/3.3 call the wire cooled "
-        f"once it is back at 0.5 % strain (4.5 mm), and the model's wire, cooling on its branch "
-        f"after the pulses of 1.6 s and more, is back at 4.5 mm at "
+        f"needs at most {max(b.start_c for b in bounds):.0f} degC. Tables 3.2/3.3 call the wire "
+        f"cooled once it is back at 0.5 % strain (4.5 mm), and the model's wire, cooling on its "
+        f"branch after the pulses of 1.6 s and more, is back at 4.5 mm at "
         f"{min(cooled):.0f}-{max(cooled):.0f} degC. If each pulse of a characterization began as "
         f"soon as the wire was cooled in that sense, all four rows are within this bound's reach "
         f"of a wire with Table 4.1's transformation temperatures. The dissertation does not say "
         f"when the pulses began; the sweep above, the calibration and the closed-loop "
         f"runs start cold.",
         "",
+    ]
+
+
+def _calibrated_parameters(result: ValidationResult) -> list[str]:
+    cal = result.params
+    return [
         "## Calibrated parameters",
         "",
         "Fewest parameters, fitted by `hems_ros.physics.calibration` (Nelder-Mead on the chapter "
         "3 facts); everything else is Table 4.1 / Table 3.1. Objective (sum of squared log ratios, "
-        f"`calibration.objective`) of this set with the current model: {cal_objective:.3f}.",
+        f"`calibration.objective`) of this set with the current model: "
+        f"{result.calibration_objective:.3f}.",
         "",
         "| parameter | Table 4.1 / default | calibrated | why |",
         "|---|---|---|---|",
@@ -315,21 +386,27 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         f"the first node: it sets the cooling after long pulses and the warming under "
         f"repeated duty |",
         "",
+    ]
+
+
+def _sheath_facts(result: ValidationResult) -> list[str]:
+    facts = result.sheath_facts
+    return [
         "## Sheath facts (calibrated set)",
         "",
         "| fact | model | dissertation / accepted |",
         "|---|---|---|",
         f"| 106.8 J (4 A x 1.6 s), cold sheath: sheathed / bare displacement | "
-        f"{sf.sheathed_106j_m * 1e3:.2f} / {sf.bare_106j_m * 1e3:.2f} mm "
-        f"= {sf.displacement_ratio:.2f} | about 0.5 / 0.35-0.65 |",
-        f"| cooling time after 20 mm controlled displacement, bare | {sf.cooling_bare_s:.2f} "
+        f"{facts.sheathed_106j_m * 1e3:.2f} / {facts.bare_106j_m * 1e3:.2f} mm "
+        f"= {facts.displacement_ratio:.2f} | about 0.5 / 0.35-0.65 |",
+        f"| cooling time after 20 mm controlled displacement, bare | {facts.cooling_bare_s:.2f} "
         f"s | 4.83 s |",
-        f"| same, sheathed | {sf.cooling_sheathed_s:.2f} s | 3.33 s |",
-        f"| ratio sheathed / bare | {sf.cooling_ratio:.2f} | 0.69 / 0.6-0.8 |",
+        f"| same, sheathed | {facts.cooling_sheathed_s:.2f} s | 3.33 s |",
+        f"| ratio sheathed / bare | {facts.cooling_ratio:.2f} | 0.69 / 0.6-0.8 |",
         f"| repeated 1.6 s pulses every 30 s: sheath temperature at each start, degC | "
-        f"{', '.join(f'{v:.1f}' for v in sf.cycle_sheath_start_c)} | heat builds up (ch. 7) |",
-        f"| same: cooling time of each cycle, s | {', '.join(_fmt(v) for v in sf.cycle_cooling_s)} "
-        f"| lengthens slowly |",
+        f"{', '.join(f'{v:.1f}' for v in facts.cycle_sheath_start_c)} | heat builds up (ch. 7) |",
+        f"| same: cooling time of each cycle, s | "
+        f"{', '.join(_fmt(v) for v in facts.cycle_cooling_s)} | lengthens slowly |",
         "",
         "The sheath has two nodes (`hems_ros/physics/sheath.py`). One lumped node fitted to the "
         "same facts took only the fast part of the sheath (3.09 J/K), could not reach both ratios "
@@ -342,32 +419,40 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         "",
         "![sheath](figures/validation_sheath.png)",
         "",
+    ]
+
+
+def _dissertation_model(result: ValidationResult) -> list[str]:
+    loops, minor, runaway = result.mass_loops, result.six_pulses, result.runaway
+    lines = [
         "## Dissertation model behaviour (Table 4.1, bare wire)",
         "",
         "| fact | model |",
         "|---|---|",
     ]
-    for i, m in enumerate(ml.masses_kg):
-        L.append(
+    for i, m in enumerate(loops.masses_kg):
+        lines.append(
             f"| {m:g} kg, 4 A x 1.8 s: onset (xi = 0.95) / midpoint (xi = 0.5) on heating, min xi, "
             f"peak apparent heat capacity on cooling / c_p rho V | "
-            f"{_fmt(ml.heating_onset_c[i], '.1f')} degC / {_fmt(ml.heating_midpoint_c[i], '.1f')} "
-            f"degC, {ml.min_martensite[i]:.2f}, {ml.cooling_capacity_ratio[i]:.1f} |"
+            f"{_fmt(loops.heating_onset_c[i], '.1f')} degC / "
+            f"{_fmt(loops.heating_midpoint_c[i], '.1f')} degC, {loops.min_martensite[i]:.2f}, "
+            f"{loops.cooling_capacity_ratio[i]:.1f} |"
         )
-    L += [
+    return lines + [
         f"| six pulses 0.5-1.0 s, 2 s pauses, 12 N spring: xi at each pulse peak | "
-        f"{', '.join(f'{v:.3f}' for v in sp.reversal_martensite)} |",
-        f"| xi at the end of each pause | {', '.join(f'{v:.3f}' for v in sp.pause_martensite)} |",
+        f"{', '.join(f'{v:.3f}' for v in minor.reversal_martensite)} |",
+        f"| xi at the end of each pause | "
+        f"{', '.join(f'{v:.3f}' for v in minor.pause_martensite)} |",
         f"| return-point deviation (xi when reheating passes the previous peak temperature minus "
-        f"xi there) | {', '.join(_fmt(v, '+.3f') for v in sp.return_deviation)} |",
+        f"xi there) | {', '.join(_fmt(v, '+.3f') for v in minor.return_deviation)} |",
         f"| same, passing the peak's effective temperature T - sigma/C_A (the kinetics' input) | "
-        f"{', '.join(_fmt(v, '+.3f') for v in sp.return_deviation_effective)} |",
-        f"| constant {ru.voltage_v:g} V, calibrated wire on the 50 N rig: peak / initial power, "
-        f"bare vs sheathed | {ru.power_gain[0]:.3f} vs {ru.power_gain[1]:.3f} |",
-        f"| same: peak wire temperature, degC | {ru.peak_temperature_c[0]:.1f} vs "
-        f"{ru.peak_temperature_c[1]:.1f} |",
-        f"| same: peak contraction speed, mm/s | {ru.peak_velocity_m_s[0] * 1e3:.1f} vs "
-        f"{ru.peak_velocity_m_s[1] * 1e3:.1f} |",
+        f"{', '.join(_fmt(v, '+.3f') for v in minor.return_deviation_effective)} |",
+        f"| constant {runaway.voltage_v:g} V, calibrated wire on the 50 N rig: peak / initial "
+        f"power, bare vs sheathed | {runaway.power_gain[0]:.3f} vs {runaway.power_gain[1]:.3f} |",
+        f"| same: peak wire temperature, degC | {runaway.peak_temperature_c[0]:.1f} vs "
+        f"{runaway.peak_temperature_c[1]:.1f} |",
+        f"| same: peak contraction speed, mm/s | {runaway.peak_velocity_m_s[0] * 1e3:.1f} vs "
+        f"{runaway.peak_velocity_m_s[1] * 1e3:.1f} |",
         "",
         "Loops move to higher temperature with load and at 5 kg the transformation no longer "
         "completes; the apparent heat capacity on cooling rises above c_p rho V where the reverse "
@@ -378,6 +463,11 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         "",
         "![minor loops and resistance](figures/validation_minor_loops_resistance.png)",
         "",
+    ]
+
+
+def _departures(result: ValidationResult) -> list[str]:
+    return [
         '## Where the code departs from the printed model',
         "",
         'Besides the effective temperature and the return-point memory (next section), three '
@@ -400,6 +490,12 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         "1.52e-5 m2/s, Pr 0.71) `heat.grashof_number` gives Gr 1.29 and the correlation h "
         "= 42.48 W/m2K.",
         "",
+    ]
+
+
+def _phase_kinetics(result: ValidationResult) -> list[str]:
+    minor = result.six_pulses
+    return [
         "## Phase kinetics: effective temperature and return-point memory",
         "",
         "What `hems_ros/physics/kinetics.py` adds to the printed Duhem/Likhachev law, and why.",
@@ -437,9 +533,9 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         "spring's stress moves the branches (eq. 4.25); in u they do not move.",
         "",
         "Return-point deviations of the six-pulse scenario (table above, Table 4.1, 12 N spring): "
-        f"{', '.join(_fmt(v, '+.3f') for v in sp.return_deviation)} at the previous peak "
-        f"temperature, {', '.join(_fmt(v, '+.3f') for v in sp.return_deviation_effective)} at its "
-        f"effective temperature (each the first 1 ms sample past the point, so one step of "
+        f"{', '.join(_fmt(v, '+.3f') for v in minor.return_deviation)} at the previous peak "
+        f"temperature, {', '.join(_fmt(v, '+.3f') for v in minor.return_deviation_effective)} at "
+        f"its effective temperature (each the first 1 ms sample past the point, so one step of "
         f"transformation is included). In u the loop closes exactly; in T there is in addition the "
         f"stress difference between the two passes (about 0.8 MPa, 0.12 degC of u, mostly the "
         f"damper's b v: the wire contracts 6-9 mm/s slower when re-heating passes the point). "
@@ -447,7 +543,6 @@ def _markdown(checks, sw, sw41, sf, ml, sp, ru, ob, cal, cal_objective) -> str:
         f"the closure rule on a prescribed nested-loop path.",
         "",
     ]
-    return "\n".join(L)
 
 
-__all__ = ["mass_loops", "six_pulses", "voltage_runaway", "sheath_facts", "sweep", "run"]
+__all__ = ["ValidationResult", "markdown", "run"]

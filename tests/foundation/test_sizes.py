@@ -24,7 +24,6 @@ LONG_FUNCTIONS = {
     "hems_ros/cli/diagnose.py:register": "the argparse declarations of the diagnose verbs",
     "hems_ros/reports/diagnosis_suite.py:_joint_section": "page text",
     "hems_ros/reports/findings.py:ch5_findings": "the chapter 5 claims, one after the other",
-    "hems_ros/reports/validation.py:_markdown": "page text",
     "benchmarks/bench_physics.py:main": "the benchmark's measurements printed side by side",
     "benchmarks/bench_diagnose.py:write_bag": "a bag of every topic the diagnosis reads",
     "benchmarks/bench_diagnose.py:main": "the benchmark's measurements printed side by side",
