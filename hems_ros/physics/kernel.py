@@ -33,6 +33,7 @@ time instead (compiled.py).
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import prange
@@ -127,6 +128,41 @@ from hems_ros.physics.rows import (
 XI_TOLERANCE = 1e-12
 MAX_ITERATIONS = 60
 
+# The state a step starts from (_begin and _finish read it where it is).
+Before = namedtuple("Before", ("temp", "xi", "sig", "x", "v", "t_sheath", "t_helix"))
+# The flows of a step, fixed at its start (the end of the step books them: _finish).
+Flows = namedtuple("Flows", ("res", "cur", "power", "q_air", "q_sh", "q_sa", "q_ha", "d_temp0"))
+# What the kinetic solve and the end of a step take from its start (_begin): the flows, the
+# start state the solve needs, the coefficients of xi's effect on the temperature and the free
+# stress, the load's response, and the elastic trial (v_new ... ua: the solve's first guess).
+# Named tuples of floats compile to the same registers as their fields in numba.
+Start = namedtuple(
+    "Start",
+    (
+        "flows",
+        "temp",
+        "xi",
+        "temp_per_xi",
+        "sig_free0",
+        "sig_free_per_xi",
+        "area",
+        "relax",
+        "c_in",
+        "g_in",
+        "c_out",
+        "g_out",
+        "inv_cm",
+        "inv_ca",
+        "um_old",
+        "ua_old",
+        "v_new",
+        "sig_new",
+        "sig_gain",
+        "um",
+        "ua",
+    ),
+)
+
 
 @jit_inline
 def _mechanics(sig_free, area, relax, c_in, g_in, c_out, g_out):
@@ -143,15 +179,22 @@ def _mechanics(sig_free, area, relax, c_in, g_in, c_out, g_out):
 
 
 @jit_inline
+def _before(s, sk, n):
+    return Before(
+        s[sk + S_T * n],
+        s[sk + S_XI * n],
+        s[sk + S_SIG * n],
+        s[sk + S_X * n],
+        s[sk + S_V * n],
+        s[sk + S_TS * n],
+        s[sk + S_TH * n],
+    )
+
+
+@jit_inline
 def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     """Start of a step: drive, heat flows, elastic trial and the kinetic solve's coefficients."""
-    temp = s[sk + S_T * n]
-    xi = s[sk + S_XI * n]
-    sig = s[sk + S_SIG * n]
-    x = s[sk + S_X * n]
-    v = s[sk + S_V * n]
-    t_sheath = s[sk + S_TS * n]
-    t_helix = s[sk + S_TH * n]
+    temp, xi, sig, x, v, t_sheath, t_helix = _before(s, sk, n)
 
     rho_m = electrical.phase_resistivity(
         p[pk + P_RHO0M * n], p[pk + P_T0M * n], p[pk + P_DRDTM * n], p[pk + P_DRDSM * n], temp, sig
@@ -230,22 +273,10 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
     um_old, ua_old = kinetics.effective_temperatures(temp, sig, inv_cm, inv_ca)
     v_new, sig_new, sig_gain = _mechanics(sig_free0, area, relax, c_in, g_in, c_out, g_out)
     um, ua = kinetics.effective_temperatures(temp + d_temp0, sig_new, inv_cm, inv_ca)
-    return (
+    return Start(
+        Flows(res, cur, power, q_air, q_sh, q_sa, q_ha, d_temp0),
         temp,
         xi,
-        sig,
-        x,
-        v,
-        t_sheath,
-        t_helix,
-        res,
-        cur,
-        power,
-        q_air,
-        q_sh,
-        q_sa,
-        q_ha,
-        d_temp0,
         temp_per_xi,
         sig_free0,
         sig_free_per_xi,
@@ -268,52 +299,26 @@ def _begin(p, pk, s, sk, n, drive_kind, drive_value, dt):
 
 
 @jit_inline
-def _finish(
-    p,
-    pk,
-    s,
-    sk,
-    dk,
-    n,
-    out,
-    ok,
-    dt,
-    temp,
-    xi,
-    x,
-    v,
-    t_sheath,
-    t_helix,
-    res,
-    cur,
-    power,
-    q_air,
-    q_sh,
-    q_sa,
-    q_ha,
-    d_temp0,
-    temp_per_xi,
-    d_xi,
-    v_new,
-    sig_new,
-    energy,
-):
-    """End of a step: new state (read at sk, written at dk), outputs and, with ``energy``, the
-    energy accumulators; True if finite."""
-    d_temp = d_temp0 + temp_per_xi * d_xi
-    x_new = x + v_new * dt
-    temp_new = temp + d_temp
+def _finish(p, pk, s, sk, dk, n, out, ok, dt, flows, d_xi, v_new, sig_new, energy):
+    """End of a step from its start state (read at sk), its ``flows`` and the solve's d_xi,
+    v_new and sig_new: new state (written at dk), outputs and, with ``energy``, the energy
+    accumulators; True if finite."""
+    was = _before(s, sk, n)
+    res, cur, power, q_air, q_sh, q_sa, q_ha, d_temp0 = flows
+    d_temp = d_temp0 + p[pk + P_TPX * n] * d_xi
+    x_new = was.x + v_new * dt
+    temp_new = was.temp + d_temp
 
     s[dk + S_T * n] = temp_new
-    s[dk + S_XI * n] = xi + d_xi
+    s[dk + S_XI * n] = was.xi + d_xi
     s[dk + S_SIG * n] = sig_new
     s[dk + S_X * n] = x_new
     s[dk + S_V * n] = v_new
     d_ts = (q_sh - q_sa) * dt * p[pk + P_INV_CS * n]
     d_th = (q_sa - q_ha) * dt * p[pk + P_INV_CH * n]  # 0 without a helix node
     sheathed = p[pk + P_SHEATH * n] > 0.0
-    s[dk + S_TS * n] = t_sheath + d_ts if sheathed else t_sheath
-    s[dk + S_TH * n] = t_helix + d_th
+    s[dk + S_TS * n] = was.t_sheath + d_ts if sheathed else was.t_sheath
+    s[dk + S_TH * n] = was.t_helix + d_th
     if energy:
         s[dk + S_ESHSTORED * n] = (
             s[sk + S_ESHSTORED * n] + (p[pk + P_CS * n] * d_ts + p[pk + P_CH * n] * d_th)
@@ -335,7 +340,7 @@ def _finish(
     out[ok + O_FW * n] = p[pk + P_S * n] * sig_new
     out[ok + O_FT * n] = loads.load_force(
         v_new,
-        v,
+        was.v,
         x_new,
         dt,
         p[pk + P_MN * n],
@@ -368,44 +373,12 @@ def step(p, s, drive_kind, drive_value, dt, out):
     extra iterations cost the batch 15 % of its time). Otherwise it iterates to XI_TOLERANCE
     (Newton steps, bisection fallback). Returns False when the new state is not finite.
     """
-    (
-        temp,
-        xi,
-        sig,
-        x,
-        v,
-        t_sheath,
-        t_helix,
-        res,
-        cur,
-        power,
-        q_air,
-        q_sh,
-        q_sa,
-        q_ha,
-        d_temp0,
-        temp_per_xi,
-        sig_free0,
-        sig_free_per_xi,
-        area,
-        relax,
-        c_in,
-        g_in,
-        c_out,
-        g_out,
-        inv_cm,
-        inv_ca,
-        um_old,
-        ua_old,
-        v_new,
-        sig_new,
-        sig_gain,
-        um,
-        ua,
-    ) = _begin(p, 0, s, 0, 1, drive_kind, drive_value, dt)
+    st = _begin(p, 0, s, 0, 1, drive_kind, drive_value, dt)
+    xi = st.xi
+    v_new, sig_new, sig_gain, um, ua = st.v_new, st.sig_new, st.sig_gain, st.um, st.ua
     d_xi = 0.0
-    heating = ua > ua_old
-    cooling = um < um_old
+    heating = ua > st.ua_old
+    cooling = um < st.um_old
     if heating and cooling:  # only when C_A != C_M: keep the current direction
         heating = s[S_DIR] > 0.0
     if heating or cooling:
@@ -415,16 +388,18 @@ def step(p, s, drive_kind, drive_value, dt, out):
         mf0, inv_mw, as0, inv_aw = p[P_MF0], p[P_INV_MW], p[P_AS0], p[P_INV_AW]
         if s[S_DIR] != 0.0 and s[S_DIR] != direction:
             n_points = kinetics.push_reversal(
-                memory, n_points, ua_old, um_old, xi, mf0, inv_mw, as0, inv_aw
+                memory, n_points, st.ua_old, st.um_old, xi, mf0, inv_mw, as0, inv_aw
             )
         s[S_DIR] = direction
         # the printed law's slope at the start, needed only on an outermost branch
         slope0 = (
-            kinetics.transformation_slope(ua_old, um_old, xi, heating, mf0, inv_mw, as0, inv_aw)
+            kinetics.transformation_slope(
+                st.ua_old, st.um_old, xi, heating, mf0, inv_mw, as0, inv_aw
+            )
             if n_points < 2
             else 0.0
         )
-        inv_c = inv_ca if heating else inv_cm
+        inv_c = st.inv_ca if heating else st.inv_cm
         lo = -xi if heating else 0.0
         hi = 0.0 if heating else 1.0 - xi
         closed = 0
@@ -436,8 +411,8 @@ def step(p, s, drive_kind, drive_value, dt, out):
                 memory,
                 n_points,
                 xi,
-                ua_old,
-                um_old,
+                st.ua_old,
+                st.um_old,
                 slope0,
                 mf0,
                 inv_mw,
@@ -451,50 +426,27 @@ def step(p, s, drive_kind, drive_value, dt, out):
                 hi = d_xi
             else:
                 lo = d_xi
-            du_dxi = temp_per_xi - sig_gain * sig_free_per_xi * inv_c
+            du_dxi = st.temp_per_xi - sig_gain * st.sig_free_per_xi * inv_c
             d_next = d_xi - r / (1.0 - dxi_du * du_dxi)
             newton = lo < d_next < hi
             d_xi = d_next if newton else 0.5 * (lo + hi)
             gain_before = sig_gain
             v_new, sig_new, sig_gain = _mechanics(
-                sig_free0 + sig_free_per_xi * d_xi, area, relax, c_in, g_in, c_out, g_out
+                st.sig_free0 + st.sig_free_per_xi * d_xi,
+                st.area,
+                st.relax,
+                st.c_in,
+                st.g_in,
+                st.c_out,
+                st.g_out,
             )
             um, ua = kinetics.effective_temperatures(
-                temp + d_temp0 + temp_per_xi * d_xi, sig_new, inv_cm, inv_ca
+                st.temp + st.flows.d_temp0 + st.temp_per_xi * d_xi, sig_new, st.inv_cm, st.inv_ca
             )
             if newton and closed == 0 and sig_gain == gain_before:
                 break
         s[S_NREV] = n_points - 2 * closed
-    return _finish(
-        p,
-        0,
-        s,
-        0,
-        0,
-        1,
-        out,
-        0,
-        dt,
-        temp,
-        xi,
-        x,
-        v,
-        t_sheath,
-        t_helix,
-        res,
-        cur,
-        power,
-        q_air,
-        q_sh,
-        q_sa,
-        q_ha,
-        d_temp0,
-        temp_per_xi,
-        d_xi,
-        v_new,
-        sig_new,
-        True,
-    )
+    return _finish(p, 0, s, 0, 0, 1, out, 0, dt, st.flows, d_xi, v_new, sig_new, True)
 
 
 @jit
@@ -749,23 +701,7 @@ def _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active):
 def _finish_set(b, j, s_in, s_out, dt, energy):
     """_finish for set j of block b from its W_* fields; True if the new state is finite."""
     w = B_WORK * BLOCK + j
-    c = s_in * BLOCK + j
-    return _finish(
-        b,
-        j,
-        b,
-        c,
-        s_out * BLOCK + j,
-        BLOCK,
-        b,
-        B_OUT * BLOCK + j,
-        dt,
-        b[c + S_T * BLOCK],
-        b[c + S_XI * BLOCK],
-        b[c + S_X * BLOCK],
-        b[c + S_V * BLOCK],
-        b[c + S_TS * BLOCK],
-        b[c + S_TH * BLOCK],
+    flows = Flows(
         b[w + W_RES * BLOCK],
         b[w + W_CUR * BLOCK],
         b[w + W_POWER * BLOCK],
@@ -774,7 +710,18 @@ def _finish_set(b, j, s_in, s_out, dt, energy):
         b[w + W_QSA * BLOCK],
         b[w + W_QHA * BLOCK],
         b[w + W_DTEMP0 * BLOCK],
-        b[j + P_TPX * BLOCK],
+    )
+    return _finish(
+        b,
+        j,
+        b,
+        s_in * BLOCK + j,
+        s_out * BLOCK + j,
+        BLOCK,
+        b,
+        B_OUT * BLOCK + j,
+        dt,
+        flows,
         b[w + W_DXI * BLOCK],
         b[w + W_VNEW * BLOCK],
         b[w + W_SIGNEW * BLOCK],
@@ -795,53 +742,20 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
     for j in range(BLOCK):
         sk = s_in * BLOCK + j
         w = B_WORK * BLOCK + j
-        (
-            temp,
-            xi,
-            sig,
-            x,
-            v,
-            t_sheath,
-            t_helix,
-            res,
-            cur,
-            power,
-            q_air,
-            q_sh,
-            q_sa,
-            q_ha,
-            d_temp0,
-            temp_per_xi,
-            sig_free0,
-            sig_free_per_xi,
-            area,
-            relax,
-            c_in,
-            g_in,
-            c_out,
-            g_out,
-            inv_cm,
-            inv_ca,
-            um_old,
-            ua_old,
-            v_new,
-            sig_new,
-            sig_gain,
-            um,
-            ua,
-        ) = _begin(b, j, b, sk, BLOCK, drive_kind, b[B_DRIVE * BLOCK + j], dt)
+        st = _begin(b, j, b, sk, BLOCK, drive_kind, b[B_DRIVE * BLOCK + j], dt)
+        flows = st.flows
         old_dir = b[sk + S_DIR * BLOCK]
-        heating = ua > ua_old
-        cooling = um < um_old
+        heating = st.ua > st.ua_old
+        cooling = st.um < st.um_old
         if heating and cooling:
             heating = old_dir > 0.0
         moving = heating or cooling
         direction = 1.0 if heating else -1.0
         n_points = b[sk + S_NREV * BLOCK]
         slope0 = kinetics.transformation_slope(
-            ua_old,
-            um_old,
-            xi,
+            st.ua_old,
+            st.um_old,
+            st.xi,
             heating,
             b[j + P_MF0 * BLOCK],
             b[j + P_INV_MW * BLOCK],
@@ -849,61 +763,61 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
             b[j + P_INV_AW * BLOCK],
         )
         if keep:
-            b[w + W_RES * BLOCK] = res
-            b[w + W_CUR * BLOCK] = cur
-            b[w + W_POWER * BLOCK] = power
-            b[w + W_QAIR * BLOCK] = q_air
-            b[w + W_QSH * BLOCK] = q_sh
-            b[w + W_QSA * BLOCK] = q_sa
-            b[w + W_QHA * BLOCK] = q_ha
-            b[w + W_DTEMP0 * BLOCK] = d_temp0
-            b[w + W_SF0 * BLOCK] = sig_free0
-            b[w + W_SFX * BLOCK] = sig_free_per_xi
-            b[w + W_RELAX * BLOCK] = relax
-            b[w + W_CIN * BLOCK] = c_in
-            b[w + W_GIN * BLOCK] = g_in
-            b[w + W_COUT * BLOCK] = c_out
-            b[w + W_GOUT * BLOCK] = g_out
-            b[w + W_UMOLD * BLOCK] = um_old
-            b[w + W_UAOLD * BLOCK] = ua_old
+            b[w + W_RES * BLOCK] = flows.res
+            b[w + W_CUR * BLOCK] = flows.cur
+            b[w + W_POWER * BLOCK] = flows.power
+            b[w + W_QAIR * BLOCK] = flows.q_air
+            b[w + W_QSH * BLOCK] = flows.q_sh
+            b[w + W_QSA * BLOCK] = flows.q_sa
+            b[w + W_QHA * BLOCK] = flows.q_ha
+            b[w + W_DTEMP0 * BLOCK] = flows.d_temp0
+            b[w + W_SF0 * BLOCK] = st.sig_free0
+            b[w + W_SFX * BLOCK] = st.sig_free_per_xi
+            b[w + W_RELAX * BLOCK] = st.relax
+            b[w + W_CIN * BLOCK] = st.c_in
+            b[w + W_GIN * BLOCK] = st.g_in
+            b[w + W_COUT * BLOCK] = st.c_out
+            b[w + W_GOUT * BLOCK] = st.g_out
+            b[w + W_UMOLD * BLOCK] = st.um_old
+            b[w + W_UAOLD * BLOCK] = st.ua_old
             b[w + W_HEATING * BLOCK] = 1.0 if heating else 0.0
             b[w + W_NPOINTS * BLOCK] = n_points
             b[w + W_SLOPE0 * BLOCK] = slope0
-        lo = -xi if heating else 0.0
-        hi = 0.0 if heating else 1.0 - xi
+        lo = -st.xi if heating else 0.0
+        hi = 0.0 if heating else 1.0 - st.xi
         d_xi1, lo1, hi1, v1, sig1, gain1, um1, ua1, active, closes = _solve_iteration(
             b,
             j,
             heating,
-            xi,
+            st.xi,
             n_points,
-            ua_old,
-            um_old,
+            st.ua_old,
+            st.um_old,
             slope0,
-            temp,
-            d_temp0,
-            sig_free0,
-            sig_free_per_xi,
-            relax,
-            c_in,
-            g_in,
-            c_out,
-            g_out,
+            st.temp,
+            flows.d_temp0,
+            st.sig_free0,
+            st.sig_free_per_xi,
+            st.relax,
+            st.c_in,
+            st.g_in,
+            st.c_out,
+            st.g_out,
             0.0,
             lo,
             hi,
-            v_new,
-            sig_new,
-            sig_gain,
-            um,
-            ua,
+            st.v_new,
+            st.sig_new,
+            st.sig_gain,
+            st.um,
+            st.ua,
             scaled,
         )
         redo = moving and (closes > 0.0 or (old_dir != 0.0 and old_dir != direction))
         if moving:
             d_xi, v_new, sig_new = d_xi1, v1, sig1
         else:
-            d_xi, active = 0.0, 0.0
+            d_xi, v_new, sig_new, active = 0.0, st.v_new, st.sig_new, 0.0
         if keep:
             _store_solve(b, j, d_xi, lo1, hi1, v_new, sig_new, gain1, um1, ua1, active)
         b[s_out * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
@@ -918,21 +832,7 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
             b,
             B_OUT * BLOCK + j,
             dt,
-            temp,
-            xi,
-            x,
-            v,
-            t_sheath,
-            t_helix,
-            res,
-            cur,
-            power,
-            q_air,
-            q_sh,
-            q_sa,
-            q_ha,
-            d_temp0,
-            temp_per_xi,
+            flows,
             d_xi,
             v_new,
             sig_new,
