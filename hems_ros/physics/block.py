@@ -138,39 +138,13 @@ def _branch(
 
 
 @jit_inline
-def _solve_iteration(
-    b,
-    j,
-    heating,
-    xi,
-    n_points,
-    ua_old,
-    um_old,
-    slope0,
-    temp,
-    d_temp0,
-    sig_free0,
-    sig_free_per_xi,
-    relax,
-    c_in,
-    g_in,
-    c_out,
-    g_out,
-    d_xi,
-    lo,
-    hi,
-    v_new,
-    sig_new,
-    sig_gain,
-    um,
-    ua,
-    scaled,
-):
-    """One iteration of step's kinetic solve for set j of block b, from the start-of-step
-    values given (the set's constants and reversal points are read from b).
+def _solve_iteration(b, j, st, heating, n_points, slope0, it, scaled):
+    """One iteration of kernel.step's kinetic solve for set j of block b from ``it`` (a
+    kernel.Solve), given the step's start ``st`` (the set's constants and reversal points are
+    read from b).
 
-    Returns the updated (d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua), 1.0 while the solve
-    goes on and 1.0 if the set has to be redone by step.
+    Returns the updated Solve, 1.0 while the solve goes on and 1.0 if the set has to be redone
+    by step.
     """
     top = (
         b[(B_TOP + M_RUA) * BLOCK + j],
@@ -185,12 +159,12 @@ def _solve_iteration(
         b[(B_TOP + M_TZM) * BLOCK + j],
     )
     xi_branch, dxi_du, closes = _branch(
-        ua,
-        um,
+        it.ua,
+        it.um,
         heating,
-        xi,
-        ua_old,
-        um_old,
+        st.xi,
+        st.ua_old,
+        st.um_old,
         slope0,
         n_points,
         top,
@@ -200,84 +174,16 @@ def _solve_iteration(
         b[j + P_INV_AW * BLOCK],
         scaled,
     )
-    r = xi + d_xi - xi_branch
+    r = st.xi + it.d_xi - xi_branch
     if abs(r) <= kernel.XI_TOLERANCE:
-        return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0, closes
-    if r > 0.0:
-        hi = d_xi
-    else:
-        lo = d_xi
-    inv_cm, inv_ca = b[j + P_INV_CM * BLOCK], b[j + P_INV_CA * BLOCK]
-    temp_per_xi = b[j + P_TPX * BLOCK]
-    du_dxi = temp_per_xi - sig_gain * sig_free_per_xi * (inv_ca if heating else inv_cm)
-    d_next = d_xi - r / (1.0 - dxi_du * du_dxi)
-    newton = lo < d_next < hi
-    d_xi = d_next if newton else 0.5 * (lo + hi)
-    gain_before = sig_gain
-    v_new, sig_new, sig_gain = kernel.mechanics(
-        sig_free0 + sig_free_per_xi * d_xi, b[j + P_S * BLOCK], relax, c_in, g_in, c_out, g_out
-    )
-    um, ua = kinetics.effective_temperatures(
-        temp + d_temp0 + temp_per_xi * d_xi, sig_new, inv_cm, inv_ca
-    )
-    done = newton and closes == 0.0 and sig_gain == gain_before
-    return d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, 0.0 if done else 1.0, closes
+        return it, 0.0, closes
+    it, settled = kernel.solve_update(st, heating, it, r, dxi_du)
+    return it, 0.0 if settled and closes == 0.0 else 1.0, closes
 
 
 @jit_inline
-def _iteration(b, j, s_in, scaled):
-    """_solve_iteration for set j of block b from its work area (W_* fields)."""
-    w = B_WORK * BLOCK + j
-    c = s_in * BLOCK + j
-    return _solve_iteration(
-        b,
-        j,
-        b[w + W_HEATING * BLOCK] > 0.0,
-        b[c + S_XI * BLOCK],
-        b[w + W_NPOINTS * BLOCK],
-        b[w + W_UAOLD * BLOCK],
-        b[w + W_UMOLD * BLOCK],
-        b[w + W_SLOPE0 * BLOCK],
-        b[c + S_T * BLOCK],
-        b[w + W_DTEMP0 * BLOCK],
-        b[w + W_SF0 * BLOCK],
-        b[w + W_SFX * BLOCK],
-        b[w + W_RELAX * BLOCK],
-        b[w + W_CIN * BLOCK],
-        b[w + W_GIN * BLOCK],
-        b[w + W_COUT * BLOCK],
-        b[w + W_GOUT * BLOCK],
-        b[w + W_DXI * BLOCK],
-        b[w + W_LO * BLOCK],
-        b[w + W_HI * BLOCK],
-        b[w + W_VNEW * BLOCK],
-        b[w + W_SIGNEW * BLOCK],
-        b[w + W_GAIN * BLOCK],
-        b[w + W_UM * BLOCK],
-        b[w + W_UA * BLOCK],
-        scaled,
-    )
-
-
-@jit_inline
-def _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active):
-    w = B_WORK * BLOCK + j
-    b[w + W_DXI * BLOCK] = d_xi
-    b[w + W_LO * BLOCK] = lo
-    b[w + W_HI * BLOCK] = hi
-    b[w + W_VNEW * BLOCK] = v_new
-    b[w + W_SIGNEW * BLOCK] = sig_new
-    b[w + W_GAIN * BLOCK] = sig_gain
-    b[w + W_UM * BLOCK] = um
-    b[w + W_UA * BLOCK] = ua
-    b[w + W_ACTIVE * BLOCK] = active
-
-
-@jit_inline
-def _finish_set(b, j, s_in, s_out, dt, energy):
-    """kernel.finish for set j of block b from its W_* fields; True if the new state is finite."""
-    w = B_WORK * BLOCK + j
-    flows = kernel.Flows(
+def _work_flows(b, w):
+    return kernel.Flows(
         b[w + W_RES * BLOCK],
         b[w + W_CUR * BLOCK],
         b[w + W_POWER * BLOCK],
@@ -287,6 +193,71 @@ def _finish_set(b, j, s_in, s_out, dt, energy):
         b[w + W_QHA * BLOCK],
         b[w + W_DTEMP0 * BLOCK],
     )
+
+
+@jit_inline
+def _iteration(b, j, s_in, scaled):
+    """_solve_iteration for set j of block b from its work area (W_* fields)."""
+    w = B_WORK * BLOCK + j
+    c = s_in * BLOCK + j
+    it = kernel.Solve(
+        b[w + W_DXI * BLOCK],
+        b[w + W_LO * BLOCK],
+        b[w + W_HI * BLOCK],
+        b[w + W_VNEW * BLOCK],
+        b[w + W_SIGNEW * BLOCK],
+        b[w + W_GAIN * BLOCK],
+        b[w + W_UM * BLOCK],
+        b[w + W_UA * BLOCK],
+    )
+    # the work area keeps no elastic trial, which the solve does not read past its start:
+    # the start's trial fields hold the solve so far
+    st = kernel.Start(
+        _work_flows(b, w),
+        b[c + S_T * BLOCK],
+        b[c + S_XI * BLOCK],
+        b[j + P_TPX * BLOCK],
+        b[w + W_SF0 * BLOCK],
+        b[w + W_SFX * BLOCK],
+        b[j + P_S * BLOCK],
+        b[w + W_RELAX * BLOCK],
+        b[w + W_CIN * BLOCK],
+        b[w + W_GIN * BLOCK],
+        b[w + W_COUT * BLOCK],
+        b[w + W_GOUT * BLOCK],
+        b[j + P_INV_CM * BLOCK],
+        b[j + P_INV_CA * BLOCK],
+        b[w + W_UMOLD * BLOCK],
+        b[w + W_UAOLD * BLOCK],
+        it.v_new,
+        it.sig_new,
+        it.sig_gain,
+        it.um,
+        it.ua,
+    )
+    heating = b[w + W_HEATING * BLOCK] > 0.0
+    n_points = b[w + W_NPOINTS * BLOCK]
+    return _solve_iteration(b, j, st, heating, n_points, b[w + W_SLOPE0 * BLOCK], it, scaled)
+
+
+@jit_inline
+def _store_solve(b, j, it, active):
+    w = B_WORK * BLOCK + j
+    b[w + W_DXI * BLOCK] = it.d_xi
+    b[w + W_LO * BLOCK] = it.lo
+    b[w + W_HI * BLOCK] = it.hi
+    b[w + W_VNEW * BLOCK] = it.v_new
+    b[w + W_SIGNEW * BLOCK] = it.sig_new
+    b[w + W_GAIN * BLOCK] = it.sig_gain
+    b[w + W_UM * BLOCK] = it.um
+    b[w + W_UA * BLOCK] = it.ua
+    b[w + W_ACTIVE * BLOCK] = active
+
+
+@jit_inline
+def _finish_set(b, j, s_in, s_out, dt, energy):
+    """kernel.finish for set j of block b from its W_* fields; True if the new state is finite."""
+    w = B_WORK * BLOCK + j
     return kernel.finish(
         b,
         j,
@@ -297,7 +268,7 @@ def _finish_set(b, j, s_in, s_out, dt, energy):
         b,
         B_OUT * BLOCK + j,
         dt,
-        flows,
+        _work_flows(b, w),
         b[w + W_DXI * BLOCK],
         b[w + W_VNEW * BLOCK],
         b[w + W_SIGNEW * BLOCK],
@@ -359,43 +330,17 @@ def _block_begin(b, drive_kind, dt, scaled, keep, s_in, s_out, energy):
             b[w + W_HEATING * BLOCK] = 1.0 if heating else 0.0
             b[w + W_NPOINTS * BLOCK] = n_points
             b[w + W_SLOPE0 * BLOCK] = slope0
-        lo = -st.xi if heating else 0.0
-        hi = 0.0 if heating else 1.0 - st.xi
-        d_xi1, lo1, hi1, v1, sig1, gain1, um1, ua1, active, closes = _solve_iteration(
-            b,
-            j,
-            heating,
-            st.xi,
-            n_points,
-            st.ua_old,
-            st.um_old,
-            slope0,
-            st.temp,
-            flows.d_temp0,
-            st.sig_free0,
-            st.sig_free_per_xi,
-            st.relax,
-            st.c_in,
-            st.g_in,
-            st.c_out,
-            st.g_out,
-            0.0,
-            lo,
-            hi,
-            st.v_new,
-            st.sig_new,
-            st.sig_gain,
-            st.um,
-            st.ua,
-            scaled,
+        it, active, closes = _solve_iteration(
+            b, j, st, heating, n_points, slope0, kernel.solve_start(st, heating), scaled
         )
         redo = moving and (closes > 0.0 or (old_dir != 0.0 and old_dir != direction))
         if moving:
-            d_xi, v_new, sig_new = d_xi1, v1, sig1
+            d_xi, v_new, sig_new = it.d_xi, it.v_new, it.sig_new
         else:
             d_xi, v_new, sig_new, active = 0.0, st.v_new, st.sig_new, 0.0
         if keep:
-            _store_solve(b, j, d_xi, lo1, hi1, v_new, sig_new, gain1, um1, ua1, active)
+            solve = kernel.Solve(d_xi, it.lo, it.hi, v_new, sig_new, it.sig_gain, it.um, it.ua)
+            _store_solve(b, j, solve, active)
         b[s_out * BLOCK + j + S_DIR * BLOCK] = direction if moving else old_dir
         b[s_out * BLOCK + j + S_NREV * BLOCK] = n_points
         finite = kernel.finish(
@@ -425,11 +370,9 @@ def _block_iterate(b, s_in):
     n_active = 0
     for j in range(BLOCK):
         w = B_WORK * BLOCK + j
-        d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active, closes = _iteration(
-            b, j, s_in, True
-        )
+        it, active, closes = _iteration(b, j, s_in, True)
         if b[w + W_ACTIVE * BLOCK] > 0.0:
-            _store_solve(b, j, d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua, active)
+            _store_solve(b, j, it, active)
             if closes > 0.0:
                 b[B_REDO * BLOCK + j] = 1.0
             n_active += 1 if active > 0.0 else 0

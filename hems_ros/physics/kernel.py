@@ -129,7 +129,8 @@ Flows = namedtuple("Flows", ("res", "cur", "power", "q_air", "q_sh", "q_sa", "q_
 # What the kinetic solve and the end of a step take from its start (begin): the flows, the
 # start state the solve needs, the coefficients of xi's effect on the temperature and the free
 # stress, the load's response, and the elastic trial (v_new ... ua: the solve's first guess).
-# Named tuples of floats compile to the same registers as their fields in numba.
+# Numba keeps a named tuple's fields in registers as it does separate values, so the names cost
+# nothing; its classes have to be module globals (block.py builds them as kernel.Flows, ...).
 Start = namedtuple(
     "Start",
     (
@@ -156,6 +157,9 @@ Start = namedtuple(
         "ua",
     ),
 )
+# The kinetic solve between its iterations: the martensite increment d_xi, its bracket, and the
+# load solve and effective temperatures at d_xi.
+Solve = namedtuple("Solve", ("d_xi", "lo", "hi", "v_new", "sig_new", "sig_gain", "um", "ua"))
 
 
 @jit_inline
@@ -169,7 +173,7 @@ def mechanics(sig_free, area, relax, c_in, g_in, c_out, g_out):
 # finish (state update, accumulators, outputs) so that step and the batch's SIMD block path
 # (block._step_block) share the arithmetic and give the same results. Both halves address a
 # set through (array, offset, stride): field f of the set is a[offset + f * stride]; a packed
-# row (pack, initial_state) is offset 0, stride 1, a block of BLOCK sets is stride BLOCK.
+# row (pack, initial_state) is offset 0, stride 1, a block of block.BLOCK sets is stride BLOCK.
 
 
 @jit_inline
@@ -347,6 +351,44 @@ def finish(p, pk, s, sk, dk, n, out, ok, dt, flows, d_xi, v_new, sig_new, energy
     return math.isfinite(temp_new) and math.isfinite(sig_new) and math.isfinite(x_new)
 
 
+@jit_inline
+def solve_start(st, heating):
+    """The kinetic solve at the elastic trial (d_xi = 0), xi + d_xi bracketed in [0, 1] on the
+    side the step's direction allows."""
+    lo = -st.xi if heating else 0.0
+    hi = 0.0 if heating else 1.0 - st.xi
+    return Solve(0.0, lo, hi, st.v_new, st.sig_new, st.sig_gain, st.um, st.ua)
+
+
+@jit_inline
+def solve_update(st, heating, it, r, dxi_du):
+    """One iteration of the kinetic solve from ``it``, whose residual is r = xi + d_xi - X(u)
+    with the branch's slope dxi_du: the bracket narrowed by r's sign, a Newton step (halving
+    the bracket where it leaves it), the load solve and the effective temperatures at the new
+    d_xi. Returns the new Solve and True if it took a Newton step that kept the load's
+    direction of motion (mechanics' gain unchanged)."""
+    lo, hi = (it.lo, it.d_xi) if r > 0.0 else (it.d_xi, it.hi)
+    inv_c = st.inv_ca if heating else st.inv_cm
+    du_dxi = st.temp_per_xi - it.sig_gain * st.sig_free_per_xi * inv_c
+    d_next = it.d_xi - r / (1.0 - dxi_du * du_dxi)
+    newton = lo < d_next < hi
+    d_xi = d_next if newton else 0.5 * (lo + hi)
+    v_new, sig_new, sig_gain = mechanics(
+        st.sig_free0 + st.sig_free_per_xi * d_xi,
+        st.area,
+        st.relax,
+        st.c_in,
+        st.g_in,
+        st.c_out,
+        st.g_out,
+    )
+    um, ua = kinetics.effective_temperatures(
+        st.temp + st.flows.d_temp0 + st.temp_per_xi * d_xi, sig_new, st.inv_cm, st.inv_ca
+    )
+    settled = newton and sig_gain == it.sig_gain
+    return Solve(d_xi, lo, hi, v_new, sig_new, sig_gain, um, ua), settled
+
+
 @jit
 def step(p, s, drive_kind, drive_value, dt, out):
     """Advance one unit by dt in place (state ``s``); write derived outputs to ``out``.
@@ -369,12 +411,11 @@ def step(p, s, drive_kind, drive_value, dt, out):
     """
     st = begin(p, 0, s, 0, 1, drive_kind, drive_value, dt)
     xi = st.xi
-    v_new, sig_new, sig_gain, um, ua = st.v_new, st.sig_new, st.sig_gain, st.um, st.ua
-    d_xi = 0.0
-    heating = ua > st.ua_old
-    cooling = um < st.um_old
+    heating = st.ua > st.ua_old
+    cooling = st.um < st.um_old
     if heating and cooling:  # only when C_A != C_M: keep the current direction
         heating = s[S_DIR] > 0.0
+    it = solve_start(st, heating)
     if heating or cooling:
         direction = 1.0 if heating else -1.0
         memory = s[S_MEM:]
@@ -393,14 +434,11 @@ def step(p, s, drive_kind, drive_value, dt, out):
             if n_points < 2
             else 0.0
         )
-        inv_c = st.inv_ca if heating else st.inv_cm
-        lo = -xi if heating else 0.0
-        hi = 0.0 if heating else 1.0 - xi
         closed = 0
         for _ in range(MAX_ITERATIONS):
             xi_branch, dxi_du, closed = kinetics.memory_branch(
-                ua,
-                um,
+                it.ua,
+                it.um,
                 heating,
                 memory,
                 n_points,
@@ -413,34 +451,14 @@ def step(p, s, drive_kind, drive_value, dt, out):
                 as0,
                 inv_aw,
             )
-            r = xi + d_xi - xi_branch
+            r = xi + it.d_xi - xi_branch
             if abs(r) <= XI_TOLERANCE:
                 break
-            if r > 0.0:
-                hi = d_xi
-            else:
-                lo = d_xi
-            du_dxi = st.temp_per_xi - sig_gain * st.sig_free_per_xi * inv_c
-            d_next = d_xi - r / (1.0 - dxi_du * du_dxi)
-            newton = lo < d_next < hi
-            d_xi = d_next if newton else 0.5 * (lo + hi)
-            gain_before = sig_gain
-            v_new, sig_new, sig_gain = mechanics(
-                st.sig_free0 + st.sig_free_per_xi * d_xi,
-                st.area,
-                st.relax,
-                st.c_in,
-                st.g_in,
-                st.c_out,
-                st.g_out,
-            )
-            um, ua = kinetics.effective_temperatures(
-                st.temp + st.flows.d_temp0 + st.temp_per_xi * d_xi, sig_new, st.inv_cm, st.inv_ca
-            )
-            if newton and closed == 0 and sig_gain == gain_before:
+            it, settled = solve_update(st, heating, it, r, dxi_du)
+            if settled and closed == 0:
                 break
         s[S_NREV] = n_points - 2 * closed
-    return finish(p, 0, s, 0, 0, 1, out, 0, dt, st.flows, d_xi, v_new, sig_new, True)
+    return finish(p, 0, s, 0, 0, 1, out, 0, dt, st.flows, it.d_xi, it.v_new, it.sig_new, True)
 
 
 @jit

@@ -13,13 +13,11 @@ FUNCTION_LINES = 100
 ROOTS = ("hems_ros", "benchmarks", "tools")
 
 LONG_MODULES = {
-    "hems_ros/physics/block.py": "the batch's SIMD block engine: its buffer layout and loops",
     "hems_ros/physics/params.py": "the typed parameters of every block of chapter 4's model",
     "hems_ros/diagnosis/csvload.py": "one loader per lab table format, with their checks",
 }
 LONG_FUNCTIONS = {
     "hems_ros/physics/kernel.py:begin": "one numba step's start: every flow of the step",
-    "hems_ros/physics/block.py:_block_begin": "the step's start vectorised over a block",
     "hems_ros/cli/diagnose.py:register": "the argparse declarations of the diagnose verbs",
     "hems_ros/reports/diagnosis_suite.py:_joint_section": "page text",
     "hems_ros/reports/findings.py:ch5_findings": "the chapter 5 claims, one after the other",
