@@ -9,7 +9,7 @@ Prints measured numbers and ratios side by side (not a pass/fail test; floors):
   the two steps, the CPU time, the threads numba used and the cores they kept busy (fewer
   than the threads: other work on the host had the rest); and at 1 kHz recording every channel
   (mostly the cost of writing 123 MB of records, plus the energy accumulators);
-- the same batch on one thread, CPU time per set-step: the SIMD blocks of kernel.run_batch
+- the same batch on one thread, CPU time per set-step: the SIMD blocks of block.run_batch
   against the sets run one by one through kernel.step, and what each gives on idle cores
   (the wall figures depend on what else the machine runs);
 - baseline: scipy.integrate.solve_ivp(method="LSODA") on the same equations (right-hand side
@@ -34,6 +34,7 @@ from scipy.integrate import solve_ivp
 
 from hems_ros.physics import (
     ActuationUnit,
+    block,
     constitutive,
     electrical,
     heat,
@@ -43,7 +44,6 @@ from hems_ros.physics import (
     sheath,
     simulate,
 )
-from hems_ros.physics import kernel as K
 from hems_ros.physics.batch import CHANNELS
 from hems_ros.physics.electrical import DRIVE_NAMES
 
@@ -82,47 +82,55 @@ def lsoda_rhs(p):
     cycles run the full loop), with dxi/dt = slope du/dt and du/dt = dT/dt - dsigma/dt / C
     solved together as in the kernel.
     """
-    c_w, lat, s_area = p[K.P_CW], p[K.P_LAT], p[K.P_S]
-    n = p[K.P_N]
+    c_w, lat, s_area = p[rows.P_CW], p[rows.P_LAT], p[rows.P_S]
+    n = p[rows.P_N]
 
     def rhs(_t, y, cur):
         temp, xi, sig, x, v, ts, th = y
         rho = electrical.mixture_resistivity(
             xi,
             electrical.phase_resistivity(
-                p[K.P_RHO0M], p[K.P_T0M], p[K.P_DRDTM], p[K.P_DRDSM], temp, sig
+                p[rows.P_RHO0M], p[rows.P_T0M], p[rows.P_DRDTM], p[rows.P_DRDSM], temp, sig
             ),
             electrical.phase_resistivity(
-                p[K.P_RHO0A], p[K.P_T0A], p[K.P_DRDTA], p[K.P_DRDSA], temp, sig
+                p[rows.P_RHO0A], p[rows.P_T0A], p[rows.P_DRDTA], p[rows.P_DRDSA], temp, sig
             ),
         )
         _, power = electrical.current_source(
-            cur, electrical.wire_resistance(rho, p[K.P_L0] - x, p[K.P_INV_S])
+            cur, electrical.wire_resistance(rho, p[rows.P_L0] - x, p[rows.P_INV_S])
         )
-        if p[K.P_SHEATH] > 0:
-            q_sh, q_sa = sheath.sheath_heat_flows(temp, ts, th, p[K.P_GWS], p[K.P_GSA])
-            q_ha = sheath.helix_heat_loss(th, p[K.P_TAMB], p[K.P_GHA])
-            net, dts, dth = power - q_sh, (q_sh - q_sa) / p[K.P_CS], (q_sa - q_ha) * p[K.P_INV_CH]
+        if p[rows.P_SHEATH] > 0:
+            q_sh, q_sa = sheath.sheath_heat_flows(temp, ts, th, p[rows.P_GWS], p[rows.P_GSA])
+            q_ha = sheath.helix_heat_loss(th, p[rows.P_TAMB], p[rows.P_GHA])
+            net, dts, dth = (
+                power - q_sh,
+                (q_sh - q_sa) / p[rows.P_CS],
+                (q_sa - q_ha) * p[rows.P_INV_CH],
+            )
         else:
-            net = power - heat.convection_loss(temp, p[K.P_TAMB], p[K.P_H0], p[K.P_H2], p[K.P_AREA])
+            net = power - heat.convection_loss(
+                temp, p[rows.P_TAMB], p[rows.P_H0], p[rows.P_H2], p[rows.P_AREA]
+            )
             dts = dth = 0.0
-        e = constitutive.reuss_modulus(xi, p[K.P_EM], p[K.P_EA])
-        omega = constitutive.transformation_coefficient(e, p[K.P_EPSL])
-        theta = constitutive.thermoelastic_coefficient(xi, e, p[K.P_ALM], p[K.P_ALA], p[K.P_NU])
+        e = constitutive.reuss_modulus(xi, p[rows.P_EM], p[rows.P_EA])
+        omega = constitutive.transformation_coefficient(e, p[rows.P_EPSL])
+        theta = constitutive.thermoelastic_coefficient(
+            xi, e, p[rows.P_ALM], p[rows.P_ALA], p[rows.P_NU]
+        )
         dtemp0 = net / c_w
-        dsig0 = -e * v / p[K.P_L0] + theta * dtemp0
-        u_m, u_a = kinetics.effective_temperatures(temp, sig, p[K.P_INV_CM], p[K.P_INV_CA])
-        heating = dtemp0 - dsig0 * p[K.P_INV_CA] > 0
-        inv_c = p[K.P_INV_CA] if heating else p[K.P_INV_CM]
+        dsig0 = -e * v / p[rows.P_L0] + theta * dtemp0
+        u_m, u_a = kinetics.effective_temperatures(temp, sig, p[rows.P_INV_CM], p[rows.P_INV_CA])
+        heating = dtemp0 - dsig0 * p[rows.P_INV_CA] > 0
+        inv_c = p[rows.P_INV_CA] if heating else p[rows.P_INV_CM]
         slope = kinetics.transformation_slope(
-            u_a, u_m, xi, heating, p[K.P_MF0], p[K.P_INV_MW], p[K.P_AS0], p[K.P_INV_AW]
+            u_a, u_m, xi, heating, p[rows.P_MF0], p[rows.P_INV_MW], p[rows.P_AS0], p[rows.P_INV_AW]
         )
         du_dxi = lat / c_w - (omega + theta * lat / c_w) * inv_c
         dxi = slope * (dtemp0 - dsig0 * inv_c) / (1.0 - slope * du_dxi)
         dtemp = dtemp0 + lat / c_w * dxi
         dsig = dsig0 + omega * dxi + theta * lat / c_w * dxi
         force = s_area * sig / n
-        acc = (force - p[K.P_FSTAT] - p[K.P_BN] * v - p[K.P_KN] * x) / p[K.P_MN]
+        acc = (force - p[rows.P_FSTAT] - p[rows.P_BN] * v - p[rows.P_KN] * x) / p[rows.P_MN]
         return [dtemp, dxi, dsig, v, acc, dts, dth]
 
     return rhs
@@ -155,15 +163,15 @@ def run_lsoda(params, current: np.ndarray, dt: float) -> np.ndarray:
 
 def set_by_set(sets, current: np.ndarray, every: int) -> np.ndarray:
     """Slider position and wire force of every set, the sets one after the other through
-    kernel.step on one thread (kernel._run_sets, what run_batch did for every set before the
+    kernel.step on one thread (block._run_sets, what run_batch did for every set before the
     SIMD blocks)."""
     packed = np.stack([rows.pack(p) for p in sets])
     states = np.stack([rows.initial_state(p) for p in sets])
     drives = np.ascontiguousarray(np.broadcast_to(current, (len(sets), current.size)))
-    channels = np.array([K.S_X, K.N_S + K.O_FW])
+    channels = np.array([rows.S_X, rows.N_S + rows.O_FW])
     records = np.zeros((2, len(sets), current.size // every))
     failed_at = np.zeros(len(sets), dtype=np.int64)
-    K._run_sets(
+    block._run_sets(
         packed,
         states,
         DRIVE_NAMES["current"],

@@ -5,7 +5,8 @@ Blocks follow the dissertation (dissertation chapter 4): :mod:`electrical` (4.1-
 (4.26-4.31), :mod:`loads` (4.32-4.35); beyond it: :mod:`sheath` (Table 3.1),
 :mod:`friction` (capstan eq. 3.1, glove Coulomb), :mod:`sensors`. :mod:`kernel` holds the
 single-step numba kernel on the rows of :mod:`rows`; :mod:`unit` (stepping, with the kernel
-compiled ahead of time: :mod:`compiled`) and :mod:`batch` (simulate) wrap it.
+compiled ahead of time: :mod:`compiled`) and :mod:`batch` (simulate, on the SIMD blocks of
+:mod:`block`) wrap it.
 
     from hems_ros.physics import ActuationUnit, simulate, load_params
 

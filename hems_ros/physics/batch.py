@@ -6,7 +6,7 @@
     res.time                       # (n_records,) s, time at the end of each recorded step
 
 Parameter sets are packed into a (n_sets, N_P) float64 array and run in parallel by
-kernel.run_batch, in blocks of sets whose step arithmetic is vectorised across the sets; a set
+block.run_batch, in blocks of sets whose step arithmetic is vectorised across the sets; a set
 gives the same bits as the stepping API's kernel.step (to rounding when no energy channel is
 recorded: the blocks then skip the energy accumulators, a tenth of their work).
 ``record_every`` keeps every k-th step; ``channels`` limits what is stored (memory for big
@@ -22,7 +22,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from hems_ros.physics import kernel, rows, sensors
+from hems_ros.physics import block, rows, sensors
 from hems_ros.physics.electrical import DRIVE_NAMES, select_drive
 from hems_ros.physics.params import UnitParams
 
@@ -196,7 +196,7 @@ def simulate(
             packed[:, rows.P_FSTAT] = static
         whole = (first, last) == (0, n_steps)
         part = records if whole else np.zeros((len(index), n_sets, (last - first) // record_every))
-        kernel.run_batch(
+        block.run_batch(
             packed,
             states,
             DRIVE_NAMES[kind],

@@ -27,8 +27,9 @@ from pathlib import Path
 from typing import Any, Callable
 
 HERE = Path(__file__).resolve().parent
-# every file whose code or constants the compiled kernel holds
+# every file whose code or constants the compiled kernel or the batch engine holds
 SOURCES = (
+    "block",
     "constitutive",
     "electrical",
     "heat",

@@ -119,7 +119,7 @@ def exp_nonpositive(x):
     """e^x for x <= 0, in plain arithmetic (within about 1 ulp of libm's exp).
 
     The libm call is opaque to LLVM's loop vectoriser; this is not, so the batch can run the
-    branch functions for several parameter sets per instruction (kernel.run_batch). Below
+    branch functions for several parameter sets per instruction (block.run_batch). Below
     -708 it returns 0 where libm returns a subnormal number or 0 (2^k stays a normal number
     in the arithmetic); z and 1 - z of :func:`_logistic` are then exactly 0 and 1 as before.
     """

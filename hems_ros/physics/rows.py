@@ -2,7 +2,7 @@
 
 Parameters are packed into a flat float64 row (:func:`pack`, index constants ``P_*``) with
 the quantities derived from them precomputed, so that the batch can run many parameter sets
-side by side (kernel.run_batch); the state is a flat row too (``S_*``, :func:`initial_state`),
+side by side (block.run_batch); the state is a flat row too (``S_*``, :func:`initial_state`),
 and each step writes its derived outputs into ``out`` (``O_*``).
 
 Plain Python and numpy, as are the equations pack takes from the blocks (kinetics.band,

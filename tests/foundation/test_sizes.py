@@ -13,14 +13,11 @@ FUNCTION_LINES = 100
 ROOTS = ("hems_ros", "benchmarks", "tools")
 
 LONG_MODULES = {
-    "hems_ros/physics/kernel.py": "the scalar step and the block engine share the numba kernel",
     "hems_ros/physics/params.py": "the typed parameters of every block of chapter 4's model",
     "hems_ros/diagnosis/csvload.py": "one loader per lab table format, with their checks",
 }
 LONG_FUNCTIONS = {
-    "hems_ros/physics/kernel.py:_begin": "one numba step's start: every flow of the step",
-    "hems_ros/physics/kernel.py:step": "one numba step, solved together (docs/validation.md)",
-    "hems_ros/physics/kernel.py:_block_begin": "the step's start vectorised over a block",
+    "hems_ros/physics/kernel.py:begin": "one numba step's start: every flow of the step",
     "hems_ros/cli/diagnose.py:register": "the argparse declarations of the diagnose verbs",
     "hems_ros/reports/diagnosis_suite.py:_joint_section": "page text",
     "hems_ros/reports/findings.py:ch5_findings": "the chapter 5 claims, one after the other",

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from hems_ros.physics import ActuationUnit, kernel, simulate
+from hems_ros.physics import ActuationUnit, block, simulate
 from hems_ros.physics.batch import CHANNELS
 from hems_ros.physics.params import load_params
 
@@ -59,7 +59,7 @@ def test_batch_of_many_sets_matches_single_runs_and_record_every():
 
 
 def test_vectorised_blocks_match_set_by_set_runs_bit_for_bit():
-    # 40 sets: one full SIMD block of kernel.BLOCK sets and a partial one, against each set
+    # 40 sets: one full SIMD block of block.BLOCK sets and a partial one, against each set
     # run alone (kernel.step set by set); pulses of rising length drive reversals, nested
     # minor loops and loop closures, over the three load kinds of the named sets
     names = ("sheathed_calibrated", "ch6_hems_index", "table41")
@@ -150,10 +150,10 @@ def test_each_set_of_a_block_gets_its_own_drive_row():
 
 def test_a_failing_set_in_a_block_is_named():
     p = load_params("table41")
-    volts = np.zeros((kernel.BLOCK, 100))
+    volts = np.zeros((block.BLOCK, 100))
     volts[5] = 1e200
     with pytest.raises(FloatingPointError, match="parameter set 5"):
-        simulate([p] * kernel.BLOCK, 1e-3, voltage=volts)
+        simulate([p] * block.BLOCK, 1e-3, voltage=volts)
 
 
 def test_sensors_quantise_and_flag_saturation():
