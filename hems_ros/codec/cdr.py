@@ -14,7 +14,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -57,7 +57,7 @@ class Column:
 class Decoder:
     type_name: str
     columns: tuple[Column, ...]
-    decode: Callable[[bytes], tuple]
+    decode: Callable[[bytes], tuple[Any, ...]]
     types: dict[str, list[Field]]
 
 
@@ -218,19 +218,19 @@ def _read_string(b: bytes, o: int) -> tuple[str, int]:
     return str(b[o + 4 : o + 3 + length], "utf-8"), o + 4 + length
 
 
-def _compile(name: str, emitter: _Emitter, body_result: str, signature: str) -> Callable:
+def _compile(name: str, emitter: _Emitter, body_result: str, signature: str) -> Callable[..., Any]:
     source = f"def {name}({signature}):\n    o = {'o0' if 'o0' in signature else HEADER_SIZE}\n"
     source += "".join(f"    {line}\n" for line in emitter.lines)
     source += f"    return {body_result}\n"
     namespace: dict[str, object] = {"unpack_from": struct.unpack_from, "frombuffer": np.frombuffer}
     namespace.update(emitter.helpers)
     exec(compile(source, f"<cdr {name}>", "exec"), namespace)  # noqa: S102 - generated from parsed definitions only
-    return namespace[name]  # type: ignore[return-value]
+    return cast(Callable[..., Any], namespace[name])
 
 
 def _element_reader(
     type_name: str, types: dict[str, list[Field]], helpers: dict[str, object]
-) -> Callable:
+) -> Callable[..., Any]:
     emitter = _Emitter(types, helpers)
     emitter.modulus = 1
     emitter.message(type_name)
@@ -243,9 +243,9 @@ def build_decoder(type_name: str, types: dict[str, list[Field]]) -> Decoder:
     emitter = _Emitter(types, {})
     emitter.message(type_name)
     result = "(" + "".join(f"{v}, " for v in emitter.values) + ")"
-    body = _compile("decode_body", emitter, result, "b")
+    body = cast(Callable[[bytes], tuple[Any, ...]], _compile("decode_body", emitter, result, "b"))
 
-    def decode(data: bytes) -> tuple:
+    def decode(data: bytes) -> tuple[Any, ...]:
         if len(data) < HEADER_SIZE or data[1] not in LITTLE_ENDIAN_KINDS:
             raise CdrError(
                 f"{type_name}: not little-endian CDR (encapsulation {bytes(data[:4]).hex()})"
@@ -299,7 +299,7 @@ class _EncodeEmitter(_Emitter):
 class Encoder:
     type_name: str
     columns: tuple[Column, ...]
-    encode: Callable[[tuple], bytes]
+    encode: Callable[[tuple[Any, ...]], bytes]
 
 
 def build_encoder(type_name: str, types: dict[str, list[Field]]) -> Encoder:
@@ -313,9 +313,9 @@ def build_encoder(type_name: str, types: dict[str, list[Field]]) -> Encoder:
     source += "    return bytes(out)\n"
     namespace: dict[str, object] = {"pack": struct.pack, "HEAD": CDR_LE_HEADER}
     exec(compile(source, f"<cdr encode {type_name}>", "exec"), namespace)  # noqa: S102 - parsed definitions only
-    body: Callable[[tuple], bytes] = namespace["encode_body"]  # type: ignore[assignment]
+    body = cast(Callable[[tuple[Any, ...]], bytes], namespace["encode_body"])
 
-    def encode(values: tuple) -> bytes:
+    def encode(values: tuple[Any, ...]) -> bytes:
         try:
             return body(values)
         except (struct.error, ValueError, TypeError, AttributeError) as error:

@@ -11,8 +11,6 @@ from hems_ros.control.base import (
     DEFAULT_N_FILTER,
     DEFAULT_TRANSFER_TAU,
     DEFAULT_TS,
-    DUTY_MAX,
-    DUTY_MIN,
     MODES,
     Controller,
 )
@@ -22,14 +20,17 @@ from hems_ros.control.gains import (
     FORCE_SCALE,
     MN_PER_N,
     TABLE_5_1,
+    TABLE_5_1_BPID,
     UM_PER_M,
     BPIDGains,
+    Gains,
     PIDGains,
     PIPDGains,
     mode_gains,
 )
 from hems_ros.control.pid import PIDController
 from hems_ros.control.pipd import PIPDController
+from hems_ros.duty import DUTY_MAX, DUTY_MIN
 
 CONTROLLERS = {cls.strategy: cls for cls in (BPIDController, PIDController, PIPDController)}
 STRATEGIES = tuple(CONTROLLERS)
@@ -38,7 +39,7 @@ STRATEGIES = tuple(CONTROLLERS)
 def make_controller(
     strategy: str,
     mode: str,
-    gains: BPIDGains | PIDGains | PIPDGains | None = None,
+    gains: Gains | None = None,
     ts: float = DEFAULT_TS,
     n_filter: float = DEFAULT_N_FILTER,
     transfer_tau: float = DEFAULT_TRANSFER_TAU,
@@ -69,6 +70,7 @@ __all__ = [
     "DUTY_MIN",
     "FORCE_MODE_BPID",
     "FORCE_SCALE",
+    "Gains",
     "MN_PER_N",
     "MODES",
     "PIDController",
@@ -77,6 +79,7 @@ __all__ = [
     "PIPDGains",
     "STRATEGIES",
     "TABLE_5_1",
+    "TABLE_5_1_BPID",
     "mode_gains",
     "UM_PER_M",
     "make_controller",

@@ -159,7 +159,7 @@ class Controller:
         self._bias = 0.0
         self._reset_state()
 
-    def set_mode(self, mode: str, measurement: float, gains=None) -> None:
+    def set_mode(self, mode: str, measurement: float, gains: Any = None) -> None:
         """Switch to ``mode`` without a jump in duty, with that mode's ``gains`` if given.
 
         ``measurement`` is the current value in the new mode's SI unit.

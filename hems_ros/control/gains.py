@@ -57,6 +57,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from types import MappingProxyType
 
@@ -125,9 +126,15 @@ class PIPDGains(_Gains):
     u_ff: float
 
 
-TABLE_5_1 = MappingProxyType(
+Gains = BPIDGains | PIDGains | PIPDGains
+"""The gain set of any strategy."""
+
+TABLE_5_1_BPID = BPIDGains(kp=0.8, ki=0.0, kd=0.05, kb=1.0)
+"""The BPID row of :data:`TABLE_5_1`, typed as BPID gains."""
+
+TABLE_5_1: Mapping[str, Gains] = MappingProxyType(
     {
-        "bpid": BPIDGains(kp=0.8, ki=0.0, kd=0.05, kb=1.0),
+        "bpid": TABLE_5_1_BPID,
         "pid": PIDGains(kp=0.8, ki=0.0, kd=0.05),
         "pipd": PIPDGains(kp_pi=0.8, ki_pi=0.25, kp_pd=0.08, kd_pd=0.003, u_ff=3.0),
     }
@@ -139,7 +146,7 @@ FORCE_MODE_BPID = BPIDGains(kp=0.4, ki=0.2, kd=0.0, kb=1.0, force_scale=100.0)
 Ki in %/(10 mN s), Kb in 1/(10 mN). Position mode keeps Table 5.1."""
 
 
-def mode_gains(strategy: str, mode: str):
+def mode_gains(strategy: str, mode: str) -> Gains:
     """Return the default gains of ``strategy`` in ``mode``.
 
     Table 5.1, except BPID in force mode (:data:`FORCE_MODE_BPID`); PID and PI-PD have no

@@ -26,12 +26,13 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 APC_CURRENT = 4.0
 APC_RESISTANCE = 4.2
 
 
-def _arrays(*arrays):
+def _arrays(*arrays: ArrayLike) -> list[NDArray[np.float64]]:
     out = [np.asarray(a, dtype=float) for a in arrays]
     n = out[0].shape
     for a in out:
@@ -40,13 +41,13 @@ def _arrays(*arrays):
     return out
 
 
-def rms(e) -> float:
+def rms(e: ArrayLike) -> float:
     """Root mean square of the residuals ``e`` (nan if there are none)."""
     e = np.asarray(e, dtype=float).ravel()
     return float(np.sqrt(np.mean(e * e))) if e.size else math.nan
 
 
-def rmse(r, y, mask=None) -> float:
+def rmse(r: ArrayLike, y: ArrayLike, mask: ArrayLike | None = None) -> float:
     """Root mean square of r - y, over ``mask`` if given (nan if the mask is empty)."""
     r, y = _arrays(r, y)
     e = r - y
@@ -55,26 +56,26 @@ def rmse(r, y, mask=None) -> float:
     return rms(e)
 
 
-def iae_integral(t, r, y) -> float:
+def iae_integral(t: ArrayLike, r: ArrayLike, y: ArrayLike) -> float:
     """Time integral of |r - y| by the trapezoid rule."""
     t, r, y = _arrays(t, r, y)
     a = np.abs(r - y)
     return float(np.sum(0.5 * (a[1:] + a[:-1]) * np.diff(t)))
 
 
-def iae_sum(r, y, scale: float = 1.0) -> float:
+def iae_sum(r: ArrayLike, y: ArrayLike, scale: float = 1.0) -> float:
     """Sum over samples of |r - y| * scale (the dissertation's IAE; scale 1e3 for mm)."""
     r, y = _arrays(r, y)
     return float(np.sum(np.abs(r - y)) * scale)
 
 
-def macsi(u) -> float:
+def macsi(u: ArrayLike) -> float:
     """Mean absolute control signal increment, in % duty per sample."""
     (u,) = _arrays(u)
     return float(np.mean(np.abs(np.diff(u))))
 
 
-def apc(u, current: float = APC_CURRENT, resistance: float = APC_RESISTANCE) -> float:
+def apc(u: ArrayLike, current: float = APC_CURRENT, resistance: float = APC_RESISTANCE) -> float:
     """Average power consumption in W: sqrt(mean(u^2)) / 100 * I^2 R."""
     (u,) = _arrays(u)
     return float(np.sqrt(np.mean(u * u)) / 100.0 * current**2 * resistance)
@@ -89,7 +90,7 @@ class StepSegment(NamedTuple):
     after: float
 
 
-def step_segments(r) -> list[StepSegment]:
+def step_segments(r: ArrayLike) -> list[StepSegment]:
     """Segments from each jump of a piecewise-constant reference to the next change.
 
     A jump is a change r(k) != r(k-1) with the reference constant on both sides, so the
@@ -106,7 +107,9 @@ def step_segments(r) -> list[StepSegment]:
     return segments
 
 
-def rise_time(t, y, seg: StepSegment, lo: float = 0.1, hi: float = 0.9) -> float:
+def rise_time(
+    t: ArrayLike, y: ArrayLike, seg: StepSegment, lo: float = 0.1, hi: float = 0.9
+) -> float:
     """Time from ``lo`` to ``hi`` of the jump within ``seg`` (fractions); nan if not reached."""
     t, y = _arrays(t, y)
     sign = 1.0 if seg.after >= seg.before else -1.0
@@ -119,14 +122,14 @@ def rise_time(t, y, seg: StepSegment, lo: float = 0.1, hi: float = 0.9) -> float
     return float(t[seg.start + reached_hi[0]] - t[seg.start + reached_lo[0]])
 
 
-def _past_level(y, seg: StepSegment):
+def _past_level(y: ArrayLike, seg: StepSegment) -> NDArray[np.float64]:
     """How far y is past the new level of ``seg`` in the direction of the jump (+ = beyond)."""
     (y,) = _arrays(y)
     sign = 1.0 if seg.after >= seg.before else -1.0
     return sign * (y[seg.start : seg.stop] - seg.after)
 
 
-def overshoot(y, seg: StepSegment) -> float:
+def overshoot(y: ArrayLike, seg: StepSegment) -> float:
     """Return the first peak of y past the new level (>= 0).
 
     The peak is the largest excursion from the first sample at or beyond the level to the
@@ -145,12 +148,14 @@ def overshoot(y, seg: StepSegment) -> float:
     return float(past[first:end].max())
 
 
-def hold_excursion(y, seg: StepSegment) -> float:
+def hold_excursion(y: ArrayLike, seg: StepSegment) -> float:
     """Largest excursion of y past the new level anywhere in ``seg`` (>= 0)."""
     return float(max(0.0, np.max(_past_level(y, seg))))
 
 
-def steady_state_error(t, r, y, seg: StepSegment, window: float = 1.0) -> float:
+def steady_state_error(
+    t: ArrayLike, r: ArrayLike, y: ArrayLike, seg: StepSegment, window: float = 1.0
+) -> float:
     """|mean(r - y)| over the last ``window`` seconds of ``seg``."""
     t, r, y = _arrays(t, r, y)
     k = np.arange(seg.start, seg.stop)
@@ -158,7 +163,7 @@ def steady_state_error(t, r, y, seg: StepSegment, window: float = 1.0) -> float:
     return float(abs(np.mean(r[k] - y[k])))
 
 
-def ascending_mask(r):
+def ascending_mask(r: ArrayLike) -> NDArray[np.bool_]:
     """Mark where the reference rises, r(k) > r(k-1); the first sample is False."""
     (r,) = _arrays(r)
     mask = np.zeros(r.size, dtype=bool)
@@ -166,7 +171,9 @@ def ascending_mask(r):
     return mask
 
 
-def stationary_mask(t, r, settle: float = 1.0, min_level: float | None = None):
+def stationary_mask(
+    t: ArrayLike, r: ArrayLike, settle: float = 1.0, min_level: float | None = None
+) -> NDArray[np.bool_]:
     """Mark where the reference has been constant for at least ``settle`` seconds.
 
     The start of the record counts as a change, so the first ``settle`` seconds are
@@ -185,7 +192,9 @@ def stationary_mask(t, r, settle: float = 1.0, min_level: float | None = None):
     return mask
 
 
-def segment_mask(kind: str, t, r, settle: float = 1.0, min_level: float | None = None):
+def segment_mask(
+    kind: str, t: ArrayLike, r: ArrayLike, settle: float = 1.0, min_level: float | None = None
+) -> NDArray[np.bool_]:
     """Mask for ``kind`` "all", "ascending" or "stationary" (see the protocols' ``segment``)."""
     if kind == "all":
         (r,) = _arrays(r)

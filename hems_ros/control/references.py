@@ -63,7 +63,7 @@ def sine(
     ts: float = DEFAULT_TS,
     duration: float = SINE_DURATION,
     base: float = 0.0,
-):
+) -> tuple[np.ndarray, np.ndarray]:
     """Return (t, ``base + p2p/2 (1 - cos 2 pi f t)``): from ``base`` at rest to base + p2p."""
     t = time_base(duration, ts)
     return t, base + 0.5 * peak_to_peak * (1.0 - np.cos(2.0 * np.pi * frequency * t))
@@ -77,7 +77,7 @@ def step_pair(
     period: float = 30.0,
     duration: float = STEP_TEST_DURATION,
     base: float = 0.0,
-):
+) -> tuple[np.ndarray, np.ndarray]:
     """Two steps of ``height`` above ``base``, ``width`` s wide, onsets ``period`` s apart."""
     t = time_base(duration, ts)
     r = np.full(t.size, base)
@@ -94,7 +94,7 @@ def staircase(
     dwell: float = 7.5,
     duration: float = STEP_TEST_DURATION,
     base: float = 0.0,
-):
+) -> tuple[np.ndarray, np.ndarray]:
     """``n_steps`` steps of ``step`` up, then down again, one every ``dwell`` s from ``first``."""
     t = time_base(duration, ts)
     r = np.full(t.size, base)
@@ -112,7 +112,7 @@ def ramp(
     hold: float = 5.0,
     rest: float = 10.0,
     base: float = 0.0,
-):
+) -> tuple[np.ndarray, np.ndarray]:
     """Trapezoid: rise at ``rate`` from ``base`` to ``base + peak``, hold, descend, rest."""
     rise = peak / rate
     t = time_base(start + 2.0 * rise + hold + rest, ts)

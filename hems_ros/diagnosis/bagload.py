@@ -199,14 +199,14 @@ def _duty_steps(
     on_time = matched & (arrival < following)
     start = np.where(on_time, stamps[index], arrival)
     timeout = WATCHDOG_PERIODS * period_ns
-    times, levels = [], []
+    step_times, step_levels = [], []
     for k in range(start.size):
-        times.append(start[k])
-        levels.append(values[k])
+        step_times.append(start[k])
+        step_levels.append(values[k])
         if k + 1 < start.size and start[k + 1] > start[k] + timeout:
-            times.append(start[k] + timeout)
-            levels.append(0.0)
-    times, levels = np.array(times, dtype=np.int64), np.array(levels, dtype=float)
+            step_times.append(start[k] + timeout)
+            step_levels.append(0.0)
+    times, levels = np.array(step_times, dtype=np.int64), np.array(step_levels, dtype=float)
     sort = np.argsort(times, kind="stable")
     late = int(np.count_nonzero(matched & ~on_time))
     notes = (

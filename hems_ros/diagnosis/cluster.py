@@ -183,6 +183,7 @@ def _on_cluster(
             client.wait_for_workers(1, timeout=WORKER_WAIT_S)
     try:
         n_workers = len(client.scheduler_info()["workers"])
+        assert client.scheduler is not None  # a client that connected has its scheduler
         say(f"{n_workers} workers at {client.scheduler.address}")
         attempts = dict.fromkeys((t.key for t in todo), 0)
 

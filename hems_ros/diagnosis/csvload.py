@@ -175,7 +175,7 @@ def _trim(fields: list[str], width: int) -> list[str]:
 
 def _delimiter(line: str) -> str | None:
     counts = {d: line.count(d) for d in (",", ";", "\t")}
-    return max(counts, key=counts.get) if any(counts.values()) else None
+    return max(counts, key=counts.__getitem__) if any(counts.values()) else None
 
 
 def _is_number(text: str) -> bool:
@@ -840,7 +840,7 @@ def _features(table: _Table, columns: Columns, name: str) -> FeatureRun:
             f"{path}: only {len(table.rows)} test row, too few to compare "
             f"(a feature table needs at least {MIN_TESTS})"
         )
-    values = {
+    values: dict[str, list[str] | np.ndarray] = {
         q: (
             _texts(table, q, c)
             if q in units.STRING_QUANTITIES
@@ -851,7 +851,7 @@ def _features(table: _Table, columns: Columns, name: str) -> FeatureRun:
     tests = []
     for k, (number, _) in enumerate(table.rows):
         conditions = {CONDITIONS[q]: _item(values[q][k]) for q in CONDITIONS if q in values}
-        given = {q: float(values[q][k]) for q in figures if math.isfinite(values[q][k])}
+        given = {q: x for q in figures if math.isfinite(x := float(values[q][k]))}
         if not given:
             raise DiagnosisInputError(
                 f"{path}, row {number}: no figure given (every figure cell is empty)"

@@ -12,6 +12,7 @@ because a smooth model cannot follow it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -115,7 +116,8 @@ def three_roles(
 class Prediction:
     """One parameter set's outputs on every run, and its weighted residuals."""
 
-    outputs: list[dict[str, np.ndarray]]  # per run: output -> (n_samples,)
+    # per run: output -> (n_samples,) array; per row of a feature table: figure -> value
+    outputs: list[dict[str, Any]]
     train: np.ndarray  # weighted residuals on the training samples
     heldout: np.ndarray
 
@@ -204,12 +206,12 @@ class TimeSeriesData:
         """The output the starting model misses most on held-out data, in noise-floor units."""
 
         def cost(name: str) -> float:
-            r = [
+            parts = [
                 (sim[name][m] - run.outputs[name][m]) / self.sigma.get(name, 1.0)
                 for run, sim, m in zip(self.runs, start.outputs, self.split.heldout)
                 if name in run.outputs
             ]
-            r = np.concatenate(r) if r else np.zeros(0)
+            r = np.concatenate(parts) if parts else np.zeros(0)
             return float(np.mean(r**2)) if r.size else 0.0
 
         return max(self.channels, key=cost)
@@ -244,10 +246,10 @@ def prepare(
             select.append(np.zeros(run.n_samples, bool))
             test.append(np.zeros(run.n_samples, bool))
         for run, seg in zip(heldout, segments[len(runs) :]):
-            testing = np.isin(seg.cycle, np.arange(1, seg.n_cycles, 2))
+            even = np.isin(seg.cycle, np.arange(1, seg.n_cycles, 2))
             train.append(np.zeros(run.n_samples, bool))
-            select.append(~testing)
-            test.append(testing)
+            select.append(~even)
+            test.append(even)
         description = (
             f"held-out runs: {', '.join(r.name for r in heldout)}, cycles 1, 3 ... selecting "
             f"the terms and 2, 4 ... testing them (fitted on {', '.join(r.name for r in runs)})"

@@ -155,11 +155,13 @@ class Evaluator:
         self.data = data
         self.sets = 0
 
-    def __call__(self, models: list[UnitParams | None]) -> list[tuple[np.ndarray, np.ndarray]]:
+    def __call__(
+        self, models: list[UnitParams | None]
+    ) -> list[tuple[np.ndarray, np.ndarray] | None]:
         valid = [m for m in models if m is not None]
         predictions = iter(self.data.predict(valid) if valid else [])
         self.sets += len(valid)
-        out = []
+        out: list[tuple[np.ndarray, np.ndarray] | None] = []
         for m in models:
             if m is None:
                 out.append(None)

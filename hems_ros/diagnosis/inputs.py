@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from collections.abc import Sequence
 from pathlib import Path
+from typing import overload
 
 import yaml
 
@@ -18,7 +20,7 @@ from hems_ros.physics.params import ParamError, UnitParams, WireGeometry, load_p
 from hems_ros.physics.yamlload import load_yaml
 
 
-def model(name: str, conditions: Path | None = None, overrides: list[str] = ()) -> UnitParams:
+def model(name: str, conditions: Path | None = None, overrides: Sequence[str] = ()) -> UnitParams:
     """The starting model: a named set or YAML file, the run's conditions,
     ``KEY=VALUE`` overrides."""
     try:
@@ -100,22 +102,32 @@ def per_run(option: str, given: list, n_runs: int) -> list:
     return list(given)
 
 
-def on_rig(runs: list[Run], conditions: Path | None, model: UnitParams) -> list[Run]:
+@overload
+def on_rig(runs: list[Run], conditions: Path, model: UnitParams) -> list[FeatureRun]: ...
+
+
+@overload
+def on_rig(runs: list[Run], conditions: Path | None, model: UnitParams) -> Sequence[Run]: ...
+
+
+def on_rig(runs: list[Run], conditions: Path | None, model: UnitParams) -> Sequence[Run]:
     """The runs of one RUN argument, tables of tests set on the rig its --conditions give."""
     if conditions is None:
         return runs
     pairs = rig(conditions)
+    tables: list[FeatureRun] = []
     for run in runs:
         if not isinstance(run, FeatureRun):
             raise DiagnosisInputError(
                 f"--conditions {conditions} for {run.name}: a rig per run applies to tables of "
                 "tests only; give one --conditions for every run of a time series"
             )
+        tables.append(run)
     try:
         model.replace(dict(pairs))
     except (ParamError, TypeError) as error:
         raise DiagnosisInputError(f"--conditions {conditions}: {error}") from None
-    return [dataclasses.replace(run, rig=pairs) for run in runs]
+    return [dataclasses.replace(table, rig=pairs) for table in tables]
 
 
 def bounds(path: Path | None) -> dict[str, object]:

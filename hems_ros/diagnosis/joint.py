@@ -139,6 +139,7 @@ def pulls(d: Diagnosis, alone: Alone, progress: Callable[[str], None] | None = N
                 progress(f"{study.key}: {name} on this table alone")
             [found] = fit.fit_structures(data, d.corrected, [(candidates.BY_NAME[name],)], {})
             bounds = intervals.estimate(data, d.corrected, found)
+            assert bounds is not None  # the fit has the candidate's terms
             values = {}
             for key, value in zip(bounds.keys, bounds.values):
                 low, high = bounds.of(key)

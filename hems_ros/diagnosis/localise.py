@@ -58,6 +58,7 @@ def _weights(data, name: str, value: float | None = None) -> float:
         return data.sigma[name]
     from hems_ros.diagnosis.features import uncertainty
 
+    assert value is not None  # a table's figure: every row gives it
     return uncertainty(name, value)
 
 
@@ -172,5 +173,5 @@ def unexplained(data, prediction: Prediction, force: bool = False) -> list[str]:
         if worst_cost[g] > UNEXPLAINED and total > 0 and excess[g] >= SHARE * total
     ]
     if not named and force and total > 0:
-        named = [max(excess, key=excess.get)]
+        named = [max(excess, key=excess.__getitem__)]
     return named

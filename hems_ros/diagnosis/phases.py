@@ -115,7 +115,7 @@ def _merge_blips(starts: list[int], near_rest: np.ndarray) -> list[int]:
     cooled a little below its zero) to the cycle after it: alone it would be a held-out
     cycle with nothing in it. Kept apart when joining leaves too few cycles to hold one out."""
     bounds = starts + [near_rest.size]
-    kept = []
+    kept: list[int] = []
     for k in range(len(starts)):
         if kept and near_rest[bounds[k - 1] : bounds[k]].all():
             continue  # the previous cycle was a blip: it runs on into this one

@@ -187,11 +187,13 @@ def _grid_step(time: np.ndarray, step: float) -> float:
 def rig(params: UnitParams, run: TimeSeriesRun) -> UnitParams:
     """The parameter set the run's conditions call for (a thermal cycle's dead weight, a
     prescribed-strain run's frame)."""
+    if run.kind not in ("thermal_cycle", "prescribed_strain"):
+        return params
+    if run.stress_pa is None:
+        raise DiagnosisInputError(f"{run.name}: a {run.kind} run needs the wire's stress")
     if run.kind == "thermal_cycle":
         return thermal_cycle_rig(params, run.stress_pa)
-    if run.kind == "prescribed_strain":
-        return frame_rig(params, run.stress_pa)
-    return params
+    return frame_rig(params, run.stress_pa)
 
 
 def start_temperature(run: TimeSeriesRun) -> float | None:

@@ -144,7 +144,9 @@ def run_search(
     """Forward selection then backward elimination over ``candidates`` (see module doc)."""
     say = progress or (lambda message: None)
     start = _start_fit(data, base)
-    current, steps, findings = start, [], []
+    current = start
+    steps: list[Step] = []
+    findings: list[str] = []
     say(f"starting model: held-out cost {start.heldout:.3g} (1 = the noise floor)")
     while current.heldout - 1.0 > NOTHING and len(current.structure) < MAX_TERMS:
         remaining = [c for c in candidates if c not in current.structure]

@@ -374,14 +374,16 @@ class Outcome:
 
 def outcome(case: Case, prof: str, noise: str, seed: int, d: Diagnosis) -> Outcome:
     fit = d.search.final
-    values = {c.parameters[k].key: None for c in fit.structure for k in range(len(c.parameters))}
+    values: dict[str, float | None] = {
+        c.parameters[k].key: None for c in fit.structure for k in range(len(c.parameters))
+    }
     i = 0
     for c in fit.structure:
         for par in c.parameters:
             values[par.key] = float(fit.values[i])
             i += 1
     errors = {
-        k: abs(values[k] / v - 1.0) for k, v in case.recover.items() if values.get(k) is not None
+        k: abs(x / v - 1.0) for k, v in case.recover.items() if (x := values.get(k)) is not None
     }
     covered = {
         k: d.intervals.of(k)[0] <= v <= d.intervals.of(k)[1]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Callable, Mapping
+from typing import Callable, Mapping, Sequence, TypeVar
 
 import numpy as np
 
@@ -55,7 +55,7 @@ class Diagnosis:
     model_name: str
     start: UnitParams
     corrected: UnitParams
-    data: object  # dataset.TimeSeriesData or features.FeatureData
+    data: dataset.TimeSeriesData | features.FeatureData
     search: Search
     candidates: list[library.Candidate]
     gap: Gap
@@ -205,15 +205,26 @@ def _apart(low: float, high: float) -> tuple[str, str]:
     return a, b
 
 
-def prepare(runs: list[Run], heldout: list[Run], dt: float | None = None):
+_R = TypeVar("_R", TimeSeriesRun, FeatureRun)
+
+
+def _of_kind(runs: Sequence[Run], kind: type[_R]) -> list[_R]:
+    return [r for r in runs if isinstance(r, kind)]
+
+
+def prepare(
+    runs: Sequence[Run], heldout: Sequence[Run], dt: float | None = None
+) -> dataset.TimeSeriesData | features.FeatureData:
     """The dataset of the runs' kind (all runs must be of one kind)."""
     everything = list(runs) + list(heldout)
     if not runs:
         raise DiagnosisInputError("no run given")
     if all(isinstance(r, TimeSeriesRun) for r in everything):
-        return dataset.prepare(list(runs), list(heldout), dt)
+        return dataset.prepare(_of_kind(runs, TimeSeriesRun), _of_kind(heldout, TimeSeriesRun), dt)
     if all(isinstance(r, FeatureRun) for r in everything):
-        return features.prepare(list(runs), list(heldout), dt or features.PULSE_DT)
+        return features.prepare(
+            _of_kind(runs, FeatureRun), _of_kind(heldout, FeatureRun), dt or features.PULSE_DT
+        )
     raise DiagnosisInputError(
         "all runs must be of one kind: time series (bags, driven runs, thermal cycles) "
         "or tables of test figures"
@@ -221,8 +232,8 @@ def prepare(runs: list[Run], heldout: list[Run], dt: float | None = None):
 
 
 def diagnose(
-    runs: list[Run],
-    heldout: list[Run],
+    runs: Sequence[Run],
+    heldout: Sequence[Run],
     model: UnitParams,
     *,
     candidates: list[str] | None = None,

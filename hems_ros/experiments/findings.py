@@ -44,10 +44,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import TypedDict
 
 import numpy as np
 
-from hems_ros.control import DEFAULT_TS, DUTY_MAX, FORCE_MODE_BPID, TABLE_5_1, metrics
+from hems_ros.control import DEFAULT_TS, DUTY_MAX, FORCE_MODE_BPID, TABLE_5_1_BPID, metrics
 from hems_ros.control.bpid import bilinear_factor
 from hems_ros.control.references import PROTOCOLS
 from hems_ros.experiments.chapters import CH6_PARAMS, force_protocol, rest_wire_tension
@@ -106,7 +107,7 @@ def coast_after_cutoff(params: UnitParams, target_m: float, dt: float = 1e-3) ->
 def bilinear_activity(run: LockstepRun, kb: float | None = None, tol: float = 0.01) -> float:
     """Fraction of samples where BPID's duty is unsaturated and its eq. 5.36 factor is off
     1 by > ``tol``."""
-    gains = TABLE_5_1["bpid"]
+    gains = TABLE_5_1_BPID
     kb = gains.kb if kb is None else kb
     scale = gains.scale_for(run.mode)
     r, y = run.reference * scale, run.measurement * scale
@@ -263,12 +264,22 @@ FORCE_GAIN_SWEEP = ((0.3, 0.2), (0.4, 0.2), (0.5, 0.3), (0.6, 0.3), (0.8, 0.5))
 """(Kp, Ki) force-mode BPID sets of :func:`force_gain_sweep`, error in 10 mN as FORCE_MODE_BPID."""
 
 
-def force_gain_sweep(sets=FORCE_GAIN_SWEEP) -> dict[tuple[float, float], dict[str, float]]:
+class ForceGainFigures(TypedDict):
+    """The figures of one gain set in :func:`force_gain_sweep`."""
+
+    noisy: float
+    quiet: float
+    quiet_by: dict[str, float]
+    ss_error: float
+    rmse_step: float
+
+
+def force_gain_sweep(sets=FORCE_GAIN_SWEEP) -> dict[tuple[float, float], ForceGainFigures]:
     """Force-step figures (N, the larger of step and staircase) of force-mode gain sets:
     overshoot with the sensor noise (``noisy``) and without it (``quiet``; per protocol in
     ``quiet_by``), and with the noise the steady-state error (``ss_error``) and the step's
     RMSE (``rmse_step``)."""
-    out = {}
+    out: dict[tuple[float, float], ForceGainFigures] = {}
     for kp, ki in sets:
         gains = replace(FORCE_MODE_BPID, kp=kp, ki=ki)
         noisy, quiet = _force_steps(gains, noise=True), _force_steps(gains, noise=False)
@@ -307,7 +318,7 @@ def gain_grid(
     least overshoot among the sets whose steady-state error is at most 0.05 mm on both
     protocols (None when no set holds); each as (overshoot mm, steady-state error mm, (Kp, Kd)).
     """
-    table = TABLE_5_1["bpid"]
+    table = TABLE_5_1_BPID
     figs = {}
     for kp in kp_values:
         for kd in kd_values:

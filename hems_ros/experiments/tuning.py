@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 from scipy.optimize import minimize
 
-from hems_ros.control import TABLE_5_1, BPIDGains
+from hems_ros.control import TABLE_5_1_BPID, BPIDGains
 from hems_ros.experiments.chapters import CH5_PARAMS, CH6_PARAMS
 from hems_ros.experiments.dissertation import CH5_PROTOCOLS, CH6_POSITION
 from hems_ros.experiments.lockstep import run_protocol
@@ -53,7 +53,7 @@ def tune_bpid(
 ):
     """(tuned gains, cost of Table 5.1, tuned cost) on ``protocol`` with its chapter's rig."""
     params = load_params(rig(protocol)[0])
-    start = TABLE_5_1["bpid"]
+    start = TABLE_5_1_BPID
     x0 = np.log([start.kp, start.kd, start.kb] + ([KI_START] if with_ki else []))
     count = [0]
 

@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass
 
 from hems_ros.control.base import Controller
+from hems_ros.control.gains import Gains
 from hems_ros.graph import transmission
 from hems_ros.graph.setpoints import Setpoint, SetpointLimits, validate
 from hems_ros.graph.thermal_guard import ThermalGuard
@@ -45,7 +46,7 @@ class FingerLoop:
     def __init__(
         self,
         controller: Controller,
-        gains: dict,
+        gains: dict[str, Gains],
         limits: SetpointLimits,
         pulley_ratio: float,
         feedback_lag_s: float,
@@ -126,7 +127,7 @@ class FingerLoop:
             return transmission.wire_position(self.setpoint.value, self.ratio)
         return transmission.wire_force(self.setpoint.value, self.ratio)
 
-    def status_key(self) -> tuple:
+    def status_key(self) -> tuple[object, ...]:
         """What a status must go out at once for when it changes."""
         return (
             self.setpoint.mode,

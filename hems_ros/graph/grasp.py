@@ -13,9 +13,12 @@ error by a few per cent from run to run.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from os import PathLike
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from hems_ros.control import metrics
 
@@ -66,7 +69,7 @@ class FingerSummary:
     hold_rmse_n: float  # over the whole hold, force build-up included
 
 
-def change_over(t, y, start: float, end: float) -> float:
+def change_over(t: ArrayLike, y: ArrayLike, start: float, end: float) -> float:
     """y(end) - y(start), each interpolated between the two samples that bracket it; NaN when the
     samples do not reach over both instants (a reader that matched late, a run cut short)."""
     t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
@@ -141,7 +144,9 @@ FOLLOW_FRACTION = 0.1
 fraction of the setpoint did not follow it (normal demo runs: about 0.3 % and 0.2 %)."""
 
 
-def tracking_report(rows: list[FingerSummary], plan: GraspPlan, fingers) -> str | None:
+def tracking_report(
+    rows: list[FingerSummary], plan: GraspPlan, fingers: Iterable[str]
+) -> str | None:
     """Which of ``fingers`` did not follow their setpoints (a run with one is not valid), or None.
 
     The supervisor does not see this: a unit that never heats (no ENABLED status reached it,
@@ -180,7 +185,9 @@ def format_summary(rows: list[FingerSummary], plan: GraspPlan) -> str:
     return "\n".join(lines)
 
 
-def plot(traces: dict[str, FingerTrace], plan: GraspPlan, t_start: float, path) -> None:
+def plot(
+    traces: dict[str, FingerTrace], plan: GraspPlan, t_start: float, path: str | PathLike[str]
+) -> None:
     import matplotlib
 
     matplotlib.use("Agg")

@@ -8,6 +8,11 @@ stream monitor sees; the others jump, saturate, turn noisy or fail to NaN.
 
 from __future__ import annotations
 
+from typing import Any, TypeVar, cast
+
+# a reading: (counts, position m) of an encoder, (force N, saturated) of a load cell
+_Reading = TypeVar("_Reading", tuple[int, float], tuple[float, bool])
+
 ENCODER_FAULTS = ("", "stuck_encoder", "encoder_jump", "nan_encoder")
 FORCE_FAULTS = ("", "stuck_force", "force_saturation", "force_noise_burst", "nan_force")
 #: what an encoder_jump adds to the reading, m
@@ -25,15 +30,16 @@ class FaultySensor:
     """One sensor's readings through the fault currently set on it."""
 
     def __init__(self) -> None:
-        self._held: tuple | None = None  # the reading a stuck sensor repeats
+        self._held: tuple[Any, ...] | None = None  # the reading a stuck sensor repeats
 
-    def _stuck(self, stuck: bool, reading: tuple) -> tuple:
+    def _stuck(self, stuck: bool, reading: _Reading) -> _Reading:
         if not stuck:
             self._held = None
             return reading
         if self._held is None:
             self._held = reading
-        return self._held
+        # a sensor is an encoder or a load cell for good: what it holds is what it reads
+        return cast(_Reading, self._held)
 
     def encoder(
         self, fault: str, counts: int, position_m: float, resolution_m: float

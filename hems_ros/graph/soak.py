@@ -8,10 +8,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hems_ros.graph import names
+
+if TYPE_CHECKING:
+    from hems_ros.bag.reader import Bag
 
 #: Limits a soak must hold (README, Safety and reliability; docs/reliability.md).
 MAX_MEMORY_GROWTH = 0.05
@@ -68,7 +72,7 @@ def sequence_losses(sequence: np.ndarray, counted: np.ndarray | None = None) -> 
     return int(np.sum(step[step > 1] - 1)), int(np.sum(step <= 0))
 
 
-def bag_losses(bag, since_ns: int = 0, until_ns: int | None = None) -> dict[str, int]:
+def bag_losses(bag: Bag, since_ns: int = 0, until_ns: int | None = None) -> dict[str, int]:
     """Messages lost per recorded topic that numbers its messages (a ``sequence`` field),
     in the steps to messages logged in [``since_ns``, ``until_ns``); topics several
     publishers share (commands) are left out."""
@@ -83,7 +87,7 @@ def bag_losses(bag, since_ns: int = 0, until_ns: int | None = None) -> dict[str,
 
 
 def missed_periods(
-    bag, finger: str, since_ns: int = 0, until_ns: int | None = None
+    bag: Bag, finger: str, since_ns: int = 0, until_ns: int | None = None
 ) -> tuple[int, int]:
     """(encoder samples with no duty command answering them, encoder samples) of ``finger``,
     between the first and the last sample a recorded duty command answers, and stamped in

@@ -44,6 +44,7 @@ controller heartbeat judges; blaming the sensor there made every controller stal
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import IntEnum
 
@@ -157,7 +158,7 @@ class SupervisorLogic:
         self._since: dict[tuple[str, str], float] = {}
         self._duty_seen: set[str] = set()
         # (finger, stream) -> [number of gaps longer than stale_s while ENABLED, longest s]
-        self._gaps: dict[tuple[str, str], list] = {}
+        self._gaps: dict[tuple[str, str], list[float]] = {}
         # finger -> (stamp s, wire position m) of the latest encoder reading
         self._readings: dict[str, tuple[float, float]] = {}
 
@@ -193,7 +194,7 @@ class SupervisorLogic:
         :meth:`MonitorLimits.gap_s` and shorter than a loss, while ENABLED, by (finger,
         stream): (count, longest s). Transient: counted for the diagnostics, and the margin
         the loss limits keep over them (docs/reliability.md)."""
-        return {key: (count, longest) for key, (count, longest) in self._gaps.items()}
+        return {key: (int(count), longest) for key, (count, longest) in self._gaps.items()}
 
     def wire_force(self, finger: str, force_n: float, now: float) -> None:
         self.saw("wire_force", finger, now)
@@ -409,7 +410,7 @@ def gap_entries(gaps: dict[tuple[str, str], tuple[int, float]]) -> list[tuple[st
     ]
 
 
-def parse_gaps(pairs) -> dict[tuple[str, str], tuple[int, float]]:
+def parse_gaps(pairs: Iterable[tuple[str, str]]) -> dict[tuple[str, str], tuple[int, float]]:
     """The inverse of :func:`gap_entries`, from (key, value) pairs; other keys are skipped."""
     gaps = {}
     for key, value in pairs:

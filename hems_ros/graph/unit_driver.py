@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -117,7 +117,7 @@ class UnitDriver:
             None  # the sample the latest answering command answered
         )
         self._sample_steps = 0
-        self._sample_snapshot: tuple | None = None
+        self._sample_snapshot: tuple[Any, ...] | None = None
 
     @property
     def last_result(self) -> StepResult | None:
@@ -262,7 +262,9 @@ class UnitDriver:
             return self._advance_at(duty, first, end, last, limit)
         return self._advance_gated(first, last, limit)
 
-    def _advance_at(self, duty: float, first: int, end: int, last: int, limit: float) -> list:
+    def _advance_at(
+        self, duty: float, first: int, end: int, last: int, limit: float
+    ) -> list[Sample]:
         """:meth:`advance` of steps ``first + 1`` to ``end`` at one gated duty."""
         samples: list[Sample] = []
         k, sample_k = first, self._next_sample_step()

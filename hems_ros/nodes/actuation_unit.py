@@ -59,7 +59,7 @@ from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.physics import ActuationUnit, load_params
 from hems_ros.ros import qos
 from hems_ros.ros.clock_time import seconds, stamp_now
-from hems_ros.ros.grid_timer import create_grid_timer
+from hems_ros.ros.grid_timer import create_grid_timer, until_next_call_s
 from hems_ros.ros.lean_node import LeanNode
 from hems_ros.ros.params import PERIOD_LIMIT, WINDOW_LIMIT, Spec, declare, one_of
 from hems_ros.ros.runner import run_node
@@ -178,7 +178,7 @@ class ActuationUnitNode(LeanNode):
         # The physics starts one period before the first tick, so encoder samples fall due on
         # the ticks and go out at once; a grid shifted from the timer's held each sample back
         # for up to a period, and the duties answering it often came after the next one.
-        start_s = seconds(self) + tick.time_until_next_call() * 1e-9 - p["tick_period_s"]
+        start_s = seconds(self) + until_next_call_s(tick) - p["tick_period_s"]
         self.driver = UnitDriver(
             ActuationUnit(physics, dt=p["physics_dt_s"]),
             start_time_s=start_s,

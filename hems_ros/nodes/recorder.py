@@ -41,10 +41,12 @@ from __future__ import annotations
 import importlib
 import time
 from datetime import datetime
+from typing import Any
 
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.subscription import Subscription
 
 from hems_ros.bag import BagWriter, TopicSelection, offered_qos
 from hems_ros.bag.selection import DEFAULT_RECORD_REGEX
@@ -101,27 +103,29 @@ def subscription_qos(publishers: list, depth: int) -> tuple[QoSProfile, list[dic
 class Recorder(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__("recorder", namespace="/hems", enable_rosout=False, **node_kwargs)
-        output = self.declare_parameter("output", "").value or datetime.now().strftime(
+        output: str = self.declare_parameter("output", "").value or datetime.now().strftime(
             "hems_%Y%m%d_%H%M%S"
         )
-        topics = self.declare_parameter("topics", Parameter.Type.STRING_ARRAY).value or []
-        regex = self.declare_parameter("regex", "").value
+        topics: list[str] = (
+            self.declare_parameter("topics", Parameter.Type.STRING_ARRAY).value or []
+        )
+        regex: str = self.declare_parameter("regex", "").value
         self._selection = TopicSelection.of(
             topics, regex or (None if topics else DEFAULT_RECORD_REGEX)
         )
         discovery = self._positive("discovery_period", 0.2)
         flush = self._positive("flush_period", 0.5)
         chunk_size = int(self.declare_parameter("chunk_size", 262144).value)
-        compression = self.declare_parameter("compression", "zstd").value
+        compression: str = self.declare_parameter("compression", "zstd").value
         self._depth = int(self.declare_parameter("queue_depth", 1000).value)
         duration = float(self.declare_parameter("duration", 0.0).value)
         if chunk_size <= 0 or self._depth <= 0 or duration < 0:
             raise ValueError("chunk_size and queue_depth must be positive, duration >= 0")
         self._writer = BagWriter(output, compression=compression, chunk_size=chunk_size)
-        self._recorded: dict[str, object] = {}
-        self._heard_from: set[object] = set()  # subscriptions that have taken a message
+        self._recorded: dict[str, Subscription[Any]] = {}
+        self._heard_from: set[Subscription[Any]] = set()  # subscriptions that have taken a message
         self._channels: dict[
-            object, tuple[int | None, type]
+            Subscription[Any], tuple[int | None, type]
         ] = {}  # subscription -> (channel, class)
         self._types: dict[str, str] = {}
         self._waiting: set[str] = set()  # subscribed before the topic had a publisher

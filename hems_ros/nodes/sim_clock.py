@@ -99,23 +99,24 @@ class SimClockNode(LeanNode):
         self.pub = self.create_publisher(
             Clock, "/clock", QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         )
-        self.lockstep = None
+        self.lockstep: LockstepClock | None = None
         if p["lockstep"]:
             fingers = tuple(f for f in p["fingers"].split(",") if f)
-            self.lockstep = LockstepClock(
+            lockstep = LockstepClock(
                 fingers, start_s=self.sim0, step_s=p["step_s"], rate=self.rate, stall_s=p["stall_s"]
             )
+            self.lockstep = lockstep
             for finger in fingers:
                 self.subscribe_serialized(
                     EncoderReading,
                     names.topic(finger, "encoder", self.graph_ns),
-                    lambda m, f=finger: self._saw(self.lockstep.encoder, f, m),
+                    lambda m, f=finger: self._saw(lockstep.encoder, f, m),
                     qos.SENSOR,
                 )
                 self.subscribe_serialized(
                     WireForce,
                     names.topic(finger, "wire_force", self.graph_ns),
-                    lambda m, f=finger: self._saw(self.lockstep.force, f, m),
+                    lambda m, f=finger: self._saw(lockstep.force, f, m),
                     qos.SENSOR,
                 )
                 self.subscribe_serialized(
@@ -127,7 +128,7 @@ class SimClockNode(LeanNode):
             self.create_subscription(
                 SupervisorStatus,
                 names.supervisor_status_topic(self.graph_ns),
-                lambda m: self._advance(self.lockstep.supervisor(from_msg(m.header.stamp))),
+                self._on_supervisor_status,
                 qos.STATUS,
             )
             self.pub.publish(Clock(clock=to_msg(self.sim0)))
@@ -142,27 +143,38 @@ class SimClockNode(LeanNode):
             Clock(clock=to_msg(self.sim0 + self.rate * (time.monotonic() - self.wall0)))
         )
 
+    @property
+    def _lockstep_clock(self) -> LockstepClock:
+        """The lockstep clock: the callbacks that use it are only set up with lockstep on."""
+        assert self.lockstep is not None
+        return self.lockstep
+
+    def _on_supervisor_status(self, message) -> None:
+        self._lockstep_clock.supervisor(from_msg(message.header.stamp))
+        self._advance()
+
     def _saw(self, record, finger: str, message) -> None:
         record(finger, seconds_of(message.header_stamp_sec, message.header_stamp_nanosec))
         self._advance()
 
     def _answer(self, finger: str, message) -> None:
-        self.lockstep.duty(
+        self._lockstep_clock.duty(
             finger, seconds_of(message.measurement_stamp_sec, message.measurement_stamp_nanosec)
         )
         self._advance()
 
     def _advance(self, _=None) -> None:
-        now = self.lockstep.try_advance(time.monotonic())
+        now = self._lockstep_clock.try_advance(time.monotonic())
         if now is not None:
             self.pub.publish(Clock(clock=to_msg(now)))
 
     def _report_stalls(self) -> None:
-        if self.lockstep.stalls > self._stalls_reported:
-            self._stalls_reported = self.lockstep.stalls
+        clock = self._lockstep_clock
+        if clock.stalls > self._stalls_reported:
+            self._stalls_reported = clock.stalls
             self.get_logger().warning(
-                f"lockstep: {self.lockstep.stalls} steps advanced without every answer "
-                f"(taking part now: {', '.join(self.lockstep.joined) or 'none'})"
+                f"lockstep: {clock.stalls} steps advanced without every answer "
+                f"(taking part now: {', '.join(clock.joined) or 'none'})"
             )
 
 

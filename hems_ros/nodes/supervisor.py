@@ -32,6 +32,8 @@ arrival (a wake-up per message cost more than the message).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
+from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from hems_msgs.msg import ActuatorState, CommandRecord, ControllerStatus, SupervisorStatus
@@ -177,7 +179,7 @@ class SupervisorNode(LeanNode):
         )
         self.position = {f: float("nan") for f in self.fingers}
         self.force = {f: float("nan") for f in self.fingers}
-        self.published = None
+        self.published: tuple[State, int] | None = None
         self.status_pub = self.create_publisher(
             SupervisorStatus, names.supervisor_status_topic(self.graph_ns), qos.STATUS
         )
@@ -189,8 +191,9 @@ class SupervisorNode(LeanNode):
             CommandRecord, names.supervisor_commands_topic(self.graph_ns), qos.COMMAND_LOG
         )
         self.commands = 0
-        self.encoder_stamps = {f: None for f in self.fingers}
-        self.force_stamps = {f: None for f in self.fingers}
+        # finger -> (sec, nanosec) of the latest reading in its controller's status
+        self.encoder_stamps: dict[str, tuple[int, int] | None] = {f: None for f in self.fingers}
+        self.force_stamps: dict[str, tuple[int, int] | None] = {f: None for f in self.fingers}
         # 420 messages a second, each of which woke the process; the monitors judge them at
         # the check anyway, so the check takes them. Only these: on sim time the node also
         # subscribes to /clock, and taken at the check, which the clock drives, it stopped
@@ -219,7 +222,7 @@ class SupervisorNode(LeanNode):
             self.create_service(
                 Trigger,
                 names.service(command, self.graph_ns),
-                lambda request, response, c=command: self.on_command(c, response),
+                self._service(command),
             )
         create_grid_timer(
             self,
@@ -263,6 +266,10 @@ class SupervisorNode(LeanNode):
         self.logic.watchdog(finger, message.watchdog_tripped, now)
         self.logic.sees_enabled(finger, "unit", message.heating_allowed, now)
         self.publish_if_changed()
+
+    def _service(self, command: str) -> Callable[[Any, Any], Any]:
+        """The callback of the Trigger service of ``command``."""
+        return lambda request, response: self.on_command(command, response)
 
     def on_command(self, command: str, response: Trigger.Response) -> Trigger.Response:
         # judge enable and reset on every report received so far: the last check's view can

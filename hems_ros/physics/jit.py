@@ -86,9 +86,10 @@ def jit_parallel(func: F) -> F:
     return _register(func, {"parallel": True})
 
 
-def intrinsic(func: F) -> F:
+def intrinsic(func: Callable[..., Any]) -> Callable[..., Any]:
     """A numba intrinsic: ``func(typingctx, *args)`` returns the signature and the code
-    generator, importing what it needs from numba and llvmlite itself."""
+    generator, importing what it needs from numba and llvmlite itself. Compiled code calls it
+    with ``args`` alone, so its signature is not ``func``'s."""
     return _register(func, None)
 
 

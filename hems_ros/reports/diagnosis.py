@@ -22,6 +22,7 @@ import numpy as np  # noqa: E402
 from hems_ros.diagnosis import localise  # noqa: E402
 from hems_ros.diagnosis.candidates import PHASES  # noqa: E402
 from hems_ros.diagnosis.dataset import TimeSeriesData  # noqa: E402
+from hems_ros.diagnosis.features import FeatureData  # noqa: E402
 from hems_ros.diagnosis.search import noise_limit  # noqa: E402
 from hems_ros.diagnosis.workflow import Diagnosis  # noqa: E402
 from hems_ros.physics.params import save_params  # noqa: E402
@@ -340,17 +341,16 @@ def _fmt(v) -> str:
 def _figures(d: Diagnosis, folder: Path) -> list[str]:
     names = []
     if isinstance(d.data, TimeSeriesData):
-        names += _overlays(d, folder)
+        names += _overlays(d, d.data, folder)
     else:
-        names.append(_figure_bars(d, folder))
+        names.append(_figure_bars(d, d.data, folder))
     names.append(_phase_bars(d, folder))
     if d.search.steps:
         names.append(_ranking(d, folder))
     return names
 
 
-def _overlays(d: Diagnosis, folder: Path) -> list[str]:
-    data = d.data
+def _overlays(d: Diagnosis, data: TimeSeriesData, folder: Path) -> list[str]:
     start, corrected = d.predictions["start"], d.predictions["corrected"]
     names = []
     for i, run in enumerate(data.runs[:6]):
@@ -406,8 +406,7 @@ def _shade(ax, t, phase, heldout) -> None:
         ax.axvspan(t[a], t[b], facecolor="none", edgecolor="0.6", hatch="//", lw=0)
 
 
-def _figure_bars(d: Diagnosis, folder: Path) -> str:
-    data = d.data
+def _figure_bars(d: Diagnosis, data: FeatureData, folder: Path) -> str:
     channels = data.channels
     fig, axes = plt.subplots(1, len(channels), figsize=(4 * len(channels), 3.5), squeeze=False)
     for ax, name in zip(axes[0], channels):
@@ -415,9 +414,11 @@ def _figure_bars(d: Diagnosis, folder: Path) -> str:
         rows = [
             (
                 t.name,
-                t.figures[name],
-                d.predictions["start"].outputs[j].get(name, math.nan),
-                d.predictions["corrected"].outputs[j].get(name, math.nan),
+                (
+                    t.figures[name],
+                    d.predictions["start"].outputs[j].get(name, math.nan),
+                    d.predictions["corrected"].outputs[j].get(name, math.nan),
+                ),
             )
             for j, (_, t) in enumerate(data.tests)
             if name in t.figures
@@ -427,9 +428,13 @@ def _figure_bars(d: Diagnosis, folder: Path) -> str:
             (("measured", "k"), (d.model_name, "tab:red"), ("corrected", "tab:green"))
         ):
             ax.bar(
-                x + (k - 1) * 0.27, [r[k + 1] * scale for r in rows], 0.27, color=color, label=label
+                x + (k - 1) * 0.27,
+                [values[k] * scale for _, values in rows],
+                0.27,
+                color=color,
+                label=label,
             )
-        ax.set_xticks(x, [r[0] for r in rows], rotation=45, ha="right", fontsize=7)
+        ax.set_xticks(x, [row for row, _ in rows], rotation=45, ha="right", fontsize=7)
         ax.set_ylabel(f"{name}, {unit}")
     axes[0][0].legend(fontsize=8)
     fig.tight_layout()

@@ -19,6 +19,7 @@ from hems_ros.diagnosis import candidates as library  # noqa: E402
 from hems_ros.diagnosis import dissertation as studies_module  # noqa: E402
 from hems_ros.diagnosis import joint as joint_module  # noqa: E402
 from hems_ros.diagnosis import public_data, suite, suite_runs  # noqa: E402
+from hems_ros.diagnosis.features import FeatureData  # noqa: E402
 from hems_ros.diagnosis.suite_runs import FLOORS, GRAPH_BAG, GRAPH_MODEL  # noqa: E402
 from hems_ros.diagnosis.workflow import Diagnosis  # noqa: E402
 from hems_ros.physics.params import load_params  # noqa: E402
@@ -278,6 +279,7 @@ def _role(select: bool, test: bool) -> str:
 def _rows(d: Diagnosis) -> list[str]:
     """Every row of the tables: measured / starting model / corrected, per figure."""
     data = d.data
+    assert isinstance(data, FeatureData)  # the studies and the joint run diagnose tables
     lines = []
     channels = data.channels
     lines += [
