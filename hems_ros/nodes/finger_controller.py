@@ -57,6 +57,7 @@ from hems_ros.graph.setpoints import SetpointError
 from hems_ros.nodes.finger_controller_parameters import PARAMETERS, declare_loop
 from hems_ros.ros import qos
 from hems_ros.ros.clock_time import now_ns, stamp_now
+from hems_ros.ros.grid_timer import until_next_call_s
 from hems_ros.ros.lean_node import LeanNode
 from hems_ros.ros.runner import run_node
 from hems_ros.ros.wire import codec, stamp_ns
@@ -122,7 +123,7 @@ class FingerControllerNode(LeanNode):
         # pushed back by the control steps, so it fires only while no feedback comes: a
         # wake-up of a sleeping process costs more than the status it would send
         self.idle_timer = self.create_timer(p["idle_status_period_s"], self.on_idle)
-        self.idle_push_ns = int(p["idle_status_period_s"] * 1e9) // 2
+        self.idle_push_s = p["idle_status_period_s"] / 2
 
     def _other_feedback(self):
         return self.feedback[self.loop.other_mode]
@@ -218,7 +219,7 @@ class FingerControllerNode(LeanNode):
         )
         # a reset wakes the node's wait set (rcl's timer guard condition): once per half
         # period, not at every step, where it cost a second pass of the spin loop
-        if self.idle_timer.time_until_next_call() < self.idle_push_ns:
+        if until_next_call_s(self.idle_timer) < self.idle_push_s:
             self.idle_timer.reset()
         if status_due or self.loop.status_key() != self._reported:
             self.publish_status()
