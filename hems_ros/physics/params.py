@@ -29,7 +29,6 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import yaml
-from typing_extensions import override
 
 from hems_ros.paths import config_path
 from hems_ros.physics.yamlload import load_yaml
@@ -65,9 +64,9 @@ class _Group:
                     raise ParamError(f"{self._prefix()}{f.name} = {value!r}: must be a number")
                 if not math.isfinite(value):
                     raise ParamError(f"{self._prefix()}{f.name} = {value!r}: must be finite")
-        self.check()
+        self._check()
 
-    def check(self) -> None:
+    def _check(self) -> None:
         """Raise ParamError naming the field that breaks the group's own rules (none here)."""
 
     def _prefix(self) -> str:
@@ -90,8 +89,7 @@ class WireGeometry(_Group):
     diameter_m: float = 0.508e-3
     length_m: float = 0.9
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._pos("diameter_m", "length_m")
 
     @property
@@ -124,8 +122,7 @@ class Electrical(_Group):
     drho_dsigma_martensite_ohm_m_per_pa: float = 1.5e-17
     drho_dsigma_austenite_ohm_m_per_pa: float = 0.5e-17
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._pos("rho0_martensite_ohm_m", "rho0_austenite_ohm_m")
 
 
@@ -140,8 +137,7 @@ class Thermal(_Group):
     h0_w_m2_c: float = 37.67
     h2_w_m2_c3: float = 0.01
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._pos("density_kg_m3", "specific_heat_j_kg_c")
         self._nonneg("latent_heat_j_kg", "h0_w_m2_c", "h2_w_m2_c3")
 
@@ -158,8 +154,7 @@ class Kinetics(_Group):
     cm_pa_per_c: float = 6.89e6
     ca_pa_per_c: float = 6.89e6
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         if not self.af0_c > self.as0_c:
             raise ParamError(
                 f"kinetics.af0_c = {self.af0_c!r}: must be > kinetics.as0_c "
@@ -185,8 +180,7 @@ class Constitutive(_Group):
     max_recoverable_strain: float = 0.038
     poisson_ratio: float = 0.33
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._pos("e_martensite_pa", "e_austenite_pa", "max_recoverable_strain")
         if not 0 <= self.poisson_ratio < 0.5:
             raise ParamError(
@@ -215,8 +209,7 @@ class Drive(_Group):
     source_resistance_ohm: float = 0.0
     input_delay_s: float = 0.0
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._pos("supply_voltage_v", "current_limit_a")
         self._nonneg("source_resistance_ohm")
 
@@ -248,8 +241,7 @@ class Load(_Group):
     gravity_m_s2: float = 9.81
     cubic_stiffness_n_per_m3: float = 0.0
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         if self.kind not in LOAD_KINDS:
             raise ParamError(f"load.kind = {self.kind!r}: must be one of {', '.join(LOAD_KINDS)}")
         self._nonneg(
@@ -312,8 +304,7 @@ class Sheath(_Group):
     helix_heat_capacity_j_per_k: float = 0.0
     liner_helix_resistance_k_per_w: float = 0.0
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._pos(
             "ptfe_inner_diameter_m",
             "ptfe_outer_diameter_m",
@@ -352,8 +343,7 @@ class Capstan(_Group):
     friction_coefficient: float = 0.04
     bend_angle_rad: float = math.pi
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._nonneg("friction_coefficient", "bend_angle_rad")
 
 
@@ -365,8 +355,7 @@ class GloveFriction(_Group):
     enabled: bool = False
     force_n: float = 1.0
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._nonneg("force_n")
 
 
@@ -382,8 +371,7 @@ class Encoder(_Group):
     resolution_m: float = 1e-6
     gain: float = 1.0
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._pos("resolution_m", "gain")
 
 
@@ -404,8 +392,7 @@ class ForceSensor(_Group):
     offset_n: float = 0.0
     drift_n_per_s: float = 0.0
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._pos("range_max_n", "resolution_n")
         self._nonneg("noise_std_n")
         if not isinstance(self.seed, int) or self.seed < 0:
@@ -424,8 +411,7 @@ class Start(_Group):
     _GROUP = "start"
     temperature_offset_c: float = 0.0
 
-    @override
-    def check(self) -> None:
+    def _check(self) -> None:
         self._nonneg("temperature_offset_c")
 
 
