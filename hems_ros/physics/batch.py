@@ -48,9 +48,11 @@ class SimResult:
 
     @property
     def n_sets(self) -> int:
+        """Number of parameter sets simulated."""
         return len(self.params)
 
     def __getitem__(self, name: str) -> np.ndarray:
+        """Return channel ``name``, (n_sets, n_records); sensor channels derive on first use."""
         if name in DERIVED and name not in self.data:
             _add_sensors(self.data, self.params, self.n_steps, self.record_every, self.time)
         if name not in self.data:
@@ -60,6 +62,7 @@ class SimResult:
         return self.data[name]
 
     def __getattr__(self, name: str) -> np.ndarray:
+        """Return channel ``name`` as an attribute (``result.wire_force_n``)."""
         if name.startswith("__") or name not in CHANNELS + DERIVED:
             raise AttributeError(name)
         try:
@@ -68,7 +71,7 @@ class SimResult:
             raise AttributeError(str(exc)) from None
 
     def channels(self) -> list[str]:
-        """Recorded channels plus the sensor channels derivable from them."""
+        """List the recorded channels and the sensor channels derivable from them."""
         derivable = []
         if "slider_position_m" in self.data:
             derivable += ["strain", "encoder_counts", "encoder_position_m"]
@@ -101,8 +104,10 @@ def _drive_array(kind: str, values, n_sets: int) -> np.ndarray:
 def _load_segments(
     static_force_n, n_sets: int, n_steps: int, every: int
 ) -> list[tuple[int, int, np.ndarray | None]]:
-    """(first step, end step, static force of each set or None: its own) of each run of
-    steps under one load."""
+    """Split the steps into runs under one load.
+
+    Returns (first step, end step, static force of each set or None: its own) of each run.
+    """
     if static_force_n is None:
         return [(0, n_steps, None)]
     force = np.asarray(static_force_n, dtype=np.float64)
@@ -234,8 +239,10 @@ def simulate(
 def _add_sensors(
     data: dict[str, np.ndarray], plist: list[UnitParams], n_steps: int, every: int, time: np.ndarray
 ) -> None:
-    """Sensor channels from the recorded truth, with the same draws as the stepping API; the
-    force sensor's drift runs on the time of each record."""
+    """Add the sensor channels derived from the recorded truth to ``data``.
+
+    The draws are the stepping API's; the force sensor's drift runs on the time of each record.
+    """
 
     def column(values):
         return np.array(values, dtype=np.float64)[:, None]
