@@ -140,7 +140,7 @@ def replay(
     from rosgraph_msgs.msg import Clock
 
     from hems_ros.bag import iter_messages
-    from hems_ros.nodes.recorder import message_class
+    from hems_ros.ros.wire import message_class
 
     if not (math.isfinite(rate) and rate > 0):
         raise ValueError(f"rate must be a finite number > 0, not {rate}")

@@ -38,7 +38,6 @@ and message counts are logged.
 
 from __future__ import annotations
 
-import importlib
 import time
 from datetime import datetime
 from typing import Any
@@ -51,17 +50,12 @@ from rclpy.subscription import Subscription
 from hems_ros.bag import BagWriter, TopicSelection, offered_qos
 from hems_ros.bag.selection import DEFAULT_RECORD_REGEX
 from hems_ros.ros import lean_spin
+from hems_ros.ros.wire import message_class
 
 READY_PREFIX = "recording "
 BATCH_S = 0.02  # recorder loop: pause after each round, so that rounds find batches
 FINISHED_PREFIX = "bag finished: "
 HEARD_PREFIX = "first message on "
-
-
-def message_class(type_name: str) -> type:
-    """The generated Python class of ``pkg/msg/Type``."""
-    package, _, name = type_name.split("/")
-    return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
 def waiting_qos(depth: int) -> QoSProfile:

@@ -14,6 +14,7 @@ the installed ``.msg`` definitions through :mod:`hems_ros.codec.cdr`. No rclpy i
 
 from __future__ import annotations
 
+import importlib
 from collections import namedtuple
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -23,6 +24,12 @@ from typing import Any
 from hems_ros.codec import cdr, msgdefs
 
 NS_PER_S = 1_000_000_000
+
+
+def message_class(type_name: str) -> type:
+    """The generated Python class of ``pkg/msg/Type`` (imported on demand)."""
+    package, _, name = type_name.split("/")
+    return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
 @dataclass(frozen=True)

@@ -70,7 +70,7 @@ def main() -> int:
     from rclpy.node import Node
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-    from hems_ros.nodes.recorder import message_class
+    from hems_ros.ros.wire import message_class
 
     rclpy.init()
     node = Node("synthetic_publisher")

@@ -69,6 +69,14 @@ def test_graph_client_and_benchmarks_import_no_node() -> None:
     assert not _offenders(paths, lambda n: n == "hems_ros.nodes" or n.startswith("hems_ros.nodes."))
 
 
+def test_verbs_import_a_node_module_only_to_run_that_node() -> None:
+    """`hems record` runs the recorder node and `hems ping` the ping responder (whose topic
+    and scales it shares); no other verb imports a node module."""
+    runners = {"record.py", "ping.py"}
+    paths = [p for p in (REPO / "hems_ros" / "cli").rglob("*.py") if p.name not in runners]
+    assert not _offenders(paths, lambda n: n == "hems_ros.nodes" or n.startswith("hems_ros.nodes."))
+
+
 def test_benchmarks_import_the_installed_package_not_a_patched_path() -> None:
     assert not [
         p.name for p in (REPO / "benchmarks").glob("*.py") if "sys.path.insert" in p.read_text()
