@@ -27,6 +27,8 @@ from hems_ros.ros import qos
 from hems_ros.ros.clock_time import from_msg
 
 RETRY_S = 2.0  # a service call unanswered this long is sent again
+# a wait for the controllers' setpoint readers shows its progress once it lasts this long, s
+PROGRESS_AFTER_S = 1.0
 CLOCK_STALL_S = 5.0  # /clock standing still this long (wall) means the graph's clock is gone
 MATCH_ALL_S = (
     1.0  # a subscription that never matches (incompatible QoS) delays a setpoint this long at most
@@ -376,18 +378,31 @@ class GraphClient:
         return publisher
 
     def fingers_without_readers(
-        self, fingers, readers: int = 1, timeout: float = DISCOVERY_S
+        self,
+        fingers,
+        readers: int = 1,
+        timeout: float = DISCOVERY_S,
+        progress: Callable[[list[str] | None], None] | None = None,
     ) -> list[str]:
         """The ``fingers`` whose setpoint writer in this client has matched fewer than
         ``readers`` readers (the finger's controller, a recorder) after ``timeout`` s, all
         waited for at once, so that a run needing them all says so before anything heats. Only
-        a matched reader gets the next setpoint: the writer keeps none for latecomers."""
+        a matched reader gets the next setpoint: the writer keeps none for latecomers.
+
+        ``progress(topics)`` is called with the setpoint topics still unmatched whenever they
+        change, once the wait has lasted PROGRESS_AFTER_S (a match usually comes sooner)."""
         publishers = {f: self._setpoint_publisher(f) for f in fingers}
-        deadline = time.monotonic() + timeout
+        started = time.monotonic()
+        shown: list[str] | None = None
         while True:
             missing = [f for f, pub in publishers.items() if pub.get_subscription_count() < readers]
-            if not missing or time.monotonic() > deadline:
+            waited = time.monotonic() - started
+            if not missing or waited > timeout:
                 return missing
+            topics = [f"{pub.topic_name} reader" for f, pub in publishers.items() if f in missing]
+            if progress is not None and waited >= PROGRESS_AFTER_S and topics != shown:
+                progress(topics)
+                shown = topics
             checked(rclpy.spin_once, self.node, timeout_sec=0.02)
 
     def _publish_setpoint(self, publisher, mode: str, value: float) -> None:
