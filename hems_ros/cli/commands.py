@@ -159,13 +159,13 @@ def run_setpoint(args: argparse.Namespace) -> int:
     from hems_ros.client.graph_client import GraphClient
 
     unit = "m" if mode == "position" else "N"
-    line = WaitingLine("setpoint")
+    waiting = WaitingLine("setpoint")
     with GraphClient(namespace=args.namespace) as client:
         client.watch_supervisor()
         # one wait for every controller: on a graph brought up with fewer fingers, "all" would
         # otherwise wait --timeout for each missing one in turn
-        missing = client.fingers_without_readers(fingers, timeout=args.timeout, progress=line)
-        line.end()
+        missing = client.fingers_without_readers(fingers, timeout=args.timeout, progress=waiting)
+        waiting.end()
         results = {
             f: client.send_setpoint(
                 f,
