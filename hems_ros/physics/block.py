@@ -554,31 +554,8 @@ def run_batch(params, states, drive_kind, drives, dt, record_every, channels, re
     for blk in prange(n_blocks):
         first = blk * BLOCK
         count = min(BLOCK, n_sets - first)
+        run = (params, states, drive_kind, drives, dt, record_every, channels, records, failed_at)
         if 4 * count < BLOCK:
-            _run_sets(
-                params,
-                states,
-                drive_kind,
-                drives,
-                dt,
-                record_every,
-                channels,
-                records,
-                failed_at,
-                first,
-                count,
-            )
+            _run_sets(*run, first, count)
         else:
-            _run_block(
-                params,
-                states,
-                drive_kind,
-                drives,
-                dt,
-                record_every,
-                channels,
-                records,
-                failed_at,
-                first,
-                count,
-            )
+            _run_block(*run, first, count)
