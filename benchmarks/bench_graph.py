@@ -131,14 +131,13 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
     try:
         with recorded_graph(options, bag, "hems_bench", 90.0) as session:
             graph, recorder, client = session.graph, session.recorder, session.client
+
+            def on_diagnostics(message: DiagnosticArray) -> None:
+                for status in message.status:
+                    latest[status.name] = {kv.key: kv.value for kv in status.values}
+
             client.node.create_subscription(
-                DiagnosticArray,
-                names.DIAGNOSTICS_TOPIC,
-                lambda m: [
-                    latest.__setitem__(s.name, {kv.key: kv.value for kv in s.values})
-                    for s in m.status
-                ],
-                10,
+                DiagnosticArray, names.DIAGNOSTICS_TOPIC, on_diagnostics, 10
             )
             if client.wait_until_ready(90) != []:
                 return {"error": graph.with_exits("the graph was not ready within 90 s")}

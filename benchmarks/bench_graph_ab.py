@@ -140,7 +140,9 @@ def main() -> None:
             f"x {args.seconds:g} s with the halves swapped; {host_line()}",
             flush=True,
         )
-        totals = {kind: {"this": [], "other": []} for kind in KINDS}
+        totals: dict[str, dict[str, list[float]]] = {
+            kind: {"this": [], "other": []} for kind in KINDS
+        }
         for swapped in (False, True):
             for kind, sides in run(tree, swapped, args.seconds).items():
                 for side, values in sides.items():

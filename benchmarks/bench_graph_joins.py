@@ -89,20 +89,19 @@ def reached(statuses: list, value: float, start_m: float) -> bool:
     )
 
 
-def command(kind: str, i: int) -> tuple[list[str], str | None, float | None]:
-    """(argv, finger, tendon position m) of join ``i``."""
+def command(kind: str, i: int) -> tuple[list[str], tuple[str, float] | None]:
+    """(argv, (finger, tendon position m) if the join sets one) of join ``i``."""
     finger = names.FINGERS[i % len(names.FINGERS)]
     value_m = HOLD_M + 1e-3 * ((i // len(KINDS)) % 2)
     hems = [sys.executable, "-m", "hems_ros.cli.main"]
     if kind == "setpoint":
-        return hems + ["setpoint", finger, f"{value_m * 1e3:g}", "--unit", "mm"], finger, value_m
+        return hems + ["setpoint", finger, f"{value_m * 1e3:g}", "--unit", "mm"], (finger, value_m)
     if kind == "topic pub":
         return (
             [sys.executable, "-c", TOPIC_PUB, names.topic(finger, "setpoint"), repr(value_m)],
-            finger,
-            value_m,
+            (finger, value_m),
         )
-    return hems + [kind], None, None
+    return hems + [kind], None
 
 
 def run(composed: bool, joins: int) -> dict:  # noqa: C901 -- one join of each kind in turn
@@ -156,17 +155,20 @@ def run(composed: bool, joins: int) -> dict:  # noqa: C901 -- one join of each k
                 client.spin_for(0.2)
             client.spin_for(1.0)
             faults.clear()
-            faulted, kinds, missed, by_kind = 0, collections.Counter(), [], collections.Counter()
+            faulted, missed = 0, []
+            kinds: collections.Counter[str] = collections.Counter()
+            by_kind: collections.Counter[str] = collections.Counter()
             for i in range(joins):
                 kind = KINDS[i % len(KINDS)]
-                argv, finger, value = command(kind, i)
+                argv, target = command(kind, i)
                 started = time.monotonic()
                 subprocess.run(
                     argv, capture_output=True, text=True, timeout=120, env=child_environment()
                 )
                 client.spin_for(SETTLE_S)
                 by_kind[kind] += 1
-                if finger is not None:
+                if target is not None:
+                    finger, value = target
                     # the statuses that came while the tool ran are taken only now, the oldest
                     # dropped by the reader's history: the start is the last one before the join
                     before = [m for t, m in shown[finger] if t < started]

@@ -72,7 +72,7 @@ def main() -> None:
     scratch = Path(tempfile.mkdtemp(prefix="hems_bench_startup_"))
     try:
         for mode in args.modes.split(","):
-            faults = collections.Counter()
+            faults: collections.Counter[str] = collections.Counter()
             for i in range(args.starts):
                 fault = start_once(mode == "composed", args.heat_s, scratch / f"{mode}_{i}")
                 shutil.rmtree(scratch / f"{mode}_{i}", ignore_errors=True)

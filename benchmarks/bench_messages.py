@@ -86,6 +86,7 @@ def publish(serialized: bool, count: int) -> dict:
         stdout=subprocess.PIPE,
         text=True,
     )
+    assert child.stdout is not None  # stdout=PIPE
     try:
         assert child.stdout.readline().strip() == "ready"
         rclpy.init()

@@ -66,7 +66,8 @@ def main() -> int:
         "1 worker": ("local", 1),
         "2 workers": ("local", 2),
     }
-    walls, work = {}, {}
+    walls: dict[str, list[float]] = {}
+    work: dict[str, list[float]] = {}
     for _ in range(args.repeat):
         for name, (scheduler, workers) in layouts.items():
             wall, busy = _time(tasks, scheduler, workers)

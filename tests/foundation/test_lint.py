@@ -1,6 +1,7 @@
 """ruff (ruff.toml: pyflakes, pycodestyle with lines of at most 100 characters, import order,
-bugbear, a cyclomatic complexity of at most 15, and its formatter's layout) holds over the
-code, and mypy (mypy.ini) over every package of hems_ros (`make lint`, `make typecheck`)."""
+bugbear, a cyclomatic complexity of at most 15, the numpy docstring convention for the public
+control and physics API, and its formatter's layout) holds over the code, and mypy (mypy.ini)
+over every package of hems_ros and the benchmarks (`make lint`, `make typecheck`)."""
 
 from __future__ import annotations
 
@@ -36,8 +37,8 @@ def test_the_code_keeps_the_formatters_layout() -> None:
 
 
 def test_mypy_finds_nothing_in_the_packages_it_checks() -> None:
-    """mypy.ini names them: every package of hems_ros, unannotated function bodies included,
-    with control, graph and codec fully annotated."""
+    """mypy.ini names them: every package of hems_ros and the benchmarks, unannotated function
+    bodies included, with control, graph and codec fully annotated."""
     done = subprocess.run(
         [sys.executable, "-m", "mypy", "--no-incremental"],
         cwd=REPO,
