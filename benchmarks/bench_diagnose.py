@@ -168,10 +168,8 @@ def encoders() -> dict[str, tuple[type, Callable[[tuple], bytes]]]:
         type_name = f"hems_msgs/msg/{name}"
         types = msgdefs.parse_full_definition(type_name, msgdefs.full_definition(type_name))
         encoder = cdr.build_encoder(type_name, types)
-        fields: type = namedtuple(  # type: ignore[misc]  # a class per message type, named at run time
-            name, [c.name.replace(".", "_") for c in encoder.columns]
-        )
-        out[name] = (fields, encoder.encode)
+        columns = [c.name.replace(".", "_") for c in encoder.columns]
+        out[name] = (namedtuple(name, columns), encoder.encode)
     return out
 
 
@@ -390,7 +388,6 @@ class Probe:
             finally:
                 probe.rounds += self.rounds
 
-        # wrapped for the rest of this benchmark's process: the library itself stays untouched
         dataset.TimeSeriesData.predict = timed_predict  # type: ignore[method-assign]
         replay.simulate = timed_simulate
         search.fit_structures = timed_fit
