@@ -45,7 +45,7 @@ DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 
 from hems_ros.client.graph_client import GraphClient  # noqa: E402
-from hems_ros.client.session import recorded_graph  # noqa: E402
+from hems_ros.client.recorded_run import recorded_graph  # noqa: E402
 from hems_ros.graph import names  # noqa: E402
 from hems_ros.launcher import GraphOptions  # noqa: E402
 
@@ -129,8 +129,8 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
     )
     latest: dict[str, dict[str, str]] = {}
     try:
-        with recorded_graph(options, bag, "hems_bench", 90.0) as session:
-            graph, recorder, client = session.graph, session.recorder, session.client
+        with recorded_graph(options, bag, "hems_bench", 90.0) as graph_run:
+            graph, recorder, client = graph_run.graph, graph_run.recorder, graph_run.client
 
             def on_diagnostics(message: DiagnosticArray) -> None:
                 for status in message.status:

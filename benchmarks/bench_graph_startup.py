@@ -23,7 +23,7 @@ from pathlib import Path
 import smoke
 from bench_graph_joins import fault_kind  # reserves this run's ROS domain
 
-from hems_ros.client.session import recorded_graph
+from hems_ros.client.recorded_run import recorded_graph
 from hems_ros.graph import names
 from hems_ros.launcher import GraphOptions
 
@@ -34,11 +34,11 @@ def start_once(composed: bool, heat_s: float, bag: Path) -> str | None:
     """One start; the supervisor's first fault (or state) if it was not ENABLED at the end,
     None if it was. RuntimeError when the graph did not come up."""
     options = GraphOptions(composed=composed, log_level="error")
-    with recorded_graph(options, bag, "hems_bench_startup", READY_TIMEOUT_S) as session:
-        client = session.client
+    with recorded_graph(options, bag, "hems_bench_startup", READY_TIMEOUT_S) as graph_run:
+        client = graph_run.client
         ok, message = client.enable_when_ready(READY_TIMEOUT_S, retry_s=0.5)
         if not ok:
-            raise RuntimeError(f"could not enable: {session.graph.with_exits(message)}")
+            raise RuntimeError(f"could not enable: {graph_run.graph.with_exits(message)}")
         for finger in names.FINGERS:
             client.send_setpoint(finger, "position", 0.02)
         client.spin_for(heat_s)

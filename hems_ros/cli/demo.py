@@ -60,30 +60,30 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as error:
         print(f"demo: {error}", file=sys.stderr)
         return 2
-    from hems_ros.client.session import recorded_graph
+    from hems_ros.client.recorded_run import recorded_graph
 
     print(
         f"demo: starting the graph ({layout_text(options)}), recording into {record}; waiting "
         f"for every stream",
         flush=True,
     )
-    run_ = None
+    graph_run = None
     try:
-        with recorded_graph(options, record, "hems_demo", args.ready_timeout) as run_:
-            code = _grasp(run_, plan, options.fingers, args)
-            recorded = stop_recorder("demo", run_.recorder)
+        with recorded_graph(options, record, "hems_demo", args.ready_timeout) as graph_run:
+            code = _grasp(graph_run, plan, options.fingers, args)
+            recorded = stop_recorder("demo", graph_run.recorder)
     except (TimeoutError, RuntimeError) as error:
         print(f"demo: {error}", file=sys.stderr)
         return 1
     finally:
-        if run_ is not None:
-            print(f"demo: graph stopped in {run_.stop_s:.2f} s")
+        if graph_run is not None:
+            print(f"demo: graph stopped in {graph_run.stop_s:.2f} s")
     return code if recorded else 1
 
 
-def _grasp(run_, plan, fingers, args: argparse.Namespace) -> int:
+def _grasp(graph_run, plan, fingers, args: argparse.Namespace) -> int:
     """The enabled grasp on the running graph: 0 if it was a valid run."""
-    graph, client = run_.graph, run_.client
+    graph, client = graph_run.graph, graph_run.client
     try:
         traces, phase_starts, statuses = grasp.enabled_grasp(
             client, plan, fingers, args.ready_timeout, "demo"

@@ -24,7 +24,7 @@ from hems_ros.graph import names, soak
 from hems_ros.rosenv import child_environment
 
 if TYPE_CHECKING:
-    from hems_ros.client.session import RecordedGraph
+    from hems_ros.client.recorded_run import RecordedGraph
 
 MEMORY_EVERY_S = 10.0
 PROGRESS_EVERY_S = 60.0
@@ -93,9 +93,13 @@ def _join(i: int, rng: random.Random) -> list[str]:
 
 
 class _Soak:
-    def __init__(self, args: argparse.Namespace, session: RecordedGraph, fingers) -> None:
+    def __init__(self, args: argparse.Namespace, graph_run: RecordedGraph, fingers) -> None:
         self.args, self.fingers = args, fingers
-        self.graph, self.recorder, self.client = session.graph, session.recorder, session.client
+        self.graph, self.recorder, self.client = (
+            graph_run.graph,
+            graph_run.recorder,
+            graph_run.client,
+        )
         self.rng = random.Random(args.seed)
         self.memory = soak.MemoryLog()
         self.faults: list[str] = []
@@ -182,23 +186,23 @@ def run(args: argparse.Namespace) -> int:
     from hems_msgs.msg import SupervisorStatus
 
     from hems_ros.bag.reader import load_bag
-    from hems_ros.client.session import recorded_graph
+    from hems_ros.client.recorded_run import recorded_graph
     from hems_ros.ros import qos
 
     print(
         f"hems soak: {layout_text(options)}, recording into {folder}, {args.minutes:g} min",
         flush=True,
     )
-    with recorded_graph(options, folder, "hems_soak", 120.0) as session:
-        client = session.client
+    with recorded_graph(options, folder, "hems_soak", 120.0) as graph_run:
+        client = graph_run.client
         ok, message = client.enable_when_ready(120.0, reset=True, retry_s=1.0)
         if not ok:
             print(
-                f"hems soak: could not enable the graph: {session.graph.with_exits(message)}",
+                f"hems soak: could not enable the graph: {graph_run.graph.with_exits(message)}",
                 file=sys.stderr,
             )
             return 1
-        run_ = _Soak(args, session, options.fingers)
+        run_ = _Soak(args, graph_run, options.fingers)
         client.node.create_subscription(
             SupervisorStatus,
             names.supervisor_status_topic(options.namespace),
@@ -210,7 +214,7 @@ def run(args: argparse.Namespace) -> int:
             client.send_setpoint(finger, "position", 0.0, confirm_s=2.0)
         client.call("disable")
         client.spin_for(0.5)
-        recorded = stop_recorder("hems soak", session.recorder)
+        recorded = stop_recorder("hems soak", graph_run.recorder)
     if not recorded:
         return 1
     bag = load_bag(folder)

@@ -21,7 +21,7 @@ from hems_ros.graph import transmission
 from hems_ros.physics.params import load_params
 
 if TYPE_CHECKING:
-    from hems_ros.client.session import RecordedGraph
+    from hems_ros.client.recorded_run import RecordedGraph
 
 # A setpoint the controller status does not show within this long ends the run: the figures
 # would otherwise describe a step the controller never took.
@@ -95,14 +95,14 @@ def run(args: argparse.Namespace) -> int:
     if args.physics_config:
         overrides += ["-p", f"physics_config:={args.physics_config}"]
     options.extra_ros_args = tuple(overrides)
-    from hems_ros.client.session import recorded_graph
+    from hems_ros.client.recorded_run import recorded_graph
 
     try:
-        with recorded_graph(options, record, "hems_step", args.ready_timeout) as session:
-            ran, state = _steps(session, options.fingers, args)
+        with recorded_graph(options, record, "hems_step", args.ready_timeout) as graph_run:
+            ran, state = _steps(graph_run, options.fingers, args)
             if not ran:
                 return 1
-            finished = session.recorder.stop()
+            finished = graph_run.recorder.stop()
     except (TimeoutError, RuntimeError) as error:
         print(f"step: {error}", file=sys.stderr)
         return 1
@@ -126,15 +126,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _steps(session: RecordedGraph, fingers, args: argparse.Namespace):
+def _steps(graph_run: RecordedGraph, fingers, args: argparse.Namespace):
     """Enable the graph and run the step cycles on every finger: (True, the supervisor's status
     at the end, None if silent), or (False, None) with why printed when the graph could not be
     enabled or a setpoint was not taken."""
-    client = session.client
+    client = graph_run.client
     ok, message = client.enable_when_ready(args.ready_timeout)
     if not ok:
         print(
-            f"step: could not enable the graph: {session.graph.with_exits(message)}",
+            f"step: could not enable the graph: {graph_run.graph.with_exits(message)}",
             file=sys.stderr,
         )
         return False, None
