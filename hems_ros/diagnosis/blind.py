@@ -74,7 +74,6 @@ def run_row(row: Row) -> dict:
 
         d = diagnose(load("train"), load("heldout"), model)
     named = [n["effect"] for n in d.named()]
-    ranking = [f.structure[-1].name for f in d.search.steps[0].ranked] if d.search.steps else []
     return {
         "family": row.family,
         "effect": row.effect,
@@ -86,7 +85,7 @@ def run_row(row: Row) -> dict:
         "verdict": d.verdict,
         "named": named,
         "recalibrated": sorted(d.recalibrated()),
-        "first": ranking[0] if ranking else None,
+        "first": d.search.first_ranked,
         "gap_metric": d.gap.metric,
         "gap_unit": d.gap.unit,
         "gap_before": _finite(d.gap.heldout_before),

@@ -278,7 +278,7 @@ def fit_structures(
                 train,
                 held,
                 n_train,
-                _pinned(space, u),
+                pinned(space, u),
                 n_eval,
                 converged,
                 stop,
@@ -361,7 +361,7 @@ def near_bounds(base: UnitParams, fit: Fit) -> list[str]:
     ]
 
 
-def _pinned(space: Space, u: np.ndarray) -> list[str]:
+def pinned(space: Space, u: np.ndarray) -> list[str]:
     """Parameters at a bound that is not where the starting model has them."""
     return [
         f"{c.candidate.name}: {c.parameter.symbol} at its {side}"

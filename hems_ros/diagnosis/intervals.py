@@ -20,6 +20,7 @@ identifiable: the data fix a combination of them, not each.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -72,11 +73,11 @@ def effective_count(data, prediction: Prediction) -> tuple[int, float]:
         for name in data.channels:
             if name in run.outputs and mask.any():
                 r = (sim[name] - run.outputs[name])[mask]
-                effective += r.size * _independence(r)
+                effective += r.size * independence(r)
     return n, effective
 
 
-def _independence(r: np.ndarray) -> float:
+def independence(r: np.ndarray) -> float:
     """(1 - rho) / (1 + rho) of a residual series, rho its lag-one autocorrelation."""
     power = float(np.dot(r, r))
     if r.size < 3 or power == 0.0:
@@ -85,8 +86,22 @@ def _independence(r: np.ndarray) -> float:
     return (1.0 - rho) / (1.0 + rho)
 
 
+#: Training residuals of parameter sets, and the effective sample count of the first one's.
+Residuals = Callable[[list[UnitParams]], tuple[list[np.ndarray], float]]
+
+
 def estimate(data, base: UnitParams, fit: Fit) -> Intervals | None:
     """The intervals of ``fit``'s values on ``data`` (None for a fit with no values)."""
+
+    def replayed(sets: list[UnitParams]) -> tuple[list[np.ndarray], float]:
+        predictions = data.predict(sets)
+        return [p.train for p in predictions], effective_count(data, predictions[0])[1]
+
+    return estimate_on(replayed, base, fit)
+
+
+def estimate_on(residuals: Residuals, base: UnitParams, fit: Fit) -> Intervals | None:
+    """The intervals of ``fit``'s values from the training ``residuals`` it was fitted to."""
     if not fit.structure:
         return None
     space = Space(base, fit.structure)
@@ -101,19 +116,16 @@ def estimate(data, base: UnitParams, fit: Fit) -> Intervals | None:
     sets = [space.params(v) for v in [u] + plus + minus]
     if any(s is None for s in sets):
         return _unknown(space, fit)
-    predictions = data.predict(sets)
-    r0 = predictions[0].train
-    if not np.all([np.isfinite(p.train).all() for p in predictions]):
+    trains, n_eff = residuals([s for s in sets if s is not None])
+    r0 = trains[0]
+    if not np.all([np.isfinite(r).all() for r in trains]):
         return _unknown(space, fit)
     k = space.size
     jac = np.stack(
-        [
-            (predictions[1 + j].train - predictions[1 + k + j].train) / (plus[j][j] - minus[j][j])
-            for j in range(k)
-        ],
+        [(trains[1 + j] - trains[1 + k + j]) / (plus[j][j] - minus[j][j]) for j in range(k)],
         axis=1,
     )
-    n, n_eff = effective_count(data, predictions[0])
+    n = int(r0.size)
     s2 = float(np.dot(r0, r0)) / max(1, n - k)
     cov = s2 * (n / max(n_eff, 1.0)) * np.linalg.pinv(jac.T @ jac)
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
@@ -132,6 +144,27 @@ def estimate(data, base: UnitParams, fit: Fit) -> Intervals | None:
         correlation,
         n,
         n_eff,
+    )
+
+
+def joined(first: Intervals | None, second: Intervals | None) -> Intervals | None:
+    """Intervals of values fitted apart (the load relation's, then the replay's on top of
+    them), as one: their correlations across the two are unknown (NaN); the sample counts
+    are the second's, which fitted the most."""
+    if first is None or second is None:
+        return first or second
+    k1, k2 = len(first.keys), len(second.keys)
+    correlation = np.full((k1 + k2, k1 + k2), np.nan)
+    correlation[:k1, :k1] = first.correlation
+    correlation[k1:, k1:] = second.correlation
+    return Intervals(
+        first.keys + second.keys,
+        np.concatenate([first.values, second.values]),
+        np.concatenate([first.lower, second.lower]),
+        np.concatenate([first.upper, second.upper]),
+        correlation,
+        second.n_samples,
+        second.n_effective,
     )
 
 

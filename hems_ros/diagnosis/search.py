@@ -15,6 +15,13 @@ first: a late record or a parameter that is simply off comes before new physics.
 whose parameter ends on a bound is a finding, not an explanation. Then backward elimination
 drops what the later terms made unnecessary.
 
+Where the runs measure both the load's motion and the wire's force, the load's own effects
+(friction, a stiffening spring, damping) are named first on the load relation (relation.py),
+by the same rules on that relation's costs, and stay at its values: a wire model of another
+family than the truth's misses the replayed outputs by far more than these effects, but not
+the relation. No later term is accepted that raises the relation's held-out cost by
+``MIN_GAIN`` or more (a sensor scale absorbing a wire's stroke misfit would).
+
 Verdicts: ``none`` (nothing beyond the noise to explain), ``timing`` (the input's timing
 only), ``recalibrated`` (parameters, with or without timing), ``named`` (effects, with or
 without the others), ``ambiguous`` (another effect fits the held-out data as well as a named
@@ -26,13 +33,14 @@ when the corrected model leaves a phase above twice the noise (workflow.Diagnosi
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
 
 from hems_ros.diagnosis.candidates import Candidate
 from hems_ros.diagnosis.fit import Fit, Space, fit_structures
+from hems_ros.diagnosis.relation import LoadRelation, Named, name_effects
 from hems_ros.physics.params import UnitParams
 
 #: Held-out cost left to explain below which there is nothing to explain ...
@@ -79,6 +87,26 @@ class Search:
     dropped: list[str]
     verdict: str
     findings: list[str] = field(default_factory=list)
+    # the load's effects named on the load relation before the steps (None: not measured)
+    load_relation: Named | None = None
+
+    @property
+    def first_ranked(self) -> str | None:
+        """The candidate ranked first: the load relation's first, else the first step's."""
+        if self.load_relation is not None and self.load_relation.steps:
+            return self.load_relation.steps[0].structure[-1].name
+        return self.steps[0].ranked[0].structure[-1].name if self.steps else None
+
+    @property
+    def fixed(self) -> Fit | None:
+        """The load relation's fit the steps were made on top of (None: nothing named)."""
+        named = self.load_relation
+        return named.final if named is not None and named.steps else None
+
+    @property
+    def free(self) -> Fit:
+        """The final fit's terms beyond the load relation's."""
+        return self.final if self.fixed is None else _free(self.fixed, self.final)
 
     @property
     def effects(self) -> list[Candidate]:
@@ -104,16 +132,21 @@ class Search:
         return out
 
 
-def _better(new: Fit, current: Fit, start: Fit) -> bool:
+def _better(new: Fit, current: Fit, start: Fit, relation: LoadRelation | None = None) -> bool:
     """``new`` explains a fair share of what ``current`` leaves (training data, where most of
     the data are), and that carries over to the held-out data beyond the noise and is a
-    material part of the starting model's gap."""
+    material part of the starting model's gap; and it leaves the load relation, where the
+    relation is measured, no worse than the noise can make it."""
     return (
         current.heldout - new.heldout >= MIN_GAIN
         and excess(current.heldout) - excess(new.heldout) >= MATERIAL * excess(start.heldout)
         and current.train - new.train >= MIN_SHARE * max(current.train - 1.0, 0.0)
         and new.bic < current.bic
         and not new.pinned
+        and (
+            relation is None
+            or relation.costs(new.params)[1] - relation.costs(current.params)[1] < MIN_GAIN
+        )
     )
 
 
@@ -140,14 +173,26 @@ def run_search(
     base: UnitParams,
     candidates: list[Candidate],
     progress: Callable[[str], None] | None = None,
+    relation: LoadRelation | None = None,
 ) -> Search:
-    """Forward selection then backward elimination over ``candidates`` (see module doc)."""
+    """Forward selection then backward elimination over ``candidates`` (see module doc),
+    after the load's effects named on the load ``relation`` where it is measured: those stay
+    at the relation's values, and every later term must leave the relation no worse."""
     say = progress or (lambda message: None)
     start = _start_fit(data, base)
-    current = start
+    say(f"starting model: held-out cost {start.heldout:.3g} (1 = the noise floor)")
+    named = None if relation is None else name_effects(relation, base, candidates, _better, say)
+    if named is not None and named.steps:
+        fixed = _costed(data, named.final)
+        say(
+            f"  {', '.join(fixed.names)} at the relation's values: held-out cost "
+            f"{start.heldout:.3g} -> {fixed.heldout:.3g}"
+        )
+    else:
+        fixed = Fit((), np.zeros(0), base, start.train, start.heldout, start.n_train, [])
+    current = fixed if fixed.structure else start
     steps: list[Step] = []
     findings: list[str] = []
-    say(f"starting model: held-out cost {start.heldout:.3g} (1 = the noise floor)")
     while current.heldout - 1.0 > NOTHING and len(current.structure) < MAX_TERMS:
         remaining = [c for c in candidates if c not in current.structure]
         if not remaining:
@@ -156,16 +201,20 @@ def run_search(
             f"step {len(steps) + 1}: {len(remaining)} candidate(s) on top of "
             f"{', '.join(current.names) or 'the starting model'}"
         )
-        fits = fit_structures(
-            data,
-            base,
-            [current.structure + (c,) for c in remaining],
-            _warm(current, base),
-            progress=say,
-        )
+        free = current.structure[len(fixed.structure) :]
+        fits = [
+            _on_top(fixed, f)
+            for f in fit_structures(
+                data,
+                fixed.params,
+                [free + (c,) for c in remaining],
+                _warm(_free(fixed, current), fixed.params),
+                progress=say,
+            )
+        ]
         ranked = sorted(fits, key=lambda f: f.bic)
         findings += [p for f in ranked for p in f.pinned if p not in findings]
-        eligible = [f for f in ranked if _better(f, current, start)]
+        eligible = [f for f in ranked if _better(f, current, start, relation)]
         if not eligible:
             steps.append(Step(ranked, None, []))
             break
@@ -190,19 +239,76 @@ def run_search(
             f"-> {chosen.heldout:.3g}"
         )
         current = chosen
-    current, dropped = _eliminate(data, base, current, start, say)
+    current, dropped = _eliminate(data, fixed, current, start, relation, say)
+    if named is not None and named.steps:
+        assert relation is not None  # it named them
+        current, refined = _refined(data, base, current, relation)
+        named = replace(named, refined=refined)
+        if refined:
+            say(f"  all refitted on the replayed outputs: held-out cost {current.heldout:.3g}")
     verdict = _verdict(start, current, steps, data.cost_spread)
-    return Search(start, steps, current, dropped, verdict, findings)
+    return Search(start, steps, current, dropped, verdict, findings, named)
 
 
-def _eliminate(data, base: UnitParams, current: Fit, start: Fit, say) -> tuple[Fit, list[str]]:
-    """Drop terms the others made unnecessary (held-out cost no worse without them)."""
+def _refined(data, base: UnitParams, final: Fit, relation: LoadRelation) -> tuple[Fit, bool]:
+    """The final structure refitted as a whole on the replayed outputs, where that fits them
+    better and leaves the load relation as good (the noise aside): the wire's model then
+    replays the runs well, and the replay's values are sharper than the relation's, whose
+    velocity is smoothed from the noisy position. Else ``final`` as it is. True when
+    refitted."""
+    [refit] = fit_structures(data, base, [final.structure], _warm(final, base))
+    if (
+        refit.pinned
+        or refit.heldout >= final.heldout
+        or relation.costs(refit.params)[1] - relation.costs(final.params)[1] >= MIN_GAIN
+    ):
+        return final, False
+    return refit, True
+
+
+def _costed(data, fit: Fit) -> Fit:
+    """``fit`` (named on the load relation) with its costs on the replayed outputs."""
+    p = data.predict([fit.params])[0]
+    return replace(
+        fit,
+        train=float(np.mean(p.train**2)),
+        heldout=float(np.mean(p.heldout**2)),
+        n_train=p.train.size,
+    )
+
+
+def _on_top(fixed: Fit, fit: Fit) -> Fit:
+    """A fit made on top of ``fixed`` (its base) as one structure with ``fixed``'s terms."""
+    return replace(
+        fit,
+        structure=fixed.structure + fit.structure,
+        values=np.concatenate([fixed.values, fit.values]),
+    )
+
+
+def _free(fixed: Fit, fit: Fit) -> Fit:
+    """The terms of ``fit`` beyond ``fixed``'s."""
+    k = len(fixed.structure)
+    return replace(fit, structure=fit.structure[k:], values=fit.values[fixed.values.size :])
+
+
+def _eliminate(
+    data, fixed: Fit, current: Fit, start: Fit, relation: LoadRelation | None, say
+) -> tuple[Fit, list[str]]:
+    """Drop terms the others made unnecessary (held-out cost no worse without them); the
+    load relation's terms stay, decided where they show."""
     dropped = []
-    while len(current.structure) > 1:
-        subsets = [tuple(c for c in current.structure if c is not t) for t in current.structure]
-        fits = fit_structures(data, base, subsets, _warm(current, base))
+    while len(current.structure) - len(fixed.structure) > 1:
+        free = current.structure[len(fixed.structure) :]
+        subsets = [tuple(c for c in free if c is not t) for t in free]
+        fits = [
+            _on_top(fixed, f)
+            for f in fit_structures(
+                data, fixed.params, subsets, _warm(_free(fixed, current), fixed.params)
+            )
+        ]
         best = min(fits, key=lambda f: f.heldout)
-        if _better(current, best, start):
+        if _better(current, best, start, relation):
             break
         gone = next(c.name for c in current.structure if c not in best.structure)
         say(

@@ -13,7 +13,7 @@ from typing import Callable, Mapping, Sequence, TypeVar
 import numpy as np
 
 from hems_ros.diagnosis import candidates as library
-from hems_ros.diagnosis import dataset, features, intervals, localise, replay
+from hems_ros.diagnosis import dataset, features, intervals, localise, relation, replay
 from hems_ros.diagnosis.fit import near_bounds
 from hems_ros.diagnosis.intervals import Intervals
 from hems_ros.diagnosis.runs import DiagnosisInputError, FeatureRun, Run, TimeSeriesRun
@@ -280,7 +280,7 @@ def diagnose(
         except ValueError as error:
             raise DiagnosisInputError(f"--bounds: {error}") from None
     say(f"candidates: {', '.join(c.name for c in pool)}")
-    search = run_search(data, model, pool, progress=say)
+    search = run_search(data, model, pool, progress=say, relation=relation.of(data, model))
     corrected = search.final.params
     final_prediction = data.predict([corrected])[0]
     headline = data.headline(start_prediction)
@@ -311,8 +311,17 @@ def diagnose(
         unexplained,
         {"start": start_prediction, "corrected": final_prediction},
         localise.left_above_noise(data, before, after),
-        intervals.estimate(data, model, search.final),
+        _intervals(data, model, search),
     )
+
+
+def _intervals(data, model: UnitParams, search: Search) -> Intervals | None:
+    """The load relation's values with its intervals (unless the replay refitted them), the
+    steps' with the replay's, made on top of the relation's values."""
+    fixed, named = search.fixed, search.load_relation
+    if fixed is None or named is None or named.refined:
+        return intervals.estimate(data, model, search.final)
+    return intervals.joined(named.intervals, intervals.estimate(data, fixed.params, search.free))
 
 
 def _with_timing_range(pool: list, data, range_s: float | None) -> list:

@@ -72,6 +72,7 @@ def summary(d: Diagnosis) -> dict:
         # sd of the log of a perfect model's cost: how far the floor's estimate may be off
         "noise_floor_spread": d.data.cost_spread,
         "ranking": [_fit_entry(f, s.start) for f in (s.steps[0].ranked if s.steps else [])],
+        "load_relation": _relation_entry(s.load_relation),
         "fit": _convergence(s.final),
         "summary": d.summary_line(),
     }
@@ -110,6 +111,50 @@ def _fit_entry(f, start) -> dict:
         "pinned": f.pinned,
         **_convergence(f),
     }
+
+
+def _relation_entry(named) -> dict | None:
+    """The load relation's costs (its own noise-floor units) and the effects named on it."""
+    if named is None:
+        return None
+    return {
+        "noise_floor_n": named.sigma_n,
+        "heldout_cost_before": named.start.heldout,
+        "heldout_cost_after": named.final.heldout,
+        "named": [_fit_entry(f, named.start) for f in named.steps],
+    }
+
+
+def _relation_lines(named) -> list[str]:
+    if named is None:
+        return []
+    lines = [
+        "### The load relation",
+        "",
+        "The force the measured motion of the load calls for under the load's law, against the "
+        "measured force, whatever the wire is made of (costs in units of the relation's noise "
+        f"floor, {named.sigma_n:.3g} N): held-out cost {_num(named.start.heldout)} with the "
+        "starting model's load.",
+        "",
+    ]
+    if not named.steps:
+        return lines + ["No effect of the load is named on it.", ""]
+    lines += [
+        "| named | fitted | held-out cost | dBIC |",
+        "|---|---|---|---|",
+    ]
+    for f in named.steps:
+        c = f.structure[-1]
+        lines.append(
+            f"| {c.name} | {', '.join(f.describe(c))} | {_num(f.heldout)} | "
+            f"{f.bic - named.start.bic:.0f} |"
+        )
+    return lines + [
+        "",
+        "The steps below are made on top of these values, and accept no term that makes the "
+        "relation worse.",
+        "",
+    ]
 
 
 def write(d: Diagnosis, out: Path) -> Path:
@@ -260,6 +305,7 @@ def _candidate_lines(d: Diagnosis) -> list[str]:
         f"chose nothing.",
         "",
     ]
+    lines += _relation_lines(s.load_relation)
     for i, step in enumerate(s.steps, start=1):
         lines += [
             f"### Step {i}",
@@ -345,8 +391,19 @@ def _figures(d: Diagnosis, folder: Path) -> list[str]:
     else:
         names.append(_figure_bars(d, d.data, folder))
     names.append(_phase_bars(d, folder))
-    if d.search.steps:
-        names.append(_ranking(d, folder))
+    s = d.search
+    if s.steps:
+        names.append(
+            _ranking(s.steps[0].ranked, s.steps[0].chosen, s.start.heldout, d.model_name, folder)
+        )
+    elif s.load_relation is not None and s.load_relation.ranked:
+        named = s.load_relation
+        chosen = named.steps[0] if named.steps else None
+        names.append(
+            _ranking(
+                named.ranked, chosen, named.start.heldout, d.model_name, folder, "load relation"
+            )
+        )
     return names
 
 
@@ -468,14 +525,14 @@ def _phase_bars(d: Diagnosis, folder: Path) -> str:
     return "residual_by_phase.png"
 
 
-def _ranking(d: Diagnosis, folder: Path) -> str:
-    s = d.search
-    ranked = s.steps[0].ranked
+def _ranking(
+    ranked, chosen, start_cost: float, model_name: str, folder: Path, on: str = "step 1"
+) -> str:
     fig, ax = plt.subplots(figsize=(7, 0.35 * len(ranked) + 1.2))
     y = np.arange(len(ranked))[::-1]
     colors = [
         "tab:green"
-        if f is s.steps[0].chosen
+        if f is chosen
         else (
             "tab:gray"
             if f.pinned
@@ -484,12 +541,12 @@ def _ranking(d: Diagnosis, folder: Path) -> str:
         for f in ranked
     ]
     ax.barh(y, [max(f.heldout, 1e-3) for f in ranked], color=colors)
-    ax.axvline(s.start.heldout, color="tab:red", lw=1, label=f"{d.model_name}")
+    ax.axvline(start_cost, color="tab:red", lw=1, label=model_name)
     ax.axvline(1.0, color="k", lw=0.8, ls=":", label="noise floor")
     ax.set_yticks(y, [f.structure[-1].name for f in ranked], fontsize=8)
     ax.set_xscale("log")
     ax.set_xlabel(
-        "held-out cost (step 1, best BIC on top; green: accepted, purple: recalibration, "
+        f"held-out cost ({on}, best BIC on top; green: accepted, purple: recalibration, "
         "grey: on a bound)"
     )
     ax.legend(fontsize=8)

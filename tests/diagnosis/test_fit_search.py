@@ -14,7 +14,7 @@ from hems_ros.diagnosis import candidates as lib
 from hems_ros.diagnosis import replay, search, suite
 from hems_ros.diagnosis.csvload import load_table
 from hems_ros.diagnosis.dataset import noise_floor
-from hems_ros.diagnosis.fit import Coordinate, Fit, Space, _pinned, fit_structures, near_bounds
+from hems_ros.diagnosis.fit import Coordinate, Fit, Space, fit_structures, near_bounds, pinned
 from hems_ros.diagnosis.runs import DiagnosisInputError, TimeSeriesRun
 from hems_ros.diagnosis.search import Step, _verdict
 from hems_ros.diagnosis.workflow import diagnose
@@ -46,21 +46,22 @@ def test_hidden_load_damping_is_named_and_recovered(damping) -> None:
     # the corrected model matches to the noise on data it was not fitted on
     assert d.search.start.heldout > 1e3 and d.search.final.heldout == pytest.approx(1.0, abs=0.15)
     assert d.gap.metric == "position" and d.gap.heldout_after < 0.01 * d.gap.heldout_before
-    assert d.search.steps[0].ranked[0].names == ("load_damping",)
-    assert not d.search.dropped
-    # a warm start fits to "absent" (0 degC, its lower bound): on a bound, but no finding
-    (warm,) = [f for f in d.search.steps[0].ranked if f.names == ("warm_start",)]
+    # named on the load relation (force against motion), which left nothing to explain
+    assert d.search.first_ranked == "load_damping" and d.search.steps == []
+    assert not d.search.dropped and not d.search.findings
+    # a warm start fits to "absent" (0 degC, its lower bound): on a bound, but not pinned
+    [warm] = fit_structures(d.data, BASE, [(lib.BY_NAME["warm_start"],)], {})
     assert warm.values[0] < 1e-3 and warm.pinned == []
-    assert not [f for f in d.search.findings if f.startswith("warm_start")]
 
 
 def test_the_fits_convergence_is_recorded(damping) -> None:
     final = damping.search.final
+    # the load relation's fit (a start at the model's value and one at "absent")
     assert final.converged and final.starts == 2 and 0 < final.evaluations <= 30
     assert summary(damping)["fit"] == {
         "converged": True,
         "stop": final.stop,
-        "starts": 2,
+        "starts": final.starts,
         "evaluations": final.evaluations,
     }
     # one evaluation allowed: the fit stops at the limit and says so
@@ -131,13 +132,13 @@ def test_space_builds_models_and_rejects_impossible_ones() -> None:
 
 def test_pinned_means_a_bound_away_from_where_the_candidate_is_absent() -> None:
     friction = Space(BASE, (lib.BY_NAME["tendon_friction"],))
-    assert _pinned(friction, np.array([0.0])) == []
-    assert _pinned(friction, np.array([0.999])) == ["tendon_friction: F_c at its upper bound 10 N"]
-    assert _pinned(friction, np.array([0.99])) == []
+    assert pinned(friction, np.array([0.0])) == []
+    assert pinned(friction, np.array([0.999])) == ["tendon_friction: F_c at its upper bound 10 N"]
+    assert pinned(friction, np.array([0.99])) == []
     gain = Space(BASE, (lib.BY_NAME["encoder_gain"],))
-    assert _pinned(gain, np.array([0.0])) == ["encoder_gain: g_x at its lower bound 0.8"]
+    assert pinned(gain, np.array([0.0])) == ["encoder_gain: g_x at its lower bound 0.8"]
     damping = Space(BASE, (lib.BY_NAME["load_damping"],))  # lower bound: the model's 65 N s/m
-    assert _pinned(damping, np.array([0.0])) == []
+    assert pinned(damping, np.array([0.0])) == []
 
 
 def _fit(names: tuple[str, ...], train: float, heldout: float, pinned=()) -> Fit:

@@ -25,7 +25,7 @@ def test_an_ar1_residual_counts_its_independent_samples(rho: float) -> None:
     shocks = rng.standard_normal(e.size)
     for k in range(1, e.size):
         e[k] = rho * e[k - 1] + shocks[k]
-    assert intervals._independence(e) == pytest.approx((1 - rho) / (1 + rho), abs=0.01)
+    assert intervals.independence(e) == pytest.approx((1 - rho) / (1 + rho), abs=0.01)
 
 
 @pytest.mark.parametrize("noise", ["low", "high"])
