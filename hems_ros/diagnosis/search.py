@@ -20,7 +20,7 @@ Where the runs measure both the load's motion and the wire's force, the load's o
 by the same rules on that relation's costs, and stay at its values: a wire model of another
 family than the truth's misses the replayed outputs by far more than these effects, but not
 the relation. No later term is accepted that raises the relation's held-out cost by
-``MIN_GAIN`` or more (a sensor scale absorbing a wire's stroke misfit would).
+``MIN_GAIN`` or more (a sensor scale absorbing a wire's stroke misfit would; ``_keeps``).
 
 Verdicts: ``none`` (nothing beyond the noise to explain), ``timing`` (the input's timing
 only), ``recalibrated`` (parameters, with or without timing), ``named`` (effects, with or
@@ -143,11 +143,16 @@ def _better(new: Fit, current: Fit, start: Fit, relation: LoadRelation | None = 
         and current.train - new.train >= MIN_SHARE * max(current.train - 1.0, 0.0)
         and new.bic < current.bic
         and not new.pinned
-        and (
-            relation is None
-            or relation.costs(new.params)[1] - relation.costs(current.params)[1] < MIN_GAIN
-        )
+        and (relation is None or _keeps(relation, new.params, current.params))
     )
+
+
+def _keeps(relation: LoadRelation, new: UnitParams, current: UnitParams) -> bool:
+    """``new`` leaves the load relation's held-out cost within MIN_GAIN of ``current``'s, in
+    noise-floor units or, where the relation itself misses by more than its noise (a
+    recording's force stamped a little off its motion), as a share of its cost."""
+    before = relation.costs(current)[1]
+    return relation.costs(new)[1] - before < MIN_GAIN * max(before, 1.0)
 
 
 def _warm(space_fit: Fit, base: UnitParams) -> dict[str, float]:
@@ -260,7 +265,7 @@ def _refined(data, base: UnitParams, final: Fit, relation: LoadRelation) -> tupl
     if (
         refit.pinned
         or refit.heldout >= final.heldout
-        or relation.costs(refit.params)[1] - relation.costs(final.params)[1] >= MIN_GAIN
+        or not _keeps(relation, refit.params, final.params)
     ):
         return final, False
     return refit, True
