@@ -51,14 +51,14 @@ SMOOTH_S = 0.2
 SPEED_NOISE = 5.0
 #: ... and at least this speed (m/s): an encoder count per ten samples at 1 ms.
 MIN_SPEED_M_S = 1e-4
-#: Runs this kind of the runs' loads are not the load's law (a frame or a dead weight).
+#: Runs of these kinds hold the wire in a frame or under a dead weight: no load law to check.
 FRAME_KINDS = ("thermal_cycle", "prescribed_strain")
 
 
 @dataclass(frozen=True)
 class Motion:
-    """One run's measured motion and force while the slider moves (the samples of a run the
-    smoothing window covers, in order)."""
+    """One run's samples where the slider slides all through the smoothing window around
+    them: the motion as measured and smoothed, and the force as measured."""
 
     time: np.ndarray
     position: np.ndarray  # m, as the encoder reads it (its gain in)
