@@ -176,6 +176,15 @@ def _reading(records: list[dict]) -> list[str]:
                 else "."
             )
         )
+        outside = [x for x in records if x["family"] == family and x["kind"] == "outside"]
+        named = Counter(n for x in outside for n in x["named"])
+        if named:
+            lines.append(
+                f"Outside the library ({TIERS[family]}) an effect was named beside the verdict "
+                f"in {sum(1 for x in outside if x['named'])} of {len(outside)} runs: "
+                + ", ".join(f"{n} ({c})" for n, c in named.most_common())
+                + "."
+            )
         missed: dict[tuple, list[str]] = {}
         for x in records:
             if x["family"] == family and x["kind"] == "outside" and not x["right"]:
