@@ -17,10 +17,12 @@ drops what the later terms made unnecessary.
 
 Where the runs measure both the load's motion and the wire's force, the load's own effects
 (friction, a stiffening spring, damping) are named first on the load relation (relation.py),
-by the same rules on that relation's costs, and stay at its values: a wire model of another
-family than the truth's misses the replayed outputs by far more than these effects, but not
-the relation. No later term is accepted that raises the relation's held-out cost by
-``MIN_GAIN`` or more (a sensor scale absorbing a wire's stroke misfit would; ``_keeps``).
+by the same rules on that relation's costs: a wire model of another family than the
+truth's misses the replayed outputs by far more than these effects, but not the relation.
+The steps are made on top of the relation's values, and no later term is accepted that
+raises the relation's held-out cost by ``MIN_GAIN`` or more (a sensor scale absorbing a
+wire's stroke misfit would; ``_keeps``). At the end the whole structure is refitted on the
+replay, and kept so where it fits better and leaves the relation as good (``_refined``).
 
 Verdicts: ``none`` (nothing beyond the noise to explain), ``timing`` (the input's timing
 only), ``recalibrated`` (parameters, with or without timing), ``named`` (effects, with or
