@@ -18,7 +18,11 @@ Velocity and acceleration come from a Savitzky-Golay fit over ``SMOOTH_S``. Only
 where the slider moves count: at rest, dry friction holds any force within its band (the
 wire's force rises through it before the load moves), so the relation fixes nothing there.
 Moving means faster than ``SPEED_NOISE`` times the velocity's noise (the position's noise
-floor through the derivative filter) over the whole smoothing window. Costs are mean
+floor through the derivative filter) over the whole smoothing window. A force offset or
+drift (the load cell's, or a pretension other than the model's) and a spring rate other
+than the model's (or an encoder's scale) look alike on the relation, so its fits and
+costs leave them out (each run's residual taken apart from a constant, the time and the
+position); the replay decides those. Costs are mean
 squared residuals over the relation's own noise floor (dataset.noise_floor of the starting
 model's residual).
 """
@@ -68,6 +72,8 @@ class Motion:
     force: np.ndarray  # N, as the load cell reads it
     train: np.ndarray  # bool masks of the data's split
     heldout: np.ndarray
+    # orthonormal columns spanning what the relation cannot tell apart (``apart``)
+    nuisance: np.ndarray
 
 
 def predicted_force(params: UnitParams, m: Motion) -> np.ndarray:
@@ -128,8 +134,12 @@ class LoadRelation:
         self.sigma = noise_floor(residual, 0.0, "wire_force")
         self.n_train = int(sum(m.train.sum() for m in self.motions))
 
-    def residuals(self, params: UnitParams) -> tuple[np.ndarray, np.ndarray]:
+    def residuals(self, params: UnitParams, apart: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """(training, held-out) residuals in noise-floor units; ``apart``: with what the
+        relation cannot tell apart removed (a force offset and drift, a spring rate)."""
         parts = [(m.force - predicted_force(params, m)) / self.sigma for m in self.motions]
+        if apart:
+            parts = [r - m.nuisance @ (m.nuisance.T @ r) for r, m in zip(parts, self.motions)]
         return (
             np.concatenate([r[m.train] for r, m in zip(parts, self.motions)]),
             np.concatenate([r[m.heldout] for r, m in zip(parts, self.motions)]),
@@ -139,12 +149,15 @@ class LoadRelation:
         """Training residuals of each set, and the effective sample count of the first's
         (intervals.estimate_on): the force's noise is coloured."""
         trains = [self.residuals(p)[0] for p in sets]
-        first = [(m.force - predicted_force(sets[0], m))[m.train] for m in self.motions]
-        return trains, float(sum(r.size * independence(r) for r in first))
+        first = [(m.force - predicted_force(sets[0], m)) for m in self.motions]
+        apart = [
+            (r - m.nuisance @ (m.nuisance.T @ r))[m.train] for r, m in zip(first, self.motions)
+        ]
+        return trains, float(sum(r.size * independence(r) for r in apart))
 
-    def costs(self, params: UnitParams) -> tuple[float, float]:
-        """(training, held-out) mean squared residual."""
-        train, heldout = self.residuals(params)
+    def costs(self, params: UnitParams, apart: bool = True) -> tuple[float, float]:
+        """(training, held-out) mean squared residual (``residuals``)."""
+        train, heldout = self.residuals(params, apart)
         return float(np.mean(train**2)), float(np.mean(heldout**2))
 
     def fit(self, base: UnitParams, structure: tuple[Candidate, ...], warm: Fit | None) -> Fit:
@@ -218,16 +231,19 @@ def _motions(data, smooth_s: float) -> list[Motion]:
         fast[inner] = np.abs(velocity[inner]) > max(SPEED_NOISE * speed_noise, MIN_SPEED_M_S)
         # a window that reaches into a stop smears the stop into its derivatives
         moving = binary_erosion(fast, np.ones(window, bool))
+        position = savgol_filter(x, window, 3)[moving]
+        time = run.time[moving]
         motions.append(
             Motion(
-                run.time[moving],
-                savgol_filter(x, window, 3)[moving],
+                time,
+                position,
                 velocity[moving],
                 savgol_filter(x, window, 3, deriv=2, delta=step)[moving],
                 np.sign(velocity[moving]),
                 run.outputs["wire_force"][moving],
                 train[moving],
                 heldout[moving],
+                np.linalg.qr(np.column_stack([np.ones(time.size), time, position]))[0],
             )
         )
     return motions

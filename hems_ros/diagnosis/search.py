@@ -152,9 +152,10 @@ def _better(new: Fit, current: Fit, start: Fit, relation: LoadRelation | None = 
 def _keeps(relation: LoadRelation, new: UnitParams, current: UnitParams) -> bool:
     """``new`` leaves the load relation's held-out cost within MIN_GAIN of ``current``'s, in
     noise-floor units or, where the relation itself misses by more than its noise (a
-    recording's force stamped a little off its motion), as a share of its cost."""
-    before = relation.costs(current)[1]
-    return relation.costs(new)[1] - before < MIN_GAIN * max(before, 1.0)
+    recording's force stamped a little off its motion), as a share of its cost; judged
+    whole, offsets and spring rate included (relation.LoadRelation.residuals)."""
+    before = relation.costs(current, apart=False)[1]
+    return relation.costs(new, apart=False)[1] - before < MIN_GAIN * max(before, 1.0)
 
 
 def _warm(space_fit: Fit, base: UnitParams) -> dict[str, float]:

@@ -37,10 +37,11 @@ def _motion(params: UnitParams, noise_n: float, seed: int) -> list[relation.Moti
     a = 2e-3 * (2 * np.pi / 5.0) ** 2 * np.cos(2 * np.pi * t / 5.0)
     train = t < 25.0
     z = np.sign(v)
-    exact = relation.Motion(t, x, v, a, z, np.zeros_like(t), train, ~train)
+    apart = np.linalg.qr(np.column_stack([np.ones_like(t), t, x]))[0]
+    exact = relation.Motion(t, x, v, a, z, np.zeros_like(t), train, ~train, apart)
     force = relation.predicted_force(params, exact)
     noisy = force + np.random.default_rng(seed).normal(0.0, noise_n, t.size)
-    return [relation.Motion(t, x, v, a, z, noisy, train, ~train)]
+    return [relation.Motion(t, x, v, a, z, noisy, train, ~train, apart)]
 
 
 def test_coulomb_friction_is_fitted_from_the_force_against_the_motion_alone():
