@@ -29,12 +29,12 @@ def _rig() -> UnitParams:
 
 
 def _motion(params: UnitParams, noise_n: float, seed: int) -> list[relation.Motion]:
-    """Strokes of 4 mm measured exactly, the force through the load law of ``params``
+    """Strokes of 10 mm measured exactly, the force through the load law of ``params``
     (sliding: the friction's sign is the velocity's)."""
     t = np.arange(0.0, 40.0, 0.01)
-    x = 2e-3 * (1.0 - np.cos(2 * np.pi * t / 5.0))
-    v = 2e-3 * 2 * np.pi / 5.0 * np.sin(2 * np.pi * t / 5.0)
-    a = 2e-3 * (2 * np.pi / 5.0) ** 2 * np.cos(2 * np.pi * t / 5.0)
+    x = 5e-3 * (1.0 - np.cos(2 * np.pi * t / 5.0))
+    v = 5e-3 * 2 * np.pi / 5.0 * np.sin(2 * np.pi * t / 5.0)
+    a = 5e-3 * (2 * np.pi / 5.0) ** 2 * np.cos(2 * np.pi * t / 5.0)
     train = t < 25.0
     z = np.sign(v)
     apart = np.linalg.qr(np.column_stack([np.ones_like(t), t, x]))[0]
