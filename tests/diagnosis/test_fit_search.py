@@ -56,8 +56,11 @@ def test_hidden_load_damping_is_named_and_recovered(damping) -> None:
 
 def test_the_fits_convergence_is_recorded(damping) -> None:
     final = damping.search.final
-    # the load relation's fit (a start at the model's value and one at "absent")
-    assert final.converged and final.starts == 2 and 0 < final.evaluations <= 30
+    # the replay's refit from the load relation's value (one start), or the relation's own
+    # fit (a start at the model's value and one at "absent") where the refit gained nothing
+    refined = damping.search.load_relation.refined
+    assert final.converged and final.starts == (1 if refined else 2)
+    assert 0 < final.evaluations <= 30
     assert summary(damping)["fit"] == {
         "converged": True,
         "stop": final.stop,
