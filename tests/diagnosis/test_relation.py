@@ -54,40 +54,30 @@ def test_coulomb_friction_is_fitted_from_the_force_against_the_motion_alone():
     assert load.costs(base)[1] > 100.0
 
 
-def test_the_relation_names_the_load_effect_hidden_and_nothing_when_none_is():
+def _named(truth: UnitParams, seed: int, pool=tuple(BY_NAME.values())) -> relation.Named:
     base = _rig()
-    stiff = BY_NAME["spring_stiffening"].apply(base, [2e6])
-    named = relation.name_effects(
-        relation.LoadRelation(_motion(stiff, 0.05, 2), base),
+    return relation.name_effects(
+        relation.LoadRelation(_motion(truth, 0.05, seed), base),
         base,
-        list(BY_NAME.values()),
+        list(pool),
         search._better,
         lambda line: None,
     )
+
+
+def test_the_relation_names_the_load_effect_hidden_and_nothing_when_none_is():
+    named = _named(BY_NAME["spring_stiffening"].apply(_rig(), [2e6]), 2)
     assert [f.structure[-1].name for f in named.steps] == ["spring_stiffening"]
     assert named.final.values[0] == pytest.approx(2e6, rel=0.05)
-    named = relation.name_effects(
-        relation.LoadRelation(_motion(base, 0.05, 3), base),
-        base,
-        list(BY_NAME.values()),
-        search._better,
-        lambda line: None,
-    )
+    named = _named(_rig(), 3)
     assert named.steps == () and named.final.structure == () and named.intervals is None
 
 
 def test_the_relation_s_intervals_hold_the_truth_nineteen_times_in_twenty():
-    base = _rig()
-    stiff = BY_NAME["spring_stiffening"].apply(base, [2e6])
+    stiff = BY_NAME["spring_stiffening"].apply(_rig(), [2e6])
     covered = 0
     for seed in range(40):
-        named = relation.name_effects(
-            relation.LoadRelation(_motion(stiff, 0.05, 100 + seed), base),
-            base,
-            [BY_NAME["spring_stiffening"]],
-            search._better,
-            lambda line: None,
-        )
+        named = _named(stiff, 100 + seed, [BY_NAME["spring_stiffening"]])
         low, high = named.intervals.of("load.cubic_stiffness_n_per_m3")
         assert high - low < 0.2e6
         covered += low < 2e6 < high
