@@ -93,10 +93,23 @@ class Search:
     load_relation: Named | None = None
 
     @property
+    def opening(self) -> tuple[Fit | None, list[Fit]]:
+        """The first selection: what it accepted (None: nothing) and every candidate's fit,
+        best first; the load relation's where it named an effect, else the first step's."""
+        named = self.load_relation
+        if named is not None and named.steps:
+            return named.steps[0], list(named.ranked)
+        if self.steps:
+            return self.steps[0].chosen, self.steps[0].ranked
+        return None, []
+
+    @property
     def first_ranked(self) -> str | None:
-        """The candidate ranked first: the load relation's first, else the first step's."""
-        if self.load_relation is not None and self.load_relation.steps:
-            return self.load_relation.steps[0].structure[-1].name
+        """The candidate ranked first: the load relation's first named, else the first
+        step's best (accepted or not)."""
+        named = self.load_relation
+        if named is not None and named.steps:
+            return named.steps[0].structure[-1].name
         return self.steps[0].ranked[0].structure[-1].name if self.steps else None
 
     @property

@@ -348,8 +348,8 @@ class Outcome:
     seed: int
     verdict: str
     named: tuple[str, ...]
-    first: str  # the first term the forward selection accepted ('' if none)
-    ranking: tuple[str, ...]  # the first step's candidates, best held-out first
+    first: str  # the first term accepted (search.Search.opening; '' if none)
+    ranking: tuple[str, ...]  # the first selection's candidates, best first
     errors: dict[str, float]  # relative error of each recovered value
     covered: dict[str, bool]  # whether each recovered value's 95 % interval holds the truth
     gap_before: float
@@ -390,9 +390,9 @@ def outcome(case: Case, prof: str, noise: str, seed: int, d: Diagnosis) -> Outco
         for k, v in case.recover.items()
         if values.get(k) is not None and d.intervals is not None
     }
-    steps = d.search.steps
-    first = steps[0].chosen.structure[-1].name if steps and steps[0].chosen else ""
-    ranking = tuple(f.structure[-1].name for f in steps[0].ranked) if steps else ()
+    chosen, ranked = d.search.opening
+    first = chosen.structure[-1].name if chosen is not None else ""
+    ranking = tuple(f.structure[-1].name for f in ranked)
     named = (
         tuple(n["effect"] for n in d.named())
         if d.verdict != "recalibrated"
