@@ -134,12 +134,17 @@ class LoadRelation:
         self.sigma = noise_floor(residual, 0.0, "wire_force")
         self.n_train = int(sum(m.train.sum() for m in self.motions))
 
-    def residuals(self, params: UnitParams, apart: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """(training, held-out) residuals in noise-floor units; ``apart``: with what the
-        relation cannot tell apart removed (a force offset and drift, a spring rate)."""
+    def _parts(self, params: UnitParams, apart: bool) -> list[np.ndarray]:
+        """Each run's residual in noise-floor units; ``apart``: with what the relation cannot
+        tell apart removed (a force offset and drift, a spring rate)."""
         parts = [(m.force - predicted_force(params, m)) / self.sigma for m in self.motions]
         if apart:
             parts = [r - m.nuisance @ (m.nuisance.T @ r) for r, m in zip(parts, self.motions)]
+        return parts
+
+    def residuals(self, params: UnitParams, apart: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """(training, held-out) residuals (``_parts``)."""
+        parts = self._parts(params, apart)
         return (
             np.concatenate([r[m.train] for r, m in zip(parts, self.motions)]),
             np.concatenate([r[m.heldout] for r, m in zip(parts, self.motions)]),
@@ -148,12 +153,9 @@ class LoadRelation:
     def training(self, sets: list[UnitParams]) -> tuple[list[np.ndarray], float]:
         """Training residuals of each set, and the effective sample count of the first's
         (intervals.estimate_on): the force's noise is coloured."""
-        trains = [self.residuals(p)[0] for p in sets]
-        first = [(m.force - predicted_force(sets[0], m)) for m in self.motions]
-        apart = [
-            (r - m.nuisance @ (m.nuisance.T @ r))[m.train] for r, m in zip(first, self.motions)
-        ]
-        return trains, float(sum(r.size * independence(r) for r in apart))
+        first = [r[m.train] for r, m in zip(self._parts(sets[0], True), self.motions)]
+        trains = [np.concatenate(first)] + [self.residuals(p)[0] for p in sets[1:]]
+        return trains, float(sum(r.size * independence(r) for r in first))
 
     def costs(self, params: UnitParams, apart: bool = True) -> tuple[float, float]:
         """(training, held-out) mean squared residual (``residuals``)."""
