@@ -18,7 +18,6 @@ from pathlib import Path
 from hems_ros.diagnosis import inputs
 from hems_ros.diagnosis.workflow import diagnose
 from hems_ros.truth import cases
-from hems_ros.truth.files import COLUMNS
 
 MODEL = "table41"
 TUNING_SEEDS = (0,)
@@ -56,6 +55,7 @@ def grid(quick: bool = False, seeds: tuple[int, ...] = HALVES["all"]):
         Row(family, effect.name, size, noise, seed)
         for family in cases.FAMILIES
         for effect in cases.EFFECTS
+        if family in effect.families
         for size in effect.sizes
         for noise in cases.NOISE
         for seed in seeds
@@ -70,7 +70,7 @@ def run_row(row: Row) -> dict:
         model = inputs.model(MODEL, files["train"][1])
 
         def load(role: str):
-            return inputs.load(str(files[role][0]), COLUMNS, None, model.wire)
+            return inputs.load(str(files[role][0]), cases.columns(effect), None, model.wire)
 
         d = diagnose(load("train"), load("heldout"), model)
     named = [n["effect"] for n in d.named()]

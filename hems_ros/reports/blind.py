@@ -81,7 +81,11 @@ def render(records: list[dict], seconds: list[float], figure: str) -> str:
         "the starting model never equals the truth. A truth's training run (six current pulses of "
         "1.0-2.0 s at 4-5 A, 20 s apart) and held-out run (four others) are written as a lab's CSV "
         "and conditions and diagnosed from `table41` with the whole library, as `hems diagnose` "
-        "does. The sensors add AR(1) noise (rho 0.3, 0.6, 0.9 at the low, mid and high levels), "
+        "does. The supply's truth is driven instead through a PWM board (20 V, 4 A limit) by a "
+        "position loop run on the truth itself, a PI on the encoder stepping through contraction "
+        "targets, so that its duty is what a controller made of the rig; its log carries the "
+        "duty and its conditions the nominal supply. The sensors add AR(1) noise (rho 0.3, 0.6, "
+        "0.9 at the low, mid and high levels), "
         "one or two samples of latency and spikes at the higher levels, and the encoder's 1 um and "
         "the load cell's 0.01 N resolution.",
         "",
@@ -185,16 +189,23 @@ def _reading(records: list[dict]) -> list[str]:
                 + ", ".join(f"{n} ({c})" for n, c in named.most_common())
                 + "."
             )
-        missed: dict[tuple, list[str]] = {}
+        missed: dict[tuple, list[dict]] = {}
         for x in records:
             if x["family"] == family and x["kind"] == "outside" and not x["right"]:
-                missed.setdefault((x["effect"], x["size"], x["noise"]), []).append(x["verdict"])
-        for (name, size, noise), verdicts_there in missed.items():
-            said = ", ".join(f"{v} ({c})" for v, c in Counter(verdicts_there).most_common())
+                missed.setdefault((x["effect"], x["size"], x["noise"]), []).append(x)
+        for (name, size, noise), there in missed.items():
+            said = ", ".join(
+                f"{v} ({c})" for v, c in Counter(x["verdict"] for x in there).most_common()
+            )
+            taken = sorted({n for x in there for n in x["named"]})
             lines.append(
                 f"Outside the library, {name} of {size:g} {cases.BY_NAME[name].unit} at {noise} "
-                f"noise ({TIERS[family]}) was judged {said}: the data showed nothing beyond "
-                "their noise."
+                f"noise ({TIERS[family]}) was judged {said}: "
+                + (
+                    f"{', '.join(taken)} explained the data down to their noise."
+                    if taken
+                    else "the data showed nothing beyond their noise."
+                )
             )
     return [" ".join(lines), ""] if lines else []
 

@@ -21,7 +21,7 @@ this module.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -64,6 +64,7 @@ class WireRig:
     # (extension from the cold rest position m, spring force change N) points, rising; the
     # spring then pulls ``preload_n`` plus the table's value instead of spring_n_m * extension
     spring_table: tuple[tuple[float, float], ...] | None = None
+    start_c: float | None = None  # the wire's and sheath's temperature at the start
 
     def __post_init__(self) -> None:
         if self.friction_n < 0.0 or self.friction_stiffness_n_m <= 0.0:
@@ -95,11 +96,13 @@ class WireRig:
         return math.pi * self.diameter_m**2 / 4.0
 
     def cold_state(self) -> np.ndarray:
-        """At rest at ambient temperature, all (detwinned) martensite, under the cold load."""
-        strain, states = self.material.cold(self.cold_load_n / self.section_m2, self.ambient_c)
+        """At rest, all (detwinned) martensite under the cold load, wire and sheath at
+        ``start_c`` (the room's temperature unless told)."""
+        warm = self.ambient_c if self.start_c is None else self.start_c
+        strain, states = self.material.cold(self.cold_load_n / self.section_m2, warm)
         network = self.network()
-        nodes = [] if network is None else [self.ambient_c] * network.capacities.size
-        return np.array([self.ambient_c, strain * self.length_m, 0.0, 0.0, *states, *nodes])
+        nodes = [] if network is None else [warm] * network.capacities.size
+        return np.array([warm, strain * self.length_m, 0.0, 0.0, *states, *nodes])
 
     def bare_loss_w(self, temp: float) -> float:
         """Heat the bare wire gives the room at ``temp``, W."""
@@ -122,10 +125,15 @@ class RigRun:
     contraction_m: np.ndarray
     martensite_fraction: np.ndarray
     sheath_node_c: np.ndarray  # (samples, nodes), inside out; no columns for a bare wire
+    duty_percent: np.ndarray | None = None  # a PWM drive's duty; None: a current source
 
 
 def _derivatives(
-    rig: WireRig, network: SheathNetwork | None, amps: float, rest_m: float, x: np.ndarray
+    rig: WireRig,
+    network: SheathNetwork | None,
+    power_w: Callable[[float], float],
+    rest_m: float,
+    x: np.ndarray,
 ) -> list[float]:
     mat = rig.material
     temp, elongation, velocity, friction = x[0], x[1], x[2], x[3]
@@ -135,7 +143,7 @@ def _derivatives(
     volume = rig.section_m2 * rig.length_m
     heat_capacity = rig.density_kg_m3 * volume * rig.heat_capacity_j_kg_k
     contraction = rest_m - elongation
-    power = amps**2 * _resistance(rig, mat.martensite(states), temp, sigma, contraction)
+    power = power_w(_resistance(rig, mat.martensite(states), temp, sigma, contraction))
     if network is None:
         loss = rig.bare_loss_w(temp)
         node_rates: list[float] = []
@@ -203,32 +211,63 @@ def simulate(
     rows = []
     for start, end in zip(edges[:-1], edges[1:]):
         amps = _current(pulses, start)
-        solution = solve_ivp(
-            lambda t, x, i=amps: _derivatives(rig, network, i, rest_m, x),
-            (start, end),
-            state,
-            method="LSODA",
-            t_eval=np.append(times[(times >= start) & (times < end)], end),
-            rtol=RTOL,
-            atol=ATOL + list(rig.material.state_atol) + [1e-6] * (state.size - len(ATOL) - 2),
-            max_step=MAX_STEP_S,
-        )
-        if not solution.success:
-            raise RuntimeError(
-                f"the rig's integration failed at {start:g}-{end:g} s: {solution.message}"
-            )
-        rows += [(t, amps, *x) for t, x in zip(solution.t[:-1], solution.y.T[:-1])]
-        state = solution.y[:, -1]
+        t_eval = np.append(times[(times >= start) & (times < end)], end)
+        t, states = integrate(rig, network, rest_m, state, start, t_eval, _joule(amps))
+        rows += [(ti, amps, *x) for ti, x in zip(t[:-1], states[:-1])]
+        state = states[-1]
     if times[-1] > rows[-1][0]:
         rows.append((times[-1], _current(pulses, times[-1]), *state))
-    return _run(rig, rest_m, np.array(rows))
+    return sampled(rig, rest_m, np.array(rows))
+
+
+def integrate(
+    rig: WireRig,
+    network: SheathNetwork | None,
+    rest_m: float,
+    state: np.ndarray,
+    start: float,
+    t_eval: np.ndarray,
+    power_w: Callable[[float], float],
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rig's states at ``t_eval`` from ``state`` at ``start`` to the last of ``t_eval``,
+    the wire heated by ``power_w(its resistance)``: (times, states by row)."""
+    end = float(t_eval[-1])
+    solution = solve_ivp(
+        lambda t, x: _derivatives(rig, network, power_w, rest_m, x),
+        (start, end),
+        state,
+        method="LSODA",
+        t_eval=t_eval,
+        rtol=RTOL,
+        atol=ATOL + list(rig.material.state_atol) + [1e-6] * (state.size - len(ATOL) - 2),
+        max_step=MAX_STEP_S,
+    )
+    if not solution.success:
+        raise RuntimeError(
+            f"the rig's integration failed at {start:g}-{end:g} s: {solution.message}"
+        )
+    return solution.t, solution.y.T
+
+
+def _joule(amps: float) -> Callable[[float], float]:
+    return lambda ohm: amps * amps * ohm
 
 
 def _current(pulses: Sequence[tuple[float, float, float]], t: float) -> float:
     return next((amps for start, end, amps in pulses if start <= t < end), 0.0)
 
 
-def _run(rig: WireRig, rest_m: float, rows: np.ndarray) -> RigRun:
+def resistance_ohm(rig: WireRig, rest_m: float, x: np.ndarray) -> float:
+    """The wire's resistance in the state ``x``."""
+    states = x[MATERIAL_STATES : MATERIAL_STATES + 2]
+    sigma = rig.material.stress_pa(x[1] / rig.length_m, states, x[0])
+    return _resistance(rig, rig.material.martensite(states), x[0], sigma, rest_m - x[1])
+
+
+def sampled(
+    rig: WireRig, rest_m: float, rows: np.ndarray, duty_percent: np.ndarray | None = None
+) -> RigRun:
+    """The run of ``rows`` (time, mean current, states); ``duty_percent`` of a PWM drive."""
     t, amps, temp, elongation = rows.T[:4]
     states = rows[:, 2 + MATERIAL_STATES : 4 + MATERIAL_STATES]
     mat = rig.material
@@ -248,4 +287,5 @@ def _run(rig: WireRig, rest_m: float, rows: np.ndarray) -> RigRun:
         contraction_m=contraction,
         martensite_fraction=xi,
         sheath_node_c=rows[:, 4 + MATERIAL_STATES :],
+        duty_percent=duty_percent,
     )

@@ -45,3 +45,20 @@ def test_readings_fall_on_the_resolution_grid():
 def test_an_impossible_sensor_is_refused_naming_every_problem():
     with pytest.raises(ValueError, match="rho 1.0 is outside.*quantum -1 is negative"):
         Sensor(rho=1.0, quantum=-1)
+
+
+def test_a_lag_filter_reaches_63_percent_of_a_step_in_its_time_constant():
+    true = np.r_[np.zeros(100), np.ones(1000)]
+    reading = measure(true, 0.001, Sensor(lag_s=0.05), np.random.default_rng())
+    assert reading[:100] == pytest.approx(0.0)
+    assert reading[100 + 50] == pytest.approx(1.0 - np.exp(-1.0), abs=0.01)
+    assert reading[-1] == pytest.approx(1.0, abs=1e-6)
+
+
+def test_a_warm_up_offset_settles_exponentially_from_the_start():
+    reading = measure(
+        np.zeros(401), 0.1, Sensor(warmup=2.0, warmup_s=10.0), np.random.default_rng()
+    )
+    assert reading[0] == 0.0
+    assert reading[100] == pytest.approx(2.0 * (1.0 - np.exp(-1.0)))
+    assert reading[400] == pytest.approx(2.0, abs=0.04)
