@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import statistics
 from collections import Counter
 from pathlib import Path
@@ -14,6 +15,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from hems_ros.diagnosis import blind  # noqa: E402
 from hems_ros.truth import cases  # noqa: E402
 
+PANELS_PER_ROW = 5
 DPI = 80
 CORES = 64
 ALL_NOISE = tuple(cases.NOISE)
@@ -229,34 +231,38 @@ def _scale(seconds: list[float]) -> list[str]:
 
 
 def figure(records: list[dict], path: Path) -> None:
-    """Share of runs right against effect size: a row of panels per tier, a panel per effect,
-    a line per noise level."""
-    effects = [e for e in cases.EFFECTS if e.kind == "effect"]
-    families = [f for f in cases.FAMILIES if any(x["family"] == f for x in records)]
-    fig, axes = plt.subplots(
-        len(families),
-        len(effects),
-        figsize=(4 * len(effects), 3.0 * len(families)),
-        squeeze=False,
-    )
-    for row, family in zip(axes, families):
-        for ax, effect in zip(row, effects):
-            # shrinking markers: levels that coincide stay visible one inside the other
-            for (noise, style), size_pt in zip(zip(cases.NOISE, ("o-", "s--", "^:")), (10, 6, 3)):
-                shares = []
-                for size in effect.sizes:
-                    at = [
-                        x["right"]
-                        for x in records
-                        if (x["family"], x["effect"], x["noise"], x["size"])
-                        == (family, effect.name, noise, size)
-                    ]
-                    shares.append(sum(at) / len(at) if at else float("nan"))
-                ax.plot(effect.sizes, shares, style, markersize=size_pt, label=f"{noise} noise")
-            ax.set_title(f"{effect.name} ({TIERS[family]})", fontsize=9)
-            ax.set_xlabel(f"size, {effect.unit}")
-            ax.set_ylim(-0.05, 1.05)
-            ax.grid(alpha=0.3)
+    """Share of runs right against effect size: a panel per tier and effect that ran, a line
+    per noise level."""
+    panels = [
+        (family, effect)
+        for family in cases.FAMILIES
+        for effect in cases.EFFECTS
+        if effect.kind == "effect"
+        and any((x["family"], x["effect"]) == (family, effect.name) for x in records)
+    ]
+    columns = min(PANELS_PER_ROW, len(panels))
+    rows = math.ceil(len(panels) / columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(4 * columns, 3.0 * rows), squeeze=False)
+    for ax, (family, effect) in zip(axes.flat, panels):
+        # shrinking markers: levels that coincide stay visible one inside the other
+        for (noise, style), size_pt in zip(zip(cases.NOISE, ("o-", "s--", "^:")), (10, 6, 3)):
+            shares = []
+            for size in effect.sizes:
+                at = [
+                    x["right"]
+                    for x in records
+                    if (x["family"], x["effect"], x["noise"], x["size"])
+                    == (family, effect.name, noise, size)
+                ]
+                shares.append(sum(at) / len(at) if at else float("nan"))
+            ax.plot(effect.sizes, shares, style, markersize=size_pt, label=f"{noise} noise")
+        ax.set_title(f"{effect.name} ({TIERS[family]})", fontsize=9)
+        ax.set_xlabel(f"size, {effect.unit}")
+        ax.set_ylim(-0.05, 1.05)
+        ax.grid(alpha=0.3)
+    for ax in axes.flat[len(panels) :]:
+        ax.set_axis_off()
+    for row in axes:
         row[0].set_ylabel("share named")
     axes[0][-1].legend(fontsize=8)
     fig.tight_layout()
