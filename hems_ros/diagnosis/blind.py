@@ -16,6 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from hems_ros.diagnosis import inputs
+from hems_ros.diagnosis.fit import Fit
+from hems_ros.diagnosis.search import Search, excess
 from hems_ros.diagnosis.workflow import diagnose
 from hems_ros.truth import cases
 
@@ -91,6 +93,32 @@ def run_row(row: Row) -> dict:
         "gap_before": _finite(d.gap.heldout_before),
         "gap_after": _finite(d.gap.heldout_after),
         "summary": d.summary_line(),
+        "openings": openings(d.search),
+    }
+
+
+def openings(found: Search) -> dict[str, dict[str, list[float]]]:
+    """What each candidate offered at the first selection on the load relation and at the
+    replay's first step: name -> [held-out gain (noise-floor units), share of the starting
+    model's held-out excess removed], the quantities MIN_GAIN and MATERIAL judge."""
+    out: dict[str, dict[str, list[float]]] = {}
+    named = found.load_relation
+    if named is not None:
+        out["relation"] = _offered(named.start, named.start, named.ranked)
+    if found.steps:
+        before = found.fixed or found.start
+        out["replay"] = _offered(before, found.start, found.steps[0].ranked)
+    return out
+
+
+def _offered(before: Fit, start: Fit, fits) -> dict[str, list[float]]:
+    gap = excess(start.heldout)
+    return {
+        f.structure[-1].name: [
+            before.heldout - f.heldout,
+            (excess(before.heldout) - excess(f.heldout)) / gap if gap > 0 else 0.0,
+        ]
+        for f in fits
     }
 
 

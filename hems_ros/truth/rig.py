@@ -15,7 +15,8 @@ short travel instead of jumping to Fc), and a bias spring given by a force-exten
 the mass's velocity, the friction force, the material's two states (Brinson's two martensite
 fractions, or the fraction and the stress of the dissertation's own law, ``duhem``), the
 sheath's nodes; scipy's LSODA integrates them between the current's edges at tolerances of
-this module.
+this module. The current comes in pulses here, or through a PWM drive under a position loop
+(``drive``); the wire may start warmer than the room (``start_c``).
 """
 
 from __future__ import annotations

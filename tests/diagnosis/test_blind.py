@@ -4,13 +4,17 @@ a row diagnosed again here."""
 
 from __future__ import annotations
 
+import os
+import pickle
 import re
+import subprocess
 from pathlib import Path
 
 import pytest
 
-from hems_ros.diagnosis import blind
+from hems_ros.diagnosis import blind, cluster, search
 from hems_ros.reports import blind as page
+from hems_ros.reports import blind_tuning as tuning
 from hems_ros.truth import cases
 
 REPO = Path(__file__).resolve().parents[2]
@@ -94,6 +98,53 @@ def test_the_committed_page_shows_what_a_row_diagnosed_here_gives():
     )
     assert f"{record['verdict']} (" in line
     assert all(f"{name} (" in line for name in record["named"])
+    # what the load relation's candidates offered at its first selection: friction far above
+    # the gain the search asks for
+    relation = record["openings"]["relation"]
+    assert {"tendon_friction", "load_damping"} <= set(relation)
+    assert relation["tendon_friction"][0] > 10 * search.MIN_GAIN
+    assert 0.0 < relation["tendon_friction"][1] <= 1.0
+
+
+def _opened(kind: str, effect: str, relation: dict[str, list[float]]) -> dict:
+    return {"kind": kind, "effect": effect, "openings": {"relation": relation}}
+
+
+def test_the_tuning_page_sets_each_threshold_between_what_null_and_hidden_truths_offered():
+    records = [
+        # nothing hidden: the best effect's offer counts, a recalibration's does not
+        _opened("null", "none", {"load_damping": [0.04, 0.0], "ambient": [5.0, 0.5]}),
+        _opened("null", "none", {"capstan_friction": [0.07, 0.0]}),
+        # a hidden friction: its own candidate's offer counts, the best of the two forms
+        _opened(
+            "effect",
+            "dahl_friction",
+            {
+                "tendon_friction": [3.0, 0.9],
+                "capstan_friction": [0.2, 0.1],
+                "load_damping": [9.0, 0.9],
+            },
+        ),
+        _opened("effect", "stiffening_spring", {"spring_stiffening": [0.5, 0.4]}),
+        _opened("outside", "encoder_drift", {"load_damping": [0.3, 0.1]}),
+        {"kind": "null", "effect": "none", "openings": {}},  # no force measured: no relation
+    ]
+    gain = tuning.THRESHOLDS[0]
+    assert (gain.stage, gain.index) == ("relation", 0)
+    assert tuning.spread(records, gain) == {
+        "null": [0.04, 0.07],
+        "effect": [3.0, 0.5],
+        "outside": [0.3],
+    }
+    text = tuning.render(records, "t.png")
+    assert "| `MIN_GAIN` | 0.1 | held-out gain on the load relation" in text
+    assert (
+        "| 0.07 (2 truths) | 0.5 (2 truths) | tells them apart: any value in [0.07, 0.5] |" in text
+    )
+    # a threshold the offers straddle says how many fall on the wrong side
+    assert tuning._reading({"null": [0.04, 0.2], "effect": [0.05, 3.0]}, 0.1) == (
+        "1 of 2 with nothing hidden at or above it, 1 of 2 hidden effects below it"
+    )
 
 
 @pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis-blind.md not generated")
@@ -116,3 +167,55 @@ def test_the_committed_page_holds_its_floors_where_it_meets_them():
     for label, floor in held:
         right, runs = shares[label]
         assert runs >= 6 and right >= floor * runs, (label, right, runs)
+
+
+def test_diagnose_blind_half_tuning_writes_the_tuning_page_from_stored_results(tmp_path):
+    """The verb resumes every row from its output folder (nothing is diagnosed again) and
+    writes the thresholds' page instead of the evaluation page."""
+    cases_folder = tmp_path / "out" / "cases"
+    cases_folder.mkdir(parents=True)
+    offers = ({"tendon_friction": [4.0, 0.8]}, {"load_damping": [0.02, 0.0]})
+    for row, relation in zip(blind.grid(quick=True), offers):
+        effect = cases.BY_NAME[row.effect]
+        record = {
+            "family": row.family,
+            "effect": row.effect,
+            "kind": effect.kind,
+            "size": row.size,
+            "noise": row.noise,
+            "seed": row.seed,
+            "half": row.half,
+            "verdict": "named" if effect.kind == "effect" else "none",
+            "named": list(effect.expected[:1]),
+            "first": None,
+            "openings": {"relation": relation},
+        }
+        with (cases_folder / f"{row.key}{cluster.SUFFIX}").open("wb") as f:
+            pickle.dump(cluster.Done(record, 1.0, "here"), f)
+    docs = tmp_path / "docs" / "diagnosis-tuning.md"
+    done = subprocess.run(
+        [
+            str(REPO / ".venv" / "bin" / "hems"),
+            "diagnose-blind",
+            "--quick",
+            "--half",
+            "tuning",
+            "--out",
+            str(tmp_path / "out"),
+            "--docs",
+            str(docs),
+            "--scheduler",
+            "serial",
+        ],
+        env=dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST"),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "resuming: 2 of 2" in done.stderr + done.stdout
+    text = docs.read_text()
+    assert "| 0.02 (1 truths) | 4 (1 truths) | tells them apart: any value in [0.02, 4] |" in text
+    assert (docs.parent / "figures" / "diagnosis_tuning.png").stat().st_size > 10_000
+    assert (tmp_path / "out" / "tuning.md").is_file()
+    assert not (tmp_path / "out" / "blind.md").exists()
