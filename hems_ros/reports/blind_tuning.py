@@ -4,8 +4,10 @@ thresholds against what the candidates offered on the tuning half.
 At a truth's first selection, on the load relation and at the replay's first step, every
 candidate's held-out gain and share of the starting model's excess are recorded
 (``blind.openings``). With nothing hidden, the most any effect offered is what a threshold
-must stay above; with an effect hidden, what its own candidate offered is what the threshold
-must let through. A value between the two tells the tuning half's truths apart.
+must stay above; with an effect hidden and named, what its own candidate offered is what the
+threshold must let through. A value between the two tells the tuning half's truths apart.
+The replay's first step is read on the independent form only: across the model family it
+recalibrates the wire, and what an effect offers there measures the families' mismatch.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ EFFECT_NAMES = frozenset(c.name for c in candidates.EFFECTS)
 #: the rows of each panel: (label, the truths' kind)
 GROUPS = (
     ("nothing hidden: best effect offered", "null"),
-    ("hidden effect: its candidate", "effect"),
+    ("hidden effect named: its candidate", "effect"),
     ("outside the library: best effect offered", "outside"),
 )
 
@@ -38,6 +40,7 @@ class Threshold:
     stage: str  # "relation" or "replay": where the opening was recorded
     index: int  # 0: held-out gain; 1: share of the starting model's excess
     what: str
+    families: tuple[str, ...] = tuple(cases.FAMILIES)  # the truths it is read on
 
 
 THRESHOLDS = (
@@ -48,13 +51,22 @@ THRESHOLDS = (
         0,
         "held-out gain on the load relation, noise-floor units",
     ),
-    Threshold("MIN_GAIN", search.MIN_GAIN, "replay", 0, "held-out gain at the replay's first step"),
+    Threshold(
+        "MIN_GAIN",
+        search.MIN_GAIN,
+        "replay",
+        0,
+        "held-out gain at the replay's first step (independent form)",
+        ("dissertation",),
+    ),
     Threshold(
         "MATERIAL",
         search.MATERIAL,
         "replay",
         1,
-        "share of the starting model's held-out excess removed at the first step",
+        "share of the starting model's held-out excess removed at the first step "
+        "(independent form)",
+        ("dissertation",),
     ),
 )
 
@@ -71,11 +83,12 @@ def offered(record: dict, threshold: Threshold) -> float | None:
 
 
 def spread(records: list[dict], threshold: Threshold) -> dict[str, list[float]]:
-    """Each truth kind's offers under ``threshold``."""
+    """Each truth kind's offers under ``threshold``; a hidden effect's where it was named."""
     out: dict[str, list[float]] = {kind: [] for _, kind in GROUPS}
     for record in records:
         value = offered(record, threshold)
-        if value is not None:
+        named = record["kind"] != "effect" or record["right"]
+        if value is not None and named and record["family"] in threshold.families:
             out[record["kind"]].append(value)
     return out
 
@@ -111,8 +124,8 @@ def render(records: list[dict], figure: str) -> str:
         "share, the load relation's veto), so a threshold alone decides only between these "
         "values.",
         "",
-        "| threshold | value | judges | nothing hidden: most offered | hidden effect: least "
-        "offered | the tuning half |",
+        "| threshold | value | judges | nothing hidden: most offered | hidden effect named: "
+        "least offered | the tuning half |",
         "|---|---|---|---|---|---|",
     ]
     for threshold in THRESHOLDS:
@@ -125,7 +138,14 @@ def render(records: list[dict], figure: str) -> str:
             if nulls and effects
             else f"| `{threshold.name}` | {threshold.value:g} | {threshold.what} | - | - | - |"
         )
-    lines += ["", f"![what the candidates offered, by truth]({figure})", ""]
+    lines += [
+        "",
+        "Each dot is one truth; an offer of nothing or a loss is drawn at the left edge, the "
+        "threshold as a dashed line.",
+        "",
+        f"![what the candidates offered, by truth]({figure})",
+        "",
+    ]
     return "\n".join(lines)
 
 

@@ -106,8 +106,15 @@ def test_the_committed_page_shows_what_a_row_diagnosed_here_gives():
     assert 0.0 < relation["tendon_friction"][1] <= 1.0
 
 
-def _opened(kind: str, effect: str, relation: dict[str, list[float]]) -> dict:
-    return {"kind": kind, "effect": effect, "openings": {"relation": relation}}
+def _opened(kind: str, effect: str, relation: dict[str, list[float]], right=True) -> dict:
+    return {
+        "family": "brinson",
+        "kind": kind,
+        "effect": effect,
+        "right": right,
+        # the replay's first step offered the same
+        "openings": {"relation": relation, "replay": relation},
+    }
 
 
 def test_the_tuning_page_sets_each_threshold_between_what_null_and_hidden_truths_offered():
@@ -126,11 +133,16 @@ def test_the_tuning_page_sets_each_threshold_between_what_null_and_hidden_truths
             },
         ),
         _opened("effect", "stiffening_spring", {"spring_stiffening": [0.5, 0.4]}),
+        # a hidden effect missed is not what the threshold let through
+        _opened("effect", "stiffening_spring", {"spring_stiffening": [0.01, 0.0]}, right=False),
         _opened("outside", "encoder_drift", {"load_damping": [0.3, 0.1]}),
-        {"kind": "null", "effect": "none", "openings": {}},  # no force measured: no relation
+        # no force measured: no relation
+        {"family": "brinson", "kind": "null", "effect": "none", "right": True, "openings": {}},
     ]
     gain = tuning.THRESHOLDS[0]
     assert (gain.stage, gain.index) == ("relation", 0)
+    # the replay's step is read on the independent form only
+    assert tuning.spread(records, tuning.THRESHOLDS[1]) == {"null": [], "effect": [], "outside": []}
     assert tuning.spread(records, gain) == {
         "null": [0.04, 0.07],
         "effect": [3.0, 0.5],
@@ -189,6 +201,7 @@ def test_diagnose_blind_half_tuning_writes_the_tuning_page_from_stored_results(t
             "named": list(effect.expected[:1]),
             "first": None,
             "openings": {"relation": relation},
+            "right": True,
         }
         with (cases_folder / f"{row.key}{cluster.SUFFIX}").open("wb") as f:
             pickle.dump(cluster.Done(record, 1.0, "here"), f)
@@ -219,3 +232,19 @@ def test_diagnose_blind_half_tuning_writes_the_tuning_page_from_stored_results(t
     assert (docs.parent / "figures" / "diagnosis_tuning.png").stat().st_size > 10_000
     assert (tmp_path / "out" / "tuning.md").is_file()
     assert not (tmp_path / "out" / "blind.md").exists()
+
+
+TUNING_PAGE = REPO / "docs" / "diagnosis-tuning.md"
+
+
+@pytest.mark.skipif(not TUNING_PAGE.is_file(), reason="docs/diagnosis-tuning.md not generated")
+def test_the_committed_tuning_page_sets_min_gain_between_the_relations_offers():
+    """What search.MIN_GAIN's comment says of the tuning half."""
+    row = next(
+        line
+        for line in TUNING_PAGE.read_text().splitlines()
+        if line.startswith("| `MIN_GAIN` |") and "on the load relation" in line
+    )
+    low, high = map(float, re.search(r"any value in \[([\d.e+-]+), ([\d.e+-]+)\]", row).groups())
+    assert low < search.MIN_GAIN < high
+    assert f"| {search.MIN_GAIN:g} |" in row
