@@ -6,7 +6,10 @@ Brinson's material, another SMA model family than the project's, so that the sta
 never equals it; or the dissertation's own law written again (``duhem``), where only the
 effect's form and the solver differ from the model. Each is driven by current pulses: a
 training run and a held-out run with other pulse lengths and currents, each with its own
-noise draw.
+noise draw. A supply's truth is driven instead through a PWM board by a position loop run on
+the rig (``drive``), stepping through other contraction targets in each run. The supply,
+warm-start and sensor forms beyond the drift are truths of the independent form only
+(``Effect.families``).
 ``expected`` names the library candidates that count as naming the effect; the null truth
 expects nothing named, an effect outside the library an ``unexplained`` or ``partial``
 verdict. Nothing here knows the library: the names are what the diagnosis should say.
