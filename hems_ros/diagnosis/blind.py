@@ -97,29 +97,38 @@ def run_row(row: Row) -> dict:
     }
 
 
-def openings(found: Search) -> dict[str, dict[str, list[float]]]:
-    """What each candidate offered at the first selection on the load relation and at the
-    replay's first step: name -> [held-out gain (noise-floor units), share of the starting
-    model's held-out excess removed], the quantities MIN_GAIN and MATERIAL judge."""
-    out: dict[str, dict[str, list[float]]] = {}
+def openings(found: Search) -> dict[str, list[dict]]:
+    """What the candidates offered at each selection, on the load relation (its first, the
+    one it keeps every candidate's fit of) and at each of the replay's steps: per selection,
+    ``offers`` (name -> [held-out gain in noise-floor units, share of the starting model's
+    held-out excess removed], the quantities MIN_GAIN and MATERIAL judge) and the name
+    ``chosen`` there (None: nothing)."""
+    out: dict[str, list[dict]] = {}
     named = found.load_relation
     if named is not None:
-        out["relation"] = _offered(named.start, named.start, named.ranked)
-    if found.steps:
-        before = found.fixed or found.start
-        out["replay"] = _offered(before, found.start, found.steps[0].ranked)
+        chosen = named.steps[0].structure[-1].name if named.steps else None
+        out["relation"] = [_selection(named.start, named.start, named.ranked, chosen)]
+    before = found.fixed or found.start
+    replay = []
+    for step in found.steps:
+        chosen = None if step.chosen is None else step.chosen.structure[-1].name
+        replay.append(_selection(before, found.start, step.ranked, chosen))
+        before = step.chosen or before
+    if replay:
+        out["replay"] = replay
     return out
 
 
-def _offered(before: Fit, start: Fit, fits) -> dict[str, list[float]]:
+def _selection(before: Fit, start: Fit, fits, chosen: str | None) -> dict:
     gap = excess(start.heldout)
-    return {
+    offers = {
         f.structure[-1].name: [
             before.heldout - f.heldout,
             (excess(before.heldout) - excess(f.heldout)) / gap if gap > 0 else 0.0,
         ]
         for f in fits
     }
+    return {"offers": offers, "chosen": chosen}
 
 
 def _finite(value: float) -> float | None:

@@ -1,13 +1,14 @@
 """The blind suite's tuning page (docs/diagnosis-tuning.md): the search's acceptance
 thresholds against what the candidates offered on the tuning half.
 
-At a truth's first selection, on the load relation and at the replay's first step, every
-candidate's held-out gain and share of the starting model's excess are recorded
-(``blind.openings``). With nothing hidden, the most any effect offered is what a threshold
-must stay above; with an effect hidden and named, what its own candidate offered is what the
-threshold must let through. A value between the two tells the tuning half's truths apart.
-The replay's first step is read on the independent form only: across the model family it
-recalibrates the wire, and what an effect offers there measures the families' mismatch.
+At each selection of a truth's diagnosis, on the load relation (its first) and at each of the
+replay's steps, every candidate's held-out gain and share of the starting model's excess are
+recorded (``blind.openings``). With nothing hidden, the most any effect offered at any
+selection is what a threshold must stay above; with an effect hidden, what its candidate
+offered at the selection that named it is what the threshold must let through. A value
+between the two tells the tuning half's truths apart. The replay's steps are read on the
+independent form only: across the model family they recalibrate the wire first, and what an
+effect offers there measures the families' mismatch.
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ THRESHOLDS = (
         search.MIN_GAIN,
         "replay",
         0,
-        "held-out gain at the replay's first step (independent form)",
+        "held-out gain at the replay's steps (independent form)",
         ("dissertation",),
     ),
     Threshold(
@@ -64,7 +65,7 @@ THRESHOLDS = (
         search.MATERIAL,
         "replay",
         1,
-        "share of the starting model's held-out excess removed at the first step "
+        "share of the starting model's held-out excess removed at the replay's steps "
         "(independent form)",
         ("dissertation",),
     ),
@@ -72,13 +73,18 @@ THRESHOLDS = (
 
 
 def offered(record: dict, threshold: Threshold) -> float | None:
-    """What the truth's own candidate offered (an effect hidden), or the most any effect of
-    the library offered (nothing hidden, or an effect outside it); None: not measured."""
-    opening = record.get("openings", {}).get(threshold.stage)
-    if not opening:
+    """What a hidden effect's candidate offered at the selection that named it, or the most
+    any effect of the library offered at any selection (nothing hidden, or an effect outside
+    the library); None: not measured, or not named there."""
+    selections = record.get("openings", {}).get(threshold.stage)
+    if not selections:
         return None
-    wanted = cases.BY_NAME[record["effect"]].expected or EFFECT_NAMES
-    values = [v[threshold.index] for name, v in opening.items() if name in wanted]
+    i = threshold.index
+    expected = cases.BY_NAME[record["effect"]].expected
+    if expected:
+        hits = [s["offers"][s["chosen"]][i] for s in selections if s["chosen"] in expected]
+        return hits[0] if hits else None
+    values = [v[i] for s in selections for n, v in s["offers"].items() if n in EFFECT_NAMES]
     return max(values) if values else None
 
 
@@ -116,13 +122,17 @@ def render(records: list[dict], figure: str) -> str:
         "",
         f"The blind suite's tuning half ({len(records)} truths: every truth, size and noise "
         "level of docs/diagnosis-blind.md once, its own seed) is where the search's thresholds "
-        "may be set; the evaluation half sets none. At each truth's first selection, on the "
-        "load relation and at the replay's first step, every candidate's held-out gain "
-        "(noise-floor units, judged by `MIN_GAIN`) and the share of the starting model's "
-        "held-out excess it removed (judged by `MATERIAL`) are recorded. A candidate is "
-        "accepted only where it also passes the search's other rules (BIC, the training "
-        "share, the load relation's veto), so a threshold alone decides only between these "
-        "values.",
+        "may be set; the evaluation half sets none. At each selection of a truth's diagnosis, "
+        "on the load relation (its first) and at each of the replay's steps, every "
+        "candidate's held-out gain (noise-floor units, judged by `MIN_GAIN`) and the share of "
+        "the starting model's held-out excess it removed (judged by `MATERIAL`) are recorded. "
+        "With nothing hidden (or an effect outside the library) the most any effect offered "
+        "at any selection counts; with an effect hidden, what its candidate offered where it "
+        "was named. A candidate is accepted only where it also passes the search's other "
+        "rules (the BIC, the training share, the load relation's veto, the kinds taken "
+        "first), so a threshold alone decides only between these values. The replay's steps "
+        "are read on the independent form only: across the model family they recalibrate the "
+        "wire first, and what an effect offers there measures the families' mismatch.",
         "",
         "| threshold | value | judges | nothing hidden: most offered | hidden effect named: "
         "least offered | the tuning half |",

@@ -98,22 +98,26 @@ def test_the_committed_page_shows_what_a_row_diagnosed_here_gives():
     )
     assert f"{record['verdict']} (" in line
     assert all(f"{name} (" in line for name in record["named"])
-    # what the load relation's candidates offered at its first selection: friction far above
-    # the gain the search asks for
-    relation = record["openings"]["relation"]
-    assert {"tendon_friction", "load_damping"} <= set(relation)
-    assert relation["tendon_friction"][0] > 10 * search.MIN_GAIN
-    assert 0.0 < relation["tendon_friction"][1] <= 1.0
+    # what the load relation's candidates offered at its first selection: the friction it
+    # named far above the gain the search asks for
+    (relation,) = record["openings"]["relation"]
+    assert {"tendon_friction", "load_damping"} <= set(relation["offers"])
+    assert relation["chosen"] in ("tendon_friction", "capstan_friction")
+    gain, share = relation["offers"][relation["chosen"]]
+    assert gain > 10 * search.MIN_GAIN and 0.0 < share <= 1.0
 
 
-def _opened(kind: str, effect: str, relation: dict[str, list[float]], right=True) -> dict:
+def _opened(kind, effect, offers, chosen=None, right=True, family="brinson", replay=()) -> dict:
+    """A record whose load relation offered ``offers`` and named ``chosen``."""
+    openings = {"relation": [{"offers": offers, "chosen": chosen}]}
+    if replay:
+        openings["replay"] = [{"offers": o, "chosen": c} for o, c in replay]
     return {
-        "family": "brinson",
+        "family": family,
         "kind": kind,
         "effect": effect,
         "right": right,
-        # the replay's first step offered the same
-        "openings": {"relation": relation, "replay": relation},
+        "openings": openings,
     }
 
 
@@ -122,31 +126,50 @@ def test_the_tuning_page_sets_each_threshold_between_what_null_and_hidden_truths
         # nothing hidden: the best effect's offer counts, a recalibration's does not
         _opened("null", "none", {"load_damping": [0.04, 0.0], "ambient": [5.0, 0.5]}),
         _opened("null", "none", {"capstan_friction": [0.07, 0.0]}),
-        # a hidden friction: its own candidate's offer counts, the best of the two forms
+        # a hidden friction: what the candidate that named it offered there
         _opened(
             "effect",
             "dahl_friction",
             {
                 "tendon_friction": [3.0, 0.9],
-                "capstan_friction": [0.2, 0.1],
+                "capstan_friction": [4.0, 0.9],
                 "load_damping": [9.0, 0.9],
             },
+            chosen="tendon_friction",
         ),
-        _opened("effect", "stiffening_spring", {"spring_stiffening": [0.5, 0.4]}),
+        _opened(
+            "effect", "stiffening_spring", {"spring_stiffening": [0.5, 0.4]}, "spring_stiffening"
+        ),
         # a hidden effect missed is not what the threshold let through
         _opened("effect", "stiffening_spring", {"spring_stiffening": [0.01, 0.0]}, right=False),
         _opened("outside", "encoder_drift", {"load_damping": [0.3, 0.1]}),
         # no force measured: no relation
         {"family": "brinson", "kind": "null", "effect": "none", "right": True, "openings": {}},
+        # the replay's steps: the most any effect offered at any step, with nothing hidden;
+        # read on the independent form only
+        _opened(
+            "null",
+            "none",
+            {},
+            family="dissertation",
+            replay=(
+                ({"ambient": [5.0, 0.5], "load_damping": [0.2, 0.05]}, "ambient"),
+                ({"load_damping": [0.35, 0.08], "supply_sag": [0.1, 0.02]}, None),
+            ),
+        ),
+        _opened("null", "none", {}, replay=(({"load_damping": [9.0, 0.9]}, None),)),
     ]
     gain = tuning.THRESHOLDS[0]
     assert (gain.stage, gain.index) == ("relation", 0)
-    # the replay's step is read on the independent form only
-    assert tuning.spread(records, tuning.THRESHOLDS[1]) == {"null": [], "effect": [], "outside": []}
     assert tuning.spread(records, gain) == {
         "null": [0.04, 0.07],
         "effect": [3.0, 0.5],
         "outside": [0.3],
+    }
+    assert tuning.spread(records, tuning.THRESHOLDS[2]) == {
+        "null": [0.08],
+        "effect": [],
+        "outside": [],
     }
     text = tuning.render(records, "t.png")
     assert "| `MIN_GAIN` | 0.1 | held-out gain on the load relation" in text
@@ -200,7 +223,7 @@ def test_diagnose_blind_half_tuning_writes_the_tuning_page_from_stored_results(t
             "verdict": "named" if effect.kind == "effect" else "none",
             "named": list(effect.expected[:1]),
             "first": None,
-            "openings": {"relation": relation},
+            "openings": {"relation": [{"offers": relation, "chosen": next(iter(relation))}]},
             "right": True,
         }
         with (cases_folder / f"{row.key}{cluster.SUFFIX}").open("wb") as f:
