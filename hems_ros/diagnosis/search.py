@@ -51,9 +51,10 @@ NOTHING = 0.2
 Z_NOISE = 1.645
 #: A step must lower the held-out cost by at least this much (noise-floor units) ...
 #: Tuning figure: docs/diagnosis-tuning.md. On the load relation the tuning half's truths
-#: with nothing hidden offered at most 0.03 and every hidden effect named at least 0.14; at
-#: the replay's first step it does not tell them apart alone (nothing hidden offered up to
-#: 0.7 there, which the training share and the BIC turned down).
+#: with nothing hidden offered at most 0.03 and every hidden effect named at least 0.14. At
+#: the replay's steps nothing hidden offered up to 0.7, turned down by the training share
+#: and the BIC, and every effect named there at least 2: a value in between would decide
+#: there alone; this one was set on the project's suite before the split.
 MIN_GAIN = 0.1
 #: ... and the training cost by this share of what is left to explain there.
 MIN_SHARE = 0.3
@@ -64,9 +65,9 @@ EXPLAINED = 0.5
 #: Each term must remove at least this share of the starting model's held-out excess RMS:
 #: where the truth has another form than the candidates (a current limit where the library
 #: has a source resistance), later terms otherwise keep shaving the mismatch left at low
-#: noise, a little each, and get named. Tuning figure: docs/diagnosis-tuning.md (at the
-#: first step, nothing hidden offered shares up to 0.2, turned down by the other rules; the
-#: share guards the later steps).
+#: noise, a little each, and get named. Tuning figure: docs/diagnosis-tuning.md: at the
+#: replay's steps nothing hidden offered up to 0.2 of the excess (turned down by the other
+#: rules) and every effect named there at least 0.33.
 MATERIAL = 0.05
 MAX_TERMS = 4
 #: Kinds taken before an effect that explains the data as well, in this order.

@@ -105,11 +105,13 @@ def _reading(values: dict[str, list[float]], value: float) -> str:
     below = sum(v < value for v in effects)
     if not nulls or not effects:
         return "-"
+    gap = f"any value in [{max(nulls):.3g}, {min(effects):.3g}]"
     if max(nulls) < value <= min(effects):
-        return f"tells them apart: any value in [{max(nulls):.3g}, {min(effects):.3g}]"
+        return f"tells them apart: {gap}"
     return (
         f"{above} of {len(nulls)} with nothing hidden at or above it, {below} of "
         f"{len(effects)} hidden effects below it"
+        + (f"; {gap} would tell them apart" if max(nulls) < min(effects) else "")
     )
 
 

@@ -180,6 +180,10 @@ def test_the_tuning_page_sets_each_threshold_between_what_null_and_hidden_truths
     assert tuning._reading({"null": [0.04, 0.2], "effect": [0.05, 3.0]}, 0.1) == (
         "1 of 2 with nothing hidden at or above it, 1 of 2 hidden effects below it"
     )
+    assert tuning._reading({"null": [0.04, 0.2], "effect": [0.5, 3.0]}, 0.1) == (
+        "1 of 2 with nothing hidden at or above it, 0 of 2 hidden effects below it; any value "
+        "in [0.2, 0.5] would tell them apart"
+    )
 
 
 @pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis-blind.md not generated")
