@@ -48,6 +48,19 @@ class Row:
     def half(self) -> str:
         return "tuning" if self.seed in TUNING_SEEDS else "evaluation"
 
+    @property
+    def identity(self) -> dict:
+        """The fields of a record that say which truth it is."""
+        return {
+            "family": self.family,
+            "effect": self.effect,
+            "kind": cases.BY_NAME[self.effect].kind,
+            "size": self.size,
+            "noise": self.noise,
+            "seed": self.seed,
+            "half": self.half,
+        }
+
 
 def grid(quick: bool = False, seeds: tuple[int, ...] = HALVES["all"]):
     """Every row of the suite (or the quick subset that ``make test`` runs)."""
@@ -76,14 +89,7 @@ def run_row(row: Row) -> dict:
 
         d = diagnose(load("train"), load("heldout"), model)
     named = [n["effect"] for n in d.named()]
-    return {
-        "family": row.family,
-        "effect": row.effect,
-        "kind": effect.kind,
-        "size": row.size,
-        "noise": row.noise,
-        "seed": row.seed,
-        "half": row.half,
+    return row.identity | {
         "verdict": d.verdict,
         "named": named,
         "recalibrated": sorted(d.recalibrated()),

@@ -216,14 +216,7 @@ def test_diagnose_blind_half_tuning_writes_the_tuning_page_from_stored_results(t
     offers = ({"tendon_friction": [4.0, 0.8]}, {"load_damping": [0.02, 0.0]})
     for row, relation in zip(blind.grid(quick=True), offers):
         effect = cases.BY_NAME[row.effect]
-        record = {
-            "family": row.family,
-            "effect": row.effect,
-            "kind": effect.kind,
-            "size": row.size,
-            "noise": row.noise,
-            "seed": row.seed,
-            "half": row.half,
+        record = row.identity | {
             "verdict": "named" if effect.kind == "effect" else "none",
             "named": list(effect.expected[:1]),
             "first": None,
