@@ -364,17 +364,21 @@ def run_blind(args: argparse.Namespace) -> int:
     seconds = [d.seconds for d in done.values()]
     (args.out / "blind.json").write_text(json.dumps({"runs": records}, indent=1) + "\n")
     if args.half == "tuning":  # the thresholds against it: what the tuning half is for
-        tuning.figure(records, args.out / "tuning.png")
-        (args.out / "tuning.md").write_text(tuning.render(records, "tuning.png"))
-        published = tuning.render(records, f"{FIGURES}/diagnosis_tuning.png")
-        figure, name = args.out / "tuning.png", "diagnosis_tuning.png"
+        stem, draw = "tuning", tuning.figure
+
+        def text(figure: str) -> str:
+            return tuning.render(records, figure)
     else:
-        page.figure(records, args.out / "blind.png")
-        (args.out / "blind.md").write_text(page.render(records, seconds, "blind.png"))
-        published = page.render(records, seconds, f"{FIGURES}/diagnosis_blind.png")
-        figure, name = args.out / "blind.png", "diagnosis_blind.png"
+        stem, draw = "blind", page.figure
+
+        def text(figure: str) -> str:
+            return page.render(records, seconds, figure)
+
+    draw(records, args.out / f"{stem}.png")
+    (args.out / f"{stem}.md").write_text(text(f"{stem}.png"))
     if args.docs is not None:
-        _publish(args.docs, published, figure, name)
+        name = f"diagnosis_{stem}.png"
+        _publish(args.docs, text(f"{FIGURES}/{name}"), args.out / f"{stem}.png", name)
         say(f"wrote {args.docs}")
     for label, (right, runs), floor in page.headline(records):
         if runs:
