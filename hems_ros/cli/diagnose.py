@@ -345,6 +345,7 @@ def run_suite(args: argparse.Namespace) -> int:
 
 def run_blind(args: argparse.Namespace) -> int:
     import json
+    from functools import partial
 
     from hems_ros.diagnosis import blind, cluster
     from hems_ros.reports import blind as page
@@ -364,16 +365,9 @@ def run_blind(args: argparse.Namespace) -> int:
     seconds = [d.seconds for d in done.values()]
     (args.out / "blind.json").write_text(json.dumps({"runs": records}, indent=1) + "\n")
     if args.half == "tuning":  # the thresholds against it: what the tuning half is for
-        stem, draw = "tuning", tuning.figure
-
-        def text(figure: str) -> str:
-            return tuning.render(records, figure)
+        stem, draw, text = "tuning", tuning.figure, partial(tuning.render, records)
     else:
-        stem, draw = "blind", page.figure
-
-        def text(figure: str) -> str:
-            return page.render(records, seconds, figure)
-
+        stem, draw, text = "blind", page.figure, partial(page.render, records, seconds)
     draw(records, args.out / f"{stem}.png")
     (args.out / f"{stem}.md").write_text(text(f"{stem}.png"))
     if args.docs is not None:
