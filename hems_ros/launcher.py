@@ -3,7 +3,9 @@
 Each node runs as its own process (``lib/hems_ros/<executable>`` in the prefix, like
 ``ros2 run``), or all of them in one process on one thread (``--composed``:
 hems_ros/nodes/composed.py). Children die with the launcher even if it is killed (PR_SET_PDEATHSIG),
-and :meth:`Graph.stop` ends every child within ``grace_s`` (SIGINT, then SIGKILL).
+and :meth:`Graph.stop` ends every child within ``grace_s`` (SIGINT, then SIGKILL). Before a
+start, the Fast DDS files that killed processes left in /dev/shm are removed
+(hems_ros/fastdds_files.py).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from hems_ros.fastdds_files import remove_orphans
 from hems_ros.graph import names
 from hems_ros.paths import config_path
 from hems_ros.processes import exit_description, stop_processes
@@ -122,6 +125,8 @@ class Graph:
         self.processes: dict[str, subprocess.Popen] = {}
         self.node_env: dict[str, dict[str, str]] = {}
         self.killed: list[str] = []  # children that needed SIGKILL at the last stop
+        # Fast DDS files of killed processes removed before the start (fastdds_files.py)
+        self.orphans_removed = 0
 
     def commands(self) -> dict[str, list[str]]:
         specs = node_specs(self.options)
@@ -165,6 +170,7 @@ class Graph:
         """Start every node's process; ``node_env`` adds variables to the environment of the
         named ones (benchmarks/bench_graph_ab.py runs some nodes on another commit's code)."""
         self.node_env = dict(node_env or {})
+        self.orphans_removed = remove_orphans()
         warm_physics_cache(child_environment())
         for name, command in self.commands().items():
             self._spawn(name, command)

@@ -210,6 +210,12 @@ def run(args: argparse.Namespace) -> int:
     started = time.monotonic()
     graph = Graph(options)
     graph.start()
+    if graph.orphans_removed:
+        print(
+            f"hems up: removed {graph.orphans_removed} Fast DDS files that killed processes "
+            "had left in /dev/shm",
+            flush=True,
+        )
     watcher = readiness_watcher(options, started)
     recorder = None
     if record is not None:
