@@ -10,6 +10,7 @@ import time
 
 from hems_ros.cli.numbers import positive, positive_int
 from hems_ros.processes import exit_description, stop_process
+from hems_ros.ros.teardown import end_ros
 from hems_ros.rosenv import child_environment
 
 
@@ -112,8 +113,7 @@ def ping(count: int, rate: float, timeout: float) -> dict:
         while sent and time.monotonic() < deadline:
             checked(rclpy.spin_once, node, timeout_sec=0.05)
     finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+        end_ros([node])
     errors.extend(f"no answer to sequence {s}" for s in sorted(sent))
     return {"rtts": rtts, "errors": errors, "count": count}
 

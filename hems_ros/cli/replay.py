@@ -15,6 +15,7 @@ from typing import Any
 import yaml
 
 from hems_ros.cli.numbers import non_negative, positive
+from hems_ros.ros.teardown import end_ros
 
 CLOCK_TOPIC = "/clock"
 
@@ -198,8 +199,7 @@ def replay(
             for publisher in publishers.values():
                 publisher.wait_for_all_acked(Duration(seconds=2.0))
     finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+        end_ros([node])
     return result
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from hems_ros.cli.numbers import add_namespace_argument, positive, positive_or_max
 from hems_ros.graph import names
 from hems_ros.launcher import Graph, GraphOptions, default_params_file, node_specs
-from hems_ros.processes import exit_description
+from hems_ros.processes import exit_description, stop_process
 from hems_ros.rosenv import child_environment, die_with_parent
 
 
@@ -263,4 +263,7 @@ def run(args: argparse.Namespace) -> int:
             ),
             flush=True,
         )
+        # a watcher wedged in its own teardown (ros/teardown.py) would hold this terminal's
+        # output open after the launcher has gone
+        stop_process(watcher, grace_s=1.0)
     return 0 if recorded else 1

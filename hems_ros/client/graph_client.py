@@ -25,6 +25,7 @@ from hems_ros.client import DISCOVERY_S
 from hems_ros.graph import names
 from hems_ros.ros import qos
 from hems_ros.ros.clock_time import from_msg
+from hems_ros.ros.teardown import end_ros
 
 RETRY_S = 2.0  # a service call unanswered this long is sent again
 # a wait for the controllers' setpoint readers shows its progress once it lasts this long, s
@@ -115,8 +116,7 @@ class GraphClient:
         self._supervisor: SupervisorStatus | None = None
 
     def close(self) -> None:
-        self.node.destroy_node()
-        rclpy.try_shutdown()
+        end_ros([self.node])
 
     def __enter__(self) -> "GraphClient":
         return self

@@ -19,6 +19,7 @@ import sys
 
 from hems_ros.ros import lean_spin
 from hems_ros.ros.runner import freeze_long_lived_objects
+from hems_ros.ros.teardown import end_ros
 from hems_ros.rosenv import apply_network_defaults, skip_code_generators
 
 NODE_CLASSES = {
@@ -90,9 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if executor is not None:
             executor.shutdown()
-        for node in nodes:
-            node.destroy_node()
-        rclpy.try_shutdown()
+        end_ros(nodes)
     return 0
 
 

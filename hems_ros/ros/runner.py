@@ -9,6 +9,7 @@ from collections.abc import Callable
 from typing import Any
 
 from hems_ros.ros.middleware_threads import defer_middleware_threads
+from hems_ros.ros.teardown import end_ros
 from hems_ros.rosenv import apply_network_defaults, skip_code_generators
 
 # Every rclpy node offers six parameter services (twelve DDS endpoints, more than half of a
@@ -76,9 +77,7 @@ def run_node(
         )
         return 2
     finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+        end_ros([] if node is None else [node])
     return 0
 
 
