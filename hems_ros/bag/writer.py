@@ -251,6 +251,10 @@ class BagWriter:
             indexes[i] = _WrittenRecord(indexes[i])
         self._compacted = len(indexes)
 
+    @property
+    def finished(self) -> bool:
+        return self._finished is not None
+
     def finish(self) -> BagSummary:
         """Write the summary, the footer and ``metadata.yaml``; idempotent."""
         if self._finished is not None:

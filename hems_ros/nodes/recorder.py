@@ -260,7 +260,10 @@ class Recorder(Node):
             self.get_logger().info(f"{HEARD_PREFIX}{subscription.topic_name}")
 
     def finish(self) -> None:
+        """Finish the bag (once; later calls do nothing)."""
         if not hasattr(self, "_writer"):  # construction failed before the bag was opened
+            return
+        if self._writer.finished:
             return
         summary = self._writer.finish()
         counts = ", ".join(f"{t} {n}" for t, n in sorted(summary.counts.items()))
@@ -285,13 +288,18 @@ def spin_until_expired(node: Recorder) -> None:
     """
     from rclpy.executors import ExternalShutdownException
 
-    lean_spin.loop(
-        node.context,
-        lambda: (list(node.subscriptions), list(node.timers), list(node.services)),
-        on_ready=node.drain,
-        keep_going=lambda: not node.expired,
-        pause_s=BATCH_S,
-    )
+    try:
+        lean_spin.loop(
+            node.context,
+            lambda: (list(node.subscriptions), list(node.timers), list(node.services)),
+            on_ready=node.drain,
+            keep_going=lambda: not node.expired,
+            pause_s=BATCH_S,
+        )
+    finally:
+        # the bag is finished here, before the teardown, whose timer must not cut a long
+        # bag's summary short (ros/teardown.py)
+        node.finish()
     if not node.expired:
         raise ExternalShutdownException()
 
