@@ -26,6 +26,8 @@ from typing import Any, Callable, Sequence
 
 import cloudpickle
 
+from hems_ros.physics import jit
+
 SERIAL = "serial"
 LOCAL = "local"
 SUFFIX = ".pkl"
@@ -129,18 +131,10 @@ def run_tasks(
 
 def _call(function: Callable[..., Any], args: tuple, threads: int | None) -> Done:
     if threads is not None:
-        _limit_threads(threads)
+        jit.limit_threads(threads)
     start = time.perf_counter()
     result = function(*args)
     return Done(result, time.perf_counter() - start, _where())
-
-
-def _limit_threads(threads: int) -> None:
-    try:
-        import numba
-    except ImportError:  # nothing runs parallel batches without it
-        return
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
 
 
 def _where() -> str:

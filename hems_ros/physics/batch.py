@@ -22,7 +22,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from hems_ros.physics import block, rows, sensors
+from hems_ros.physics import block, jit, rows, sensors
 from hems_ros.physics.electrical import DRIVE_NAMES, select_drive
 from hems_ros.physics.params import UnitParams
 
@@ -201,6 +201,7 @@ def simulate(
             packed[:, rows.P_FSTAT] = static
         whole = (first, last) == (0, n_steps)
         part = records if whole else np.zeros((len(index), n_sets, (last - first) // record_every))
+        jit.apply_thread_limit()
         block.run_batch(
             packed,
             states,

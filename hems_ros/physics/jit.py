@@ -93,6 +93,28 @@ def intrinsic(func: Callable[..., Any]) -> Callable[..., Any]:
     return _register(func, None)
 
 
+# numba counts threads per calling thread, and a new thread starts with all of them, so a limit
+# for the whole process (a Dask worker's one core) is kept here and applied at each call of the
+# parallel batch, in whichever thread makes it (a fit's thread: diagnosis/batching.py)
+_thread_limit: int | None = None
+
+
+def limit_threads(threads: int | None) -> None:
+    """Let the parallel functions use at most ``threads`` threads in this process (None: all
+    of numba's)."""
+    global _thread_limit
+    _thread_limit = threads
+
+
+def apply_thread_limit() -> None:
+    """Apply :func:`limit_threads` in the calling thread; call it before a parallel function."""
+    if _thread_limit is None:
+        return
+    import numba
+
+    numba.set_num_threads(max(1, min(_thread_limit, numba.config.NUMBA_NUM_THREADS)))
+
+
 def use_numba() -> None:
     """Compile the registered functions with numba from now on (once per process)."""
     global _started
