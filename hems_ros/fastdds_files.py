@@ -5,10 +5,11 @@ A Fast DDS participant keeps a segment (``fastdds_<16 hex>``) and opens ports
 reader, ``_sl``: shared readers) while it lives. A process killed by SIGKILL, OOM or a crash
 leaves its files behind, and the port numbers come back with the next graph of the same
 domain. Fast DDS then opens the stale port, checks its health and may replace it while another
-process keeps the old one open, and two processes may never hear each other (eProsima/Fast-DDS
-issues 3535 and 5053, pull request 4728). A file is an orphan when no process holds any of its
-lock files; removing those is what ``fastdds shm clean`` does, and it leaves the files of live
-processes (other graphs, other ROS programs) alone.
+process keeps the old one open, and two processes may never hear each other (Fast DDS's reports
+"The shared memory mode cannot communicate after restarting the process" and "FastDDS nodes
+cannot communicate if another user run node in the past"). A file is an orphan when no process
+holds any of its lock files; removing those is what ``fastdds shm clean`` does, and it leaves
+the files of live processes (other graphs, other ROS programs) alone.
 """
 
 from __future__ import annotations

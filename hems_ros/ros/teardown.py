@@ -5,8 +5,9 @@ busy-waits for the participant's discovery callback to return, and that callback
 just discovered) waits on a mutex and never does. The process then spins a core for good,
 holding the GIL, so no Python code of its own runs again (seen in a `hems wait` that
 the launcher stopped: 3 minutes at 93 % of a core, its stack in
-``DomainParticipant::set_listener`` under ``rmw_destroy_node``; eProsima/Fast-DDS issue 6513
-describes the busy wait). A timer signal with its default action ends such a process after
+``DomainParticipant::set_listener`` under ``rmw_destroy_node``; Fast DDS's report
+"DomainParticipantImpl::set_listener busy-spins with its default infinite timeout" describes the
+busy wait). A timer signal with its default action ends such a process after
 ``TEARDOWN_S``, GIL or not. It leaves its Fast DDS files behind as a killed process does;
 ``hems up`` removes those at its next start (hems_ros/fastdds_files.py).
 """
