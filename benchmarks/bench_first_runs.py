@@ -47,6 +47,7 @@ GAPS = re.compile(
 )
 LIMIT = re.compile(r"a stream silent for (\d+) ms faults")
 READY = re.compile(r"ready after ([\d.]+) s")
+UP_STOP_S = 60  # s from Ctrl-C for `hems up` to end
 
 
 @dataclass
@@ -93,6 +94,16 @@ def demo(layout: list[str], scratch: Path, index: int) -> Run:
     return Run(code == 0, "" if code == 0 else problem, longest, stream, limit, enabled_s)
 
 
+def hems_step(args: list[str], timeout_s: float) -> subprocess.CompletedProcess:
+    """One `hems` command; one that outlives ``timeout_s`` is killed and counts as failed."""
+    try:
+        return subprocess.run(HEMS + args, capture_output=True, text=True, timeout=timeout_s)
+    except subprocess.TimeoutExpired as late:
+        return subprocess.CompletedProcess(
+            late.cmd, -1, "", f"hems {args[0]}: no answer within {timeout_s:g} s"
+        )
+
+
 def typical(layout: list[str]) -> Run:
     up = subprocess.Popen(
         HEMS + ["up", *layout, "--log-level", "warn"],
@@ -102,30 +113,36 @@ def typical(layout: list[str]) -> Run:
         process_group=0,
     )
     try:
-        enable = subprocess.run(HEMS + ["enable"], capture_output=True, text=True, timeout=120)
-        setpoint = subprocess.run(
-            HEMS + ["setpoint", "index", "20", "--unit", "mm"],
-            capture_output=True,
-            text=True,
-            timeout=60,
-        )
+        enable = hems_step(["enable"], timeout_s=120)
+        setpoint = hems_step(["setpoint", "index", "20", "--unit", "mm"], timeout_s=60)
         time.sleep(3.0)
-        status = subprocess.run(HEMS + ["status"], capture_output=True, text=True, timeout=60)
+        status = hems_step(["status"], timeout_s=60)
     finally:
         os.killpg(up.pid, signal.SIGINT)
-        output, _ = up.communicate(timeout=60)
+        try:
+            output, _ = up.communicate(timeout=UP_STOP_S)
+            stopped = True
+        except subprocess.TimeoutExpired:
+            # a graph that does not stop is this run's failure, not the benchmark's end
+            for pid in children(up.pid):
+                os.kill(pid, signal.SIGKILL)
+            os.killpg(up.pid, signal.SIGKILL)
+            output, _ = up.communicate()
+            stopped = False
     ready = READY.search(output)
     state = next(
         (line for line in status.stdout.splitlines() if line.startswith("supervisor:")), ""
     )
-    valid = enable.returncode == 0 and setpoint.returncode == 0 and "ENABLED" in state
+    valid = enable.returncode == 0 and setpoint.returncode == 0 and "ENABLED" in state and stopped
     # the first step that failed says why (an enable that gave up names the missing streams)
     failed = next((step for step in (enable, setpoint) if step.returncode != 0), None)
     detail = failed.stderr.strip().splitlines()[-1:] if failed is not None else []
+    if not stopped:
+        detail.append(f"hems up still running {UP_STOP_S} s after Ctrl-C (killed)")
     longest, stream, limit = gaps_of(status.stdout)
     return Run(
         valid,
-        "" if valid else f"{state} {detail[0] if detail else ''}".strip(),
+        "" if valid else f"{state} {'; '.join(detail)}".strip(),
         longest,
         stream,
         limit,
