@@ -8,14 +8,12 @@ import argparse
 import functools
 import sys
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
-from hems_ros.diagnosis import cluster
-from hems_ros.diagnosis.inputs import ARCHIVE_TABLE
-from hems_ros.diagnosis.runs import Run
-from hems_ros.diagnosis.workflow import Diagnosis, diagnose
-from hems_ros.physics.params import UnitParams
-from hems_ros.reports import diagnosis as report
+if TYPE_CHECKING:
+    from hems_ros.diagnosis.runs import Run
+    from hems_ros.diagnosis.workflow import Diagnosis
+    from hems_ros.physics.params import UnitParams
 
 SHARED = "all"
 
@@ -44,6 +42,14 @@ def diagnose_each(
 ) -> int:
     """Each group of runs (a RUN's fingers or tests) alone, then all of them with ``heldout``;
     a report folder for each and a table of the verdicts."""
+    # here, not at the top: every `hems` verb imports this module while it looks for verbs,
+    # and these take seconds of CPU (scipy, numba, matplotlib) that a `hems setpoint` joining
+    # a running graph would take from it
+    from hems_ros.diagnosis import cluster
+    from hems_ros.diagnosis.inputs import ARCHIVE_TABLE
+    from hems_ros.diagnosis.workflow import diagnose
+    from hems_ros.reports import diagnosis as report
+
     run = functools.partial(diagnose, **options)
     keys = task_keys([name for name, _ in groups])
     everything = [r for _, group in groups for r in group]

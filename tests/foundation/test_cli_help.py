@@ -185,3 +185,18 @@ def test_bad_inputs_stop_before_anything_starts(tmp_path, argv, code, message):
     assert "Traceback" not in done.stderr
     assert time.monotonic() - started < 20
     assert not (tmp_path / "bags").exists()
+
+
+def test_finding_the_verbs_loads_no_numerical_library() -> None:
+    """Every `hems` command builds the whole parser first; a `hems setpoint` that joins a
+    running graph should not spend seconds of the host's CPU importing what only the diagnosis
+    and the plots use."""
+    code = (
+        "import sys; from hems_ros.cli.main import build_parser; build_parser(); "
+        "print(sorted({m.split('.')[0] for m in sys.modules} & "
+        "{'scipy', 'numba', 'matplotlib', 'dask', 'distributed'}))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    )
+    assert result.stdout.strip() == "[]"
