@@ -10,11 +10,11 @@ and a plain rclpy process that creates a publisher and sends one FingerSetpoint 
 the controller has matched it, as `ros2 topic pub --once` does. It counts the joins after
 which the supervisor left ENABLED, and checks that every setpoint was reached (the finger's
 controller status shows the tendon within 0.5 mm of it, or past it, before the next join).
-Layouts: the default `hems up` (16 processes, as `ros2 run` of each node gives) and composed
-(one).
+Layouts: separate (`hems up --separate`, 16 processes, as `ros2 run` of each node gives) and
+composed (one process, the default of `hems up`).
 
-Usage: .venv/bin/python benchmarks/bench_graph_joins.py [--joins 200] [--layouts separate,composed]
-       [--markdown FILE]    (the result table, as docs/reliability.md shows it)
+Usage: .venv/bin/python benchmarks/bench_graph_joins.py [--joins 20] [--layouts separate,composed]
+       [--busy] [--markdown FILE]    (the result table, as docs/reliability.md shows it)
        [--smoke]    (one join of each kind, composed)
 """
 
