@@ -59,7 +59,7 @@ demo: setup
 	$(VENV)/bin/hems demo $(DEMO_ARGS)
 
 test: setup
-	tools/run_pytest.sh $(PY) tests $(PYTEST_ARGS)
+	tools/run_tests_in_two.sh $(PY) tests $(PYTEST_ARGS)
 
 # make test runs both of these too (tests/foundation/test_lint.py)
 lint: setup

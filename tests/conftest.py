@@ -34,6 +34,36 @@ def pytest_configure(config: pytest.Config) -> None:
     os.environ["ROS_DOMAIN_ID"] = os.environ["HEMS_TEST_DOMAIN_ID"]
 
 
+#: Folders whose tests only compute (no graph, no ROS process unless they ask for the domain).
+COMPUTING_FOLDERS = {"physics", "control", "diagnosis", "truth", "experiments", "fuzz"}
+#: ... and single files elsewhere that only compute.
+COMPUTING_FILES = {"test_lint.py", "test_cli_help.py"}
+
+
+def computes_only(item: pytest.Item) -> bool:
+    path = Path(item.path)
+    return (
+        path.parent.name in COMPUTING_FOLDERS or path.name in COMPUTING_FILES
+    ) and "ros_domain_id" not in getattr(item, "fixturenames", ())
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """``HEMS_TEST_PART=computing`` or ``ros`` keeps one side of the split
+    tools/run_tests_in_two.sh runs as two processes side by side."""
+    part = os.environ.get("HEMS_TEST_PART")
+    if part is None:
+        return
+    if part not in ("computing", "ros"):
+        raise pytest.UsageError(f"HEMS_TEST_PART={part!r}: expected 'computing' or 'ros'")
+    kept: list[pytest.Item] = []
+    dropped: list[pytest.Item] = []
+    for item in items:
+        (kept if computes_only(item) == (part == "computing") else dropped).append(item)
+    if dropped:
+        config.hook.pytest_deselected(items=dropped)
+        items[:] = kept
+
+
 def pytest_unconfigure(config: pytest.Config) -> None:
     if _domain_lock is not None:
         _domain_lock.close()  # releases the domain for the next run
