@@ -6,7 +6,7 @@ cluster.py). Also measured: the same subset serially in this process, where each
 batches use both cores, which is what a single worker per core competes with.
 
 Each layout starts from an empty output folder and is timed from the call to the last result,
-cluster start-up included (printed apart); the sum of the task times says how much of the wall
+cluster start-up included; the sum of the task times says how much of the wall
 time the tasks themselves took. Prints measured numbers and ratios; the exit code does not
 depend on the timings.
 
