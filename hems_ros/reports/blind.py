@@ -92,8 +92,10 @@ def render(records: list[dict], seconds: list[float], figure: str) -> str:
         "the load cell's 0.01 N resolution.",
         "",
         f"Seeds {', '.join(map(str, blind.TUNING_SEEDS))} form the tuning half, seeds "
-        f"{', '.join(map(str, blind.EVALUATION_SEEDS))} the evaluation half; this page reports "
-        "the evaluation half only. Shares count every size of an effect, the smallest too.",
+        f"{', '.join(map(str, blind.EVALUATION_SEEDS))} the evaluation half, which draws the "
+        f"truths with nothing hidden also with seeds {blind.NULL_EXTRA_SEEDS[0]}-"
+        f"{blind.NULL_EXTRA_SEEDS[-1]} (two runs each cannot show a share of 90 %); this page "
+        "reports the evaluation half only. Shares count every size of an effect, the smallest too.",
         "",
         "## Headline",
         "",
