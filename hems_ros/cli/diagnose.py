@@ -220,7 +220,7 @@ def register(subparsers) -> None:
     )
     blind.add_argument(
         "--half",
-        choices=("evaluation", "tuning", "all"),  # the keys of blind.HALVES
+        choices=("evaluation", "tuning", "all"),  # hems_ros.diagnosis.blind.HALVES
         default="evaluation",
         help="which seeds: the evaluation half (default, what the page reports), the tuning "
         "half (what thresholds may be set on) or both",
@@ -352,7 +352,7 @@ def run_blind(args: argparse.Namespace) -> int:
     from hems_ros.reports import blind_tuning as tuning
 
     say = _say(False)
-    rows = blind.grid(args.quick, blind.HALVES[args.half])
+    rows = blind.grid(args.quick, args.half)
     done = cluster.run_tasks(
         [cluster.Task(row.key, blind.run_row, (row,)) for row in rows],
         args.out / "cases",

@@ -22,8 +22,8 @@ PAGE = REPO / "docs" / "diagnosis-blind.md"
 
 
 def test_the_halves_split_the_rows_by_seed_and_share_none():
-    tuning = blind.grid(seeds=blind.TUNING_SEEDS)
-    evaluation = blind.grid(seeds=blind.EVALUATION_SEEDS)
+    tuning = blind.grid(half="tuning")
+    evaluation = blind.grid(half="evaluation")
     assert {r.half for r in tuning} == {"tuning"} and {r.half for r in evaluation} == {"evaluation"}
     assert not {r.key for r in tuning} & {r.key for r in evaluation}
     everything = blind.grid()
