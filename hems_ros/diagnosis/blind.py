@@ -122,7 +122,7 @@ def openings(found: Search) -> dict[str, list[dict]]:
     if named is not None:
         chosen = named.steps[0].structure[-1].name if named.steps else None
         out["relation"] = [_selection(named.start, named.start, named.ranked, chosen)]
-    before = found.fixed or found.start
+    before = found.begun
     replay = []
     for step in found.steps:
         chosen = None if step.chosen is None else step.chosen.structure[-1].name

@@ -91,6 +91,9 @@ class Step:
 @dataclass
 class Search:
     start: Fit
+    # the fit the replay's steps began from: the starting model, or the effects named on the
+    # load relation with their costs on the replayed outputs
+    begun: Fit
     steps: list[Step]
     final: Fit
     dropped: list[str]
@@ -218,7 +221,7 @@ def run_search(
         )
     else:
         fixed = Fit((), np.zeros(0), base, start.train, start.heldout, start.n_train, [])
-    current = fixed if fixed.structure else start
+    current = begun = fixed if fixed.structure else start
     steps: list[Step] = []
     findings: list[str] = []
     while current.heldout - 1.0 > NOTHING and len(current.structure) < MAX_TERMS:
@@ -275,7 +278,7 @@ def run_search(
         if refined:
             say(f"  all refitted on the replayed outputs: held-out cost {current.heldout:.3g}")
     verdict = _verdict(start, current, steps, data.cost_spread)
-    return Search(start, steps, current, dropped, verdict, findings, named)
+    return Search(start, begun, steps, current, dropped, verdict, findings, named)
 
 
 def _refined(data, base: UnitParams, final: Fit, relation: LoadRelation) -> tuple[Fit, bool]:

@@ -4,15 +4,21 @@ a row diagnosed again here."""
 
 from __future__ import annotations
 
+import math
 import os
 import pickle
 import re
 import subprocess
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from hems_ros.diagnosis import blind, cluster, search
+from hems_ros.diagnosis import blind, candidates, cluster, search
+from hems_ros.diagnosis.fit import Fit
+from hems_ros.diagnosis.relation import Named
+from hems_ros.physics.params import UnitParams
 from hems_ros.reports import blind as page
 from hems_ros.reports import blind_tuning as tuning
 from hems_ros.truth import cases
@@ -105,6 +111,25 @@ def test_the_committed_page_shows_what_a_row_diagnosed_here_gives():
     assert relation["chosen"] in ("tendon_friction", "capstan_friction")
     gain, share = relation["offers"][relation["chosen"]]
     assert gain > 10 * search.MIN_GAIN and 0.0 < share <= 1.0
+
+
+def _fit(name: str, train: float, heldout: float) -> Fit:
+    return Fit((candidates.BY_NAME[name],), np.zeros(1), UnitParams(), train, heldout, 100, [])
+
+
+def test_the_replays_first_offers_are_counted_from_the_relations_effects_on_the_replay():
+    """The load relation's costs are in its own noise units: the replay's first step offers
+    against the relation's effects costed on the replayed outputs, as the search judged it."""
+    start = replace(_fit("tendon_friction", 9.0, 9.0), structure=(), values=np.zeros(0))
+    on_relation = _fit("tendon_friction", 1.1, 1.2)  # the relation's own costs
+    on_replay = replace(on_relation, train=4.0, heldout=5.0)
+    step = _fit("convection", 2.0, 2.0)
+    named = Named(start, (on_relation,), (on_relation,), 0.05, None)
+    found = search.Search(start, on_replay, [search.Step([step], step, [])], step, [], "named")
+    found.load_relation = named
+    [offers] = blind.openings(found)["replay"]
+    assert offers["chosen"] == "convection"
+    assert offers["offers"]["convection"] == pytest.approx([3.0, (2.0 - 1.0) / math.sqrt(8.0)])
 
 
 def _opened(kind, effect, offers, chosen=None, right=True, family="brinson", replay=()) -> dict:
