@@ -115,7 +115,7 @@ def openings(found: Search) -> dict[str, list[dict]]:
     """What the candidates offered at each selection, on the load relation (its first, the
     one it keeps every candidate's fit of) and at each of the replay's steps: per selection,
     ``offers`` (name -> [held-out gain in noise-floor units, share of the starting model's
-    held-out excess removed], the quantities MIN_GAIN and MATERIAL judge) and the name
+    held-out excess removed], the quantities the search's thresholds judge) and the name
     ``chosen`` there (None: nothing)."""
     out: dict[str, list[dict]] = {}
     named = found.load_relation
@@ -134,11 +134,13 @@ def openings(found: Search) -> dict[str, list[dict]]:
 
 
 def _selection(before: Fit, start: Fit, fits, chosen: str | None) -> dict:
+    """The offers at one selection; a share is None where the starting model left nothing
+    beyond the noise, so that the share's rule did not judge."""
     gap = excess(start.heldout)
     offers = {
         f.structure[-1].name: [
             before.heldout - f.heldout,
-            (excess(before.heldout) - excess(f.heldout)) / gap if gap > 0 else 0.0,
+            (excess(before.heldout) - excess(f.heldout)) / gap if gap > 0 else None,
         ]
         for f in fits
     }

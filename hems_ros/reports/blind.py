@@ -227,7 +227,10 @@ def _scale(seconds: list[float]) -> list[str]:
         f"{total / 3600:.2f} core-hours in all. On {CORES} cores (a Dask cluster of {CORES} "
         f"one-thread workers, the tasks independent) that is about "
         f"{(total / CORES + longest) / 60:.1f} min: the sum spread over the cores plus the "
-        "longest task, which the last free core may start just before the end.",
+        "longest task, which the last free core may start just before the end. How much "
+        "faster two workers run than one on a two-core host is measured by "
+        "`benchmarks/bench_suite_workers.py` (docs/design.md, \"Suites and archives on "
+        "Dask\").",
         "",
     ]
 

@@ -46,18 +46,25 @@ class Threshold:
 
 THRESHOLDS = (
     Threshold(
-        "MIN_GAIN",
-        search.MIN_GAIN,
+        "RELATION_MIN_GAIN",
+        search.RELATION_MIN_GAIN,
         "relation",
         0,
         "held-out gain on the load relation, noise-floor units",
+    ),
+    Threshold(
+        "RELATION_MATERIAL",
+        search.RELATION_MATERIAL,
+        "relation",
+        1,
+        "share of the load relation's starting held-out excess removed",
     ),
     Threshold(
         "MIN_GAIN",
         search.MIN_GAIN,
         "replay",
         0,
-        "held-out gain at the replay's steps (independent form)",
+        "held-out gain at the replay's steps (independent form), noise-floor units",
         ("dissertation",),
     ),
     Threshold(
@@ -75,7 +82,8 @@ THRESHOLDS = (
 def offered(record: dict, threshold: Threshold) -> float | None:
     """What a hidden effect's candidate offered at the selection that named it, or the most
     any effect of the library offered at any selection (nothing hidden, or an effect outside
-    the library); None: not measured, or not named there."""
+    the library); None: not measured, not named there, or a share where the starting model
+    left nothing beyond the noise (the share's rule did not judge)."""
     selections = record.get("openings", {}).get(threshold.stage)
     if not selections:
         return None
@@ -84,7 +92,12 @@ def offered(record: dict, threshold: Threshold) -> float | None:
     if expected:
         hits = [s["offers"][s["chosen"]][i] for s in selections if s["chosen"] in expected]
         return hits[0] if hits else None
-    values = [v[i] for s in selections for n, v in s["offers"].items() if n in EFFECT_NAMES]
+    values = [
+        v[i]
+        for s in selections
+        for n, v in s["offers"].items()
+        if n in EFFECT_NAMES and v[i] is not None
+    ]
     return max(values) if values else None
 
 
@@ -126,8 +139,10 @@ def render(records: list[dict], figure: str) -> str:
         "level of docs/diagnosis-blind.md once, its own seed) is where the search's thresholds "
         "may be set; the evaluation half sets none. At each selection of a truth's diagnosis, "
         "on the load relation (its first) and at each of the replay's steps, every "
-        "candidate's held-out gain (noise-floor units, judged by `MIN_GAIN`) and the share of "
-        "the starting model's held-out excess it removed (judged by `MATERIAL`) are recorded. "
+        "candidate's held-out gain (noise-floor units) and the share of the starting model's "
+        "held-out excess it removed are recorded: on the relation judged by "
+        "`RELATION_MIN_GAIN` and `RELATION_MATERIAL`, at the replay's steps by `MIN_GAIN` and "
+        "`MATERIAL`. "
         "With nothing hidden (or an effect outside the library) the most any effect offered "
         "at any selection counts; with an effect hidden, what its candidate offered where it "
         "was named. A candidate is accepted only where it also passes the search's other "

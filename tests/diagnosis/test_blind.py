@@ -110,7 +110,7 @@ def test_the_committed_page_shows_what_a_row_diagnosed_here_gives():
     assert {"tendon_friction", "load_damping"} <= set(relation["offers"])
     assert relation["chosen"] in ("tendon_friction", "capstan_friction")
     gain, share = relation["offers"][relation["chosen"]]
-    assert gain > 10 * search.MIN_GAIN and 0.0 < share <= 1.0
+    assert gain > 10 * search.RELATION_MIN_GAIN and 0.0 < share <= 1.0
 
 
 def _fit(name: str, train: float, heldout: float) -> Fit:
@@ -197,7 +197,7 @@ def test_the_tuning_page_sets_each_threshold_between_what_null_and_hidden_truths
         "outside": [],
     }
     text = tuning.render(records, "t.png")
-    assert "| `MIN_GAIN` | 0.1 | held-out gain on the load relation" in text
+    assert "| `RELATION_MIN_GAIN` | 0.1 | held-out gain on the load relation" in text
     assert (
         "| 0.07 (2 truths) | 0.5 (2 truths) | tells them apart: any value in [0.07, 0.5] |" in text
     )
@@ -282,13 +282,15 @@ TUNING_PAGE = REPO / "docs" / "diagnosis-tuning.md"
 
 
 @pytest.mark.skipif(not TUNING_PAGE.is_file(), reason="docs/diagnosis-tuning.md not generated")
-def test_the_committed_tuning_page_sets_min_gain_between_the_relations_offers():
-    """What search.MIN_GAIN's comment says of the tuning half."""
-    row = next(
-        line
-        for line in TUNING_PAGE.read_text().splitlines()
-        if line.startswith("| `MIN_GAIN` |") and "on the load relation" in line
-    )
-    low, high = map(float, re.search(r"any value in \[([\d.e+-]+), ([\d.e+-]+)\]", row).groups())
-    assert low < search.MIN_GAIN < high
-    assert f"| {search.MIN_GAIN:g} |" in row
+def test_every_threshold_lies_where_the_committed_tuning_page_tells_the_halves_apart():
+    """The search's thresholds are set on the tuning half: each sits between what its truths
+    with nothing hidden offered and what every hidden effect named offered."""
+    rows = [line for line in TUNING_PAGE.read_text().splitlines() if line.startswith("| `")]
+    assert len(rows) == len(tuning.THRESHOLDS)
+    for threshold, row in zip(tuning.THRESHOLDS, rows):
+        assert row.startswith(f"| `{threshold.name}` | {threshold.value:g} |"), row
+        found = re.search(r"tells them apart: any value in \[([\d.e+-]+), ([\d.e+-]+)\]", row)
+        assert found, row
+        low, high = map(float, found.groups())
+        assert low < threshold.value <= high
+        assert getattr(search, threshold.name) == threshold.value
