@@ -206,25 +206,32 @@ def test_better_needs_held_out_gain_training_share_material_bic_and_no_bound() -
     good = _fit(("load_damping",), 1.0, 1.0)
     assert search._better(good, current, current)
     assert not search._better(
-        _fit(("load_damping",), 1.0, 4.95), current, current
-    )  # held-out gain 0.05
+        _fit(("load_damping",), 1.0, 5.0 - search.MIN_GAIN / 2), current, current
+    )  # half the held-out gain asked for
     assert not search._better(
         _fit(("load_damping",), 8.5, 1.0), current, current
     )  # 25 % of the 10 left
     assert search._better(_fit(("load_damping",), 7.9, 1.0), current, current)  # 31 %
     assert not search._better(_fit(("load_damping",), 1.0, 1.0, ["pinned"]), current, current)
     # BIC: one parameter costs ln(1000) = 6.9 against 1000 ln(train ratio)
-    near = _fit(("load_damping",), 0.999 * 1.0, 0.8)
-    flat = _fit((), 1.0, 1.0)
+    near = _fit(("load_damping",), 0.999 * 1.0, 1.0)
+    flat = _fit((), 1.0, 3.0)
     assert not search._better(near, flat, flat) and search._better(
-        _fit(("load_damping",), 0.99, 0.8), flat, flat
+        _fit(("load_damping",), 0.99, 1.0), flat, flat
     )
     # material: the starting model left an excess RMS of 99 noise floors (cost 9802); a second
-    # term that takes the held-out cost from 101 (excess 10) to 50 (excess 7) removes 3 % of it
+    # term that takes the held-out cost from 901 (excess 30) to 626 (excess 25) removes 5 % of
+    # it, one that takes it to 2 (excess 1) 29 %
     start = _fit((), 9802.0, 9802.0)
-    first = _fit(("supply_sag",), 100.0, 101.0)
-    assert not search._better(_fit(("supply_sag", "spring_stiffening"), 40.0, 50.0), first, start)
-    assert search._better(_fit(("supply_sag", "spring_stiffening"), 40.0, 2.0), first, start)  # 9 %
+    first = _fit(("supply_sag",), 100.0, 901.0)
+    assert search.MATERIAL > 0.05
+    assert not search._better(_fit(("supply_sag", "spring_stiffening"), 40.0, 626.0), first, start)
+    assert search._better(_fit(("supply_sag", "spring_stiffening"), 40.0, 2.0), first, start)
+    # the load relation's own thresholds, its gains an order of magnitude smaller
+    assert search.RELATION_MIN_GAIN < search.MIN_GAIN
+    assert search._better_on_relation(
+        _fit(("load_damping",), 1.0, 5.0 - search.MIN_GAIN / 2), current, current
+    )
 
 
 def _thermal_truth(start_c: float, wander: float = 0.0) -> TimeSeriesRun:
