@@ -220,7 +220,7 @@ def register(subparsers) -> None:
     )
     blind.add_argument(
         "--half",
-        choices=("evaluation", "tuning", "all"),  # hems_ros.diagnosis.blind.HALVES
+        choices=("evaluation", "tuning", "all"),  # the halves hems_ros.diagnosis.blind.seeds knows
         default="evaluation",
         help="which seeds: the evaluation half (default, what the page reports), the tuning "
         "half (what thresholds may be set on) or both",

@@ -28,7 +28,6 @@ EVALUATION_SEEDS = (1, 2)
 #: show a share of 90 %, so the evaluation half draws them with these seeds as well (every run
 #: counted; the tuning half keeps its one seed).
 NULL_EXTRA_SEEDS = tuple(range(3, 11))
-HALVES = ("evaluation", "tuning", "all")
 QUICK = (("dissertation", "dahl_friction", 1.0, "low", 1), ("brinson", "none", 0.0, "low", 1))
 
 
