@@ -134,8 +134,15 @@ class RecorderProcess:
                     )
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
-                    raise TimeoutError(f"{what.format(sorted(missing()))} within {timeout:.0f} s")
+                    raise TimeoutError(
+                        f"{what.format(sorted(missing()))} within {timeout:.0f} s"
+                        + "".join(f" | {line}" for line in self._lines_on(missing()))
+                    )
                 self._changed.wait(min(remaining, 0.2))
+
+    def _lines_on(self, topics: set[str]) -> list[str]:
+        """The recorder's log lines on ``topics`` (how each was subscribed, say)."""
+        return [line for line in self.log if any(f" {t} " in f"{line} " for t in topics)]
 
     def wait(self, timeout: float | None = None) -> BagInfo:
         """Wait for the recorder to exit by itself (``duration`` set); return the bag's info."""

@@ -215,7 +215,12 @@ def record_commands(output: Path, *args: str) -> tuple[RecorderProcess, object]:
     recorder = RecorderProcess(output, topics=["/hems/index/setpoint"], discovery_period=0.05)
     try:
         recorder.wait_for_topics(["/hems/index/setpoint"])  # no publisher in the graph yet
-        with pytest.raises(TimeoutError, match=r"no message of \['/hems/index/setpoint'\]"):
+        # the error also quotes how the recorder subscribed to the silent topic
+        with pytest.raises(
+            TimeoutError,
+            match=r"no message of \['/hems/index/setpoint'\].* \| .*recording /hems/index/setpoint "
+            r"\[hems_msgs/msg/FingerSetpoint\] reliable, volatile, before any publisher$",
+        ):
             recorder.wait_for_messages(["/hems/index/setpoint"], timeout=0.3)
         run_command_publisher(*args)
     finally:
