@@ -1,11 +1,17 @@
-"""Many concurrent fits, one simulation batch per round.
+"""Many fits side by side, one simulation batch per round.
 
 Each fit runs scipy's least squares in a thread of its own; whenever it needs the model it
-hands its parameter sets to the :class:`Barrier` and waits. Once every fit still running
-is waiting, the barrier runs all their sets as one batch (the physics batch vectorises
-across sets and spreads them over the cores) and wakes them. Each round holds exactly one
-request of every live fit, in fit order, so the batches, and therefore the results, do
-not depend on how the threads were scheduled.
+hands its parameter sets to the :class:`Barrier` and waits. The fits take turns, in fit
+order: one runs until its next request (or its end) and wakes the next, and the last of a
+round runs every request as one batch (the physics batch vectorises across sets and spreads
+them over the cores), then wakes the first. Each round holds exactly one request of every
+live fit, in fit order, so the batches, and therefore the results, do not depend on how the
+threads were scheduled.
+
+The threads only turn scipy's loop inside out; their Python holds the GIL, so letting them
+run at once gained nothing and cost a wake-up of every fit after each batch, and on a host
+whose cores are all busy (a suite's worker beside another) each of those wake-ups waited for
+a core.
 """
 
 from __future__ import annotations
@@ -17,13 +23,14 @@ T = TypeVar("T")
 
 
 class Barrier:
-    """Gathers the requests of concurrent jobs into one call of ``evaluate`` per round."""
+    """Gathers the requests of jobs that take turns into one call of ``evaluate`` per round."""
 
     def __init__(self, evaluate: Callable[[list], list]) -> None:
         self._evaluate = evaluate
-        self._cv = threading.Condition()
+        self._lock = threading.Lock()
         self._local = threading.local()
-        self._live = 0
+        self._turns: list[threading.Event] = []
+        self._live: list[int] = []  # jobs not ended, in order
         self._pending: dict[int, list] = {}
         self._results: dict[int, list] = {}
         self._error: BaseException | None = None
@@ -31,27 +38,31 @@ class Barrier:
         self.evaluated = 0
 
     def run(self, jobs: Sequence[Callable[["Barrier"], T]]) -> list[T]:
-        """Run ``jobs`` (each called with this barrier) concurrently; their results in order."""
+        """Run ``jobs`` (each called with this barrier) in turns; their results in order."""
         outs: list = [None] * len(jobs)
         errors: list = [None] * len(jobs)
-        self._live, self._error = len(jobs), None
+        self._turns = [threading.Event() for _ in jobs]
+        self._live, self._error = list(range(len(jobs))), None
 
         def work(i: int, job) -> None:
             self._local.job = i
+            self._wait_turn(i)
             try:
                 outs[i] = job(self)
             except BaseException as error:  # noqa: BLE001 - re-raised in the caller's thread
                 errors[i] = error
             finally:
-                with self._cv:
-                    self._live -= 1
-                    self._flush()
+                with self._lock:
+                    self._live.remove(i)
+                    self._pass_turn(i)
 
         threads = [
             threading.Thread(target=work, args=(i, job), daemon=True) for i, job in enumerate(jobs)
         ]
         for thread in threads:
             thread.start()
+        if jobs:
+            self._turns[0].set()
         for thread in threads:
             thread.join()
         first = next((e for e in errors if e is not None), None)
@@ -62,18 +73,30 @@ class Barrier:
     def __call__(self, items: list) -> list:
         """Evaluate ``items`` in the next round (blocks until it has run)."""
         job = self._local.job
-        with self._cv:
-            self._pending[job] = list(items)
-            self._flush()
-            while job not in self._results and self._error is None:
-                self._cv.wait()
-            if job not in self._results:
+        with self._lock:
+            if self._error is not None:  # a failed batch ends every round of this run
                 raise RuntimeError("a batch of model evaluations failed") from self._error
-            return self._results.pop(job)
+            self._pending[job] = list(items)
+            self._pass_turn(job)
+        self._wait_turn(job)
+        if job not in self._results:
+            raise RuntimeError("a batch of model evaluations failed") from self._error
+        return self._results.pop(job)
 
-    def _flush(self) -> None:
-        """Run the round once every live job waits (called with the lock held)."""
-        if not self._pending or len(self._pending) < self._live:
+    def _wait_turn(self, job: int) -> None:
+        self._turns[job].wait()
+        self._turns[job].clear()
+
+    def _pass_turn(self, after: int) -> None:
+        """Wake the next live job of this round; after the round's last, run the batch and
+        wake the first (called with the lock held)."""
+        if self._error is not None:  # every waiting job was woken with it
+            return
+        later = [j for j in self._live if j > after]
+        if later:
+            self._turns[later[0]].set()
+            return
+        if not self._pending:
             return
         order = sorted(self._pending)
         batch = [item for job in order for item in self._pending[job]]
@@ -82,7 +105,8 @@ class Barrier:
         except BaseException as error:  # noqa: BLE001 - handed to every waiting job
             self._error = error
             self._pending.clear()
-            self._cv.notify_all()
+            for job in order:
+                self._turns[job].set()
             return
         self.rounds += 1
         self.evaluated += len(batch)
@@ -92,4 +116,4 @@ class Barrier:
             self._results[job] = results[start : start + n]
             start += n
         self._pending.clear()
-        self._cv.notify_all()
+        self._turns[order[0]].set()

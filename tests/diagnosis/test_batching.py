@@ -90,18 +90,25 @@ def test_a_job_that_ends_lets_the_waiting_ones_go_on() -> None:
     assert [[tag for tag, _ in b] for b in ev.batches] == [[0, 5, 2, 2], [0, 2, 2]]
 
 
-def test_jobs_run_concurrently() -> None:
-    # eight jobs that each sleep 0.3 s before their one request: serial would take 2.4 s
+def test_jobs_take_turns_one_at_a_time() -> None:
+    # each job's Python between requests runs alone: the next job waits for it
+    running, most = [0], [0]
+
     def job(barrier: Barrier) -> int:
-        time.sleep(0.3)
-        return barrier([(0, 2)])[0][1]
+        total = 0
+        for k in range(3):
+            running[0] += 1
+            most[0] = max(most[0], running[0])
+            time.sleep(0.01)  # releases the GIL: a job running beside it would be seen here
+            running[0] -= 1
+            total += barrier([(0, k)])[0][1]
+        return total
 
     ev = Recorder()
     barrier = Barrier(ev)
-    start = time.perf_counter()
-    assert _run(barrier, [job] * 8) == [4] * 8
-    assert time.perf_counter() - start < 1.5
-    assert [len(b) for b in ev.batches] == [8] and barrier.rounds == 1
+    assert _run(barrier, [job] * 8) == [0 + 1 + 4] * 8
+    assert most[0] == 1
+    assert [len(b) for b in ev.batches] == [8, 8, 8] and barrier.rounds == 3
 
 
 @pytest.mark.parametrize("seed", range(4))
