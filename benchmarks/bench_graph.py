@@ -35,7 +35,7 @@ from pathlib import Path
 
 import busy as busy_option
 import smoke
-from host import host_line
+from host import cpu_jiffies, host_line, steal_pct
 
 from hems_ros.rosenv import apply_network_defaults, use_private_domain
 
@@ -154,9 +154,10 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
             client.spin_for(min(SETTLE_S, seconds))
             start = {k: dict(v) for k, v in latest.items()}
             cpu0, t0 = cpu_by_process(graph.pids), time.monotonic()
-            rec1 = cpu_by_process(recorder_pid)
+            rec1, jiffies = cpu_by_process(recorder_pid), cpu_jiffies()
             client.spin_for(seconds)
             elapsed = time.monotonic() - t0
+            stolen = steal_pct(jiffies, cpu_jiffies())
             enabled = cores(cpu0, cpu_by_process(graph.pids), elapsed)
             recorder_cores = cores(rec1, cpu_by_process(recorder_pid), elapsed)
             rss, pss = memory_mib(graph.pids)
@@ -197,6 +198,7 @@ def run(composed: bool, seconds: float, bag: Path) -> dict:
         "cpu_cores": sum(enabled.values()),
         "idle_cores": sum(idle.values()),
         "idle_drift_cores": drift,
+        "steal_pct": stolen,
         "cpu_by_kind": by_kind,
         "rss_mib": rss,
         "pss_mib": pss,
@@ -244,7 +246,8 @@ def report(mode: str, r: dict) -> None:
             for kind, v in sorted(r["cpu_by_kind"].items(), key=lambda kv: -sum(kv[1]))
         )
         + f"; recorder (apart) {r['recorder'][0]:.2f} cores, {r['recorder'][1]:.0f} MiB; "
-        f"the idle windows before and after differ by {r['idle_drift_cores']:.3f} cores"
+        f"the idle windows before and after differ by {r['idle_drift_cores']:.3f} cores; "
+        f"the hypervisor held back {r['steal_pct']:.1f} % of the CPUs' time while enabled (steal)"
     )
     if r["faults"]:
         print(" " * 10 + " supervisor faults: " + "; ".join(r["faults"]))

@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 import smoke
-from host import host_line
+from host import cpu_jiffies, host_line, steal_pct
 
 from hems_ros.diagnosis import (
     cluster,
@@ -34,13 +34,15 @@ GOAL = 1.7
 SMOKE_CASES = ("nothing",)
 
 
-def _time(tasks: list[cluster.Task], scheduler: str, workers: int | None) -> tuple[float, float]:
-    """(wall s from the call to the last result, sum of the task times s)."""
+def _time(
+    tasks: list[cluster.Task], scheduler: str, workers: int | None
+) -> tuple[float, float, float]:
+    """(wall s from the call to the last result, sum of the task times s, steal %)."""
     with tempfile.TemporaryDirectory(prefix="hems-bench-suite-") as folder:
-        start = time.perf_counter()
+        start, jiffies = time.perf_counter(), cpu_jiffies()
         report = cluster.run_tasks(tasks, Path(folder), scheduler=scheduler, workers=workers)
         wall = time.perf_counter() - start
-    return wall, sum(d.seconds for d in report.done.values())
+    return wall, sum(d.seconds for d in report.done.values()), steal_pct(jiffies, cpu_jiffies())
 
 
 def main() -> int:
@@ -68,17 +70,25 @@ def main() -> int:
     }
     walls: dict[str, list[float]] = {}
     work: dict[str, list[float]] = {}
+    stolen: dict[str, list[float]] = {}
     for _ in range(args.repeat):
         for name, (scheduler, workers) in layouts.items():
-            wall, busy = _time(tasks, scheduler, workers)
+            wall, busy, steal = _time(tasks, scheduler, workers)
             walls.setdefault(name, []).append(wall)
             work.setdefault(name, []).append(busy)
-    print("| layout | wall s (median) | task time s (sum) | speed-up over 1 worker |")
-    print("|---|---|---|---|")
+            stolen.setdefault(name, []).append(steal)
+    print(
+        "| layout | wall s (median) | task time s (sum) | speed-up over 1 worker "
+        "| CPU time the hypervisor held back (steal) |"
+    )
+    print("|---|---|---|---|---|")
     one = statistics.median(walls["1 worker"])
     for name in layouts:
         wall = statistics.median(walls[name])
-        print(f"| {name} | {wall:.1f} | {statistics.median(work[name]):.1f} | {one / wall:.2f}x |")
+        print(
+            f"| {name} | {wall:.1f} | {statistics.median(work[name]):.1f} | {one / wall:.2f}x "
+            f"| {', '.join(f'{s:.1f} %' for s in stolen[name])} |"
+        )
     ratio = one / statistics.median(walls["2 workers"])
     print(f"2 workers over 1: {ratio:.2f}x (goal >= {GOAL}x)")
     print(host_line())

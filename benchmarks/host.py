@@ -42,6 +42,26 @@ def wake_round_trip_us(rounds: int = 5000) -> float:
     return elapsed / rounds * 1e6
 
 
+def cpu_jiffies() -> tuple[int, int]:
+    """(steal, total) clock ticks of all CPUs since boot (/proc/stat; (0, 0) where it is missing).
+
+    Steal is the time a virtual CPU was ready to run while the hypervisor ran something else:
+    on a shared host it is the part of a slow phase that no code of ours can change."""
+    try:
+        with open("/proc/stat") as stat:
+            fields = [int(x) for x in stat.readline().split()[1:]]
+    except (OSError, ValueError):
+        return 0, 0
+    # user nice system idle iowait irq softirq steal (guest time is counted in user already)
+    return (fields[7] if len(fields) > 7 else 0), sum(fields[:8])
+
+
+def steal_pct(before: tuple[int, int], after: tuple[int, int]) -> float:
+    """Per cent of all CPUs' time between two :func:`cpu_jiffies` readings that was stolen."""
+    total = after[1] - before[1]
+    return 100.0 * (after[0] - before[0]) / total if total > 0 else 0.0
+
+
 def host_line() -> str:
     return (
         f"host speed {host_speed_s():.2f} s (a 3-million-addition Python loop; lower is quicker), "
