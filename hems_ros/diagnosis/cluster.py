@@ -34,10 +34,6 @@ SUFFIX = ".pkl"
 CONNECT_S = 30.0
 SPAWN_ENVIRON = "distributed.nanny.pre-spawn-environ"
 WORKER_WAIT_S = 120.0
-QUIET_WORKERS = {
-    "distributed.worker.profile.enabled": False,
-    "distributed.admin.tick.interval": "1s",
-}
 
 
 class TaskFailed(RuntimeError):
@@ -168,15 +164,11 @@ def _on_cluster(
         # and submitted again here, instead of being retried unseen by the scheduler; and the
         # workers start without the MALLOC_TRIM_THRESHOLD_ the nanny sets by default, which
         # also fixes glibc's mmap threshold at 128 KiB: every larger array was then mapped and
-        # unmapped anew, and the suite's tasks ran 40 % slower than in a plain process; and
-        # the workers' profiler (every 10 ms) and event-loop tick (every 20 ms) stay quiet,
-        # since on a host with a worker per core each of their wake-ups preempted a task
-        # (two workers' task times 9-16 % above one worker's with them, -2 to +10 % without)
+        # unmapped anew, and the suite's tasks ran 40 % slower than in a plain process
         with dask.config.set(
             {
                 "distributed.scheduler.allowed-failures": 0,
                 f"{SPAWN_ENVIRON}.MALLOC_TRIM_THRESHOLD_": None,
-                **QUIET_WORKERS,
             }
         ):
             cluster = LocalCluster(

@@ -21,13 +21,6 @@ def square(x: int, die_once: str = "", seconds: float = 0.0) -> int:
     return x * x
 
 
-def worker_config(keys: tuple[str, ...]) -> dict:
-    """The Dask configuration the worker that runs this task holds for ``keys``."""
-    import dask
-
-    return {key: dask.config.get(key) for key in keys}
-
-
 def fails(x: int) -> int:
     raise ValueError(f"no square for {x}")
 

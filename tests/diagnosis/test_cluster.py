@@ -33,16 +33,6 @@ def test_serial_and_local_cluster_give_every_result_in_the_tasks_order(tmp_path)
     )
 
 
-def test_local_workers_run_without_the_profiler_and_the_fast_event_loop_tick(tmp_path):
-    # each of their wake-ups preempted a task on a host with a worker per core (docs/design.md)
-    keys = tuple(cluster.QUIET_WORKERS)
-    task = cluster.Task("config", cluster_tasks.worker_config, (keys,))
-    report = cluster.run_tasks([task], tmp_path, workers=1)
-    assert report.results() == [
-        {"distributed.worker.profile.enabled": False, "distributed.admin.tick.interval": "1s"}
-    ]
-
-
 def test_a_worker_killed_mid_task_costs_only_its_tasks_which_run_again(tmp_path):
     lines = []
     tasks = cluster_tasks.squares(8, die_once=str(tmp_path / "died"), seconds=0.2)
