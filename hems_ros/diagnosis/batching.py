@@ -8,10 +8,9 @@ them over the cores), then wakes the first. Each round holds exactly one request
 live fit, in fit order, so the batches, and therefore the results, do not depend on how the
 threads were scheduled.
 
-The threads only turn scipy's loop inside out; their Python holds the GIL, so letting them
-run at once gained nothing and cost a wake-up of every fit after each batch, and on a host
-whose cores are all busy (a suite's worker beside another) each of those wake-ups waited for
-a core.
+The threads only turn scipy's loop inside out. Their Python holds the GIL, so running them
+at once would gain nothing and cost a wake-up of every fit after each batch, each of which
+waits for a core on a host whose cores are all busy (a suite's worker beside another).
 """
 
 from __future__ import annotations
