@@ -15,7 +15,7 @@ node process steps its unit with the kernel compiled ahead of time (compiled.py)
 physics modules import without numba: :func:`jit`, :func:`jit_inline`, :func:`jit_parallel`
 and :func:`intrinsic` only register a function. The first call of any registered function
 from Python starts numba (:func:`use_numba`): it checks numba's on-disk cache against the
-sources (compiled.use_current_cache), then puts each function's numba dispatcher into its
+sources (kernel_sources.use_current_cache), then puts each function's numba dispatcher into its
 module in its place, where compiled code looks it up by name (so compiled functions call one
 another within a module or through their module, ``kinetics.memory_branch``, never through a
 name imported from another module).
@@ -28,7 +28,7 @@ import sys
 import threading
 from typing import Any, Callable, TypeVar, cast
 
-from hems_ros.physics import compiled
+from hems_ros.physics import kernel_sources
 
 OPTIONS: dict[str, Any] = dict(cache=True, error_model="numpy", fastmath={"contract"})
 
@@ -121,7 +121,7 @@ def use_numba() -> None:
     with _starting:
         if _started:
             return
-        compiled.use_current_cache()
+        kernel_sources.use_current_cache()
         for func, extra in _registered:
             setattr(sys.modules[func.__module__], func.__name__, _compile(func, extra))
         _registered.clear()

@@ -8,7 +8,7 @@ and each step writes its derived outputs into ``out`` (``O_*``).
 Plain Python and numpy, as are the equations pack takes from the blocks (kinetics.band,
 loads.referred_load, loads.transmission, friction.capstan_ratio, sheath.sheath_resistances),
 which no compiled code calls: a node process builds its rows without numba (jit.py). The
-compiled kernel holds these constants as they were when it was compiled (compiled.SOURCES).
+compiled kernel holds these constants as they were when it was compiled (kernel_sources.SOURCES).
 """
 
 from __future__ import annotations

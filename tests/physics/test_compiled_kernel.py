@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from hems_ros.physics import compiled, electrical, kernel, load_params, rows
+from hems_ros.physics import compiled, electrical, kernel, kernel_sources, load_params, rows
 
 
 def _fresh_module():
@@ -18,7 +18,7 @@ def _fresh_module():
         module = importlib.import_module(f"hems_ros.physics.{compiled.MODULE}")
     except ImportError:
         pytest.fail("the compiled kernel is missing: run `make setup`")
-    if module.build_hash() != compiled.build_hash():
+    if module.build_hash() != kernel_sources.build_hash():
         pytest.fail("the compiled kernel was built from other sources: run `make setup`")
     return module
 
@@ -72,12 +72,12 @@ def test_the_compiled_steps_give_the_jit_kernels_bits(name):
 
 FALLBACK = """
 import importlib, sys, warnings
-from hems_ros.physics import ActuationUnit, compiled
+from hems_ros.physics import ActuationUnit, compiled, kernel_sources
 module = importlib.import_module("hems_ros.physics." + compiled.MODULE)
 assert compiled.step_kernel() is module.steps
 compiled.step_kernel.cache_clear()
 if sys.argv[1] == "stale":
-    module.build_hash = lambda: compiled.build_hash() ^ 1  # built from other sources
+    module.build_hash = lambda: kernel_sources.build_hash() ^ 1  # built from other sources
 else:
     sys.modules["hems_ros.physics." + compiled.MODULE] = None
 assert "numba" not in sys.modules

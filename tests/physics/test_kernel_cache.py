@@ -9,8 +9,8 @@ import sys
 
 SCRIPT = """
 import numpy as np
-from hems_ros.physics import compiled, kernel, load_params, rows
-compiled.use_current_cache = lambda: print("checked")
+from hems_ros.physics import kernel, kernel_sources, load_params, rows
+kernel_sources.use_current_cache = lambda: print("checked")
 params = load_params("table41")
 p, s = rows.pack(params), rows.initial_state(params)
 print("packed")
