@@ -91,9 +91,9 @@ class Barrier:
         wake the first (called with the lock held)."""
         if self._error is not None:  # every waiting job was woken with it
             return
-        later = [j for j in self._live if j > after]
-        if later:
-            self._turns[later[0]].set()
+        following = next((j for j in self._live if j > after), None)
+        if following is not None:
+            self._turns[following].set()
             return
         if not self._pending:
             return

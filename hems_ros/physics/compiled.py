@@ -45,6 +45,12 @@ def step_kernel() -> Callable[..., int]:
         RuntimeWarning,
         stacklevel=2,
     )
+    return _jit_steps()
+
+
+def _jit_steps() -> Any:
+    """numba's JIT dispatcher of ``kernel.steps``; numba and the kernel's modules load only
+    here, so that a node with the compiled module runs without them."""
     from hems_ros.physics import jit, kernel
 
     jit.use_numba()
@@ -60,10 +66,7 @@ def build(path: Path) -> None:
     except ImportError:  # pycc is pending deprecation in numba: the nodes keep the JIT kernel
         print(f"numba.pycc is gone: {path} not built, nodes run numba's JIT", file=sys.stderr)
         return
-    from hems_ros.physics import jit, kernel
-
-    jit.use_numba()
-    dispatcher: Any = kernel.steps
+    dispatcher = _jit_steps()
     built_with = build_hash()
     cc = CC(MODULE)
     cc.output_dir, cc.output_file, cc.target_cpu = str(HERE), path.name, "host"
