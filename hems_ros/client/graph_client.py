@@ -101,11 +101,18 @@ class GraphClient:
             rclpy.init(args=[])
         self.sim_time = sim_time
         self.namespace = namespace
-        self.node = Node(
-            f"{name}_{int(time.time() * 1e3) % 100000}",
-            namespace=namespace,
-            parameter_overrides=[Parameter("use_sim_time", value=True)] if sim_time else [],
-        )
+        try:
+            self.node = Node(
+                f"{name}_{int(time.time() * 1e3) % 100000}",
+                namespace=namespace,
+                parameter_overrides=[Parameter("use_sim_time", value=True)] if sim_time else [],
+            )
+        except Exception as error:
+            # a SIGINT or SIGTERM while the node was being made shut the context down under
+            # it (its next rcl call fails): a stop, as the verbs know it, not a crash
+            if not rclpy.ok():
+                raise ExternalShutdownException() from error
+            raise
         self._setpoint_pubs: dict[str, object] = {}
         # Endpoints are kept for the client's life: every new endpoint is announced to all
         # sixteen nodes, which costs them CPU at the moment they should be controlling.

@@ -62,3 +62,35 @@ def test_a_waiting_verb_stops_cleanly(
     assert verb.returncode == code, err
     assert err.strip().splitlines()[-1] == message
     assert "Traceback" not in err
+
+
+# a signal that shuts the context down while a verb's node is being made: rclpy's handler
+# runs between two calls of Node's constructor, whose next call then fails on the dead context
+MID_CONSTRUCTION = """
+import rclpy
+import rclpy.node
+from rclpy.executors import ExternalShutdownException
+from hems_ros.client import graph_client
+
+def node_cut_short(*args, **kwargs):
+    rclpy.shutdown()
+    return rclpy.node.Node(*args, **kwargs)
+
+graph_client.Node = node_cut_short
+try:
+    graph_client.GraphClient("hems_test_signal")
+except ExternalShutdownException:
+    print("stopped")
+"""
+
+
+def test_a_signal_while_a_verbs_node_is_made_is_a_stop_not_a_crash(ros_domain_id: int) -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", MID_CONSTRUCTION],
+        env=child_environment(),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["stopped"], done.stdout + done.stderr
