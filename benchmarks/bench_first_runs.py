@@ -5,7 +5,8 @@ supervisor stayed ENABLED through the grasp and the fingers tracked). Each typic
 what the README shows, typed as fast as a script types it: `hems up &`, at once `hems enable`,
 `hems setpoint index 20 --unit mm`, three seconds of heating, `hems status`, Ctrl-C; valid
 when the status shows the supervisor ENABLED. Both print the supervisor's count of stream
-gaps while ENABLED (its /diagnostics), whose longest is compared with its loss limit.
+gaps while ENABLED (its /diagnostics), whose longest is compared with its loss limit, and the
+longest time a unit or controller took to take ENABLED, compared with the enable grace.
 
 ``--busy`` runs a busy loop on one core throughout (``python3 -c "while True: pass"`` at
 normal priority: a browser, a compiler, a user's own node). ``--kill-first`` starts one graph
@@ -46,6 +47,9 @@ GAPS = re.compile(
     r"\(([^)]*)\))"
 )
 LIMIT = re.compile(r"a stream silent for (\d+) ms faults")
+TAKE = re.compile(
+    r"ENABLED taken within (\d+) ms \(([^)]*)\), a node that has not taken it for (\d+) ms faults"
+)
 READY = re.compile(r"ready after ([\d.]+) s")
 UP_STOP_S = 60  # s from Ctrl-C for `hems up` to end
 
@@ -58,6 +62,7 @@ class Run:
     gap_stream: str  # "-": no gap counted
     limit_ms: float
     ready_s: float | None  # hems up or the demo: from start to every stream present
+    take: tuple[float, str, float] | None  # longest take of ENABLED ms, whose, grace ms
 
 
 def gaps_of(text: str) -> tuple[float, str, float]:
@@ -67,6 +72,12 @@ def gaps_of(text: str) -> tuple[float, str, float]:
     if gaps is None:  # no status came (the run is not valid either)
         return 0.0, "not reported", limit_ms
     return float(gaps.group(1) or gaps.group(3)), gaps.group(4) or "-", limit_ms
+
+
+def take_of(text: str) -> tuple[float, str, float] | None:
+    """(ms, whose, grace ms): the longest a unit or controller took to take ENABLED."""
+    take = TAKE.search(text)
+    return (float(take.group(1)), take.group(2), float(take.group(3))) if take else None
 
 
 def demo(layout: list[str], scratch: Path, index: int) -> Run:
@@ -91,7 +102,9 @@ def demo(layout: list[str], scratch: Path, index: int) -> Run:
         f"exit code {code}",
     ).strip()
     longest, stream, limit = gaps_of(text)
-    return Run(code == 0, "" if code == 0 else problem, longest, stream, limit, enabled_s)
+    return Run(
+        code == 0, "" if code == 0 else problem, longest, stream, limit, enabled_s, take_of(text)
+    )
 
 
 def hems_step(args: list[str], timeout_s: float) -> subprocess.CompletedProcess:
@@ -147,6 +160,7 @@ def typical(layout: list[str]) -> Run:
         stream,
         limit,
         float(ready.group(1)) if ready else None,
+        take_of(status.stdout),
     )
 
 
@@ -184,9 +198,14 @@ def summary(kind: str, runs: list[Run]) -> str:
         margin = f"{'' if counted else '> '}{worst.limit_ms / worst.longest_gap_ms:.1f}"
     else:
         margin = "-"
+    takes = [r.take for r in runs if r.take is not None]
+    take_text = "-"
+    if takes:
+        ms, whose, grace = max(takes)
+        take_text = f"{ms:.0f} ms ({whose}) | {grace:.0f} ms | {grace / ms:.1f}"
     return (
         f"| {kind} | {len(runs)} | {valid} | {ready_text} | {gap_text(worst)} | "
-        f"{worst.limit_ms:.0f} ms | {margin} |"
+        f"{worst.limit_ms:.0f} ms | {margin} | {take_text} |"
     )
 
 
@@ -238,6 +257,7 @@ def main() -> None:
                     f"  {kind} {i + 1}/{count}: "
                     f"{'valid' if run.valid else 'NOT VALID: ' + run.detail}"
                     f"; longest gap {gap_text(run)}"
+                    + (f"; ENABLED taken within {run.take[0]:.0f} ms" if run.take else "")
                     + (f"; ready after {run.ready_s:.1f} s" if run.ready_s else ""),
                     flush=True,
                 )
@@ -245,9 +265,9 @@ def main() -> None:
                 results[kind] = runs
         print(
             "| run | runs | valid | ready s (median / max) | longest gap (stream) | loss limit "
-            "| limit / gap |"
+            "| limit / gap | longest take of ENABLED | enable grace | grace / take |"
         )
-        print("|---|---|---|---|---|---|---|")
+        print("|---|---|---|---|---|---|---|---|---|---|")
         for kind, runs in results.items():
             print(summary(kind, runs))
         print(f"after the runs: {host_line()}")

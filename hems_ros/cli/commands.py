@@ -13,7 +13,9 @@ from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
 from hems_ros.graph.supervisor_logic import (
     GAP_FLOOR_KEY,
+    GRACE_KEY,
     LOSS_LIMIT_KEY,
+    TAKE_KEY,
     longest_gap,
     parse_gaps,
 )
@@ -249,13 +251,20 @@ def format_status(snap) -> str:
 
 
 def gap_line(snap) -> str:
-    """The supervisor's count of stream gaps and its loss limit, from its /diagnostics."""
+    """The supervisor's count of stream gaps and its loss limit, and the longest time a unit or
+    controller took to take ENABLED against its grace, from the supervisor's /diagnostics."""
     if not snap.diagnostics:
         return "stream gaps: no supervisor diagnostics received"
     values = dict(snap.diagnostics)
     limit = values.get(LOSS_LIMIT_KEY, "?")
     gaps = longest_gap(parse_gaps(snap.diagnostics), values.get(GAP_FLOOR_KEY, "?"))
-    return f"stream gaps while ENABLED: {gaps}; " f"a stream silent for {limit} ms faults"
+    line = f"stream gaps while ENABLED: {gaps}; a stream silent for {limit} ms faults"
+    if TAKE_KEY in values:
+        line += (
+            f"; ENABLED taken within {values[TAKE_KEY]}, "
+            f"a node that has not taken it for {values.get(GRACE_KEY, '?')} ms faults"
+        )
+    return line
 
 
 def run_status(args: argparse.Namespace) -> int:

@@ -95,9 +95,13 @@ class MonitorLimits:
     # one until its repair (why the controller status and the duty commands are best
     # effort, ros/qos.py), the likely cause, not confirmed.
     watchdog_hold_s: float = 0.5
-    # units and controllers take a new state from the status that follows it (20 ms); this
-    # is how long one of them may report otherwise while ENABLED, on a busy host
-    enable_grace_s: float = 0.5
+    # Units and controllers take a new state from the status that follows it (20 ms) and say
+    # so in their next report: two deliveries, each of which the stream checks let be late by
+    # up to lost_s (400 ms) before they fault. Judged no more strictly, the grace is at least
+    # 2 x 400 ms plus the two periods; a finger that has not taken ENABLED is cold, so a longer
+    # grace only names it later. At 0.5 s it latched FAULT once beside the full test suite
+    # (502 ms); with both cores busy the longest take was 91 ms (docs/reliability.md).
+    enable_grace_s: float = 1.0
 
     def timeout(self, stream: str) -> float:
         """How old a stream's last message may be for ``enable``: the unit state comes at 20 Hz
@@ -159,6 +163,10 @@ class SupervisorLogic:
         self._duty_seen: set[str] = set()
         # (finger, stream) -> [number of gaps longer than stale_s while ENABLED, longest s]
         self._gaps: dict[tuple[str, str], list[float]] = {}
+        # (finger, component) -> the longest time from an enable to its first report of having
+        # taken ENABLED; those that have reported so since the latest enable
+        self._takes: dict[tuple[str, str], float] = {}
+        self._taken: set[tuple[str, str]] = set()
         # finger -> (stamp s, wire position m) of the latest encoder reading
         self._readings: dict[str, tuple[float, float]] = {}
 
@@ -195,6 +203,12 @@ class SupervisorLogic:
         stream): (count, longest s). Transient: counted for the diagnostics, and the margin
         the loss limits keep over them (docs/reliability.md)."""
         return {key: (int(count), longest) for key, (count, longest) in self._gaps.items()}
+
+    def enable_takes(self) -> dict[tuple[str, str], float]:
+        """By (finger, "unit" or "controller"): the longest time, over the enables so far, from
+        an enable to the first report of having taken ENABLED. The margin ``enable_grace_s``
+        keeps over them (docs/reliability.md)."""
+        return dict(self._takes)
 
     def wire_force(self, finger: str, force_n: float, now: float) -> None:
         self.saw("wire_force", finger, now)
@@ -295,6 +309,10 @@ class SupervisorLogic:
         whether it has taken the ENABLED status (the unit's heating permission, the controller's
         ``active``). While ENABLED, reports saying no for ``enable_grace_s`` latch FAULT."""
         condition = f"{component} not enabled"
+        if enabled and self.state == State.ENABLED and (finger, component) not in self._taken:
+            self._taken.add((finger, component))
+            took = now - self._enabled_at
+            self._takes[(finger, component)] = max(took, self._takes.get((finger, component), 0))
         held = self._held(finger, condition, not enabled and self.state == State.ENABLED, now)
         if held >= self.limits.enable_grace_s:
             consequence = "it does not heat" if component == "unit" else "it sends 0 % duty"
@@ -365,6 +383,8 @@ class SupervisorLogic:
             missing = self.missing_streams(now)
             if missing:
                 return False, "cannot enable: " + "; ".join(missing)
+            if self.state != State.ENABLED:
+                self._taken.clear()
             self.state = State.ENABLED
             self._enabled_at = now
             return True, "ENABLED"
@@ -400,6 +420,8 @@ class SupervisorLogic:
 GAP_KEY = "gaps"
 LOSS_LIMIT_KEY = "loss limit ms"  # the shorter of lost_s and heartbeat_timeout_s
 GAP_FLOOR_KEY = "gap floor ms"  # stale_s: shorter silences are not counted as gaps
+TAKE_KEY = "enable taken"  # the longest of SupervisorLogic.enable_takes, and whose
+GRACE_KEY = "enable grace ms"  # enable_grace_s
 
 
 def gap_entries(gaps: dict[tuple[str, str], tuple[int, float]]) -> list[tuple[str, str]]:
@@ -429,3 +451,9 @@ def longest_gap(gaps: dict[tuple[str, str], tuple[int, float]], floor_ms: str = 
     (finger, stream), (_, longest) = max(gaps.items(), key=lambda item: item[1][1])
     total = sum(count for count, _ in gaps.values())
     return f"{total} gaps, longest {1e3 * longest:.0f} ms ({finger} {stream})"
+
+
+def longest_take(takes: dict[tuple[str, str], float]) -> str:
+    """The longest of :meth:`SupervisorLogic.enable_takes` and whose, as "85 ms (index unit)"."""
+    (finger, component), took = max(takes.items(), key=lambda item: item[1])
+    return f"{1e3 * took:.0f} ms ({finger} {component})"

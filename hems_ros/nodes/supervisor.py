@@ -21,7 +21,7 @@ default 400 ms; shorter gaps over stale_s, 50 ms, are counted in /diagnostics), 
 heartbeats (> heartbeat_timeout_s, default 400 ms), wire over-force (default 50 N), tendon
 over-travel, a wire temperature estimated at max_wire_temperature_c (170 degC; the controllers cut
 heating at 150 degC themselves), duty-watchdog flags held watchdog_hold_s (500 ms), and while
-ENABLED a unit or controller that has not taken ENABLED within enable_grace_s (0.5 s). ``enable``
+ENABLED a unit or controller that has not taken ENABLED within enable_grace_s (1 s). ``enable``
 also waits for every unit's state and for its controller's commands to reach it (watchdog flag not
 held). Heating is allowed only in ENABLED: the units and controllers drop every duty to 0 as soon
 as they see any other state. FAULT and ESTOP latch until reset. The controller status and
@@ -44,11 +44,14 @@ from hems_ros.graph import names, transmission
 from hems_ros.graph.cadence import Cadence, supervisor_check_delay
 from hems_ros.graph.supervisor_logic import (
     GAP_FLOOR_KEY,
+    GRACE_KEY,
     LOSS_LIMIT_KEY,
+    TAKE_KEY,
     MonitorLimits,
     State,
     SupervisorLogic,
     gap_entries,
+    longest_take,
 )
 from hems_ros.ros import qos
 from hems_ros.ros.clock_time import seconds, stamp_now
@@ -370,6 +373,7 @@ class SupervisorNode(LeanNode):
             state, DiagnosticStatus.OK
         )
         missing = self.logic.missing_streams(seconds(self))
+        takes = self.logic.enable_takes()
         status = DiagnosticStatus(
             level=level,
             name=names.diagnostic_name(self.graph_ns, "supervisor"),
@@ -380,7 +384,9 @@ class SupervisorNode(LeanNode):
             + [KeyValue(key="not ready", value=m) for m in missing]
             + [KeyValue(key=k, value=v) for k, v in gap_entries(self.logic.gaps())]
             + [KeyValue(key=GAP_FLOOR_KEY, value=f"{1e3 * self.logic.limits.stale_s:.0f}")]
-            + [KeyValue(key=LOSS_LIMIT_KEY, value=f"{1e3 * self.logic.limits.loss_s:.0f}")],
+            + [KeyValue(key=LOSS_LIMIT_KEY, value=f"{1e3 * self.logic.limits.loss_s:.0f}")]
+            + ([KeyValue(key=TAKE_KEY, value=longest_take(takes))] if takes else [])
+            + [KeyValue(key=GRACE_KEY, value=f"{1e3 * self.logic.limits.enable_grace_s:.0f}")],
         )
         array = DiagnosticArray(status=[status])
         array.header.stamp = stamp_now(self)

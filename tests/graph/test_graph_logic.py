@@ -15,7 +15,13 @@ from hems_ros.graph.grasp import (
     tracking_report,
 )
 from hems_ros.graph.setpoints import SetpointError, SetpointLimits, validate
-from hems_ros.graph.supervisor_logic import STREAMS, MonitorLimits, State, SupervisorLogic
+from hems_ros.graph.supervisor_logic import (
+    STREAMS,
+    MonitorLimits,
+    State,
+    SupervisorLogic,
+    longest_take,
+)
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.launcher import Graph, GraphOptions
 from hems_ros.physics import ActuationUnit, load_params
@@ -225,6 +231,28 @@ def test_a_unit_or_controller_that_has_not_taken_enabled_faults_after_the_grace(
     assert (
         str(logic.faults[0]) == f"ring: {component} has not taken ENABLED for 500 ms: {consequence}"
     )
+
+
+def test_the_longest_take_of_enabled_is_kept_over_enables_and_named():
+    logic = SupervisorLogic(("index", "ring"))
+    _ready(logic, 1.0)
+    logic.sees_enabled("index", "unit", True, 0.99)  # before enabling: not a take
+    logic.request("enable", 1.0)
+    logic.sees_enabled("index", "unit", True, 1.04)
+    logic.sees_enabled("ring", "controller", False, 1.04)
+    logic.sees_enabled("ring", "controller", True, 1.12)
+    logic.sees_enabled("ring", "controller", True, 1.30)  # already taken: not a longer take
+    logic.request("enable", 1.5)  # a repeated enable while ENABLED: nothing to take again
+    logic.sees_enabled("index", "unit", True, 1.9)
+    assert logic.enable_takes() == pytest.approx(
+        {("index", "unit"): 0.04, ("ring", "controller"): 0.12}
+    )
+    logic.request("disable", 2.0)
+    _ready(logic, 3.0)
+    logic.request("enable", 3.0)
+    logic.sees_enabled("index", "unit", True, 3.2)
+    assert logic.enable_takes()[("index", "unit")] == pytest.approx(0.2)
+    assert longest_take(logic.enable_takes()) == "200 ms (index unit)"
 
 
 def test_a_brief_lapse_of_the_enabled_view_and_a_new_enable_start_the_grace_again():

@@ -82,3 +82,12 @@ def test_a_finger_heard_without_its_state_or_force_keeps_the_snapshot_listening_
     assert format_status(snap).splitlines()[-1] == (
         "stream gaps while ENABLED: no gap over 50 ms; a stream silent for 400 ms faults"
     )
+    snap.diagnostics += [("enable taken", "85 ms (ring controller)"), ("enable grace ms", "1000")]
+    assert (
+        format_status(snap)
+        .splitlines()[-1]
+        .endswith(
+            "; ENABLED taken within 85 ms (ring controller), "
+            "a node that has not taken it for 1000 ms faults"
+        )
+    )
