@@ -309,10 +309,12 @@ class SupervisorLogic:
         whether it has taken the ENABLED status (the unit's heating permission, the controller's
         ``active``). While ENABLED, reports saying no for ``enable_grace_s`` latch FAULT."""
         condition = f"{component} not enabled"
-        if enabled and self.state == State.ENABLED and (finger, component) not in self._taken:
-            self._taken.add((finger, component))
-            took = now - self._enabled_at
-            self._takes[(finger, component)] = max(took, self._takes.get((finger, component), 0))
+        key = (finger, component)
+        # a report received before the enable (taken from the queue after it) tells nothing
+        if enabled and self.state == State.ENABLED and key not in self._taken:
+            if now >= self._enabled_at:
+                self._taken.add(key)
+                self._takes[key] = max(now - self._enabled_at, self._takes.get(key, 0.0))
         held = self._held(finger, condition, not enabled and self.state == State.ENABLED, now)
         if held >= self.limits.enable_grace_s:
             consequence = "it does not heat" if component == "unit" else "it sends 0 % duty"

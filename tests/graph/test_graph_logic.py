@@ -238,6 +238,7 @@ def test_the_longest_take_of_enabled_is_kept_over_enables_and_named():
     _ready(logic, 1.0)
     logic.sees_enabled("index", "unit", True, 0.99)  # before enabling: not a take
     logic.request("enable", 1.0)
+    logic.sees_enabled("ring", "controller", True, 0.995)  # received before, taken from the queue
     logic.sees_enabled("index", "unit", True, 1.04)
     logic.sees_enabled("ring", "controller", False, 1.04)
     logic.sees_enabled("ring", "controller", True, 1.12)
