@@ -311,10 +311,10 @@ class SupervisorLogic:
         condition = f"{component} not enabled"
         key = (finger, component)
         # a report received before the enable (taken from the queue after it) tells nothing
-        if enabled and self.state == State.ENABLED and key not in self._taken:
-            if now >= self._enabled_at:
-                self._taken.add(key)
-                self._takes[key] = max(now - self._enabled_at, self._takes.get(key, 0.0))
+        first_since_enable = key not in self._taken and now >= self._enabled_at
+        if enabled and self.state == State.ENABLED and first_since_enable:
+            self._taken.add(key)
+            self._takes[key] = max(now - self._enabled_at, self._takes.get(key, 0.0))
         held = self._held(finger, condition, not enabled and self.state == State.ENABLED, now)
         if held >= self.limits.enable_grace_s:
             consequence = "it does not heat" if component == "unit" else "it sends 0 % duty"
