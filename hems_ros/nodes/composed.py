@@ -19,7 +19,6 @@ import sys
 
 from hems_ros.ros import lean_spin
 from hems_ros.ros.runner import freeze_long_lived_objects
-from hems_ros.ros.short_slice import request_short_slice
 from hems_ros.ros.teardown import end_ros
 from hems_ros.rosenv import apply_network_defaults, skip_code_generators
 
@@ -65,7 +64,6 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     split = argv.index("--ros-args") if "--ros-args" in argv else len(argv)
     specs, ros_args = argv[:split], argv[split:]
-    request_short_slice()  # before rclpy starts the middleware's threads, which inherit it
     rclpy.init(args=["composed", *ros_args])
     executor = None
     nodes = []
