@@ -6,7 +6,8 @@ cluster.py). Also measured: the same subset serially in this process, where each
 batches use both cores, which is what a single worker per core competes with.
 
 Each layout starts from an empty output folder and is timed from the call to the last result,
-cluster start-up included; the sum of the task times says how much of the wall
+cluster start-up included (the fork server its workers start from runs from an untimed first
+cluster on, as a process pays for it once); the sum of the task times says how much of the wall
 time the tasks themselves took. Prints measured numbers and ratios; the exit code does not
 depend on the timings.
 
@@ -62,7 +63,10 @@ def main() -> int:
     print(host_line())
     subset = "the quick subset" if args.cases is None else "the full suite's first"
     print(f"{len(tasks)} suite cases ({subset}{', smoke' if args.smoke else ''})")
-    _time(tasks[:1], cluster.SERIAL, None)  # numba's cache and the first imports, untimed
+    # untimed, as a process pays them once: numba's cache and the first imports, and the
+    # server that local workers fork from (hems_ros/diagnosis/cluster.py)
+    _time(tasks[:1], cluster.SERIAL, None)
+    _time(tasks[:1], cluster.LOCAL, 1)
     layouts = {
         "serial": (cluster.SERIAL, None),
         "1 worker": ("local", 1),

@@ -20,7 +20,11 @@ from hang_guard import live_descendants, pytest_runtest_protocol  # noqa: F401
 REPO = Path(__file__).resolve().parent.parent
 VENV = REPO / ".venv"
 _domain_lock = None
-RESOURCE_TRACKER = "from multiprocessing.resource_tracker import main"
+# multiprocessing's helpers of this process, started with Dask's first local cluster
+HELPERS = (
+    "from multiprocessing.resource_tracker import main",
+    "from multiprocessing.forkserver import main",
+)
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -92,9 +96,8 @@ def no_process_outlives_its_module():
     left = {
         pid: command
         for pid, command in live_descendants(os.getpid()).items()
-        # multiprocessing's helper of this process (started with Dask's first local cluster)
-        # lives as long as the test run and restarts itself if killed
-        if RESOURCE_TRACKER not in command
+        # they live as long as the test run and restart if killed
+        if not any(helper in command for helper in HELPERS)
     }
     if not left:
         return

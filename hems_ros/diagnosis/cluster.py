@@ -33,6 +33,7 @@ LOCAL = "local"
 SUFFIX = ".pkl"
 CONNECT_S = 30.0
 SPAWN_ENVIRON = "distributed.nanny.pre-spawn-environ"
+MULTIPROCESSING_METHOD = "distributed.worker.multiprocessing-method"
 WORKER_WAIT_S = 120.0
 
 
@@ -169,8 +170,10 @@ def _on_cluster(
             {
                 "distributed.scheduler.allowed-failures": 0,
                 f"{SPAWN_ENVIRON}.MALLOC_TRIM_THRESHOLD_": None,
+                MULTIPROCESSING_METHOD: "forkserver",
             }
         ):
+            _preload_fork_server({t.function.__module__ for t in todo})
             cluster = LocalCluster(
                 n_workers=workers or os.cpu_count() or 1,
                 threads_per_worker=1,
@@ -237,6 +240,21 @@ def _on_cluster(
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _preload_fork_server(modules: set[str]) -> None:
+    """Local workers fork from one server process that has imported Dask and the tasks'
+    modules once, instead of each starting Python and importing them anew: a local cluster
+    then starts in about 0.1 s and closes in 0.03 s, where spawned workers took 2.2-2.6 s and
+    0.4-0.5 s (the first cluster of a process still waits for the server's imports). The
+    server keeps the environment it started with, so the nanny's variables for new workers
+    (pre-spawn-environ) come too late for glibc's malloc, which reads them at start-up; the
+    one the nanny sets by default is the one left out above anyway. Call it with the
+    configuration that selects the server (Dask sets its own list of modules at its first
+    use, which this one extends); once the server runs, a further list changes nothing."""
+    from distributed.utils import get_mp_context
+
+    get_mp_context().set_forkserver_preload(["distributed", "numpy", *sorted(modules)])
 
 
 def _threads(client) -> int:
