@@ -21,6 +21,12 @@ def square(x: int, die_once: str = "", seconds: float = 0.0) -> int:
     return x * x
 
 
+def parent_command(_: int) -> str:
+    """The command line of the process that started this one."""
+    with open(f"/proc/{os.getppid()}/cmdline") as cmdline:
+        return cmdline.read().replace("\0", " ")
+
+
 def fails(x: int) -> int:
     raise ValueError(f"no square for {x}")
 

@@ -33,6 +33,14 @@ def test_serial_and_local_cluster_give_every_result_in_the_tasks_order(tmp_path)
     )
 
 
+def test_local_workers_fork_from_the_preloaded_server(tmp_path):
+    tasks = [cluster.Task("parent", cluster_tasks.parent_command, (0,))]
+    [command] = cluster.run_tasks(tasks, tmp_path, workers=1).results()
+    assert "from multiprocessing.forkserver import main" in command
+    # Dask and the first local cluster's task modules of this process, imported once
+    assert "['distributed', 'numpy', '" in command
+
+
 def test_a_worker_killed_mid_task_costs_only_its_tasks_which_run_again(tmp_path):
     lines = []
     tasks = cluster_tasks.squares(8, die_once=str(tmp_path / "died"), seconds=0.2)
