@@ -250,8 +250,9 @@ def _preload_fork_server(modules: set[str]) -> None:
     server keeps the environment it started with, so the nanny's variables for new workers
     (pre-spawn-environ) come too late for glibc's malloc, which reads them at start-up; the
     one the nanny sets by default is the one left out above anyway. Call it with the
-    configuration that selects the server (Dask sets its own list of modules at its first
-    use, which this one extends); once the server runs, a further list changes nothing."""
+    configuration that selects the server: Dask sets its own list of modules at its first
+    use, which this one replaces. Once the server runs, a further list changes nothing, and
+    a module that fails to import there is imported by the task instead."""
     from distributed.utils import get_mp_context
 
     get_mp_context().set_forkserver_preload(["distributed", "numpy", *sorted(modules)])
