@@ -6,10 +6,10 @@ cluster.py). Also measured: the same subset serially in this process, where each
 batches use both cores, which is what a single worker per core competes with.
 
 Each layout starts from an empty output folder and is timed from the call to the last result,
-cluster start-up included (the fork server its workers start from runs from an untimed first
-cluster on, as a process pays for it once); the sum of the task times says how much of the wall
-time the tasks themselves took. Prints measured numbers and ratios; the exit code does not
-depend on the timings.
+cluster start-up included; an untimed first cluster starts the server the workers fork from,
+as the imports are untimed: a process pays for both once. The sum of the task times says how
+much of the wall time the tasks themselves took. Prints measured numbers and ratios; the exit
+code does not depend on the timings.
 
 Run: .venv/bin/python benchmarks/bench_suite_workers.py [--repeat N] [--smoke]
 """

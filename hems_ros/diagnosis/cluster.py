@@ -244,15 +244,14 @@ def _on_cluster(
 
 def _preload_fork_server(modules: set[str]) -> None:
     """Local workers fork from one server process that has imported Dask and the tasks'
-    modules once, instead of each starting Python and importing them anew: a local cluster
-    then starts in about 0.1 s and closes in 0.03 s, where spawned workers took 2.2-2.6 s and
-    0.4-0.5 s (the first cluster of a process still waits for the server's imports). The
-    server keeps the environment it started with, so the nanny's variables for new workers
-    (pre-spawn-environ) come too late for glibc's malloc, which reads them at start-up; the
-    one the nanny sets by default is the one left out above anyway. Call it with the
-    configuration that selects the server: Dask sets its own list of modules at its first
-    use, which this one replaces. Once the server runs, a further list changes nothing, and
-    a module that fails to import there is imported by the task instead."""
+    modules once, instead of each starting Python and importing them anew (start and close
+    times: docs/design.md, "Suites and archives on Dask"). The server keeps the environment
+    it started with, so the nanny's variables for new workers (pre-spawn-environ) come too
+    late for glibc's malloc, which reads them at start-up; the one the nanny sets by default
+    is left out above anyway. Call it under the configuration that selects the server: Dask
+    sets its own module list at its first use, which this one replaces. Once the server
+    runs, a further list changes nothing; a module that fails to import there is imported
+    by its task instead."""
     from distributed.utils import get_mp_context
 
     get_mp_context().set_forkserver_preload(["distributed", "numpy", *sorted(modules)])
