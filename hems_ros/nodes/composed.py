@@ -65,7 +65,6 @@ def main(argv: list[str] | None = None) -> int:
     split = argv.index("--ros-args") if "--ros-args" in argv else len(argv)
     specs, ros_args = argv[:split], argv[split:]
     rclpy.init(args=["composed", *ros_args])
-    executor = None
     nodes = []
     try:
         for spec in specs:
@@ -79,18 +78,13 @@ def main(argv: list[str] | None = None) -> int:
         if all(lean_spin.can_spin(node) for node in nodes):
             lean_spin.spin_nodes(nodes)
         else:
-            executor = MultiThreadedExecutor(num_threads=4)
-            for node in nodes:
-                executor.add_node(node)
-            executor.spin()
+            lean_spin.spin_on_executor(nodes, MultiThreadedExecutor(num_threads=4))
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ValueError as error:
         print(f"composed: invalid configuration: {error}", file=sys.stderr)
         return 2
     finally:
-        if executor is not None:
-            executor.shutdown()
         end_ros(nodes)
     return 0
 

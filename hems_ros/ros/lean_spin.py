@@ -10,7 +10,7 @@ It serves nodes with timers, subscriptions and services only (no clients, guard 
 or waitables such as QoS event handlers: see lean_node.py) and callbacks that are plain
 functions (a timer callback gets no TimerInfo). :func:`spin` takes the entities as built;
 :func:`loop` also follows entities added later. :func:`can_spin` tells; other nodes spin
-with ``rclpy.spin``.
+on an rclpy executor (:func:`spin_on_executor`).
 """
 
 from __future__ import annotations
@@ -69,7 +69,8 @@ def spin_nodes(nodes) -> None:
     for node in nodes:
         if not can_spin(node):
             raise ValueError(
-                f"node {node.get_name()} has clients, guard conditions or waitables: use rclpy.spin"
+                f"node {node.get_name()} has clients, guard conditions or waitables: "
+                "use spin_on_executor"
             )
     timers = [t for node in nodes for t in node.timers]
     services = [s for node in nodes for s in node.services]
@@ -91,6 +92,26 @@ def spin_nodes(nodes) -> None:
         return current["entities"]
 
     loop(nodes[0].context, entities)
+    raise ExternalShutdownException()
+
+
+def spin_on_executor(nodes, executor) -> None:
+    """Spin nodes that :func:`spin_nodes` cannot serve on an rclpy ``executor`` until their
+    context shuts down (then ExternalShutdownException), every wait bounded.
+
+    rclpy's executors wait without a timeout for the guard conditions that its signal thread
+    triggers on Ctrl-C or SIGTERM. Now and then that wake-up is lost: a ping_responder on
+    ``rclpy.spin``, stopped 60 times with one core busy, once slept on in ``rcl_wait`` after
+    SIGTERM, every thread idle, until it was killed. A wait that returns after WAIT_TIMEOUT_NS
+    lets the context be checked, as :func:`loop` does.
+    """
+    try:
+        for node in nodes:
+            executor.add_node(node)
+        while nodes[0].context.ok():
+            executor.spin_once(timeout_sec=WAIT_TIMEOUT_NS / 1e9)
+    finally:
+        executor.shutdown()
     raise ExternalShutdownException()
 
 

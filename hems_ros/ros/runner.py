@@ -34,7 +34,7 @@ def run_node(
     parameter services (NO_PARAMETER_SERVICES_FLAG).
     A ``config_errors`` exception (``ValueError`` by default) raised while constructing the
     node is a configuration error: it is printed with the node's name and the process exits
-    with code 2. ``spin(node)`` replaces ``rclpy.spin`` for nodes that drive their own executor.
+    with code 2. ``spin(node)`` replaces the default spin for nodes that drive their own loop.
     """
     args = sys.argv if argv is None else argv
     user_args = args[1 : args.index("--ros-args")] if "--ros-args" in args else args[1:]
@@ -47,7 +47,7 @@ def run_node(
     apply_network_defaults()
     skip_code_generators()
     import rclpy
-    from rclpy.executors import ExternalShutdownException
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
     try:
         rclpy.init(args=args)
@@ -62,7 +62,11 @@ def run_node(
         if spin is None:
             from hems_ros.ros import lean_spin
 
-            spin = lean_spin.spin if lean_spin.can_spin(node) else rclpy.spin
+            spin = (
+                lean_spin.spin
+                if lean_spin.can_spin(node)
+                else lambda node: lean_spin.spin_on_executor([node], SingleThreadedExecutor())
+            )
         spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -122,7 +122,7 @@ def test_nodes_with_clients_are_left_to_rclpy(ros_domain_id: int) -> None:
     try:
         node.create_client(Trigger, "/lean_spin_test/nothing")
         assert not lean_spin.can_spin(node)
-        with pytest.raises(ValueError, match="use rclpy.spin"):
+        with pytest.raises(ValueError, match="use spin_on_executor"):
             lean_spin.spin(node)
     finally:
         node.destroy_node()
@@ -171,4 +171,55 @@ def test_a_queued_message_runs_before_a_timer_ready_at_the_same_wake_up(
         assert order == ["message 1", "timer"]
     finally:
         helper.destroy_node()
+        node.destroy_node()
+
+
+@pytest.mark.parametrize("bounded", [True, False], ids=["bounded", "unbounded"])
+def test_a_node_on_an_executor_stops_even_if_the_shutdown_wake_up_is_lost(
+    ros_domain_id: int, bounded: bool
+) -> None:
+    """The context is shut down beneath rclpy (through its handle), so neither the signal
+    guard condition nor the executor's on-shutdown wake fires, as when rclpy loses that
+    wake-up: spin_on_executor returns within a few wait timeouts; an unbounded wait does not."""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.node import Node
+    from std_msgs.msg import Empty
+
+    from hems_ros.ros import lean_spin
+
+    context = Context()
+    rclpy.init(context=context)
+    node = Node("executor_stop_test", context=context)
+    node.create_subscription(Empty, "/executor_stop_test/in", lambda _: None, 1)
+    executor = SingleThreadedExecutor(context=context)
+    ended = threading.Event()
+
+    def run() -> None:
+        try:
+            if bounded:
+                lean_spin.spin_on_executor([node], executor)
+            else:
+                executor.add_node(node)
+                executor.spin_once(timeout_sec=None)
+        except ExternalShutdownException:
+            ended.set()
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    time.sleep(0.5)
+    shut = time.monotonic()
+    context.handle.shutdown()
+    try:
+        if bounded:
+            assert ended.wait(5.0)
+            assert time.monotonic() - shut < 1.0
+        else:
+            assert not ended.wait(1.0)
+            executor.wake()  # what rclpy's lost wake-up would have done
+            assert ended.wait(5.0)
+    finally:
+        thread.join(5.0)
+        executor.shutdown()
         node.destroy_node()
