@@ -134,20 +134,23 @@ def main() -> None:
         "--seconds", type=float, default=30.0, help="measured time per run, s (default 30)"
     )
     args = smoke.parse_args(parser, seconds=2.0)
+    # a smoke run goes through both halves' code once; the swap only runs it again
+    runs = (False,) if args.smoke else (False, True)
     with worktree(args.against) as (sha, tree):
         print(
-            f"graph A/B benchmark: this tree against {args.against} ({sha[:8]}), 2 runs "
-            f"x {args.seconds:g} s with the halves swapped; {host_line()}",
+            f"graph A/B benchmark: this tree against {args.against} ({sha[:8]}), {len(runs)} "
+            f"run(s) x {args.seconds:g} s{' with the halves swapped' * (len(runs) > 1)}; "
+            f"{host_line()}",
             flush=True,
         )
         totals: dict[str, dict[str, list[float]]] = {
             kind: {"this": [], "other": []} for kind in KINDS
         }
-        for swapped in (False, True):
+        for swapped in runs:
             for kind, sides in run(tree, swapped, args.seconds).items():
                 for side, values in sides.items():
                     totals[kind][side].extend(values)
-            print(f"  run {int(swapped) + 1} of 2 done", flush=True)
+            print(f"  run {int(swapped) + 1} of {len(runs)} done", flush=True)
     print(
         f"{'node kind':<18} {'this tree':>10} {sha[:8]:>10} {'ratio':>7}   (CPU cores per "
         f"process, mean)"
