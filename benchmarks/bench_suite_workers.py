@@ -8,8 +8,10 @@ batches use both cores, which is what a single worker per core competes with.
 Each layout starts from an empty output folder and is timed from the call to the last result,
 cluster start-up included; an untimed first cluster starts the server the workers fork from,
 as the imports are untimed: a process pays for both once. The sum of the task times says how
-much of the wall time the tasks themselves took. Prints measured numbers and ratios; the exit
-code does not depend on the timings.
+much of the wall time the tasks themselves took. Before and after the runs, a pure-Python
+loop is timed alone and beside a copy of itself on the other core: how much the host's two
+cores slow each other at the moment, which caps what two workers can gain. Prints measured
+numbers and ratios; the exit code does not depend on the timings.
 
 Run: .venv/bin/python benchmarks/bench_suite_workers.py [--repeat N] [--smoke]
 """
@@ -24,7 +26,7 @@ import time
 from pathlib import Path
 
 import smoke
-from host import cpu_jiffies, host_line, steal_pct
+from host import cpu_jiffies, host_line, steal_pct, twin_slowdown
 
 from hems_ros.diagnosis import (
     cluster,
@@ -61,6 +63,9 @@ def main() -> int:
         rows = [r for r in rows if r[0].name in SMOKE_CASES]
     tasks = suite_runs.suite_tasks(rows)
     print(host_line())
+    # a smoke run reads one short pair
+    probe = (1, 3_000_000) if args.smoke else (5, 15_000_000)
+    twin_before = twin_slowdown(*probe)
     subset = "the quick subset" if args.cases is None else "the full suite's first"
     print(f"{len(tasks)} suite cases ({subset}{', smoke' if args.smoke else ''})")
     # untimed, as a process pays them once: numba's cache and the first imports, and the
@@ -97,6 +102,13 @@ def main() -> int:
     # each repeat's own pair, run minutes apart at most: the host's speed drifts between repeats
     pairs = ", ".join(f"{a / b:.2f}x" for a, b in zip(walls["1 worker"], walls["2 workers"]))
     print(f"2 workers over 1: {ratio:.2f}x (goal >= {GOAL}x); repeat by repeat {pairs}")
+    beside = statistics.median(work["2 workers"]) / statistics.median(work["1 worker"])
+    print(
+        f"beside each other the tasks took {beside:.2f}x their time on one worker; a Python "
+        f"loop took {twin_before:.2f}x (before the runs) and {twin_slowdown(*probe):.2f}x (after) "
+        f"its time alone beside a copy of itself (median of {probe[0]} pairs; 1.00: the host's "
+        "two cores do not slow each other)"
+    )
     print(host_line())
     return 0
 

@@ -10,11 +10,11 @@ import os
 import time
 
 
-def host_speed_s() -> float:
+def host_speed_s(additions: int = 3_000_000) -> float:
     """Seconds a fixed pure-Python loop (three million additions) takes now. The speed of a
     shared host swings by half within minutes; runs are comparable only at similar values."""
     start, total = time.perf_counter(), 0
-    for i in range(3_000_000):
+    for i in range(additions):
         total += i
     return time.perf_counter() - start
 
@@ -40,6 +40,39 @@ def wake_round_trip_us(rounds: int = 5000) -> float:
     for fd in (to_child, from_parent, from_child, to_parent):
         os.close(fd)
     return elapsed / rounds * 1e6
+
+
+def twin_slowdown(pairs: int = 5, additions: int = 15_000_000) -> float:
+    """How much longer :func:`host_speed_s`'s loop takes beside a copy of itself on the other
+    core than alone (median of ``pairs``; 1.0: the cores do not slow each other). On this VM
+    such pairs read 1.02-1.07 in one phase and 0.98-1.37 in another: two vCPUs may share a
+    physical core's resources, which no division of work between two processes can undo
+    (docs/design.md, "Suites and archives on Dask")."""
+    ratios = []
+    for _ in range(pairs):
+        alone = _loops_in_children(1, additions)
+        ratios.append(_loops_in_children(2, additions) / alone)
+    return sorted(ratios)[len(ratios) // 2]
+
+
+def _loops_in_children(count: int, additions: int) -> float:
+    """Mean seconds of :func:`host_speed_s` in ``count`` forked processes started together."""
+    pipes, pids = [], []
+    for _ in range(count):
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:
+            os.write(write, repr(host_speed_s(additions)).encode())
+            os._exit(0)
+        os.close(write)
+        pipes.append(read)
+        pids.append(pid)
+    times = []
+    for read, pid in zip(pipes, pids):
+        times.append(float(os.read(read, 64)))
+        os.close(read)
+        os.waitpid(pid, 0)
+    return sum(times) / len(times)
 
 
 def cpu_jiffies() -> tuple[int, int]:
