@@ -288,3 +288,27 @@ def test_thermal_cycle_replay_ignores_heat_transfer_and_the_start_offset() -> No
     for row in strain[1:4]:
         np.testing.assert_array_equal(row, strain[0])
     assert strain[4].min() == pytest.approx(strain[0].min() * 0.045 / 0.038, rel=0.03)
+
+
+@pytest.mark.parametrize("steps", [0.0, 2.0, 3.7, -2.25, 0.5, 1e-9, 9.5, 25.3, -40.2])
+def test_a_delayed_input_takes_each_steps_record_minus_the_delay(steps: float) -> None:
+    values = np.random.default_rng(7).random(20)
+    expected = []
+    for i in range(values.size):
+        position = i - steps
+        below = int(np.floor(position))
+        share = position - below
+        low, high = (values[min(max(k, 0), values.size - 1)] for k in (below, below + 1))
+        expected.append((1.0 - share) * low + share * high)
+    assert np.allclose(replay.delayed(values, steps), expected, rtol=0.0, atol=1e-12)
+    assert replay.delayed(values[:0], steps).size == 0
+
+
+def test_a_delayed_input_stays_within_its_records() -> None:
+    """With weights (1 - s, s) for a small share s, a step between two records of 100 % came
+    out at 100.00000000000001 %, which the batch refuses as a duty."""
+    duty = np.array([0.0, 100.0, 100.0, 100.0, 37.5, 37.5, 0.0] * 50)
+    # a lead of a small fraction of a step leaves exactly that fraction as the share
+    for share in 10.0 ** np.random.default_rng(3).uniform(-12, -1, 400):
+        shifted = replay.delayed(duty, -share)
+        assert shifted.min() >= 0.0 and shifted.max() <= 100.0, share
