@@ -138,9 +138,9 @@ def main() -> None:
     runs = (False,) if args.smoke else (False, True)
     with worktree(args.against) as (sha, tree):
         print(
-            f"graph A/B benchmark: this tree against {args.against} ({sha[:8]}), {len(runs)} "
-            f"run(s) x {args.seconds:g} s{' with the halves swapped' * (len(runs) > 1)}; "
-            f"{host_line()}",
+            f"graph A/B benchmark: this tree against {args.against} ({sha[:8]}), "
+            + ("1 run" if args.smoke else "2 runs with the halves swapped")
+            + f" x {args.seconds:g} s; {host_line()}",
             flush=True,
         )
         totals: dict[str, dict[str, list[float]]] = {

@@ -11,8 +11,9 @@ import time
 
 
 def host_speed_s(additions: int = 3_000_000) -> float:
-    """Seconds a fixed pure-Python loop (three million additions) takes now. The speed of a
-    shared host swings by half within minutes; runs are comparable only at similar values."""
+    """Seconds a fixed pure-Python loop (``additions`` additions, three million by default)
+    takes now. The speed of a shared host swings by half within minutes; runs are comparable
+    only at similar values."""
     start, total = time.perf_counter(), 0
     for i in range(additions):
         total += i

@@ -539,7 +539,11 @@ class UnitParams:
             parts = dotted.split(".")
             if len(parts) == 1 and parts[0] in _TOP_KEYS:
                 top[parts[0]] = value
-            elif len(parts) == 2 and parts[1] in _field_types(_GROUPS.get(parts[0], object)):
+            elif (
+                len(parts) == 2
+                and parts[0] in _GROUPS
+                and parts[1] in _field_types(_GROUPS[parts[0]])
+            ):
                 groups.setdefault(parts[0], {})[parts[1]] = _coerce(
                     _GROUPS[parts[0]], parts[1], value
                 )
@@ -565,11 +569,10 @@ _FIELD_TYPES: dict[type, dict[str, Any]] = {}
 
 
 def _field_types(cls: type) -> dict[str, Any]:
-    """Return a group's field names and declared types, in order ({} for no dataclass)."""
+    """Return a group's field names and declared types, in order."""
     known = _FIELD_TYPES.get(cls)
     if known is None:
-        known = {f.name: f.type for f in fields(cls)} if dataclasses.is_dataclass(cls) else {}
-        _FIELD_TYPES[cls] = known
+        known = _FIELD_TYPES[cls] = {f.name: f.type for f in fields(cls)}
     return known
 
 
