@@ -35,6 +35,20 @@ CONNECT_S = 30.0
 SPAWN_ENVIRON = "distributed.nanny.pre-spawn-environ"
 MULTIPROCESSING_METHOD = "distributed.worker.multiprocessing-method"
 WORKER_WAIT_S = 120.0
+# Dask's housekeeping, which took 12 % of a core in an idle local cluster of two workers and
+# 1.4 % with these (docs/design.md, "Suites and archives on Dask"): with a worker on each
+# core it has no free core to run on and preempts the tasks. The workers' statistical
+# profiler (for the dashboard) walks the running task's stack every 10 ms; every server's
+# event loop measured its own delay every 20 ms; each nanny read its worker's memory every
+# 0.1 s and each server its CPU and memory every 0.5 s; the scheduler looked for work to
+# steal every second, though no worker ever holds more tasks than it runs (see _on_cluster).
+QUIET = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.system-monitor.interval": "5s",
+    "distributed.scheduler.work-stealing": False,
+}
 
 
 class TaskFailed(RuntimeError):
@@ -165,9 +179,11 @@ def _on_cluster(
         # and submitted again here, instead of being retried unseen by the scheduler; and the
         # workers start without the MALLOC_TRIM_THRESHOLD_ the nanny sets by default, which
         # also fixes glibc's mmap threshold at 128 KiB: every larger array was then mapped and
-        # unmapped anew, and the suite's tasks ran 40 % slower than in a plain process
+        # unmapped anew, and the suite's tasks ran 40 % slower than in a plain process; and
+        # with Dask's housekeeping slowed down (QUIET)
         with dask.config.set(
             {
+                **QUIET,
                 "distributed.scheduler.allowed-failures": 0,
                 f"{SPAWN_ENVIRON}.MALLOC_TRIM_THRESHOLD_": None,
                 MULTIPROCESSING_METHOD: "forkserver",

@@ -27,6 +27,13 @@ def parent_command(_: int) -> str:
         return cmdline.read().replace("\0", " ")
 
 
+def worker_settings(_: int) -> dict:
+    """The Dask settings the worker that runs this task sees, of those the runner quiets."""
+    import dask
+
+    return {key: dask.config.get(key) for key in cluster.QUIET}
+
+
 def fails(x: int) -> int:
     raise ValueError(f"no square for {x}")
 

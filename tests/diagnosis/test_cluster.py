@@ -41,6 +41,14 @@ def test_local_workers_fork_from_the_preloaded_server(tmp_path):
     assert "['distributed', 'numpy', '" in command
 
 
+def test_local_workers_run_with_dask_housekeeping_quieted(tmp_path):
+    # the profiler, ticks and monitors a worker would otherwise run beside its task
+    tasks = [cluster.Task("settings", cluster_tasks.worker_settings, (0,))]
+    [seen] = cluster.run_tasks(tasks, tmp_path, workers=1).results()
+    assert seen == cluster.QUIET
+    assert seen["distributed.worker.profile.enabled"] is False
+
+
 def test_a_worker_killed_mid_task_costs_only_its_tasks_which_run_again(tmp_path):
     lines = []
     tasks = cluster_tasks.squares(8, die_once=str(tmp_path / "died"), seconds=0.2)
