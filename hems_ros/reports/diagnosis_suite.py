@@ -203,6 +203,12 @@ def _suite_section(outcomes, stats, seed, quick, figure) -> list[str]:
         f"cycle only, is tested that way too. The workflow sees the measured duty, position and "
         f"wire force only. Seed {seed}" + (" (reduced subset)." if quick else "."),
         "",
+        "Most of these truths are the starting model with a candidate's own parameters changed, "
+        "simulated by the kernel the fit runs, so the suite shows that the search finds what the "
+        "model's own code put there. How it fares on truths from code it never runs (independent "
+        "forms of each effect, another SMA model family, coloured noise and latency) is the blind "
+        "suite's page, `docs/diagnosis-blind.md`.",
+        "",
         "| what the suite must show | floor | measured |",
         "|---|---|---|",
         f"| single effect ranked first, low noise | {_pct(FLOORS['single_low'])} | "
