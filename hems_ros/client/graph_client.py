@@ -328,7 +328,9 @@ class GraphClient:
         while time.monotonic() < deadline:
             checked(rclpy.spin_once, self.node, timeout_sec=0.01)
             status = self._statuses.get(finger)
-            if status is not None:
+            # only a status received after the publish: the one before may come from a
+            # controller since restarted, which never took this setpoint
+            if status is not None and status is not before:
                 if status.mode == mode and math.isclose(
                     status.setpoint, value, rel_tol=1e-9, abs_tol=1e-12
                 ):
@@ -348,7 +350,7 @@ class GraphClient:
         status = self._statuses.get(finger)
         seen = (
             "no controller status received"
-            if status is None
+            if status is None or status is before
             else f"the controller status shows {status.mode} {status.setpoint:g}"
         )
         return SetpointResult(True, False, f"sent, but not in force after {confirm_s:g} s ({seen})")

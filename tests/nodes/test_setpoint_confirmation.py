@@ -5,9 +5,8 @@ participant)."""
 
 from __future__ import annotations
 
-import threading
-
 import pytest
+from background_spin import BackgroundSpin
 
 
 class StandInController:
@@ -45,10 +44,9 @@ class StandInController:
                     )
                 ),
             )
-        self.executor = SingleThreadedExecutor(context=context)
-        self.executor.add_node(self.node)
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(self.node)
+        self.spinner = BackgroundSpin(executor)
 
     def on_setpoint(self, message) -> None:
         self.received += 1
@@ -61,7 +59,7 @@ class StandInController:
         self.mode, self.setpoint = message.mode, message.value
 
     def stop(self) -> None:
-        self.executor.shutdown()
+        self.spinner.stop()
         self.node.destroy_node()
 
 
@@ -110,3 +108,21 @@ def test_without_a_controller_nothing_is_sent(client):
     result = client.send_setpoint("index", "position", 0.012, timeout=0.5, confirm_s=1.0)
     assert not result and not result.sent
     assert result.message == "no finger_controller subscribed to /hems/index/setpoint"
+
+
+def test_a_status_from_before_the_setpoint_does_not_confirm_it(client, context):
+    first = StandInController(context)
+    try:
+        assert client.send_setpoint("index", "position", 0.012, confirm_s=5.0).confirmed is True
+    finally:
+        first.stop()
+    # restarted, and its status not (yet) reaching the client: the cached status of the
+    # controller before shows 0.012, which the new one has never been sent
+    second = StandInController(context, status=False)
+    try:
+        result = client.send_setpoint("index", "position", 0.012, confirm_s=1.0)
+        assert result.sent and result.confirmed is False
+        assert result.message == "sent, but not in force after 1 s (no controller status received)"
+        assert second.setpoint == 0.012
+    finally:
+        second.stop()
