@@ -221,10 +221,12 @@ class SupervisorLogic:
                 f"wire over-force {force_n:.1f} N (limit {self.limits.max_wire_force_n:g} N)",
             )
 
-    def controller_fault(self, finger: str, fault: str) -> None:
-        """A controller that reports a fault (a non-finite input) sends 0 % until it is reset:
-        the finger is lost to control, which the graph must show."""
-        if fault:
+    def controller_fault(self, finger: str, fault: str, active: bool) -> None:
+        """A controller that reports a fault (a non-finite input) while active sends 0 % until
+        its next enable clears it: the finger is lost to control, which the graph must show.
+        An inactive controller heats nothing and reports the fault it tripped on until that
+        enable: latched again after a reset, it would refuse the enable that clears it."""
+        if fault and active:
             self._fault(finger, "controller", f"controller fault: {fault}")
 
     def temperature(self, finger: str, celsius: float) -> None:

@@ -244,7 +244,7 @@ class SupervisorNode(LeanNode):
         self.logic.saw("heartbeat", finger, now)
         self.logic.sees_enabled(finger, "controller", message.active, now)
         self.logic.temperature(finger, message.wire_temperature_c)
-        self.logic.controller_fault(finger, message.fault)
+        self.logic.controller_fault(finger, message.fault, message.active)
         # a reading counts as fresh when its stamp moved since the last status (receive-side
         # judgement: no clock comparison between hosts)
         encoder = (message.encoder_stamp_sec, message.encoder_stamp_nanosec)

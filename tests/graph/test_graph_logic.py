@@ -668,10 +668,24 @@ def test_a_reading_that_jumps_or_is_not_a_number_is_a_failed_sensor():
     assert not logic.faults
     logic.encoder("index", 0.016, 1.31, stamp_s=100.04)
     logic.wire_force("middle", float("nan"), 1.32)
-    logic.controller_fault("ring", "measurement is nan")
+    logic.controller_fault("ring", "measurement is nan", active=True)
     kinds = [(f.finger, f.kind) for f in logic.faults]
     assert kinds == [("index", "encoder jump"), ("middle", "wire_force"), ("ring", "controller")]
     assert "encoder jump +5.0 mm in 20 ms" in str(logic.faults[0]) and logic.state == State.FAULT
+
+
+def test_a_controller_fault_reported_while_inactive_does_not_undo_the_reset():
+    logic = SupervisorLogic(("index",))
+    _ready(logic, 1.0)
+    logic.request("enable", 1.0)
+    logic.controller_fault("index", "measurement is nan", active=True)
+    assert logic.state == State.FAULT
+    _ready(logic, 1.1)  # the repaired sensor reports again
+    assert logic.request("reset", 1.1)[0]
+    # until its next enable the controller reports the fault it tripped on
+    logic.controller_fault("index", "measurement is nan", active=False)
+    assert logic.state == State.IDLE and not logic.faults
+    assert logic.request("enable", 1.12)[0] and logic.state == State.ENABLED
 
 
 def test_advancing_at_one_gated_duty_gives_the_bits_of_gating_every_step():
