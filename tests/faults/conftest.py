@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import os
 import re
-import threading
 import time
 from pathlib import Path
 
 import pytest
+from background_spin import BackgroundSpin
 from faultrows import BEGIN, END, FINGER, ROWS, Observer, render
 
 
@@ -23,7 +23,9 @@ from faultrows import BEGIN, END, FINGER, ROWS, Observer, render
 def matrix_graph(ros_domain_id):
     import rclpy
     from hems_msgs.msg import ActuatorState, ControllerStatus, EncoderReading, SupervisorStatus
+    from rcl_interfaces.msg import ParameterEvent
     from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import qos_profile_parameter_events
 
     from hems_ros.client.graph_client import GraphClient
     from hems_ros.graph import names
@@ -68,14 +70,22 @@ def matrix_graph(ros_domain_id):
                 lambda m: keep(observer.status, (now(), m)),
                 qos.CONTROLLER_STATUS,
             )
+            node.create_subscription(
+                ParameterEvent,
+                "/parameter_events",
+                lambda m: [
+                    keep(observer.parameters, (now(), m.node, p.name, p.value.string_value))
+                    for p in m.changed_parameters
+                ],
+                qos_profile_parameter_events,
+            )
             executor = SingleThreadedExecutor(context=context)
             executor.add_node(node)
-            spinner = threading.Thread(target=executor.spin, daemon=True)
-            spinner.start()
+            spinner = BackgroundSpin(executor)
             try:
                 yield graph, client, observer
             finally:
-                executor.shutdown()
+                spinner.stop()
                 node.destroy_node()
                 rclpy.try_shutdown(context=context)
     finally:

@@ -33,7 +33,21 @@ class Observer:
     supervisor: list[tuple[float, str, tuple]] = field(default_factory=list)  # (t, state, faults)
     status: list[tuple[float, object]] = field(default_factory=list)
     truth_c: list[tuple[float, float]] = field(default_factory=list)  # (t, wire degC)
+    # (t, node's full name, parameter, string value) of every parameter a node changed
+    parameters: list[tuple[float, str, str, str]] = field(default_factory=list)
     lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def parameter_taken(self, node: str, name: str, value: str, after: float) -> float | None:
+        """When ``node`` reported ``name`` changed to ``value`` after ``after``, or None."""
+        with self.lock:
+            return next(
+                (
+                    t
+                    for t, n, p, v in self.parameters
+                    if t >= after and (n, p, v) == (node, name, value)
+                ),
+                None,
+            )
 
     def since(self, t0: float) -> tuple[list, list, list]:
         with self.lock:

@@ -41,8 +41,12 @@ UNIT, MODULE = f"actuation_unit_{FINGER}", "shoulder_module_index_middle"
 CONTROLLER, SUPERVISOR = f"finger_controller_{FINGER}", "supervisor"
 
 
-def _set(client, node: str, name: str, value: str) -> float:
-    """Set a string parameter; returns when the request left (the fault's start)."""
+def _set(client, observer, node: str, name: str, value: str) -> float:
+    """Set a string parameter; returns when the node reported the change (the fault's start).
+
+    Not when the request left: a node serves its parameter services between its control
+    wake-ups, every 0.1 s (hems_ros.ros.lean_spin), and a new service client may wait for
+    discovery first, which added up to 0.2 s of the test's own making."""
     import rclpy
     from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
     from rcl_interfaces.srv import SetParameters
@@ -63,7 +67,11 @@ def _set(client, node: str, name: str, value: str) -> float:
     rclpy.spin_until_future_complete(client.node, future, timeout_sec=10.0)
     assert future.result() is not None and future.result().results[0].successful
     client.node.destroy_client(service)
-    return sent
+    deadline = time.monotonic() + 5.0
+    while (taken := observer.parameter_taken(f"/hems/{node}", name, value, sent)) is None:
+        assert time.monotonic() < deadline, f"{node} reported no change of {name} to {value!r}"
+        time.sleep(0.01)
+    return taken
 
 
 def _healthy(graph, client) -> None:
@@ -205,7 +213,7 @@ def test_fault(matrix_graph, node, fault, inject, zero_limit_ms, fault_words):
     elif kind == "flood":
         _flood(inject[1], inject[2])
     else:
-        t0 = heat_from = _set(client, inject[1], "sensor_fault", inject[2])
+        t0 = heat_from = _set(client, observer, inject[1], "sensor_fault", inject[2])
     if inject[2] in PROVOKE:
         client.spin_for(0.5)
         assert client.send_setpoint(FINGER, *PROVOKE[inject[2]], confirm_s=10.0).confirmed
@@ -221,7 +229,7 @@ def test_fault(matrix_graph, node, fault, inject, zero_limit_ms, fault_words):
     if kind == "signal" and graph.processes[inject[1]].poll() is not None:
         graph.restart(inject[1])
     if kind == "param":
-        _set(client, inject[1], "sensor_fault", "")
+        _set(client, observer, inject[1], "sensor_fault", "")
         client.spin_for(0.5)  # the repaired sensor's readings reach the supervisor before reset
     if inject[2] in PROVOKE:
         client.call("disable")
