@@ -95,9 +95,10 @@ def spin_nodes(nodes) -> None:
     raise ExternalShutdownException()
 
 
-def spin_on_executor(nodes, executor) -> None:
+def spin_on_executor(nodes, executor, keep_going=None) -> None:
     """Spin nodes that :func:`spin_nodes` cannot serve on an rclpy ``executor`` until their
-    context shuts down (then ExternalShutdownException), every wait bounded.
+    context shuts down (then ExternalShutdownException) or ``keep_going()`` turns false (then
+    it returns), every wait bounded; the executor is shut down either way.
 
     rclpy's executors wait without a timeout for the guard conditions that its signal thread
     triggers on Ctrl-C or SIGTERM. Now and then that wake-up is lost: a ping_responder on
@@ -109,6 +110,8 @@ def spin_on_executor(nodes, executor) -> None:
         for node in nodes:
             executor.add_node(node)
         while nodes[0].context.ok():
+            if keep_going is not None and not keep_going():
+                return
             executor.spin_once(timeout_sec=WAIT_TIMEOUT_NS / 1e9)
     finally:
         executor.shutdown()

@@ -24,7 +24,6 @@ def matrix_graph(ros_domain_id):
     import rclpy
     from hems_msgs.msg import ActuatorState, ControllerStatus, EncoderReading, SupervisorStatus
     from rcl_interfaces.msg import ParameterEvent
-    from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import qos_profile_parameter_events
 
     from hems_ros.client.graph_client import GraphClient
@@ -79,9 +78,7 @@ def matrix_graph(ros_domain_id):
                 ],
                 qos_profile_parameter_events,
             )
-            executor = SingleThreadedExecutor(context=context)
-            executor.add_node(node)
-            spinner = BackgroundSpin(executor)
+            spinner = BackgroundSpin(node)
             try:
                 yield graph, client, observer
             finally:

@@ -17,7 +17,6 @@ class StandInController:
     ) -> None:
         import rclpy
         from hems_msgs.msg import ControllerStatus, FingerSetpoint
-        from rclpy.executors import SingleThreadedExecutor
 
         from hems_ros.ros import qos
 
@@ -44,9 +43,7 @@ class StandInController:
                     )
                 ),
             )
-        executor = SingleThreadedExecutor(context=context)
-        executor.add_node(self.node)
-        self.spinner = BackgroundSpin(executor)
+        self.spinner = BackgroundSpin(self.node)
 
     def on_setpoint(self, message) -> None:
         self.received += 1
@@ -116,6 +113,7 @@ def test_a_status_from_before_the_setpoint_does_not_confirm_it(client, context):
         assert client.send_setpoint("index", "position", 0.012, confirm_s=5.0).confirmed is True
     finally:
         first.stop()
+    client.spin_for(0.5)  # the client takes the last statuses of the stopped one meanwhile
     # restarted, and its status not (yet) reaching the client: the cached status of the
     # controller before shows 0.012, which the new one has never been sent
     second = StandInController(context, status=False)
