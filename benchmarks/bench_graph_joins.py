@@ -10,8 +10,10 @@ and a plain rclpy process that creates a publisher and sends one FingerSetpoint 
 the controller has matched it, as `ros2 topic pub --once` does. It counts the joins after
 which the supervisor left ENABLED, and checks that every setpoint was reached (the finger's
 controller status shows the tendon within 0.5 mm of it, or past it, before the next join).
-Layouts: separate (`hems up --separate`, 16 processes, as `ros2 run` of each node gives) and
-composed (one process, the default of `hems up`).
+Also printed: the CPU time each kind of tool took in its own process (median), which on a
+host with one free core comes out of the graph's share. Layouts: separate (`hems up
+--separate`, 16 processes, as `ros2 run` of each node gives) and composed (one process, the
+default of `hems up`).
 
 Usage: .venv/bin/python benchmarks/bench_graph_joins.py [--joins 20] [--layouts separate,composed]
        [--busy] [--markdown FILE]    (the result table, as docs/reliability.md shows it)
@@ -24,6 +26,8 @@ import argparse
 import collections
 import json
 import math
+import os
+import statistics
 import subprocess
 import sys
 import time
@@ -158,12 +162,20 @@ def run(composed: bool, joins: int) -> dict:  # noqa: C901 -- one join of each k
             faulted, missed = 0, []
             kinds: collections.Counter[str] = collections.Counter()
             by_kind: collections.Counter[str] = collections.Counter()
+            tool_cpu: dict[str, list[float]] = collections.defaultdict(list)
             for i in range(joins):
                 kind = KINDS[i % len(KINDS)]
                 argv, target = command(kind, i)
-                started = time.monotonic()
+                started, before = time.monotonic(), os.times()
                 subprocess.run(
                     argv, capture_output=True, text=True, timeout=120, env=child_environment()
+                )
+                after = os.times()
+                tool_cpu[kind].append(
+                    after.children_user
+                    - before.children_user
+                    + after.children_system
+                    - before.children_system
                 )
                 client.spin_for(SETTLE_S)
                 by_kind[kind] += 1
@@ -212,6 +224,7 @@ def run(composed: bool, joins: int) -> dict:  # noqa: C901 -- one join of each k
         "kinds": dict(kinds),
         "missed": missed,
         "by_kind": dict(by_kind),
+        "tool_cpu_s": {kind: statistics.median(cpu) for kind, cpu in tool_cpu.items()},
         "gaps": sum(count for count, _ in gaps.values()),
         "longest_gap_ms": 1e3 * longest[1][1],
         "longest_gap_stream": " ".join(longest[0]),
@@ -278,6 +291,10 @@ def main() -> None:
     text = table(results)
     print(f"after the joins: {host_line()}")
     print(text)
+    for layout, r in results.items():
+        if "tool_cpu_s" in r:
+            each = ", ".join(f"{kind} {cpu:.2f} s" for kind, cpu in r["tool_cpu_s"].items())
+            print(f"{layout}: CPU of one tool in its own process (median): {each}")
     if args.markdown is not None:
         args.markdown.write_text(text)
     if args.json is not None:

@@ -22,6 +22,9 @@ COMMAND = QoSProfile(
 STATUS = QoSProfile(
     depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
 )
+# A tool's reader that only wants each stream's newest message (`hems status`), taken when it
+# looks: best effort matches every writer of the graph.
+LATEST = STATUS
 # The same statuses for a unit, which takes them in a batch at its tick and runs its permission
 # from each one's time: kept to one, a late tick (a busy host) that found two took only the
 # newer, and the heating paused over the gap the older one had covered.
