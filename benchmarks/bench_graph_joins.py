@@ -166,16 +166,16 @@ def run(composed: bool, joins: int) -> dict:  # noqa: C901 -- one join of each k
             for i in range(joins):
                 kind = KINDS[i % len(KINDS)]
                 argv, target = command(kind, i)
-                started, before = time.monotonic(), os.times()
+                started, times_before = time.monotonic(), os.times()
                 subprocess.run(
                     argv, capture_output=True, text=True, timeout=120, env=child_environment()
                 )
-                after = os.times()
+                times_after = os.times()
                 tool_cpu[kind].append(
-                    after.children_user
-                    - before.children_user
-                    + after.children_system
-                    - before.children_system
+                    times_after.children_user
+                    - times_before.children_user
+                    + times_after.children_system
+                    - times_before.children_system
                 )
                 client.spin_for(SETTLE_S)
                 by_kind[kind] += 1

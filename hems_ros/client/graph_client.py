@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
@@ -456,7 +458,7 @@ class GraphClient:
                 if status.name == supervisor:
                     snap.diagnostics = [(kv.key, kv.value) for kv in status.values]
 
-        streams = [
+        streams: list[tuple[type, str, Callable[[Any], None]]] = [
             (
                 SupervisorStatus,
                 names.supervisor_status_topic(self.namespace),
@@ -468,17 +470,17 @@ class GraphClient:
                 (
                     ControllerStatus,
                     names.topic(finger, "controller_status", self.namespace),
-                    lambda m, f=finger: snap.controllers.__setitem__(f, m),
+                    functools.partial(snap.controllers.__setitem__, finger),
                 ),
                 (
                     ActuatorState,
                     names.sim_topic(finger, "state", self.namespace),
-                    lambda m, f=finger: snap.states.__setitem__(f, m),
+                    functools.partial(snap.states.__setitem__, finger),
                 ),
                 (
                     WireForce,
                     names.topic(finger, "wire_force", self.namespace),
-                    lambda m, f=finger: snap.forces.__setitem__(f, m),
+                    functools.partial(snap.forces.__setitem__, finger),
                 ),
             ]
         subs = [self.node.create_subscription(*stream, qos.LATEST) for stream in streams]
