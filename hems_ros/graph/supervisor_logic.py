@@ -156,6 +156,9 @@ class SupervisorLogic:
         self._last_seen: dict[tuple[str, str], float] = {}
         self._enabled_at = float("inf")
         self._last_check: float | None = None
+        # silences are judged from here at the earliest: the end of the supervisor's latest
+        # stall of half a loss limit or more (check_streams)
+        self._listening_since = -math.inf
         # (finger, condition) -> receive time of the first report of a condition that has held
         # since: a unit's watchdog trip (-inf while the unit has not yet reported its commands
         # arriving), a unit or controller not having taken ENABLED
@@ -172,29 +175,29 @@ class SupervisorLogic:
 
     # observations -------------------------------------------------------------
     def saw(self, stream: str, finger: str, now: float) -> None:
-        seen = self._last_seen.get((stream, finger))
-        if (
-            self.state == State.ENABLED
-            and seen is not None
-            and now - max(seen, self._enabled_at) > self.limits.gap_s(stream)
-        ):
+        silence = self._silence(stream, finger, now)
+        if self.state == State.ENABLED and silence > self.limits.gap_s(stream):
             gap = self._gaps.setdefault((finger, stream), [0, 0.0])
             gap[0] += 1
-            gap[1] = max(gap[1], now - max(seen, self._enabled_at))
+            gap[1] = max(gap[1], silence)
         self._last_seen[(stream, finger)] = now
+
+    def _silence(self, stream: str, finger: str, now: float) -> float:
+        """How long ``stream`` of ``finger`` has been silent by ``now`` while ENABLED and while
+        the supervisor was listening (0 if never seen)."""
+        seen = self._last_seen.get((stream, finger))
+        if seen is None:
+            return 0.0
+        return now - max(seen, self._enabled_at, self._listening_since)
 
     def unchanged(self, stream: str, finger: str, now: float) -> None:
         """A controller reported the same ``stream`` reading ("encoder" or "wire_force") as
         before (a new one goes to :meth:`encoder` or :meth:`wire_force`): while ENABLED, a
         reading unchanged for longer than ``lost_s`` faults the stream."""
-        seen = self._last_seen.get((stream, finger))
-        if (
-            self.state == State.ENABLED
-            and seen is not None
-            and now - max(seen, self._enabled_at) > self.limits.lost_s
-        ):
+        silence = self._silence(stream, finger, now)
+        if self.state == State.ENABLED and silence > self.limits.lost_s:
             self._fault(
-                finger, stream, f"{stream} lost ({1e3 * (now - seen):.0f} ms without a new reading)"
+                finger, stream, f"{stream} lost ({1e3 * silence:.0f} ms without a new reading)"
             )
 
     def gaps(self) -> dict[tuple[str, str], tuple[int, float]]:
@@ -334,29 +337,36 @@ class SupervisorLogic:
 
         When this check itself comes late (the supervisor was not scheduled for a while),
         the messages that arrived meanwhile are still queued and every stream would look
-        stale at once; such a check only re-arms, and the next on-time one judges.
+        stale at once; such a check only re-arms, and the next on-time one judges. A stall of
+        half a loss limit or more (the supervisor stopped, or starved on a busy host) leaves
+        less than the limits' twofold margin to the messages still on their way, whose
+        process may itself just be resuming: silences then count from the resume, as if the
+        supervisor had just started listening. A stream that stays silent faults a loss
+        limit later; the heating stopped 35 ms into the stall (the units' permission).
         """
-        late = self._last_check is not None and now - self._last_check > self.limits.stale_s / 2
+        if self._last_check is not None:
+            if now - self._last_check >= self.limits.loss_s / 2:
+                self._listening_since = now
+            late = now - self._last_check > self.limits.stale_s / 2
+        else:
+            late = False
         self._last_check = now
         if self.state != State.ENABLED or late:
             return
         for finger in self.fingers:
-            seen = self._last_seen.get(("heartbeat", finger))
-            if (
-                seen is not None
-                and now - max(seen, self._enabled_at) > self.limits.heartbeat_timeout_s
-            ):
+            silence = self._silence("heartbeat", finger, now)
+            if silence > self.limits.heartbeat_timeout_s:
                 self._fault(
                     finger,
                     "heartbeat",
-                    f"heartbeat stale ({1e3 * (now - seen):.0f} ms without a message)",
+                    f"heartbeat stale ({1e3 * silence:.0f} ms without a message)",
                 )
-            seen = self._last_seen.get(("unit state", finger))
-            if seen is not None and now - max(seen, self._enabled_at) > self.limits.lost_s:
+            silence = self._silence("unit state", finger, now)
+            if silence > self.limits.lost_s:
                 self._fault(
                     finger,
                     "unit state",
-                    f"unit state lost ({1e3 * (now - seen):.0f} ms without a report)",
+                    f"unit state lost ({1e3 * silence:.0f} ms without a report)",
                 )
 
     def missing_streams(self, now: float) -> list[str]:

@@ -254,7 +254,7 @@ def test_fault(matrix_graph, node, fault, inject, zero_limit_ms, fault_words):
     if inject[2] in PROVOKE:
         assert fault_ms is None or (FINGER in message and "over-" in message), message
     elif fault_words is None:
-        assert fault_ms is None or node == SUPERVISOR, message
+        assert fault_ms is None, message
     else:
         assert fault_ms is not None and fault_ms <= 500, (fault_ms, message)
         assert FINGER in message and fault_words in message, message

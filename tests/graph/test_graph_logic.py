@@ -169,11 +169,45 @@ def test_a_late_check_does_not_blame_the_streams():
     logic = SupervisorLogic(("index",), MonitorLimits(heartbeat_timeout_s=0.2))
     _ready(logic, 0.0)
     logic.request("enable", 0.0)
-    logic.check_streams(0.01)
-    logic.check_streams(0.2)  # the supervisor itself stalled 190 ms
+    for k in range(1, 13):
+        logic.check_streams(0.01 * k)
+    logic.check_streams(0.21)  # the supervisor itself stalled 90 ms, under half the limit
     assert logic.state == State.ENABLED
-    logic.check_streams(0.21)  # on time now, streams still silent: a real fault
-    assert logic.state == State.FAULT
+    logic.check_streams(0.22)  # on time now, streams still silent: a real fault
+    assert [(f.finger, f.kind) for f in logic.faults] == [("index", "heartbeat")]
+    assert "heartbeat stale (220 ms without a message)" in str(logic.faults[0])
+
+
+def test_a_supervisor_stopped_for_a_second_does_not_fault_its_streams_for_its_own_stop():
+    """Stopped (SIGSTOP) or starved for longer than half a loss limit, the supervisor resumes
+    to streams that look silent for the whole stop while their messages are still on their
+    way: it judges silences from its resume. One that stays silent faults a limit later."""
+    limits = MonitorLimits(lost_s=0.4, heartbeat_timeout_s=0.4)
+    logic = SupervisorLogic(("index", "middle"), limits)
+    _ready(logic, 0.0)
+    logic.request("enable", 0.0)
+    for k in range(1, 51):
+        now = 0.02 * k
+        logic.check_streams(now)
+        _report(logic, "index", now)
+        _report(logic, "middle", now)
+    faulted_at = None
+    for k in range(0, 30):  # stopped from 1.0 s to 2.0 s; index is back 60 ms after the resume
+        now = 2.0 + 0.02 * k
+        logic.check_streams(now)
+        if now >= 2.06:
+            _report(logic, "index", now)
+        if faulted_at is None and logic.state == State.FAULT:
+            faulted_at = now
+    # middle never came back: named 400 ms after the resume, not at the first check after it
+    assert faulted_at == pytest.approx(2.42, abs=0.001)
+    assert {(f.finger, f.kind) for f in logic.faults} == {
+        ("middle", "heartbeat"),
+        ("middle", "unit state"),
+    }
+    assert "middle: heartbeat stale (420 ms without a message)" in [str(f) for f in logic.faults]
+    # index's gap is the 60 ms it took after the resume, not the supervisor's stop
+    assert logic.gaps()[("index", "heartbeat")] == (1, pytest.approx(0.06))
 
 
 def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
