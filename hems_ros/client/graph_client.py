@@ -109,9 +109,10 @@ class GraphClient:
         self.sim_time = sim_time
         self.namespace = namespace
         try:
-            # No parameter, type-description or log services and no /rosout: the client has
-            # no parameters to serve and logs nothing, and each endpoint it would make is
-            # announced to every node of the graph as the command-line tool starts.
+            # No parameter or type-description services, no /rosout and (LeanNode) no QoS
+            # event handlers: the client serves no parameters and logs nothing, each endpoint
+            # is announced to every node of the graph as a command-line tool starts, and each
+            # handler is another entity for every wait of rclpy's executor.
             self.node = LeanNode(
                 f"{name}_{int(time.time() * 1e3) % 100000}",
                 namespace=namespace,
@@ -446,7 +447,8 @@ class GraphClient:
     def snapshot(
         self, fingers=names.FINGERS, seconds: float = 0.5, supervisor_wait_s: float = DISCOVERY_S
     ) -> Snapshot:
-        """Listen for ``seconds``, and up to ``supervisor_wait_s`` longer while the snapshot is
+        """Listen for ``seconds`` (taking each stream's newest message every
+        :data:`SNAPSHOT_POLL_S`), and up to ``supervisor_wait_s`` longer while the snapshot is
         :meth:`Snapshot.incomplete`: DDS discovery between a new process and the graph now and
         then waits for a periodic announcement, seconds later, and `hems status` reported a
         running supervisor as not running, or a finger's position and force as missing."""
