@@ -68,15 +68,15 @@ def test_a_waiting_verb_stops_cleanly(
 # runs between two calls of Node's constructor, whose next call then fails on the dead context
 MID_CONSTRUCTION = """
 import rclpy
-import rclpy.node
 from rclpy.executors import ExternalShutdownException
 from hems_ros.client import graph_client
+from hems_ros.ros.lean_node import LeanNode
 
 def node_cut_short(*args, **kwargs):
     rclpy.shutdown()
-    return rclpy.node.Node(*args, **kwargs)
+    return LeanNode(*args, **kwargs)
 
-graph_client.Node = node_cut_short
+graph_client.LeanNode = node_cut_short
 try:
     graph_client.GraphClient("hems_test_signal")
 except ExternalShutdownException:
