@@ -344,14 +344,11 @@ class SupervisorLogic:
         supervisor had just started listening. A stream that stays silent faults a loss
         limit later; the heating stopped 35 ms into the stall (the units' permission).
         """
-        if self._last_check is not None:
-            if now - self._last_check >= self.limits.loss_s / 2:
-                self._listening_since = now
-            late = now - self._last_check > self.limits.stale_s / 2
-        else:
-            late = False
+        interval = 0.0 if self._last_check is None else now - self._last_check
         self._last_check = now
-        if self.state != State.ENABLED or late:
+        if interval >= self.limits.loss_s / 2:
+            self._listening_since = now
+        if self.state != State.ENABLED or interval > self.limits.stale_s / 2:
             return
         for finger in self.fingers:
             silence = self._silence("heartbeat", finger, now)
