@@ -5,8 +5,10 @@ supervisor stayed ENABLED through the grasp and the fingers tracked). Each typic
 what the README shows, typed as fast as a script types it: `hems up &`, at once `hems enable`,
 `hems setpoint index 20 --unit mm`, three seconds of heating, `hems status`, Ctrl-C; valid
 when the status shows the supervisor ENABLED. Both print the supervisor's count of stream
-gaps while ENABLED (its /diagnostics), whose longest is compared with its loss limit, and the
-longest time a unit or controller took to take ENABLED, compared with the enable grace.
+gaps while ENABLED (its /diagnostics), whose longest is compared with its loss limit, its
+longest quiet (every stream silent at once: its own reception held up, excused in the gaps
+beyond the supervisor's quiet_s), and the longest time a unit or controller took to take
+ENABLED, compared with the enable grace.
 
 ``--busy`` runs a busy loop on one core throughout (``python3 -c "while True: pass"`` at
 normal priority: a browser, a compiler, a user's own node). ``--kill-first`` starts one graph
@@ -47,6 +49,7 @@ GAPS = re.compile(
     r"\(([^)]*)\))"
 )
 LIMIT = re.compile(r"a stream silent for (\d+) ms faults")
+QUIET = re.compile(r"supervisor quiets: \d+, longest (\d+) ms")
 TAKE = re.compile(
     r"ENABLED taken within (\d+) ms \(([^)]*)\), a node that has not taken it for (\d+) ms faults"
 )
@@ -63,6 +66,7 @@ class Run:
     limit_ms: float
     ready_s: float | None  # hems up or the demo: from start to every stream present
     take: tuple[float, str, float] | None  # longest take of ENABLED ms, whose, grace ms
+    quiet_ms: float  # the supervisor's longest quiet of every stream at once (0: none reported)
 
 
 def gaps_of(text: str) -> tuple[float, str, float]:
@@ -72,6 +76,11 @@ def gaps_of(text: str) -> tuple[float, str, float]:
     if gaps is None:  # no status came (the run is not valid either)
         return 0.0, "not reported", limit_ms
     return float(gaps.group(1) or gaps.group(3)), gaps.group(4) or "-", limit_ms
+
+
+def quiet_of(text: str) -> float:
+    quiet = QUIET.search(text)
+    return float(quiet.group(1)) if quiet else 0.0
 
 
 def take_of(text: str) -> tuple[float, str, float] | None:
@@ -103,7 +112,14 @@ def demo(layout: list[str], scratch: Path, index: int) -> Run:
     ).strip()
     longest, stream, limit = gaps_of(text)
     return Run(
-        code == 0, "" if code == 0 else problem, longest, stream, limit, enabled_s, take_of(text)
+        code == 0,
+        "" if code == 0 else problem,
+        longest,
+        stream,
+        limit,
+        enabled_s,
+        take_of(text),
+        quiet_of(text),
     )
 
 
@@ -161,6 +177,7 @@ def typical(layout: list[str]) -> Run:
         limit,
         float(ready.group(1)) if ready else None,
         take_of(status.stdout),
+        quiet_of(status.stdout),
     )
 
 
@@ -203,9 +220,11 @@ def summary(kind: str, runs: list[Run]) -> str:
     if takes:
         ms, whose, grace = max(takes)
         take_text = f"{ms:.0f} ms ({whose}) | {grace:.0f} ms | {grace / ms:.1f}"
+    quiet = max(r.quiet_ms for r in runs)
     return (
         f"| {kind} | {len(runs)} | {valid} | {ready_text} | {gap_text(worst)} | "
-        f"{worst.limit_ms:.0f} ms | {margin} | {take_text} |"
+        f"{worst.limit_ms:.0f} ms | {margin} | {f'{quiet:.0f} ms' if quiet else '-'} | "
+        f"{take_text} |"
     )
 
 
@@ -257,6 +276,7 @@ def main() -> None:
                     f"  {kind} {i + 1}/{count}: "
                     f"{'valid' if run.valid else 'NOT VALID: ' + run.detail}"
                     f"; longest gap {gap_text(run)}"
+                    + (f"; supervisor quiet {run.quiet_ms:.0f} ms" if run.quiet_ms else "")
                     + (f"; ENABLED taken within {run.take[0]:.0f} ms" if run.take else "")
                     + (f"; ready after {run.ready_s:.1f} s" if run.ready_s else ""),
                     flush=True,
@@ -265,9 +285,10 @@ def main() -> None:
                 results[kind] = runs
         print(
             "| run | runs | valid | ready s (median / max) | longest gap (stream) | loss limit "
-            "| limit / gap | longest take of ENABLED | enable grace | grace / take |"
+            "| limit / gap | longest supervisor quiet | longest take of ENABLED | enable grace "
+            "| grace / take |"
         )
-        print("|---|---|---|---|---|---|---|---|---|---|")
+        print("|---|---|---|---|---|---|---|---|---|---|---|")
         for kind, runs in results.items():
             print(summary(kind, runs))
         print(f"after the runs: {host_line()}")

@@ -51,7 +51,7 @@ from hems_msgs.msg import ControllerStatus, SupervisorStatus  # noqa: E402
 
 from hems_ros.client.graph_client import GraphClient  # noqa: E402
 from hems_ros.graph import names  # noqa: E402
-from hems_ros.graph.supervisor_logic import parse_gaps  # noqa: E402
+from hems_ros.graph.supervisor_logic import QUIET_KEY, parse_gaps  # noqa: E402
 from hems_ros.launcher import Graph, GraphOptions  # noqa: E402
 from hems_ros.ros import qos  # noqa: E402
 
@@ -124,10 +124,15 @@ def run(composed: bool, joins: int) -> dict:  # noqa: C901 -- one join of each k
     gaps: dict[tuple[str, str], tuple[int, float]] = {}
     supervisor = names.diagnostic_name(names.NAMESPACE, "supervisor")
 
+    quiets = ["-"]  # the supervisor's latest count of its own quiets, "count, longest N ms"
+
     def on_diagnostics(message: DiagnosticArray) -> None:
         for status in message.status:
             if status.name == supervisor:
                 gaps.update(parse_gaps((kv.key, kv.value) for kv in status.values))
+                quiets[0] = next(
+                    (kv.value for kv in status.values if kv.key == QUIET_KEY), quiets[0]
+                )
 
     try:
         with GraphClient("hems_bench_joins") as client:
@@ -230,6 +235,7 @@ def run(composed: bool, joins: int) -> dict:  # noqa: C901 -- one join of each k
         "longest_gap_stream": " ".join(longest[0]),
         "longest_sensor_gap_ms": 1e3 * sensed[1][1],
         "longest_sensor_gap_stream": " ".join(sensed[0]),
+        "supervisor_quiets": quiets[0],
     }
 
 
@@ -237,19 +243,20 @@ def table(results: dict[str, dict]) -> str:
     lines = [
         "| layout | joins (setpoint, status, enable, reset, topic pub) | supervisor left ENABLED | "
         "setpoints not reached | faults named | stream gaps over 50 ms (longest) | "
-        "longest sensor or heartbeat gap |",
-        "|---|---|---|---|---|---|---|",
+        "longest sensor or heartbeat gap | supervisor quiets (longest) |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for layout, r in results.items():
         if "error" in r:
-            lines.append(f"| {layout} | - | {r['error']} | - | - | - | - |")
+            lines.append(f"| {layout} | - | {r['error']} | - | - | - | - | - |")
             continue
         kinds = ", ".join(f"{k} x{n}" for k, n in sorted(r["kinds"].items())) or "-"
         per_kind = ", ".join(str(r["by_kind"].get(k, 0)) for k in KINDS)
         lines.append(
             f"| {layout} | {r['joins']} ({per_kind}) | {r['faulted']} | {len(r['missed'])} | "
             f"{kinds} | {r['gaps']} ({r['longest_gap_ms']:.0f} ms, {r['longest_gap_stream']}) | "
-            f"{r['longest_sensor_gap_ms']:.0f} ms ({r['longest_sensor_gap_stream']}) |"
+            f"{r['longest_sensor_gap_ms']:.0f} ms ({r['longest_sensor_gap_stream']}) | "
+            f"{r['supervisor_quiets']} |"
         )
     return "\n".join(lines) + "\n"
 

@@ -15,6 +15,7 @@ from hems_ros.graph.supervisor_logic import (
     GAP_FLOOR_KEY,
     GRACE_KEY,
     LOSS_LIMIT_KEY,
+    QUIET_KEY,
     TAKE_KEY,
     longest_gap,
     parse_gaps,
@@ -259,6 +260,8 @@ def gap_line(snap) -> str:
     limit = values.get(LOSS_LIMIT_KEY, "?")
     gaps = longest_gap(parse_gaps(snap.diagnostics), values.get(GAP_FLOOR_KEY, "?"))
     line = f"stream gaps while ENABLED: {gaps}; a stream silent for {limit} ms faults"
+    if QUIET_KEY in values:
+        line += f"; supervisor quiets: {values[QUIET_KEY]}"
     if TAKE_KEY in values:
         line += (
             f"; ENABLED taken within {values[TAKE_KEY]}, "

@@ -102,6 +102,13 @@ class MonitorLimits:
     # grace only names it later. At 0.5 s it latched FAULT once beside the full test suite
     # (502 ms); with both cores busy the longest take was 91 ms (docs/reliability.md).
     enable_grace_s: float = 1.0
+    # Every monitored stream silent at once for longer than this is the supervisor not
+    # hearing (its process or its reception held up: a join's discovery on a busy host), not
+    # each stream lost: such a quiet beyond it, up to loss_s, is not counted in any stream's
+    # silence. Above the slowest report period a live graph keeps (a controller without new
+    # readings reports every 100 ms), so one lost stream of a one-finger graph still faults on
+    # time; a graph silent as a whole faults after loss_s more.
+    quiet_s: float = 0.15
 
     def timeout(self, stream: str) -> float:
         """How old a stream's last message may be for ``enable``: the unit state comes at 20 Hz
@@ -129,6 +136,7 @@ class MonitorLimits:
             "heartbeat_timeout_s",
             "watchdog_hold_s",
             "enable_grace_s",
+            "quiet_s",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
@@ -159,6 +167,12 @@ class SupervisorLogic:
         # silences are judged from here at the earliest: the end of the supervisor's latest
         # stall of half a loss limit or more (check_streams)
         self._listening_since = -math.inf
+        # the supervisor's own quiets (quiet_s): the latest reception of any monitored stream,
+        # the quiet excused so far in total, and that total when each silence began
+        self._heard_at: float | None = None
+        self._excused = 0.0
+        self._excused_at: dict[object, float] = {}
+        self._quiets: list[float] = [0, 0.0]
         # (finger, condition) -> receive time of the first report of a condition that has held
         # since: a unit's watchdog trip (-inf while the unit has not yet reported its commands
         # arriving), a unit or controller not having taken ENABLED
@@ -175,20 +189,47 @@ class SupervisorLogic:
 
     # observations -------------------------------------------------------------
     def saw(self, stream: str, finger: str, now: float) -> None:
+        """A message of ``stream`` from ``finger`` received at ``now``; messages are taken in
+        the order they were received."""
+        self._hear(now)
         silence = self._silence(stream, finger, now)
         if self.state == State.ENABLED and silence > self.limits.gap_s(stream):
             gap = self._gaps.setdefault((finger, stream), [0, 0.0])
             gap[0] += 1
             gap[1] = max(gap[1], silence)
         self._last_seen[(stream, finger)] = now
+        self._excused_at[(stream, finger)] = self._excused
+
+    def _hear(self, now: float) -> None:
+        if self._heard_at is not None and now > self._heard_at:
+            quiet = now - self._heard_at
+            self._excused += self._excuse(quiet)
+            if self.state == State.ENABLED and quiet > self.limits.quiet_s:
+                self._quiets[0] += 1
+                self._quiets[1] = max(self._quiets[1], quiet)
+        self._heard_at = now if self._heard_at is None else max(self._heard_at, now)
+
+    def _excuse(self, quiet: float) -> float:
+        """The part of a quiet of every stream that counts in no stream's silence."""
+        return min(max(0.0, quiet - self.limits.quiet_s), self.limits.loss_s)
+
+    def _excused_by(self, now: float) -> float:
+        ongoing = 0.0 if self._heard_at is None else self._excuse(now - self._heard_at)
+        return self._excused + ongoing
 
     def _silence(self, stream: str, finger: str, now: float) -> float:
         """How long ``stream`` of ``finger`` has been silent by ``now`` while ENABLED and while
-        the supervisor was listening (0 if never seen)."""
+        the supervisor was listening and hearing other streams (0 if never seen)."""
         seen = self._last_seen.get((stream, finger))
         if seen is None:
             return 0.0
-        return now - max(seen, self._enabled_at, self._listening_since)
+        since, key = max(
+            (seen, (stream, finger)),
+            (self._enabled_at, "enabled"),
+            (self._listening_since, "listening"),
+            key=lambda mark: mark[0],
+        )
+        return now - since - (self._excused_by(now) - self._excused_at.get(key, self._excused))
 
     def unchanged(self, stream: str, finger: str, now: float) -> None:
         """A controller reported the same ``stream`` reading ("encoder" or "wire_force") as
@@ -206,6 +247,12 @@ class SupervisorLogic:
         stream): (count, longest s). Transient: counted for the diagnostics, and the margin
         the loss limits keep over them (docs/reliability.md)."""
         return {key: (int(count), longest) for key, (count, longest) in self._gaps.items()}
+
+    def quiets(self) -> tuple[int, float]:
+        """The supervisor's own quiets while ENABLED: every monitored stream silent at once for
+        longer than ``quiet_s``, (count, longest s). What a quiet lasts beyond ``quiet_s`` (up
+        to ``loss_s``) is in no stream's gap (:meth:`gaps`)."""
+        return int(self._quiets[0]), self._quiets[1]
 
     def enable_takes(self) -> dict[tuple[str, str], float]:
         """By (finger, "unit" or "controller"): the longest time, over the enables so far, from
@@ -348,6 +395,7 @@ class SupervisorLogic:
         self._last_check = now
         if interval >= self.limits.loss_s / 2:
             self._listening_since = now
+            self._excused_at["listening"] = self._excused_by(now)
         if self.state != State.ENABLED or interval > self.limits.stale_s / 2:
             return
         for finger in self.fingers:
@@ -398,6 +446,7 @@ class SupervisorLogic:
                 self._taken.clear()
             self.state = State.ENABLED
             self._enabled_at = now
+            self._excused_at["enabled"] = self._excused_by(now)
             return True, "ENABLED"
         if command == "disable":
             if self.state in (State.FAULT, State.ESTOP):
@@ -433,6 +482,7 @@ LOSS_LIMIT_KEY = "loss limit ms"  # the shorter of lost_s and heartbeat_timeout_
 GAP_FLOOR_KEY = "gap floor ms"  # stale_s: shorter silences are not counted as gaps
 TAKE_KEY = "enable taken"  # the longest of SupervisorLogic.enable_takes, and whose
 GRACE_KEY = "enable grace ms"  # enable_grace_s
+QUIET_KEY = "supervisor quiets"  # SupervisorLogic.quiets, as "count, longest N ms"
 
 
 def gap_entries(gaps: dict[tuple[str, str], tuple[int, float]]) -> list[tuple[str, str]]:
@@ -441,6 +491,11 @@ def gap_entries(gaps: dict[tuple[str, str], tuple[int, float]]) -> list[tuple[st
         (f"{GAP_KEY} {finger} {stream}", f"{count}, longest {1e3 * longest:.0f} ms")
         for (finger, stream), (count, longest) in sorted(gaps.items())
     ]
+
+
+def quiet_entry(quiets: tuple[int, float]) -> tuple[str, str]:
+    """:meth:`SupervisorLogic.quiets` as a /diagnostics key-value pair."""
+    return QUIET_KEY, f"{quiets[0]}, longest {1e3 * quiets[1]:.0f} ms"
 
 
 def parse_gaps(pairs: Iterable[tuple[str, str]]) -> dict[tuple[str, str], tuple[int, float]]:

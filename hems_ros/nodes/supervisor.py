@@ -52,6 +52,7 @@ from hems_ros.graph.supervisor_logic import (
     SupervisorLogic,
     gap_entries,
     longest_take,
+    quiet_entry,
 )
 from hems_ros.ros import qos
 from hems_ros.ros.clock_time import seconds, stamp_now
@@ -113,6 +114,15 @@ PARAMETERS = [
         _LIMITS.enable_grace_s,
         "while ENABLED, a unit without heating permission or an "
         "inactive controller for longer than this is a fault, s",
+        PERIOD_LIMIT,
+        True,
+    ),
+    Spec(
+        "quiet_s",
+        _LIMITS.quiet_s,
+        "every monitored stream silent at once for longer than this is the supervisor not "
+        "hearing, not each stream lost: the rest of such a quiet, up to the loss limit, counts "
+        "in no stream's silence (a graph silent as a whole faults a loss limit later), s",
         PERIOD_LIMIT,
         True,
     ),
@@ -302,12 +312,16 @@ class SupervisorNode(LeanNode):
     def take_reports(self) -> None:
         """Take the controller status and unit state messages received since the last take.
 
-        On the wall clock each counts from when the middleware received it: a check that ran
-        late (the process not scheduled for a while, on a busy host) then sees how the streams
-        came, not how late it looked at them; its own delay is no stream's gap. On sim time
-        the reception's system-clock time is not the graph's time: taken now."""
+        On the wall clock each counts from when the middleware received it, in that order: a
+        check that ran late (the process not scheduled for a while, on a busy host) then sees
+        how the streams came, not how late it looked at them; its own delay is no stream's
+        gap, and a quiet of every stream is told from one stream's silence. On sim time the
+        reception's system-clock time is not the graph's time: taken now."""
+        if self.wall_clock:
+            self.drain_in_order(*self.monitored)
+            return
         for subscription in self.monitored:
-            self.drain(subscription, with_reception_time=self.wall_clock)
+            self.drain(subscription)
 
     def check(self) -> None:
         self.take_reports()
@@ -374,6 +388,7 @@ class SupervisorNode(LeanNode):
         )
         missing = self.logic.missing_streams(seconds(self))
         takes = self.logic.enable_takes()
+        quiet_key, quiet_value = quiet_entry(self.logic.quiets())
         status = DiagnosticStatus(
             level=level,
             name=names.diagnostic_name(self.graph_ns, "supervisor"),
@@ -383,6 +398,7 @@ class SupervisorNode(LeanNode):
             + [KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
             + [KeyValue(key="not ready", value=m) for m in missing]
             + [KeyValue(key=k, value=v) for k, v in gap_entries(self.logic.gaps())]
+            + [KeyValue(key=quiet_key, value=quiet_value)]
             + [KeyValue(key=GAP_FLOOR_KEY, value=f"{1e3 * self.logic.limits.stale_s:.0f}")]
             + [KeyValue(key=LOSS_LIMIT_KEY, value=f"{1e3 * self.logic.limits.loss_s:.0f}")]
             + ([KeyValue(key=TAKE_KEY, value=longest_take(takes))] if takes else [])

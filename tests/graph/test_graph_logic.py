@@ -149,19 +149,25 @@ def test_heartbeat_and_unit_state_gaps_are_counted_with_their_longest():
     assert logic.state == State.ENABLED
 
 
+def _checks_with_unit_states(logic, finger: str, ks: range) -> None:
+    """Checks every 10 ms (at 0.01 k s); the unit's state report comes every 50 ms."""
+    for k in ks:
+        if k % 5 == 0:
+            logic.saw("unit state", finger, 0.01 * k)
+        logic.check_streams(0.01 * k)
+
+
 def test_a_silent_controller_is_its_heartbeat_fault_not_its_sensors():
     logic = SupervisorLogic(("index",), MonitorLimits(heartbeat_timeout_s=0.2))
     _ready(logic, 0.0)
     logic.request("enable", 0.0)
-    for k in range(1, 20):  # no report for 190 ms: the sensors cannot be judged
-        logic.check_streams(0.01 * k)
-    assert logic.state == State.ENABLED
+    _checks_with_unit_states(logic, "index", range(1, 20))  # no status for 190 ms
+    assert logic.state == State.ENABLED  # the sensors cannot be judged
     # the controller was only late: its next report carries fresh readings
     _report(logic, "index", 0.195)
     logic.check_streams(0.2)
     assert logic.state == State.ENABLED
-    for k in range(21, 42):
-        logic.check_streams(0.01 * k)
+    _checks_with_unit_states(logic, "index", range(21, 42))
     assert [(f.finger, f.kind) for f in logic.faults] == [("index", "heartbeat")]
 
 
@@ -169,11 +175,12 @@ def test_a_late_check_does_not_blame_the_streams():
     logic = SupervisorLogic(("index",), MonitorLimits(heartbeat_timeout_s=0.2))
     _ready(logic, 0.0)
     logic.request("enable", 0.0)
-    for k in range(1, 13):
-        logic.check_streams(0.01 * k)
+    _checks_with_unit_states(logic, "index", range(1, 13))
+    logic.saw("unit state", "index", 0.15)  # received while the supervisor stalled
     logic.check_streams(0.21)  # the supervisor itself stalled 90 ms, under half the limit
     assert logic.state == State.ENABLED
-    logic.check_streams(0.22)  # on time now, streams still silent: a real fault
+    logic.saw("unit state", "index", 0.2)
+    logic.check_streams(0.22)  # on time now, the heartbeat still silent: a real fault
     assert [(f.finger, f.kind) for f in logic.faults] == [("index", "heartbeat")]
     assert "heartbeat stale (220 ms without a message)" in str(logic.faults[0])
 
@@ -208,6 +215,68 @@ def test_a_supervisor_stopped_for_a_second_does_not_fault_its_streams_for_its_ow
     assert "middle: heartbeat stale (420 ms without a message)" in [str(f) for f in logic.faults]
     # index's gap is the 60 ms it took after the resume, not the supervisor's stop
     assert logic.gaps()[("index", "heartbeat")] == (1, pytest.approx(0.06))
+
+
+def _enabled_and_reporting(fingers, until: float) -> SupervisorLogic:
+    """ENABLED at 0 s, every finger reporting every 20 ms up to ``until``."""
+    logic = SupervisorLogic(fingers, MonitorLimits(lost_s=0.4, heartbeat_timeout_s=0.4))
+    _ready(logic, 0.0)
+    logic.request("enable", 0.0)
+    for k in range(1, round(until / 0.02) + 1):
+        for finger in fingers:
+            _report(logic, finger, 0.02 * k)
+        logic.check_streams(0.02 * k)
+    return logic
+
+
+def test_a_quiet_of_every_stream_at_once_is_the_supervisors_not_each_streams():
+    """A join's discovery held the supervisor's reception on a busy host: every stream of
+    every finger came 170-200 ms late at once. Such a quiet beyond quiet_s (150 ms) is no
+    stream's silence; here 450 ms, which faulted every stream before."""
+    logic = _enabled_and_reporting(("index", "middle"), until=1.0)
+    for k in range(1, 23):  # checks on time, nothing received until 1.45 s
+        logic.check_streams(1.0 + 0.02 * k)
+    for finger in ("index", "middle"):
+        _report(logic, finger, 1.45)
+    logic.check_streams(1.46)
+    assert logic.state == State.ENABLED, [str(f) for f in logic.faults]
+    assert logic.gaps()[("middle", "heartbeat")] == (1, pytest.approx(0.15))
+    assert logic.quiets() == (1, pytest.approx(0.45))
+
+
+def test_one_stream_silent_while_the_others_are_heard_faults_on_time():
+    """A killed unit in a one-finger graph: its controller, without new encoder readings,
+    reports only every 100 ms (late by up to 40 ms on a busy host), under quiet_s, so the
+    unit's silence counts in full."""
+    logic = _enabled_and_reporting(("index",), until=1.0)
+    faulted_at = None
+    for k in range(1, 40):
+        now = 1.0 + 0.02 * k
+        if k % 7 == 0:  # every 140 ms
+            logic.saw("heartbeat", "index", now)
+            logic.unchanged("encoder", "index", now)
+        logic.check_streams(now)
+        if faulted_at is None and logic.state == State.FAULT:
+            faulted_at = now
+    assert faulted_at == pytest.approx(1.42, abs=1e-6)
+    # the unit's encoder, in the controller's report, is named at the check's moment
+    assert [str(f) for f in logic.faults] == ["index: encoder lost (420 ms without a new reading)"]
+    assert logic.quiets() == (0, 0.0)
+
+
+def test_a_graph_silent_as_a_whole_still_faults_a_loss_limit_later():
+    """Every process gone: the supervisor cannot tell that from not hearing, so it excuses at
+    most one loss limit (400 ms) of the quiet beyond quiet_s, and faults every stream."""
+    logic = _enabled_and_reporting(("index", "middle"), until=1.0)
+    faulted_at = None
+    for k in range(1, 60):
+        now = 1.0 + 0.02 * k
+        logic.check_streams(now)
+        if faulted_at is None and logic.state == State.FAULT:
+            faulted_at = now
+    assert faulted_at == pytest.approx(1.82, abs=1e-6)
+    assert "middle: heartbeat stale (420 ms without a message)" in [str(f) for f in logic.faults]
+    assert {f.kind for f in logic.faults} == {"heartbeat", "unit state"}
 
 
 def test_enable_waits_for_every_units_state_with_its_watchdog_clear():
