@@ -167,13 +167,13 @@ def register(subparsers) -> None:
 
     suite = subparsers.add_parser(
         "diagnose-suite",
-        help="run the hidden-effect suite of hems diagnose (docs/diagnosis.md)",
+        help="run the hidden-effect suite of hems diagnose (docs/diagnosis-suite.md)",
         description="Synthetic measurements with a known truth (each candidate effect hidden in "
         "turn, a parameter moved, two effects at once, effects in another form than their "
         "candidate, an effect outside the library, nothing at all), at three sensor-noise levels "
         "on two input profiles, each diagnosed from the starting model; plus the dissertation's "
         "own measurements. Writes suite.md, suite.json and the confusion matrix into --out, and "
-        "docs/diagnosis.md with --docs. Seeded: the same seed gives the same result, on any "
+        "docs/diagnosis-suite.md with --docs. Seeded: the same seed gives the same result, on any "
         "scheduler. Each finished case is kept in OUT/cases, so a stopped run continues where "
         "it stopped (remove OUT/cases to start afresh).",
     )
@@ -191,7 +191,7 @@ def register(subparsers) -> None:
         type=Path,
         default=None,
         metavar="PATH",
-        help="also write the generated page (e.g. docs/diagnosis.md)",
+        help="also write the generated page (e.g. docs/diagnosis-suite.md)",
     )
     suite.add_argument(
         "--no-dissertation",
@@ -203,7 +203,7 @@ def register(subparsers) -> None:
 
     blind = subparsers.add_parser(
         "diagnose-blind",
-        help="run the blind suite of hems diagnose (docs/diagnosis-blind.md)",
+        help="run the blind suite of hems diagnose (docs/diagnosis.md)",
         description="Truths from code the diagnosis never runs (a wire of the dissertation's "
         "law written again or of Brinson's model in the chapter 3 rig with a Bowden sheath, "
         "Dahl friction, a tabulated stiffening spring, a sagging supply under a position loop, "
@@ -231,7 +231,7 @@ def register(subparsers) -> None:
         type=Path,
         default=None,
         metavar="PATH",
-        help="also write the page (docs/diagnosis-blind.md, or docs/diagnosis-tuning.md with "
+        help="also write the page (docs/diagnosis.md, or docs/diagnosis-tuning.md with "
         "--half tuning) and its figure beside it",
     )
     add_cluster_options(blind)

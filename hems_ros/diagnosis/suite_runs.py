@@ -1,7 +1,7 @@
 """The hidden-effect suite as a whole: its grid of cases, profiles, noise levels and seeds,
 the cases as tasks on the Dask runner, the dissertation's studies beside them, each outcome as
 a record and the figures the suite is judged by. ``hems_ros.reports.diagnosis_suite`` renders
-them (docs/diagnosis.md).
+them (docs/diagnosis-suite.md).
 """
 
 from __future__ import annotations

@@ -5,5 +5,5 @@ and PNG figures from the data that the physics, experiments and diagnosis module
 - :mod:`hems_ros.reports.experiments`: ``hems experiment`` (docs/experiments.md, results/), with the
   chapter 5 and 6 claims checked in :mod:`hems_ros.reports.findings`;
 - :mod:`hems_ros.reports.diagnosis`: one ``hems diagnose`` run (report.md, summary.json, figures);
-- :mod:`hems_ros.reports.diagnosis_suite`: ``hems diagnose-suite`` (docs/diagnosis.md).
+- :mod:`hems_ros.reports.diagnosis_suite`: ``hems diagnose-suite`` (docs/diagnosis-suite.md).
 """

@@ -136,7 +136,7 @@ def render(records: list[dict], figure: str) -> str:
         "not edit by hand.",
         "",
         f"The blind suite's tuning half ({len(records)} truths: every truth, size and noise "
-        "level of docs/diagnosis-blind.md once, its own seed) is where the search's thresholds "
+        "level of docs/diagnosis.md once, its own seed) is where the search's thresholds "
         "may be set; the evaluation half sets none. At each selection of a truth's diagnosis, "
         "on the load relation (its first) and at each of the replay's steps, every "
         "candidate's held-out gain (noise-floor units) and the share of the starting model's "

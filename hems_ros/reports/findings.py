@@ -184,7 +184,7 @@ def ch5_findings(ch5: dict, params: UnitParams) -> list[Finding]:
             f"damps the swing more the smaller its stress slope: with Table 4.1's C_M = C_A "
             f"= {Kinetics().ca_pa_per_c / 1e6:.2f} MPa/degC instead of the calibrated "
             f"{params.kinetics.ca_pa_per_c / 1e6:.1f} (docs/validation.md: the 50 N preload of "
-            f"Table 3.2 needs the larger one; docs/diagnosis.md names, figure by figure, what a "
+            f"Table 3.2 needs the larger one; docs/diagnosis-suite.md names, figure by figure, what a "
             f"slope within NiTi's band costs the chapters) BPID overshoots "
             f"{slope['ch5_step']:.2f} mm (step) "
             f"and {slope['ch5_staircase']:.2f} mm (staircase): less, not none. With Kp = 0.8 %/um "

@@ -368,7 +368,7 @@ def _calibrated_parameters(result: ValidationResult) -> list[str]:
         "|---|---|---|---|",
         f"| C_M = C_A, Pa/degC | 6.89e6 | {cal.kinetics.cm_pa_per_c:.3e} | Table 4.1 was "
         f"identified near 12 N (9 degC shift); at 50-70 N its 36-50 degC shift puts As out of "
-        f"reach of a 107 J pulse, while the measured wire moves 15 mm; docs/diagnosis.md "
+        f"reach of a 107 J pulse, while the measured wire moves 15 mm; docs/diagnosis-suite.md "
         f"refits the slope within NiTi's 5-15 MPa/degC to each chapter's table and names the "
         f"figures that need this one, by how much |",
         f"| eps_L | 0.038 | {cal.constitutive.max_recoverable_strain:.4f} | measured stroke "
@@ -482,7 +482,7 @@ def _departures(result: ValidationResult) -> list[str]:
         "hanging mass (F = m x'' + b x' + m g); the code applies the load's b to the bias spring "
         "and to the HEMS finger as well (referred to the wire through the pulley), since a tendon "
         "and glove dissipate too. The chapter 5 and 6 figures that the diagnosis workflow examines "
-        "depend on it (docs/diagnosis.md).",
+        "depend on it (docs/diagnosis-suite.md).",
         "- **Appendix convection inputs as printed.** `heat.appendix_h` feeds the appendix's own "
         "Grashof (1.6947) and Prandtl (0.591) numbers into the Churchill-Chu correlation, so the "
         "check of h = 42.51 W/m2K tests the correlation's code against the printed result, not the "

@@ -24,7 +24,7 @@ from hems_ros.reports import blind_tuning as tuning
 from hems_ros.truth import cases
 
 REPO = Path(__file__).resolve().parents[2]
-PAGE = REPO / "docs" / "diagnosis-blind.md"
+PAGE = REPO / "docs" / "diagnosis.md"
 
 
 def test_the_halves_split_the_rows_by_seed_and_share_none():
@@ -90,7 +90,7 @@ def test_the_detection_limit_is_the_smallest_size_from_which_every_run_is_right(
     assert "| another model family: an effect, named | 67% (4 of 6) | 70% |" in text
 
 
-@pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis-blind.md not generated")
+@pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis.md not generated")
 def test_the_committed_page_shows_what_a_row_diagnosed_here_gives():
     row = blind.Row(*blind.QUICK[0])
     record = blind.run_row(row)
@@ -213,7 +213,7 @@ def test_the_tuning_page_sets_each_threshold_between_what_null_and_hidden_truths
     )
 
 
-@pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis-blind.md not generated")
+@pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis.md not generated")
 def test_the_committed_page_holds_its_floors_where_it_meets_them():
     """Every headline floor of the evaluation half, the null rows on their thirty runs each
     (the first six of the independent form named a capstan friction twice)."""

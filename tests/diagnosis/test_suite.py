@@ -13,7 +13,7 @@ from hems_ros.paths import config_path
 from hems_ros.reports import diagnosis_suite as suite_report
 
 REPO = Path(__file__).resolve().parents[2]
-PAGE = REPO / "docs" / "diagnosis.md"
+PAGE = REPO / "docs" / "diagnosis-suite.md"
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +76,7 @@ def _measured(row: str) -> float:
 
 
 def test_the_committed_page_meets_the_floors() -> None:
-    """docs/diagnosis.md is what a full `hems diagnose-suite` printed; its figures must meet
+    """docs/diagnosis-suite.md is what a full `hems diagnose-suite` printed; its figures must meet
     the floors of the workflow's acceptance."""
     assert _measured("single effect ranked first, low noise") >= 0.9
     assert _measured("single effect ranked first, high noise") >= 0.8
