@@ -106,10 +106,12 @@ def demo(layout: list[str], scratch: Path, index: int) -> Run:
     code = process.wait()
     shutil.rmtree(scratch / f"demo_{index}", ignore_errors=True)
     text = "".join(lines)
+    # the verdict line, else the last thing the demo said (a timeout, a crash's last line)
+    said = [line.strip() for line in lines if line.strip() and "graph stopped in" not in line]
     problem = next(
-        (line for line in lines if "not a valid run" in line or "could not" in line),
-        f"exit code {code}",
-    ).strip()
+        (line for line in said if "not a valid run" in line or "could not" in line),
+        f"exit code {code}: {said[-1] if said else 'no output'}",
+    )
     longest, stream, limit = gaps_of(text)
     return Run(
         code == 0,

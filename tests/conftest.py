@@ -1,4 +1,11 @@
-"""Test-run environment: DDS on loopback only and a ROS domain of this run's own.
+"""Test-run environment: DDS on loopback only, the project's Fast DDS settings and a ROS
+domain of this run's own.
+
+The test process's own participants (the clients that observe a graph) take the Fast DDS
+profiles file that every process of the graph and every `hems` command takes: a participant
+without it makes its shared-memory port with Fast DDS's default health check (1000 ms), and a
+writer that opens such a port may wait a third of that for its listener, which no user's
+process does.
 
 The domain id is reserved with an exclusive lock file for the whole run, so two test
 runs on one machine (a developer's and CI's, say) never share a DDS domain. It is set
@@ -28,7 +35,10 @@ HELPERS = (
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    from hems_ros.rosenv import apply_network_defaults
+
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    apply_network_defaults()
     global _domain_lock
     if "HEMS_TEST_DOMAIN_ID" not in os.environ:
         from hems_ros.rosenv import reserve_domain_id

@@ -260,7 +260,7 @@ def gap_line(snap) -> str:
     limit = values.get(LOSS_LIMIT_KEY, "?")
     gaps = longest_gap(parse_gaps(snap.diagnostics), values.get(GAP_FLOOR_KEY, "?"))
     line = f"stream gaps while ENABLED: {gaps}; a stream silent for {limit} ms faults"
-    if QUIET_KEY in values:
+    if not values.get(QUIET_KEY, "0,").startswith("0,"):
         line += f"; supervisor quiets: {values[QUIET_KEY]}"
     if TAKE_KEY in values:
         line += (

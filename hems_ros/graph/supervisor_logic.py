@@ -39,6 +39,11 @@ report whose reading has not moved for longer than ``stale_s`` faults that strea
 no report comes the supervisor cannot tell a silent sensor from a late controller, and the
 controller heartbeat judges; blaming the sensor there made every controller stall of some
 40 ms on a busy host a "stale encoder" FAULT, while the encoder was running.
+
+A silence of every monitored stream at once is not each node's loss: one process or one
+thread held up the whole graph's traffic to the supervisor (its own stall, or a newcomer's
+discovery on a busy host). Such a quiet beyond ``quiet_s`` is counted apart
+(:meth:`SupervisorLogic.quiets`) and, up to one loss limit, in no stream's silence.
 """
 
 from __future__ import annotations

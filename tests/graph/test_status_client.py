@@ -82,6 +82,14 @@ def test_a_finger_heard_without_its_state_or_force_keeps_the_snapshot_listening_
     assert format_status(snap).splitlines()[-1] == (
         "stream gaps while ENABLED: no gap over 50 ms; a stream silent for 400 ms faults"
     )
+    snap.diagnostics.append(("supervisor quiets", "0, longest 0 ms"))  # none: not shown
+    assert format_status(snap).splitlines()[-1].endswith("a stream silent for 400 ms faults")
+    snap.diagnostics[-1] = ("supervisor quiets", "2, longest 334 ms")
+    assert (
+        format_status(snap)
+        .splitlines()[-1]
+        .endswith("faults; supervisor quiets: 2, longest 334 ms")
+    )
     snap.diagnostics += [("enable taken", "85 ms (ring controller)"), ("enable grace ms", "1000")]
     assert (
         format_status(snap)
