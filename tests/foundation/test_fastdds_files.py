@@ -4,6 +4,7 @@ files laid out as Fast DDS names them, and on a real participant alive and then 
 from __future__ import annotations
 
 import fcntl
+import mmap
 import os
 import signal
 import subprocess
@@ -49,6 +50,20 @@ def test_young_lock_files_stay_as_a_starting_process_may_not_hold_them_yet(tmp_p
     _files(tmp_path, SEGMENT, SEGMENT + "_el", age_s=1.0)
     assert remove_orphans(tmp_path) == 0
     assert remove_orphans(tmp_path, min_age_s=0.5) == 2
+
+
+def test_a_port_without_lock_files_goes_unless_a_live_process_maps_it(tmp_path):
+    """A writer killed after the port's owner had gone leaves the port with no lock file; the
+    next owner of its number would reuse it with its first creator's settings."""
+    left, in_use = "fastdds_port7417", "fastdds_port7419"
+    (tmp_path / in_use).write_bytes(bytes(4096))
+    _files(tmp_path, left, f"sem.{left}_mutex", f"sem.{in_use}_mutex")
+    os.utime(tmp_path / in_use, (time.time() - 60.0, time.time() - 60.0))
+    with (tmp_path / in_use).open("r+b") as f, mmap.mmap(f.fileno(), 4096):
+        assert remove_orphans(tmp_path) == 2
+        assert sorted(os.listdir(tmp_path)) == [in_use, f"sem.{in_use}_mutex"]
+    assert remove_orphans(tmp_path, min_age_s=0.0) == 2
+    assert os.listdir(tmp_path) == []
 
 
 def test_no_shared_memory_folder_is_nothing_to_do(tmp_path):
