@@ -35,14 +35,12 @@ HELPERS = (
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    from hems_ros.rosenv import apply_network_defaults
+    from hems_ros.rosenv import apply_network_defaults, reserve_domain_id
 
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     apply_network_defaults()
     global _domain_lock
     if "HEMS_TEST_DOMAIN_ID" not in os.environ:
-        from hems_ros.rosenv import reserve_domain_id
-
         domain, _domain_lock = reserve_domain_id()
         os.environ["HEMS_TEST_DOMAIN_ID"] = str(domain)
     os.environ["ROS_DOMAIN_ID"] = os.environ["HEMS_TEST_DOMAIN_ID"]

@@ -173,10 +173,13 @@ class SupervisorLogic:
         # stall of half a loss limit or more (check_streams)
         self._listening_since = -math.inf
         # the supervisor's own quiets (quiet_s): the latest reception of any monitored stream,
-        # the quiet excused so far in total, and that total when each silence began
+        # the quiet excused so far in total, and that total at each stream's last message, at
+        # the enable and at the resume (where a silence may begin)
         self._heard_at: float | None = None
         self._excused = 0.0
-        self._excused_at: dict[object, float] = {}
+        self._excused_at_seen: dict[tuple[str, str], float] = {}
+        self._excused_at_enable = 0.0
+        self._excused_at_resume = 0.0
         self._quiets: list[float] = [0, 0.0]
         # (finger, condition) -> receive time of the first report of a condition that has held
         # since: a unit's watchdog trip (-inf while the unit has not yet reported its commands
@@ -203,7 +206,7 @@ class SupervisorLogic:
             gap[0] += 1
             gap[1] = max(gap[1], silence)
         self._last_seen[(stream, finger)] = now
-        self._excused_at[(stream, finger)] = self._excused
+        self._excused_at_seen[(stream, finger)] = self._excused
 
     def _hear(self, now: float) -> None:
         if self._heard_at is not None and now > self._heard_at:
@@ -228,13 +231,12 @@ class SupervisorLogic:
         seen = self._last_seen.get((stream, finger))
         if seen is None:
             return 0.0
-        since, key = max(
-            (seen, (stream, finger)),
-            (self._enabled_at, "enabled"),
-            (self._listening_since, "listening"),
-            key=lambda mark: mark[0],
-        )
-        return now - since - (self._excused_by(now) - self._excused_at.get(key, self._excused))
+        since, excused = seen, self._excused_at_seen[(stream, finger)]
+        if self._enabled_at > since:
+            since, excused = self._enabled_at, self._excused_at_enable
+        if self._listening_since > since:
+            since, excused = self._listening_since, self._excused_at_resume
+        return now - since - (self._excused_by(now) - excused)
 
     def unchanged(self, stream: str, finger: str, now: float) -> None:
         """A controller reported the same ``stream`` reading ("encoder" or "wire_force") as
@@ -400,7 +402,7 @@ class SupervisorLogic:
         self._last_check = now
         if interval >= self.limits.loss_s / 2:
             self._listening_since = now
-            self._excused_at["listening"] = self._excused_by(now)
+            self._excused_at_resume = self._excused_by(now)
         if self.state != State.ENABLED or interval > self.limits.stale_s / 2:
             return
         for finger in self.fingers:
@@ -451,7 +453,7 @@ class SupervisorLogic:
                 self._taken.clear()
             self.state = State.ENABLED
             self._enabled_at = now
-            self._excused_at["enabled"] = self._excused_by(now)
+            self._excused_at_enable = self._excused_by(now)
             return True, "ENABLED"
         if command == "disable":
             if self.state in (State.FAULT, State.ESTOP):
