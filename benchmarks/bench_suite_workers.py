@@ -21,17 +21,11 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import tempfile
-import time
-from pathlib import Path
 
 import smoke
 from host import cpu_jiffies, host_line, steal_pct, twin_slowdown
 
-from hems_ros.diagnosis import (
-    cluster,
-    suite_runs,
-)
+from hems_ros.diagnosis import cluster, speedup, suite_runs
 
 GOAL = 1.7
 SMOKE_CASES = ("nothing",)
@@ -41,11 +35,9 @@ def _time(
     tasks: list[cluster.Task], scheduler: str, workers: int | None
 ) -> tuple[float, float, float]:
     """(wall s from the call to the last result, sum of the task times s, steal %)."""
-    with tempfile.TemporaryDirectory(prefix="hems-bench-suite-") as folder:
-        start, jiffies = time.perf_counter(), cpu_jiffies()
-        report = cluster.run_tasks(tasks, Path(folder), scheduler=scheduler, workers=workers)
-        wall = time.perf_counter() - start
-    return wall, sum(d.seconds for d in report.done.values()), steal_pct(jiffies, cpu_jiffies())
+    jiffies = cpu_jiffies()
+    timing = speedup.timed(tasks, scheduler, workers)
+    return timing.wall_s, timing.task_s, steal_pct(jiffies, cpu_jiffies())
 
 
 def main() -> int:

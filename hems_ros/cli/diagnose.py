@@ -347,14 +347,19 @@ def run_blind(args: argparse.Namespace) -> int:
     import json
     from functools import partial
 
-    from hems_ros.diagnosis import blind, cluster
+    from hems_ros.diagnosis import blind, cluster, speedup
     from hems_ros.reports import blind as page
     from hems_ros.reports import blind_tuning as tuning
 
     say = _say(False)
     rows = blind.grid(args.quick, args.half)
+    tasks = [cluster.Task(row.key, blind.run_row, (row,)) for row in rows]
+    # the page states what a second worker gains here, measured on some of its own tasks
+    measured = None
+    if args.docs is not None and args.half != "tuning" and args.scheduler == cluster.LOCAL:
+        measured = speedup.two_over_one(speedup.spread(tasks), say)
     done = cluster.run_tasks(
-        [cluster.Task(row.key, blind.run_row, (row,)) for row in rows],
+        tasks,
         args.out / "cases",
         scheduler=args.scheduler,
         workers=args.workers,
@@ -367,7 +372,11 @@ def run_blind(args: argparse.Namespace) -> int:
     if args.half == "tuning":  # the thresholds against it: what the tuning half is for
         stem, draw, text = "tuning", tuning.figure, partial(tuning.render, records)
     else:
-        stem, draw, text = "blind", page.figure, partial(page.render, records, seconds)
+        stem, draw, text = (
+            "blind",
+            page.figure,
+            partial(page.render, records, seconds, measured=measured),
+        )
     draw(records, args.out / f"{stem}.png")
     (args.out / f"{stem}.md").write_text(text(f"{stem}.png"))
     if args.docs is not None:

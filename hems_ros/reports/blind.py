@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import math
+import os
 import statistics
 from collections import Counter
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -14,6 +16,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from hems_ros.diagnosis import blind  # noqa: E402
 from hems_ros.truth import cases  # noqa: E402
+
+if TYPE_CHECKING:
+    from hems_ros.diagnosis.speedup import Speedup
 
 PANELS_PER_ROW = 5
 DPI = 80
@@ -65,7 +70,9 @@ def _size(effect: cases.Effect, size: float | None) -> str:
     return f"{size:g} {effect.unit}"
 
 
-def render(records: list[dict], seconds: list[float], figure: str) -> str:
+def render(
+    records: list[dict], seconds: list[float], figure: str, measured: Speedup | None = None
+) -> str:
     """The page: headline against the floors, detection limits, verdicts by truth, scale."""
     lines = [
         "# Blind suite: truths the fit never runs",
@@ -147,7 +154,7 @@ def render(records: list[dict], seconds: list[float], figure: str) -> str:
                     ]
                     if rows:
                         lines.append(_verdicts(family, effect, size, noise, rows))
-    lines += ["", *_scale(seconds)]
+    lines += ["", *_scale(seconds, measured)]
     return "\n".join(lines) + "\n"
 
 
@@ -214,11 +221,22 @@ def _reading(records: list[dict]) -> list[str]:
     return [" ".join(lines), ""] if lines else []
 
 
-def _scale(seconds: list[float]) -> list[str]:
+def _scale(seconds: list[float], measured: Speedup | None) -> list[str]:
     if not seconds:
         return []
     total = sum(seconds)
     longest = max(seconds)
+    if measured is None:
+        workers = "How much faster two workers run than one"
+    else:
+        workers = (
+            f"Measured as this page was made, {measured.tasks} of these tasks (taken at even "
+            f"steps through the grid) ran {measured.ratio:.2f}x as fast on two local workers as "
+            f"on one ({measured.two.wall_s:.0f} s against {measured.one.wall_s:.0f} s from the "
+            "call to the last result, the cluster's start included), on a host with "
+            f"{os.cpu_count()} cores; beside each other the tasks took {measured.beside:.2f}x "
+            "their time on one worker. How that figure moves with the host"
+        )
     return [
         "## Scale",
         "",
@@ -227,10 +245,9 @@ def _scale(seconds: list[float]) -> list[str]:
         f"{total / 3600:.2f} core-hours in all. On {CORES} cores (a Dask cluster of {CORES} "
         f"one-thread workers, the tasks independent) that is about "
         f"{(total / CORES + longest) / 60:.1f} min: the sum spread over the cores plus the "
-        "longest task, which the last free core may start just before the end. How much "
-        "faster two workers run than one on a two-core host is measured by "
-        "`benchmarks/bench_suite_workers.py` (docs/design.md, \"Suites and archives on "
-        "Dask\").",
+        f"longest task, which the last free core may start just before the end. {workers} "
+        "is measured by `benchmarks/bench_suite_workers.py` (docs/design.md, \"Suites and "
+        "archives on Dask\").",
         "",
     ]
 

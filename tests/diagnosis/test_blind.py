@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hems_ros.diagnosis import blind, candidates, cluster, search
+from hems_ros.diagnosis import blind, candidates, cluster, search, speedup
 from hems_ros.diagnosis.fit import Fit
 from hems_ros.diagnosis.relation import Named
 from hems_ros.physics.params import UnitParams
@@ -88,6 +88,18 @@ def test_the_detection_limit_is_the_smallest_size_from_which_every_run_is_right(
     assert "| another model family | dahl_friction (" in text
     assert "| - | 2 N | not named up to 4 N |" in text
     assert "| another model family: an effect, named | 67% (4 of 6) | 70% |" in text
+    assert "How much faster two workers run than one is measured by" in text
+    measured = speedup.Speedup(8, speedup.Timing(90.0, 88.0), speedup.Timing(50.0, 96.8))
+    text = page.render(records, [30.0, 40.0], "f.png", measured=measured)
+    assert "8 of these tasks (taken at even steps through the grid) ran 1.80x as fast" in text
+    assert "(50 s against 90 s from the call" in text
+    assert "the tasks took 1.10x their time on one worker" in text
+
+
+def test_the_speed_up_tasks_are_spread_through_the_grid():
+    tasks = [cluster.Task(f"t{i}", print) for i in range(20)]
+    assert [t.key for t in speedup.spread(tasks, 4)] == ["t0", "t5", "t10", "t15"]
+    assert len(speedup.spread(tasks[:3], 8)) == 3
 
 
 @pytest.mark.skipif(not PAGE.is_file(), reason="docs/diagnosis.md not generated")
