@@ -26,11 +26,18 @@ class Timing:
     task_s: float  # the tasks' own times, summed
 
 
-def timed(tasks: Sequence[cluster.Task], scheduler: str, workers: int | None) -> Timing:
+def timed(
+    tasks: Sequence[cluster.Task],
+    scheduler: str,
+    workers: int | None,
+    say: Callable[[str], None] = lambda message: None,
+) -> Timing:
     """Run ``tasks`` afresh (nothing resumed) and time them."""
     with tempfile.TemporaryDirectory(prefix="hems-speedup-") as folder:
         start = time.perf_counter()
-        report = cluster.run_tasks(tasks, Path(folder), scheduler=scheduler, workers=workers)
+        report = cluster.run_tasks(
+            tasks, Path(folder), scheduler=scheduler, workers=workers, say=say
+        )
         wall = time.perf_counter() - start
     return Timing(wall, sum(d.seconds for d in report.done.values()))
 
@@ -64,8 +71,8 @@ def two_over_one(
 ) -> Speedup:
     timed(tasks[:1], cluster.LOCAL, 1)
     say(f"speed-up: {len(tasks)} tasks on one local worker, then on two")
-    one = timed(tasks, cluster.LOCAL, 1)
-    two = timed(tasks, cluster.LOCAL, 2)
+    one = timed(tasks, cluster.LOCAL, 1, say)
+    two = timed(tasks, cluster.LOCAL, 2, say)
     result = Speedup(len(tasks), one, two)
     say(f"speed-up: one worker {one.wall_s:.1f} s, two {two.wall_s:.1f} s: {result.ratio:.2f}x")
     return result
