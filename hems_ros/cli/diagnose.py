@@ -232,7 +232,9 @@ def register(subparsers) -> None:
         default=None,
         metavar="PATH",
         help="also write the page (docs/diagnosis.md, or docs/diagnosis-tuning.md with "
-        "--half tuning) and its figure beside it",
+        "--half tuning) and its figure beside it; on the local scheduler the page's scale "
+        "section first times a spread of the truths on one worker and on two (about 5 minutes on "
+        "two cores)",
     )
     add_cluster_options(blind)
     blind.set_defaults(func=run_blind)
