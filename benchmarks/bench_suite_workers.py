@@ -38,10 +38,9 @@ BLIND_TASKS = 8  # about 100 s on one worker here
 def _tasks(args: argparse.Namespace) -> tuple[list[cluster.Task], str]:
     """The tasks to time and what they are."""
     if args.suite == "blind" and not args.smoke:
-        rows = blind.grid(half="evaluation")
-        tasks = [cluster.Task(row.key, blind.run_row, (row,)) for row in rows]
         count = args.cases or BLIND_TASKS
-        return speedup.spread(tasks, count), f"blind suite: {count} truths spread over its grid"
+        tasks = speedup.spread(blind.tasks(blind.grid(half="evaluation")), count)
+        return tasks, f"blind suite: {count} truths spread over its grid"
     # a smoke run times the self-made suite's quickest case, in seconds
     rows = suite_runs.grid(0, quick=args.cases is None)[: args.cases]
     if args.smoke:

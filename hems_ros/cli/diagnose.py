@@ -355,7 +355,7 @@ def run_blind(args: argparse.Namespace) -> int:
 
     say = _say(False)
     rows = blind.grid(args.quick, args.half)
-    tasks = [cluster.Task(row.key, blind.run_row, (row,)) for row in rows]
+    tasks = blind.tasks(rows)
     # the page states what a second worker gains here, measured on some of its own tasks
     measured = None
     if args.docs is not None and args.half != "tuning" and args.scheduler == cluster.LOCAL:

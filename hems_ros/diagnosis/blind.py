@@ -15,7 +15,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from hems_ros.diagnosis import inputs
+from hems_ros.diagnosis import cluster, inputs
 from hems_ros.diagnosis.fit import Fit
 from hems_ros.diagnosis.search import Search, excess
 from hems_ros.diagnosis.workflow import diagnose
@@ -82,6 +82,11 @@ def grid(quick: bool = False, half: str = "all"):
         for noise in cases.NOISE
         for seed in seeds(half, effect.kind)
     ]
+
+
+def tasks(rows: list[Row]) -> list[cluster.Task]:
+    """One task per row of :func:`grid`, for the cluster runner."""
+    return [cluster.Task(row.key, run_row, (row,)) for row in rows]
 
 
 def run_row(row: Row) -> dict:
