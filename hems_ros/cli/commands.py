@@ -19,6 +19,7 @@ from hems_ros.graph.supervisor_logic import (
     TAKE_KEY,
     longest_gap,
     parse_gaps,
+    parse_quiets,
 )
 
 UNITS = {"mm": ("position", 1e-3), "m": ("position", 1.0), "N": ("force", 1.0)}
@@ -260,7 +261,7 @@ def gap_line(snap) -> str:
     limit = values.get(LOSS_LIMIT_KEY, "?")
     gaps = longest_gap(parse_gaps(snap.diagnostics), values.get(GAP_FLOOR_KEY, "?"))
     line = f"stream gaps while ENABLED: {gaps}; a stream silent for {limit} ms faults"
-    if not values.get(QUIET_KEY, "0,").startswith("0,"):
+    if QUIET_KEY in values and parse_quiets(values[QUIET_KEY])[0]:
         line += f"; supervisor quiets: {values[QUIET_KEY]}"
     if TAKE_KEY in values:
         line += (

@@ -505,6 +505,12 @@ def quiet_entry(quiets: tuple[int, float]) -> tuple[str, str]:
     return QUIET_KEY, f"{quiets[0]}, longest {1e3 * quiets[1]:.0f} ms"
 
 
+def parse_quiets(value: str) -> tuple[int, float]:
+    """The inverse of :func:`quiet_entry`'s value: (count, longest s)."""
+    count, longest = value.split(", longest ")
+    return int(count), float(longest.removesuffix(" ms")) / 1e3
+
+
 def parse_gaps(pairs: Iterable[tuple[str, str]]) -> dict[tuple[str, str], tuple[int, float]]:
     """The inverse of :func:`gap_entries`, from (key, value) pairs; other keys are skipped."""
     gaps = {}

@@ -21,6 +21,8 @@ from hems_ros.graph.supervisor_logic import (
     State,
     SupervisorLogic,
     longest_take,
+    parse_quiets,
+    quiet_entry,
 )
 from hems_ros.graph.unit_driver import UnitDriver
 from hems_ros.launcher import Graph, GraphOptions
@@ -242,6 +244,9 @@ def test_a_quiet_of_every_stream_at_once_is_the_supervisors_not_each_streams():
     assert logic.state == State.ENABLED, [str(f) for f in logic.faults]
     assert logic.gaps()[("middle", "heartbeat")] == (1, pytest.approx(0.15))
     assert logic.quiets() == (1, pytest.approx(0.45))
+    key, value = quiet_entry(logic.quiets())
+    assert (key, value) == ("supervisor quiets", "1, longest 450 ms")
+    assert parse_quiets(value) == (1, pytest.approx(0.45))
 
 
 def test_one_stream_silent_while_the_others_are_heard_faults_on_time():
