@@ -22,6 +22,7 @@ Usage: .venv/bin/python benchmarks/bench_first_runs.py [--demos 20] [--typical 2
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import re
 import shutil
@@ -44,15 +45,6 @@ apply_network_defaults()
 DOMAIN_LOCK = use_private_domain()  # no test run or other benchmark shares it
 
 HEMS = [sys.executable, "-m", "hems_ros.cli.main"]
-GAPS = re.compile(
-    r"stream gaps while ENABLED: (?:no gap over (\d+) ms|(\d+) gaps, longest (\d+) ms "
-    r"\(([^)]*)\))"
-)
-LIMIT = re.compile(r"a stream silent for (\d+) ms faults")
-QUIET = re.compile(r"supervisor quiets: \d+, longest (\d+) ms")
-TAKE = re.compile(
-    r"ENABLED taken within (\d+) ms \(([^)]*)\), a node that has not taken it for (\d+) ms faults"
-)
 READY = re.compile(r"ready after ([\d.]+) s")
 UP_STOP_S = 60  # s from Ctrl-C for `hems up` to end
 
@@ -69,30 +61,31 @@ class Run:
     quiet_ms: float  # the supervisor's longest quiet of every stream at once (0: none reported)
 
 
-def gaps_of(text: str) -> tuple[float, str, float]:
-    """(longest gap ms, whose, loss limit ms) from a `hems status` or demo output."""
-    gaps, limit = GAPS.search(text), LIMIT.search(text)
-    limit_ms = float(limit.group(1)) if limit else 0.0
-    if gaps is None:  # no status came (the run is not valid either)
-        return 0.0, "not reported", limit_ms
-    return float(gaps.group(1) or gaps.group(3)), gaps.group(4) or "-", limit_ms
-
-
-def quiet_of(text: str) -> float:
-    quiet = QUIET.search(text)
-    return float(quiet.group(1)) if quiet else 0.0
-
-
-def take_of(text: str) -> tuple[float, str, float] | None:
-    """(ms, whose, grace ms): the longest a unit or controller took to take ENABLED."""
-    take = TAKE.search(text)
-    return (float(take.group(1)), take.group(2), float(take.group(3))) if take else None
+def figures(
+    report: dict | None,
+) -> tuple[float, str, float, tuple[float, str, float] | None, float]:
+    """(longest gap ms, whose, loss limit ms, take, quiet ms) for a :class:`Run`, from the
+    supervisor's gap figures as `hems status --json` and `hems demo --summary` give them."""
+    if report is None:  # no status came (the run is not valid either)
+        return 0.0, "not reported", 0.0, None, 0.0
+    if report["longest_gap_ms"] is None:
+        longest, stream = report["gap_floor_ms"] or 0.0, "-"
+    else:
+        longest, stream = report["longest_gap_ms"], report["longest_gap_stream"]
+    take = (
+        (report["enable_taken_ms"], report["enable_taken_by"], report["enable_grace_ms"])
+        if report["enable_taken_ms"] is not None and report["enable_grace_ms"] is not None
+        else None
+    )
+    return longest, stream, report["loss_limit_ms"] or 0.0, take, report["longest_quiet_ms"] or 0.0
 
 
 def demo(layout: list[str], scratch: Path, index: int) -> Run:
+    verdict = scratch / f"demo_{index}.json"
     started = time.monotonic()
     process = subprocess.Popen(
-        HEMS + ["demo", *layout, "--record", str(scratch / f"demo_{index}")],
+        HEMS
+        + ["demo", *layout, "--record", str(scratch / f"demo_{index}"), "--summary", str(verdict)],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
@@ -105,23 +98,15 @@ def demo(layout: list[str], scratch: Path, index: int) -> Run:
             enabled_s = time.monotonic() - started
     code = process.wait()
     shutil.rmtree(scratch / f"demo_{index}", ignore_errors=True)
-    text = "".join(lines)
-    # the verdict line, else the last thing the demo said (a timeout, a crash's last line)
-    said = [line.strip() for line in lines if line.strip() and "graph stopped in" not in line]
-    problem = next(
-        (line for line in said if "not a valid run" in line or "could not" in line),
-        f"exit code {code}: {said[-1] if said else 'no output'}",
-    )
-    longest, stream, limit = gaps_of(text)
+    report = json.loads(verdict.read_text()) if verdict.exists() else None
+    if report is not None:
+        problem = report["problem"] or ""
+    else:  # the demo ended before it could write its verdict: its last words say why
+        said = [line.strip() for line in lines if line.strip()]
+        problem = f"exit code {code}: {said[-1] if said else 'no output'}"
+    longest, stream, limit, take, quiet = figures(report and report["stream_gaps"])
     return Run(
-        code == 0,
-        "" if code == 0 else problem,
-        longest,
-        stream,
-        limit,
-        enabled_s,
-        take_of(text),
-        quiet_of(text),
+        code == 0, "" if code == 0 else problem, longest, stream, limit, enabled_s, take, quiet
     )
 
 
@@ -147,7 +132,7 @@ def typical(layout: list[str]) -> Run:
         enable = hems_step(["enable"], timeout_s=120)
         setpoint = hems_step(["setpoint", "index", "20", "--unit", "mm"], timeout_s=60)
         time.sleep(3.0)
-        status = hems_step(["status"], timeout_s=60)
+        status = hems_step(["status", "--json"], timeout_s=60)
     finally:
         os.killpg(up.pid, signal.SIGINT)
         try:
@@ -161,25 +146,30 @@ def typical(layout: list[str]) -> Run:
             output, _ = up.communicate()
             stopped = False
     ready = READY.search(output)
-    state = next(
-        (line for line in status.stdout.splitlines() if line.startswith("supervisor:")), ""
-    )
-    valid = enable.returncode == 0 and setpoint.returncode == 0 and "ENABLED" in state and stopped
+    try:
+        document = json.loads(status.stdout)
+    except ValueError:  # the status step timed out or crashed
+        document = None
+    state = document["supervisor"]["state"] if document else None
+    valid = enable.returncode == 0 and setpoint.returncode == 0 and state == "ENABLED" and stopped
     # the first step that failed says why (an enable that gave up names the missing streams)
-    failed = next((step for step in (enable, setpoint) if step.returncode != 0), None)
-    detail = failed.stderr.strip().splitlines()[-1:] if failed is not None else []
+    failed = next((step for step in (enable, setpoint, status) if step.returncode != 0), None)
+    detail = [f"supervisor: {state or 'not heard'}"]
+    if document and document["supervisor"]["faults"]:
+        detail.append("; ".join(document["supervisor"]["faults"]))
+    detail += failed.stderr.strip().splitlines()[-1:] if failed is not None else []
     if not stopped:
         detail.append(f"hems up still running {UP_STOP_S} s after Ctrl-C (killed)")
-    longest, stream, limit = gaps_of(status.stdout)
+    longest, stream, limit, take, quiet = figures(document and document["stream_gaps"])
     return Run(
         valid,
-        "" if valid else f"{state} {'; '.join(detail)}".strip(),
+        "" if valid else "; ".join(detail),
         longest,
         stream,
         limit,
         float(ready.group(1)) if ready else None,
-        take_of(status.stdout),
-        quiet_of(status.stdout),
+        take,
+        quiet,
     )
 
 

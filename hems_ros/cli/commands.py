@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 
@@ -17,6 +18,7 @@ from hems_ros.graph.supervisor_logic import (
     LOSS_LIMIT_KEY,
     QUIET_KEY,
     TAKE_KEY,
+    gap_report,
     longest_gap,
     parse_gaps,
     parse_quiets,
@@ -101,6 +103,12 @@ def register(subparsers) -> None:
     )
     parser.add_argument(
         "--listen", type=positive, default=1.5, help="seconds to listen (default 1.5)"
+    )
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object instead of the table (SI units, named in the keys; the "
+        "supervisor's stream-gap figures in ms; null where nothing was heard)",
     )
     add_namespace_argument(parser)
     parser.set_defaults(func=run_status)
@@ -228,16 +236,7 @@ def format_status(snap) -> str:
         setpoint = 1e3 * c.setpoint if c.mode == "position" else c.setpoint
         position = f"{1e3 * s.tendon_position:>12.2f}" if s is not None else f"{'-':>12}"
         force = f"{transmission.tendon_force(f.force):>8.2f}" if f is not None else f"{'-':>8}"
-        faults = [c.fault] if c.fault else []
-        if s is not None and s.watchdog_tripped:
-            faults.append("watchdog")
-        if snap.supervisor is not None and snap.supervisor.state_name == "ENABLED":
-            if s is not None and not s.heating_allowed:
-                faults.append("unit has no heating permission")
-            if not c.active:
-                faults.append("controller inactive")
-        if c.rejected_setpoints:
-            faults.append(f"{c.rejected_setpoints} rejected ({c.last_rejection})")
+        faults = finger_faults(snap, finger)
         rows.append(
             f"{finger:<16} {c.mode:<9} {setpoint:>7.2f} {unit:<2} {position} {force} "
             f"{c.duty_percent:>7.1f}  {', '.join(faults) or '-'}"
@@ -250,6 +249,56 @@ def format_status(snap) -> str:
     if snap.diagnostics:
         rows.append(gap_line(snap))
     return "\n".join(rows)
+
+
+def finger_faults(snap, finger: str) -> list[str]:
+    """What is wrong with ``finger`` in the snapshot, in words (empty: nothing)."""
+    c, s = snap.controllers[finger], snap.states.get(finger)
+    faults = [c.fault] if c.fault else []
+    if s is not None and s.watchdog_tripped:
+        faults.append("watchdog")
+    if snap.supervisor is not None and snap.supervisor.state_name == "ENABLED":
+        if s is not None and not s.heating_allowed:
+            faults.append("unit has no heating permission")
+        if not c.active:
+            faults.append("controller inactive")
+    if c.rejected_setpoints:
+        faults.append(f"{c.rejected_setpoints} rejected ({c.last_rejection})")
+    return faults
+
+
+def status_document(snap) -> dict:
+    """The snapshot for scripts (`hems status --json`): SI units, named in the keys."""
+    fingers: dict[str, dict | None] = {}
+    for finger in names.FINGERS:
+        c, s, f = (snap.controllers.get(finger), snap.states.get(finger), snap.forces.get(finger))
+        fingers[finger] = (
+            None
+            if c is None
+            else {
+                "mode": c.mode,
+                "setpoint": finite(c.setpoint),
+                "setpoint_unit": "m" if c.mode == "position" else "N",
+                "tendon_position_m": None if s is None else finite(s.tendon_position),
+                "tendon_force_n": None if f is None else finite(transmission.tendon_force(f.force)),
+                "duty_percent": finite(c.duty_percent),
+                "faults": finger_faults(snap, finger),
+            }
+        )
+    sup = snap.supervisor
+    return {
+        "supervisor": {
+            "state": sup.state_name if sup else None,
+            "faults": list(sup.faults) if sup else [],
+        },
+        "fingers": fingers,
+        "stream_gaps": gap_report(snap.diagnostics) if snap.diagnostics else None,
+    }
+
+
+def finite(value: float) -> float | None:
+    """``value``, or None for NaN and infinities, which JSON cannot carry."""
+    return value if math.isfinite(value) else None
 
 
 def gap_line(snap) -> str:
@@ -276,5 +325,8 @@ def run_status(args: argparse.Namespace) -> int:
 
     with GraphClient(namespace=args.namespace) as client:
         snap = client.snapshot(seconds=args.listen)
-    print(format_status(snap))
+    if args.json:
+        print(json.dumps(status_document(snap), allow_nan=False))
+    else:
+        print(format_status(snap))
     return 0 if snap.supervisor is not None else 1

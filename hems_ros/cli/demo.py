@@ -5,12 +5,14 @@ Brings the 16-node graph up (composed in one process; a process per node with
 all six fingers (position approach, force hold, release), prints the per-finger summary,
 writes a PNG plot and shuts everything down. The run is recorded into a bag
 (``bags/demo_<date>_<time>/`` unless ``--record DIR``) whose path and message counts are
-printed at the end.
+printed at the end; ``--summary FILE`` also writes the verdict and the supervisor's
+stream-gap figures as JSON for scripts.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -24,13 +26,15 @@ from hems_ros.cli.up import (
     layout_text,
     stop_recorder,
 )
+from hems_ros.graph.supervisor_logic import gap_report
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "demo",
         help="run the end-to-end demonstration (what `make demo` runs)",
-        description="Start the HEMS graph (16 nodes, one process each), enable it, run a scripted "
+        description="Start the HEMS graph (16 nodes, composed in one process unless --separate), "
+        "enable it, run a scripted "
         "grasp on all six fingers (position approach, force hold, release), print a per-finger "
         "summary (tracking error, peak force, energy), write a PNG plot, shut down.",
     )
@@ -50,6 +54,14 @@ def register(subparsers) -> None:
         metavar="DIR",
         help="bag folder the run is recorded into (default bags/demo_<date>_<time>)",
     )
+    parser.add_argument(
+        "--summary",
+        type=Path,
+        metavar="FILE",
+        help="also write the run's verdict as JSON to FILE: valid (as the exit code), problem "
+        "(why not, else null), stream_gaps (the supervisor's gap figures in ms, as `hems status "
+        "--json` gives them; null if the grasp never ran)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -68,40 +80,51 @@ def run(args: argparse.Namespace) -> int:
         flush=True,
     )
     graph_run = None
+    summary: dict = {"valid": False, "problem": None, "stream_gaps": None}
     try:
         with recorded_graph(options, record, "hems_demo", args.ready_timeout) as graph_run:
-            code = _grasp(graph_run, plan, options.fingers, args)
-            recorded = stop_recorder("demo", graph_run.recorder)
+            summary["problem"] = _grasp(graph_run, plan, options.fingers, args, summary)
+            if not stop_recorder("demo", graph_run.recorder):
+                summary["problem"] = summary["problem"] or "the recording failed"
+            summary["valid"] = summary["problem"] is None
     except (TimeoutError, RuntimeError) as error:
         print(f"demo: {error}", file=sys.stderr)
-        return 1
+        summary.update(valid=False, problem=str(error))
     finally:
         if graph_run is not None:
             print(f"demo: graph stopped in {graph_run.stop_s:.2f} s")
-    return code if recorded else 1
+        if args.summary is not None:
+            args.summary.write_text(json.dumps(summary, indent=2) + "\n")
+    return 0 if summary["valid"] else 1
 
 
-def _grasp(graph_run, plan, fingers, args: argparse.Namespace) -> int:
-    """The enabled grasp on the running graph: 0 if it was a valid run."""
+def _grasp(graph_run, plan, fingers, args: argparse.Namespace, summary: dict) -> str | None:
+    """The enabled grasp on the running graph: None if it was a valid run, else why not.
+    Puts the supervisor's stream-gap figures into ``summary``."""
     graph, client = graph_run.graph, graph_run.client
     try:
         traces, phase_starts, statuses = grasp.enabled_grasp(
             client, plan, fingers, args.ready_timeout, "demo"
         )
     except grasp.EnableRefused as error:
-        print(f"demo: could not enable the graph: {graph.with_exits(str(error))}", file=sys.stderr)
-        return 1
+        problem = f"could not enable the graph: {graph.with_exits(str(error))}"
+        print(f"demo: {problem}", file=sys.stderr)
+        return problem
     except RuntimeError as error:
-        print(f"demo: {graph.with_exits(str(error))}", file=sys.stderr)
-        return 1
-    print(f"demo: {gap_line(client.snapshot(fingers=(), seconds=0.2))}", flush=True)
+        problem = graph.with_exits(str(error))
+        print(f"demo: {problem}", file=sys.stderr)
+        return problem
+    snap = client.snapshot(fingers=(), seconds=0.2)
+    summary["stream_gaps"] = gap_report(snap.diagnostics) if snap.diagnostics else None
+    print(f"demo: {gap_line(snap)}", flush=True)
     rows = grasp.report(traces, plan, phase_starts, args.plot)
-    problem = grasp.fault_report(statuses) or grasp.tracking_report(rows, plan, fingers)
-    if problem:
-        print(f"demo: not a valid run: {problem}", file=sys.stderr)
-        return 1
+    verdict = grasp.fault_report(statuses) or grasp.tracking_report(rows, plan, fingers)
+    if verdict:
+        print(f"demo: not a valid run: {verdict}", file=sys.stderr)
+        return verdict
     crashed = graph.exited()
     if crashed:
-        print(f"demo: nodes exited during the run: {crashed}", file=sys.stderr)
-        return 1
-    return 0
+        problem = f"nodes exited during the run: {crashed}"
+        print(f"demo: {problem}", file=sys.stderr)
+        return problem
+    return None

@@ -536,3 +536,41 @@ def longest_take(takes: dict[tuple[str, str], float]) -> str:
     """The longest of :meth:`SupervisorLogic.enable_takes` and whose, as "85 ms (index unit)"."""
     (finger, component), took = max(takes.items(), key=lambda item: item[1])
     return f"{1e3 * took:.0f} ms ({finger} {component})"
+
+
+def parse_take(value: str) -> tuple[float, str]:
+    """The inverse of :func:`longest_take`: (ms, whose)."""
+    took, whose = value.split(" ms (", 1)
+    return float(took), whose.removesuffix(")")
+
+
+def gap_report(pairs: Iterable[tuple[str, str]]) -> dict[str, float | int | str | None]:
+    """The supervisor's stream-gap figures from its /diagnostics pairs, as numbers for scripts.
+
+    Times in ms as the diagnostics carry them; None where the supervisor reported no such
+    figure (no gap counted, no enable taken yet, an older supervisor without the key)."""
+    pairs = list(pairs)
+    values = dict(pairs)
+    gaps = parse_gaps(pairs)
+    longest = max(gaps.items(), key=lambda item: item[1][1]) if gaps else None
+    quiets, longest_quiet_s = parse_quiets(values[QUIET_KEY]) if QUIET_KEY in values else (0, 0.0)
+    take = parse_take(values[TAKE_KEY]) if TAKE_KEY in values else None
+
+    def number(key: str) -> float | None:
+        try:
+            return float(values[key])
+        except (KeyError, ValueError):
+            return None
+
+    return {
+        "gaps": sum(count for count, _ in gaps.values()),
+        "longest_gap_ms": None if longest is None else round(1e3 * longest[1][1]),
+        "longest_gap_stream": None if longest is None else " ".join(longest[0]),
+        "gap_floor_ms": number(GAP_FLOOR_KEY),
+        "loss_limit_ms": number(LOSS_LIMIT_KEY),
+        "quiets": quiets,
+        "longest_quiet_ms": round(1e3 * longest_quiet_s) if quiets else None,
+        "enable_taken_ms": None if take is None else take[0],
+        "enable_taken_by": None if take is None else take[1],
+        "enable_grace_ms": number(GRACE_KEY),
+    }

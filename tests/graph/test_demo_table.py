@@ -11,6 +11,7 @@ state stream begins after the grasp did.
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 
@@ -142,12 +143,21 @@ def test_the_printed_table_is_the_bags(ros_domain_id, venv, tmp_path):
             str(bag_path),
             "--plot",
             str(tmp_path / "demo.png"),
+            "--summary",
+            str(tmp_path / "verdict.json"),
         ],
         capture_output=True,
         text=True,
         timeout=240,
     )
     assert done.returncode == 0, done.stdout + done.stderr
+    verdict = json.loads((tmp_path / "verdict.json").read_text())
+    assert verdict["valid"] is True and verdict["problem"] is None
+    gaps = verdict["stream_gaps"]  # config/hems.yaml's supervisor limits, in ms
+    assert (gaps["loss_limit_ms"], gaps["gap_floor_ms"], gaps["enable_grace_ms"]) == (400, 50, 1000)
+    assert gaps["enable_taken_by"] in (f"{FINGER} unit", f"{FINGER} controller")
+    assert 0 <= gaps["enable_taken_ms"] < 1000
+    assert gaps["gaps"] == 0 or 50 < gaps["longest_gap_ms"] < 400, gaps
     printed = _printed_row(done.stdout)
     recorded, starts, status, state = _from_bag(bag_path, plan)
     assert len(starts) == 3

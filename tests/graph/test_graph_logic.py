@@ -20,8 +20,11 @@ from hems_ros.graph.supervisor_logic import (
     MonitorLimits,
     State,
     SupervisorLogic,
+    gap_entries,
+    gap_report,
     longest_take,
     parse_quiets,
+    parse_take,
     quiet_entry,
 )
 from hems_ros.graph.unit_driver import UnitDriver
@@ -362,6 +365,37 @@ def test_the_longest_take_of_enabled_is_kept_over_enables_and_named():
     logic.sees_enabled("index", "unit", True, 3.2)
     assert logic.enable_takes()[("index", "unit")] == pytest.approx(0.2)
     assert longest_take(logic.enable_takes()) == "200 ms (index unit)"
+
+
+def test_the_gap_report_gives_scripts_the_diagnostics_figures_as_numbers():
+    takes = {("index", "unit"): 0.085, ("ring", "controller"): 0.2134}
+    assert parse_take(longest_take(takes)) == (213.0, "ring controller")
+    pairs = [
+        ("state", "ENABLED"),
+        *gap_entries({("index", "encoder"): (2, 0.0712), ("ring", "heartbeat"): (3, 0.1384)}),
+        ("gap floor ms", "50"),
+        ("loss limit ms", "400"),
+        quiet_entry((2, 0.2216)),
+        ("enable taken", longest_take(takes)),
+        ("enable grace ms", "1000"),
+    ]
+    assert gap_report(pairs) == {
+        "gaps": 5,
+        "longest_gap_ms": 138,
+        "longest_gap_stream": "ring heartbeat",
+        "gap_floor_ms": 50.0,
+        "loss_limit_ms": 400.0,
+        "quiets": 2,
+        "longest_quiet_ms": 222,
+        "enable_taken_ms": 213.0,
+        "enable_taken_by": "ring controller",
+        "enable_grace_ms": 1000.0,
+    }
+    # before any gap, quiet or enable: nulls, not made-up zeros
+    bare = gap_report([("gap floor ms", "50"), ("loss limit ms", "400"), quiet_entry((0, 0.0))])
+    assert (bare["gaps"], bare["longest_gap_ms"], bare["longest_gap_stream"]) == (0, None, None)
+    assert (bare["quiets"], bare["longest_quiet_ms"], bare["enable_taken_ms"]) == (0, None, None)
+    assert bare["enable_grace_ms"] is None and bare["loss_limit_ms"] == 400.0
 
 
 def test_a_brief_lapse_of_the_enabled_view_and_a_new_enable_start_the_grace_again():

@@ -6,6 +6,7 @@ supervisor stays IDLE, its finger cold and still, and nothing runs under the def
 
 from __future__ import annotations
 
+import json
 import subprocess
 import time
 
@@ -68,6 +69,16 @@ def test_verbs_with_a_namespace_move_one_hand_and_leave_the_other_untouched(ros_
         assert snap.supervisor.state_name == "ENABLED"
         assert snap.controllers[FINGER].setpoint == pytest.approx(TARGET_MM * 1e-3)
         assert abs(position_mm - TARGET_MM) < 1.5, position_mm
+        status = _hems(venv, "status", "--namespace", "left", "--json")
+        assert status.returncode == 0, status.stdout + status.stderr
+        document = json.loads(status.stdout)
+        assert document["supervisor"] == {"state": "ENABLED", "faults": []}
+        row = document["fingers"][FINGER]
+        assert (row["mode"], row["setpoint_unit"]) == ("position", "m")
+        assert row["setpoint"] == pytest.approx(TARGET_MM * 1e-3)
+        assert abs(1e3 * row["tendon_position_m"] - TARGET_MM) < 1.5, row
+        assert row["faults"] == [] and 0.0 <= row["duty_percent"] <= 100.0
+        assert document["stream_gaps"]["loss_limit_ms"] == 400
 
         after, topics = _snapshot("/right")
         assert after.supervisor.state_name == "IDLE"
