@@ -18,7 +18,8 @@ the other in alternating windows (``--rounds`` pairs), so each pair sees the sam
 pair's ratio says how much of the graph's CPU the messaging and wake-ups alone take. The
 skeleton's CPU is the floor under any node code in this layout on this host, in this phase.
 
-Usage: .venv/bin/python benchmarks/bench_graph_floor.py [--seconds 20] [--rounds 2] [--smoke]
+Usage: .venv/bin/python benchmarks/bench_graph_floor.py [--seconds 20] [--rounds 2] [--busy]
+       [--smoke]
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import sys
 import time
 from pathlib import Path
 
+import busy as busy_option
 import smoke
 from bench_graph import FLOORS, cores, cpu_by_process, hold, node_kind  # reserves the domain
 from host import host_line
@@ -144,11 +146,21 @@ def main() -> None:
     parser.add_argument(
         "--rounds", type=int, default=2, help="skeleton and graph window pairs (default 2)"
     )
+    busy_option.add_option(parser)
     args = smoke.parse_args(parser, seconds=2.0, rounds=1)
+    busy = busy_option.start(args)
+    try:
+        measure(args)
+    finally:
+        if busy is not None:
+            busy.kill()
+
+
+def measure(args: argparse.Namespace) -> None:
     floor = FLOORS["separate"][0]
     print(
         f"separate layout's messaging floor: {args.rounds} x (skeleton, graph) windows of "
-        f"{args.seconds:g} s; {host_line()}",
+        f"{args.seconds:g} s{', a busy loop on one core' if args.busy else ''}; {host_line()}",
         flush=True,
     )
     print(
