@@ -35,7 +35,6 @@ import busy as busy_option
 import smoke
 from bench_graph import FLOORS, cores, cpu_by_process, hold, node_kind  # reserves the domain
 from host import host_line
-from skeleton_node import ROLES
 
 from hems_ros.client.graph_client import GraphClient
 from hems_ros.graph import names
@@ -44,6 +43,7 @@ from hems_ros.rosenv import child_environment
 
 SKELETON_NODE = Path(__file__).with_name("skeleton_node.py")
 SETTLE_S = 5.0
+ROLES = ("unit", "module", "controller", "supervisor")  # skeleton_node.BUILDERS
 
 
 def skeleton_processes() -> list[tuple[str, str]]:
