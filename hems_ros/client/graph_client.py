@@ -25,6 +25,7 @@ from std_srvs.srv import Trigger
 
 from hems_ros.client import DISCOVERY_S
 from hems_ros.graph import names
+from hems_ros.graph.supervisor_logic import HEARD_KEY
 from hems_ros.ros import qos
 from hems_ros.ros.clock_time import from_msg
 from hems_ros.ros.lean_node import LeanNode
@@ -86,13 +87,19 @@ class Snapshot:
     supervisor: SupervisorStatus | None = None
     # the supervisor's latest /diagnostics key-value pairs (1 Hz: empty if none came)
     diagnostics: list[tuple[str, str]] = field(default_factory=list)
+    # the fingers listened to: those of them the supervisor hears must report here too
+    fingers: tuple[str, ...] = ()
 
     def incomplete(self) -> bool:
-        """The supervisor not heard yet (its status, or its once-a-second diagnostics), or a
-        finger whose controller reported without its unit's state or its wire force."""
+        """The supervisor not heard yet (its status, or its once-a-second diagnostics), a
+        finger listened to whose controller the supervisor hears but this snapshot has not (a
+        new process discovers the graph's writers one by one), or a finger whose controller
+        reported without its unit's state or its wire force."""
+        heard = dict(self.diagnostics).get(HEARD_KEY, "").split(",")
         return (
             self.supervisor is None
             or not self.diagnostics
+            or any(f in heard and f not in self.controllers for f in self.fingers)
             or any(f not in self.states or f not in self.forces for f in self.controllers)
         )
 
@@ -452,7 +459,7 @@ class GraphClient:
         :meth:`Snapshot.incomplete`: DDS discovery between a new process and the graph now and
         then waits for a periodic announcement, seconds later, and `hems status` reported a
         running supervisor as not running, or a finger's position and force as missing."""
-        snap = Snapshot()
+        snap = Snapshot(fingers=tuple(fingers))
         supervisor = names.diagnostic_name(self.namespace, "supervisor")
 
         def on_diagnostics(array: DiagnosticArray) -> None:

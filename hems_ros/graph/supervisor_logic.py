@@ -437,6 +437,16 @@ class SupervisorLogic:
                 )
         return missing
 
+    def heard_fingers(self, now: float) -> list[str]:
+        """Fingers whose controller's heartbeat is fresh: a status tool that does not hear one
+        of them yet is still discovering the graph, not looking at a dead controller."""
+        timeout = self.limits.timeout("heartbeat")
+        return [
+            finger
+            for finger in self.fingers
+            if now - self._last_seen.get(("heartbeat", finger), -math.inf) <= timeout
+        ]
+
     # commands -----------------------------------------------------------------
     def request(self, command: str, now: float) -> tuple[bool, str]:
         """Apply enable | disable | estop | reset; (accepted, message)."""
@@ -490,6 +500,7 @@ GAP_FLOOR_KEY = "gap floor ms"  # stale_s: shorter silences are not counted as g
 TAKE_KEY = "enable taken"  # the longest of SupervisorLogic.enable_takes, and whose
 GRACE_KEY = "enable grace ms"  # enable_grace_s
 QUIET_KEY = "supervisor quiets"  # SupervisorLogic.quiets, as "count, longest N ms"
+HEARD_KEY = "fingers heard"  # SupervisorLogic.heard_fingers, comma-separated
 
 
 def gap_entries(gaps: dict[tuple[str, str], tuple[int, float]]) -> list[tuple[str, str]]:

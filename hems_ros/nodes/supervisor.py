@@ -45,6 +45,7 @@ from hems_ros.graph.cadence import Cadence, supervisor_check_delay
 from hems_ros.graph.supervisor_logic import (
     GAP_FLOOR_KEY,
     GRACE_KEY,
+    HEARD_KEY,
     LOSS_LIMIT_KEY,
     TAKE_KEY,
     MonitorLimits,
@@ -395,6 +396,7 @@ class SupervisorNode(LeanNode):
             hardware_id="supervisor",
             message=state.name,
             values=[KeyValue(key="ready", value=str(not missing).lower())]
+            + [KeyValue(key=HEARD_KEY, value=",".join(self.logic.heard_fingers(seconds(self))))]
             + [KeyValue(key="fault", value=str(f)) for f in self.logic.faults]
             + [KeyValue(key="not ready", value=m) for m in missing]
             + [KeyValue(key=k, value=v) for k, v in gap_entries(self.logic.gaps())]

@@ -367,6 +367,17 @@ def test_the_longest_take_of_enabled_is_kept_over_enables_and_named():
     assert longest_take(logic.enable_takes()) == "200 ms (index unit)"
 
 
+def test_the_fingers_heard_are_those_whose_heartbeat_is_fresh():
+    logic = SupervisorLogic(("index", "ring", "little"), MonitorLimits(heartbeat_timeout_s=0.4))
+    assert logic.heard_fingers(0.0) == []
+    logic.saw("heartbeat", "index", 1.0)
+    logic.saw("heartbeat", "ring", 1.3)
+    logic.saw("encoder", "little", 1.3)  # a sensor is no heartbeat
+    assert logic.heard_fingers(1.35) == ["index", "ring"]
+    assert logic.heard_fingers(1.45) == ["ring"]  # index silent for 0.45 s
+    assert logic.heard_fingers(1.75) == []
+
+
 def test_the_gap_report_gives_scripts_the_diagnostics_figures_as_numbers():
     takes = {("index", "unit"): 0.085, ("ring", "controller"): 0.2134}
     assert parse_take(longest_take(takes)) == (213.0, "ring controller")

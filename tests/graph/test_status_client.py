@@ -74,6 +74,15 @@ def test_a_finger_heard_without_its_state_or_force_keeps_the_snapshot_listening_
     assert snap.incomplete()  # the supervisor's diagnostics, once a second, not yet
     snap.diagnostics = [("ready", "true"), ("gaps index encoder", "2, longest 71 ms")]
     assert not snap.incomplete()
+    # a finger listened to whose controller the supervisor hears and this snapshot not yet
+    snap.fingers = ("index", "middle", "ring")
+    snap.diagnostics.append(("fingers heard", "index,middle"))
+    assert snap.incomplete()
+    snap.controllers["middle"] = ControllerStatus(finger="middle")
+    snap.states["middle"] = ActuatorState(finger="middle")
+    snap.forces["middle"] = WireForce(finger="middle")
+    assert not snap.incomplete()  # ring: not heard by the supervisor, nothing to wait for
+    del snap.diagnostics[-1]
     lines = format_status(snap).splitlines()
     row = next(line for line in lines if line.startswith("index"))
     assert row.split()[4:6] == ["12.00", "4.00"]
