@@ -13,15 +13,7 @@ from hems_ros.client import DISCOVERY_S
 from hems_ros.graph import names, transmission
 from hems_ros.graph.setpoints import MODES, SetpointError, SetpointLimits, validate
 from hems_ros.graph.supervisor_logic import (
-    GAP_FLOOR_KEY,
-    GRACE_KEY,
-    LOSS_LIMIT_KEY,
-    QUIET_KEY,
-    TAKE_KEY,
     gap_report,
-    longest_gap,
-    parse_gaps,
-    parse_quiets,
 )
 
 UNITS = {"mm": ("position", 1e-3), "m": ("position", 1.0), "N": ("force", 1.0)}
@@ -306,16 +298,23 @@ def gap_line(snap) -> str:
     controller took to take ENABLED against its grace, from the supervisor's /diagnostics."""
     if not snap.diagnostics:
         return "stream gaps: no supervisor diagnostics received"
-    values = dict(snap.diagnostics)
-    limit = values.get(LOSS_LIMIT_KEY, "?")
-    gaps = longest_gap(parse_gaps(snap.diagnostics), values.get(GAP_FLOOR_KEY, "?"))
-    line = f"stream gaps while ENABLED: {gaps}; a stream silent for {limit} ms faults"
-    if QUIET_KEY in values and parse_quiets(values[QUIET_KEY])[0]:
-        line += f"; supervisor quiets: {values[QUIET_KEY]}"
-    if TAKE_KEY in values:
+    report = gap_report(snap.diagnostics)
+
+    def ms(key: str) -> str:
+        return "?" if report[key] is None else f"{report[key]:g}"
+
+    gaps = (
+        f"{report['gaps']} gaps, longest {ms('longest_gap_ms')} ms ({report['longest_gap_stream']})"
+        if report["gaps"]
+        else f"no gap over {ms('gap_floor_ms')} ms"
+    )
+    line = f"stream gaps while ENABLED: {gaps}; a stream silent for {ms('loss_limit_ms')} ms faults"
+    if report["quiets"]:
+        line += f"; supervisor quiets: {report['quiets']}, longest {ms('longest_quiet_ms')} ms"
+    if report["enable_taken_ms"] is not None:
         line += (
-            f"; ENABLED taken within {values[TAKE_KEY]}, "
-            f"a node that has not taken it for {values.get(GRACE_KEY, '?')} ms faults"
+            f"; ENABLED taken within {ms('enable_taken_ms')} ms ({report['enable_taken_by']}), "
+            f"a node that has not taken it for {ms('enable_grace_ms')} ms faults"
         )
     return line
 

@@ -533,16 +533,6 @@ def parse_gaps(pairs: Iterable[tuple[str, str]]) -> dict[tuple[str, str], tuple[
     return gaps
 
 
-def longest_gap(gaps: dict[tuple[str, str], tuple[int, float]], floor_ms: str = "?") -> str:
-    """One line on the gaps: how many, the longest and whose; ``floor_ms``: the silence under
-    which none is counted (:data:`GAP_FLOOR_KEY`)."""
-    if not gaps:
-        return f"no gap over {floor_ms} ms"
-    (finger, stream), (_, longest) = max(gaps.items(), key=lambda item: item[1][1])
-    total = sum(count for count, _ in gaps.values())
-    return f"{total} gaps, longest {1e3 * longest:.0f} ms ({finger} {stream})"
-
-
 def longest_take(takes: dict[tuple[str, str], float]) -> str:
     """The longest of :meth:`SupervisorLogic.enable_takes` and whose, as "85 ms (index unit)"."""
     (finger, component), took = max(takes.items(), key=lambda item: item[1])
