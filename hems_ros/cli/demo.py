@@ -83,7 +83,9 @@ def run(args: argparse.Namespace) -> int:
     summary: dict = {"valid": False, "problem": None, "stream_gaps": None}
     try:
         with recorded_graph(options, record, "hems_demo", args.ready_timeout) as graph_run:
-            summary["problem"] = _grasp(graph_run, plan, options.fingers, args, summary)
+            summary["problem"], summary["stream_gaps"] = _grasp(
+                graph_run, plan, options.fingers, args
+            )
             if not stop_recorder("demo", graph_run.recorder):
                 summary["problem"] = summary["problem"] or "the recording failed"
             summary["valid"] = summary["problem"] is None
@@ -98,9 +100,9 @@ def run(args: argparse.Namespace) -> int:
     return 0 if summary["valid"] else 1
 
 
-def _grasp(graph_run, plan, fingers, args: argparse.Namespace, summary: dict) -> str | None:
-    """The enabled grasp on the running graph: None if it was a valid run, else why not.
-    Puts the supervisor's stream-gap figures into ``summary``."""
+def _grasp(graph_run, plan, fingers, args: argparse.Namespace) -> tuple[str | None, dict | None]:
+    """The enabled grasp on the running graph: (None if it was a valid run, else why not; the
+    supervisor's stream-gap figures, None if the grasp did not run or none came)."""
     graph, client = graph_run.graph, graph_run.client
     try:
         traces, phase_starts, statuses = grasp.enabled_grasp(
@@ -109,22 +111,22 @@ def _grasp(graph_run, plan, fingers, args: argparse.Namespace, summary: dict) ->
     except grasp.EnableRefused as error:
         problem = f"could not enable the graph: {graph.with_exits(str(error))}"
         print(f"demo: {problem}", file=sys.stderr)
-        return problem
+        return problem, None
     except RuntimeError as error:
         problem = graph.with_exits(str(error))
         print(f"demo: {problem}", file=sys.stderr)
-        return problem
+        return problem, None
     snap = client.snapshot(fingers=(), seconds=0.2)
-    summary["stream_gaps"] = gap_report(snap.diagnostics) if snap.diagnostics else None
+    gaps = gap_report(snap.diagnostics) if snap.diagnostics else None
     print(f"demo: {gap_line(snap)}", flush=True)
     rows = grasp.report(traces, plan, phase_starts, args.plot)
     verdict = grasp.fault_report(statuses) or grasp.tracking_report(rows, plan, fingers)
     if verdict:
         print(f"demo: not a valid run: {verdict}", file=sys.stderr)
-        return verdict
+        return verdict, gaps
     crashed = graph.exited()
     if crashed:
         problem = f"nodes exited during the run: {crashed}"
         print(f"demo: {problem}", file=sys.stderr)
-        return problem
-    return None
+        return problem, gaps
+    return None, gaps
