@@ -33,12 +33,13 @@ from pathlib import Path
 
 import busy as busy_option
 import smoke
+import yaml
 from bench_graph import FLOORS, cores, cpu_by_process, hold, node_kind  # reserves the domain
 from host import host_line
 
 from hems_ros.client.graph_client import GraphClient
 from hems_ros.graph import names
-from hems_ros.launcher import Graph, GraphOptions
+from hems_ros.launcher import Graph, GraphOptions, default_params_file
 from hems_ros.rosenv import child_environment
 
 SKELETON_NODE = Path(__file__).with_name("skeleton_node.py")
@@ -55,14 +56,38 @@ def skeleton_processes() -> list[tuple[str, str]]:
     )
 
 
+def graph_rates() -> list[str]:
+    """The skeleton's rates as the graph runs them, for skeleton_node's command line: each
+    from config/hems.yaml's shared section, else its node's default."""
+    from hems_ros.nodes import actuation_unit, finger_controller_parameters, supervisor
+
+    shared = yaml.safe_load(default_params_file().read_text())["/**"]["ros__parameters"]
+    defaults = {
+        spec.name: spec.default
+        for module in (actuation_unit, finger_controller_parameters, supervisor)
+        for spec in module.PARAMETERS
+    }
+
+    def value(name: str):
+        return shared.get(name, defaults[name])
+
+    tick_s = value("tick_period_s")
+    return [
+        str(tick_s),
+        str(value("check_period_s")),
+        str(round(value("state_period_s") / tick_s)),
+        str(value("status_every")),
+    ]
+
+
 def skeleton_window(seconds: float) -> dict[str, list[float]]:
     """Start the skeleton, let it settle, measure: cores of each process, by role."""
-    environment = child_environment()
+    environment, rates = child_environment(), graph_rates()
     processes = [
         (
             role,
             subprocess.Popen(
-                [sys.executable, str(SKELETON_NODE), role, name],
+                [sys.executable, str(SKELETON_NODE), role, name, *rates],
                 env=environment,
                 stdout=subprocess.PIPE,
                 text=True,

@@ -3,19 +3,27 @@
 Kept apart from the benchmark, whose imports (the graph client, the launcher) a node process
 does not carry; rclpy and the messages are imported only once ``run_node`` has applied the
 project's environment, as in the nodes. Usage: python benchmarks/skeleton_node.py ROLE NAME
-(ROLE: unit, module, controller, supervisor; NAME: a finger, a shoulder module or "supervisor").
+TICK_S CHECK_S STATE_EVERY STATUS_EVERY (ROLE: unit, module, controller, supervisor; NAME: a
+finger, a shoulder module or "supervisor"; the rates as the graph's configuration gives them,
+bench_graph_floor.graph_rates).
 """
 
 from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass
 
 from hems_ros.graph import names
 from hems_ros.graph.cadence import supervisor_check_delay, tick_delay
 
-TICK_S, CHECK_S = 0.01, 0.02
-STATE_EVERY, STATUS_EVERY = 5, 2  # ticks per unit state (20 Hz), steps per controller status
+
+@dataclass(frozen=True)
+class Rates:
+    tick_s: float  # a unit's tick (tick_period_s)
+    check_s: float  # the supervisor's check (check_period_s)
+    state_every: int  # ticks per unit state (state_period_s / tick_period_s)
+    status_every: int  # controller steps per status (status_every)
 
 
 def encoded(message_type) -> bytes:
@@ -32,9 +40,9 @@ def subscribe(node, message_type, topic: str, profile, callback=None):
     )
 
 
-def build_unit(node, finger: str) -> None:
+def build_unit(node, finger: str, rates: Rates) -> None:
     """Ticks on its pair's grid: takes duty commands and statuses, sends an encoder reading and
-    a wire tension, and its state every STATE_EVERY ticks."""
+    a wire tension, and its state every ``state_every`` ticks."""
     from hems_msgs.msg import (
         ActuatorState,
         DutyCommand,
@@ -62,13 +70,13 @@ def build_unit(node, finger: str) -> None:
         encoder.publish(messages[EncoderReading])
         tension.publish(messages[WireForce])
         ticks[0] += 1
-        if ticks[0] % STATE_EVERY == 0:
+        if ticks[0] % rates.state_every == 0:
             state.publish(messages[ActuatorState])
 
-    create_grid_timer(node, TICK_S, lambda now: tick_delay(finger, TICK_S, now), tick)
+    create_grid_timer(node, rates.tick_s, lambda now: tick_delay(finger, rates.tick_s, now), tick)
 
 
-def build_module(node, module: str) -> None:
+def build_module(node, module: str, _rates: Rates) -> None:
     """Wakes on each of its units' tensions and sends that finger's force reading."""
     from hems_msgs.msg import WireForce
 
@@ -86,9 +94,9 @@ def build_module(node, module: str) -> None:
         )
 
 
-def build_controller(node, finger: str) -> None:
+def build_controller(node, finger: str, rates: Rates) -> None:
     """Wakes on its encoder readings: takes force readings and statuses, sends a duty command,
-    and its status every STATUS_EVERY steps."""
+    and its status every ``status_every`` steps."""
     from hems_msgs.msg import (
         ControllerStatus,
         DutyCommand,
@@ -116,14 +124,14 @@ def build_controller(node, finger: str) -> None:
             node.drain(subscription)
         duty.publish(messages[DutyCommand])
         steps[0] += 1
-        if steps[0] % STATUS_EVERY == 0:
+        if steps[0] % rates.status_every == 0:
             status.publish(messages[ControllerStatus])
 
     subscribe(node, EncoderReading, names.topic(finger, "encoder"), qos.SENSOR, step)
 
 
-def build_supervisor(node, _name: str) -> None:
-    """Every CHECK_S at the supervisor's phase: takes the controllers' statuses and units'
+def build_supervisor(node, _name: str, rates: Rates) -> None:
+    """Every ``check_s`` at the supervisor's phase: takes the controllers' statuses and units'
     states, sends its status."""
     from hems_msgs.msg import ActuatorState, ControllerStatus, SupervisorStatus
 
@@ -146,7 +154,9 @@ def build_supervisor(node, _name: str) -> None:
         node.drain_in_order(*reports)
         status.publish(message)
 
-    create_grid_timer(node, CHECK_S, lambda now: supervisor_check_delay(CHECK_S, now), check)
+    create_grid_timer(
+        node, rates.check_s, lambda now: supervisor_check_delay(rates.check_s, now), check
+    )
 
 
 BUILDERS: dict[str, Callable[..., None]] = {
@@ -157,14 +167,14 @@ BUILDERS: dict[str, Callable[..., None]] = {
 }
 
 
-def skeleton_node(role: str, name: str):
+def skeleton_node(role: str, name: str, rates: Rates):
     """The node class of one skeleton process."""
     from hems_ros.ros.lean_node import LeanNode
 
     class Skeleton(LeanNode):
         def __init__(self, **kwargs) -> None:
             super().__init__(f"skeleton_{role}_{name}", **kwargs)
-            BUILDERS[role](self, name)
+            BUILDERS[role](self, name, rates)
             print("ready", flush=True)  # the benchmark measures once all sixteen are
 
     return Skeleton
@@ -173,7 +183,8 @@ def skeleton_node(role: str, name: str):
 if __name__ == "__main__":
     from hems_ros.ros.runner import run_node
 
-    role, name = sys.argv[1:3]
+    role, name, tick_s, check_s, state_every, status_every = sys.argv[1:7]
     if role not in BUILDERS:
         sys.exit(f"skeleton_node: role {role!r}: expected one of {', '.join(BUILDERS)}")
-    sys.exit(run_node(skeleton_node(role, name), [sys.argv[0]]))
+    rates = Rates(float(tick_s), float(check_s), int(state_every), int(status_every))
+    sys.exit(run_node(skeleton_node(role, name, rates), [sys.argv[0]]))
