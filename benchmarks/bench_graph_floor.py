@@ -57,26 +57,15 @@ def skeleton_processes() -> list[tuple[str, str]]:
 
 
 def graph_rates() -> list[str]:
-    """The skeleton's rates as the graph runs them, for skeleton_node's command line: each
-    from config/hems.yaml's shared section, else its node's default."""
-    from hems_ros.nodes import actuation_unit, finger_controller_parameters, supervisor
-
+    """The skeleton's rates as the graph runs them (config/hems.yaml's shared section), for
+    skeleton_node's command line."""
     shared = yaml.safe_load(default_params_file().read_text())["/**"]["ros__parameters"]
-    defaults = {
-        spec.name: spec.default
-        for module in (actuation_unit, finger_controller_parameters, supervisor)
-        for spec in module.PARAMETERS
-    }
-
-    def value(name: str):
-        return shared.get(name, defaults[name])
-
-    tick_s = value("tick_period_s")
+    tick_s = shared["tick_period_s"]
     return [
         str(tick_s),
-        str(value("check_period_s")),
-        str(round(value("state_period_s") / tick_s)),
-        str(value("status_every")),
+        str(shared["check_period_s"]),
+        str(round(shared["state_period_s"] / tick_s)),
+        str(shared["status_every"]),
     ]
 
 
