@@ -17,6 +17,9 @@ The skeleton and the real separate graph (six fingers enabled, holding 10 mm) ru
 the other in alternating windows (``--rounds`` pairs), so each pair sees the same host; each
 pair's ratio says how much of the graph's CPU the messaging and wake-ups alone take. The
 skeleton's CPU is the floor under any node code in this layout on this host, in this phase.
+A last table splits both by thread (benchmarks/threads.py): the nodes' main threads, which
+run Python at each wake-up, against Fast DDS's, whose shared-memory listeners wake once per
+message received.
 
 Usage: .venv/bin/python benchmarks/bench_graph_floor.py [--seconds 20] [--rounds 2] [--busy]
        [--smoke]
@@ -36,6 +39,7 @@ import smoke
 import yaml
 from bench_graph import FLOORS, cores, cpu_by_process, hold, node_kind  # reserves the domain
 from host import host_line
+from threads import by_group, snapshot, table
 
 from hems_ros.client.graph_client import GraphClient
 from hems_ros.graph import names
@@ -69,8 +73,12 @@ def graph_rates() -> list[str]:
     ]
 
 
-def skeleton_window(seconds: float) -> dict[str, list[float]]:
-    """Start the skeleton, let it settle, measure: cores of each process, by role."""
+Window = tuple[dict[str, list[float]], dict[str, tuple[float, float]]]
+
+
+def skeleton_window(seconds: float) -> Window:
+    """Start the skeleton, let it settle, measure: cores of each process by role, and the
+    threads' use by group (threads.by_group)."""
     environment, rates = child_environment(), graph_rates()
     processes = [
         (
@@ -91,9 +99,11 @@ def skeleton_window(seconds: float) -> dict[str, list[float]]:
                 sys.exit(f"bench_graph_floor: a skeleton {role} ended at start-up")
         time.sleep(SETTLE_S)
         pids = [process.pid for _, process in processes]
-        before, t0 = cpu_by_process(pids), time.monotonic()
+        roles = {process.pid: role for role, process in processes}
+        before, threads, t0 = cpu_by_process(pids), snapshot(roles), time.monotonic()
         time.sleep(seconds)
         used = cores(before, cpu_by_process(pids), time.monotonic() - t0)
+        groups = by_group(threads, snapshot(roles), time.monotonic() - t0)
         ended = [role for role, process in processes if process.poll() is not None]
         if ended:
             sys.exit(f"bench_graph_floor: skeleton processes ended while measured: {ended}")
@@ -105,7 +115,7 @@ def skeleton_window(seconds: float) -> dict[str, list[float]]:
     by_role: dict[str, list[float]] = {}
     for role, process in processes:
         by_role.setdefault(role, []).append(used.get(process.pid, 0.0))
-    return by_role
+    return by_role, groups
 
 
 GRAPH_KINDS = {  # the graph's executables under the skeleton's role names
@@ -116,8 +126,9 @@ GRAPH_KINDS = {  # the graph's executables under the skeleton's role names
 }
 
 
-def graph_window(seconds: float) -> dict[str, list[float]]:
-    """The real separate graph, enabled and holding 10 mm: cores of each process, by role."""
+def graph_window(seconds: float) -> Window:
+    """The real separate graph, enabled and holding 10 mm: cores of each process by role,
+    and the threads' use by group."""
     graph = Graph(GraphOptions(composed=False, log_level="error"))
     graph.start()
     try:
@@ -127,10 +138,11 @@ def graph_window(seconds: float) -> dict[str, list[float]]:
                 sys.exit(f"bench_graph_floor: {message}")
             client.spin_for(SETTLE_S)
             pids = graph.pids
-            before, t0 = cpu_by_process(pids), time.monotonic()
+            kinds = {pid: GRAPH_KINDS.get(node_kind(pid), "other") for pid in pids}
+            before, threads, t0 = cpu_by_process(pids), snapshot(kinds), time.monotonic()
             client.spin_for(seconds)
             used = cores(before, cpu_by_process(pids), time.monotonic() - t0)
-            kinds = {pid: GRAPH_KINDS.get(node_kind(pid), "other") for pid in pids}
+            groups = by_group(threads, snapshot(kinds), time.monotonic() - t0)
             state = client.snapshot(seconds=0.5).supervisor
             if state is None or state.state_name != "ENABLED":
                 sys.exit(f"bench_graph_floor: the graph left ENABLED: {state}")
@@ -139,7 +151,19 @@ def graph_window(seconds: float) -> dict[str, list[float]]:
     by_role: dict[str, list[float]] = {}
     for pid, cpu in used.items():
         by_role.setdefault(kinds[pid], []).append(cpu)
-    return by_role
+    return by_role, groups
+
+
+def mean_groups(rounds: list[dict[str, tuple[float, float]]]) -> dict[str, tuple[float, float]]:
+    """Each thread group's cores and switches a second, averaged over the rounds."""
+    groups = {g for r in rounds for g in r}
+    return {
+        g: (
+            statistics.mean(r.get(g, (0.0, 0.0))[0] for r in rounds),
+            statistics.mean(r.get(g, (0.0, 0.0))[1] for r in rounds),
+        )
+        for g in groups
+    }
 
 
 def total(by_role: dict[str, list[float]]) -> float:
@@ -183,14 +207,22 @@ def measure(args: argparse.Namespace) -> None:
     )
     print("|---|---|---|---|---|---|---|")
     ratios = []
+    thread_use: dict[str, list[dict[str, tuple[float, float]]]] = {"skeleton": [], "graph": []}
     for round_ in range(1, args.rounds + 1):
-        skeleton, graph = skeleton_window(args.seconds), graph_window(args.seconds)
+        (skeleton, skeleton_threads), (graph, graph_threads) = (
+            skeleton_window(args.seconds),
+            graph_window(args.seconds),
+        )
+        thread_use["skeleton"].append(skeleton_threads)
+        thread_use["graph"].append(graph_threads)
         ratios.append(total(skeleton) / total(graph))
         print(
             f"| {round_} | {total(skeleton):.3f} | {total(graph):.3f} | {ratios[-1]:.2f} | "
             f"{total(skeleton) / floor:.2f} | {per_process(skeleton)} | {per_process(graph)} |",
             flush=True,
         )
+    print("\nper thread, the rounds' mean (a context switch is about one wake-up):")
+    print("\n".join(table({k: mean_groups(v) for k, v in thread_use.items()})))
     print(
         f"the skeleton takes {min(ratios):.2f}-{max(ratios):.2f} of the graph's CPU; "
         f"separate CPU floor {floor} cores; after the runs: {host_line()}"
