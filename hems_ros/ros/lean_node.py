@@ -14,6 +14,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 
@@ -50,6 +51,19 @@ class LeanNode(Node):
         self.polled: frozenset = frozenset()
         # on the system clock (not /clock): messages may count from their reception times
         self.wall_clock = not self.get_parameter("use_sim_time").value
+        self.add_on_set_parameters_callback(self._keep_clock)
+
+    def _keep_clock(self, parameters) -> SetParametersResult:
+        """The clock is chosen at start-up: timers on the clock's grid, reception times and
+        clock reads all follow it, so a change while running is refused, not half applied."""
+        for parameter in parameters:
+            if parameter.name == "use_sim_time" and parameter.value == self.wall_clock:
+                return SetParametersResult(
+                    successful=False,
+                    reason="use_sim_time is read at start-up: restart the node with "
+                    f"-p use_sim_time:={str(parameter.value).lower()} to change it",
+                )
+        return SetParametersResult(successful=True)
 
     def poll(self, *subscriptions) -> None:
         """Leave these subscriptions out of lean_spin's wait set from now on: the node drains

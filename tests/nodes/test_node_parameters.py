@@ -70,3 +70,25 @@ def test_a_parameter_changed_at_run_time_reaches_the_node_and_a_bad_one_does_not
         assert node.params["sensor_fault"] == "nan_force"
     finally:
         node.destroy_node()
+
+
+def test_the_clock_chosen_at_start_up_cannot_be_switched_while_running(context):
+    """A unit's grid timers, reception times and clock reads follow the clock it started on;
+    a use_sim_time change while it runs is refused with the restart that would apply it, and
+    setting the value it already has is accepted."""
+    from rclpy.parameter import Parameter
+
+    from hems_ros.nodes.actuation_unit import ActuationUnitNode
+
+    node = ActuationUnitNode(context=context)
+    try:
+        assert node.wall_clock
+        (switch,) = node.set_parameters([Parameter("use_sim_time", value=True)])
+        assert not switch.successful
+        assert "restart the node with -p use_sim_time:=true" in switch.reason
+        assert node.get_parameter("use_sim_time").value is False
+        assert not node.get_clock().ros_time_is_active
+        (same,) = node.set_parameters([Parameter("use_sim_time", value=False)])
+        assert same.successful
+    finally:
+        node.destroy_node()
