@@ -39,7 +39,7 @@ import smoke
 import yaml
 from bench_graph import FLOORS, cores, cpu_by_process, hold, node_kind  # reserves the domain
 from host import host_line
-from threads import by_group, snapshot, table
+from threads import by_group, mean_by_group, snapshot, table
 
 from hems_ros.client.graph_client import GraphClient
 from hems_ros.graph import names
@@ -154,18 +154,6 @@ def graph_window(seconds: float) -> Window:
     return by_role, groups
 
 
-def mean_groups(rounds: list[dict[str, tuple[float, float]]]) -> dict[str, tuple[float, float]]:
-    """Each thread group's cores and switches a second, averaged over the rounds."""
-    groups = {g for r in rounds for g in r}
-    return {
-        g: (
-            statistics.mean(r.get(g, (0.0, 0.0))[0] for r in rounds),
-            statistics.mean(r.get(g, (0.0, 0.0))[1] for r in rounds),
-        )
-        for g in groups
-    }
-
-
 def total(by_role: dict[str, list[float]]) -> float:
     return sum(sum(values) for values in by_role.values())
 
@@ -222,7 +210,7 @@ def measure(args: argparse.Namespace) -> None:
             flush=True,
         )
     print("\nper thread, the rounds' mean (a context switch is about one wake-up):")
-    print("\n".join(table({k: mean_groups(v) for k, v in thread_use.items()})))
+    print("\n".join(table({k: mean_by_group(v) for k, v in thread_use.items()})))
     print(
         f"the skeleton takes {min(ratios):.2f}-{max(ratios):.2f} of the graph's CPU; "
         f"separate CPU floor {floor} cores; after the runs: {host_line()}"

@@ -90,6 +90,18 @@ def by_group(before: dict, after: dict, elapsed_s: float) -> dict[str, tuple[flo
     return groups
 
 
+def mean_by_group(windows: list[dict[str, tuple[float, float]]]) -> dict[str, tuple[float, float]]:
+    """by_group results of several windows averaged (a group missing from one counts 0)."""
+    groups = {g for window in windows for g in window}
+    return {
+        g: (
+            sum(w.get(g, (0.0, 0.0))[0] for w in windows) / len(windows),
+            sum(w.get(g, (0.0, 0.0))[1] for w in windows) / len(windows),
+        )
+        for g in groups
+    }
+
+
 def table(columns: dict[str, dict[str, tuple[float, float]]]) -> list[str]:
     """Markdown rows: each group's cores, switches a second and CPU per switch, one column
     per measured graph (``columns``: title -> by_group result)."""

@@ -53,6 +53,17 @@ def test_use_between_snapshots_is_summed_by_group_per_second() -> None:
     assert groups["dds UDP listener (discovery)"] == pytest.approx((0.01, 2.0))
 
 
+def test_windows_average_by_group_a_missing_group_counting_zero() -> None:
+    mean = threads.mean_by_group(
+        [
+            {"main thread, unit": (0.2, 600.0), "dds event thread": (0.01, 20.0)},
+            {"main thread, unit": (0.4, 620.0)},
+        ]
+    )
+    assert mean["main thread, unit"] == pytest.approx((0.3, 610.0))
+    assert mean["dds event thread"] == pytest.approx((0.005, 10.0))
+
+
 def test_the_table_gives_cpu_per_wake_up_and_a_dash_without_any() -> None:
     rows = threads.table(
         {
