@@ -3,18 +3,10 @@ other state's windows beside it, judged against their own spread (benchmarks/pai
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import pytest
+from benchmark_modules import load
 
-PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "paired.py"
-_spec = importlib.util.spec_from_file_location("paired", PATH)
-assert _spec is not None and _spec.loader is not None
-paired = importlib.util.module_from_spec(_spec)
-sys.modules["paired"] = paired  # a dataclass looks its module up there
-_spec.loader.exec_module(paired)
+paired = load("paired")
 
 
 def test_a_steady_drift_cancels_between_neighbours() -> None:

@@ -3,20 +3,13 @@ role, their CPU and context switches between two snapshots."""
 
 from __future__ import annotations
 
-import importlib.util
 import os
-import sys
 import threading
-from pathlib import Path
 
 import pytest
+from benchmark_modules import load
 
-PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "threads.py"
-_spec = importlib.util.spec_from_file_location("threads", PATH)
-assert _spec is not None and _spec.loader is not None
-threads = importlib.util.module_from_spec(_spec)
-sys.modules["threads"] = threads  # a dataclass looks its module up there
-_spec.loader.exec_module(threads)
+threads = load("threads")
 
 Use = threads.ThreadUse
 
