@@ -426,10 +426,9 @@ class SupervisorLogic:
         missing = []
         for finger in self.fingers:
             for stream in STREAMS:
-                seen = self._last_seen.get((stream, finger))
-                if seen is None:
+                if (stream, finger) not in self._last_seen:
                     missing.append(f"{finger}: no {stream} yet")
-                elif now - seen > self.limits.timeout(stream):
+                elif not self._fresh(stream, finger, now):
                     missing.append(f"{finger}: {stream} stale")
             if now - self._since.get((finger, "watchdog"), math.inf) >= self.limits.watchdog_hold_s:
                 missing.append(
@@ -440,12 +439,12 @@ class SupervisorLogic:
     def heard_fingers(self, now: float) -> list[str]:
         """Fingers whose controller's heartbeat is fresh: a status tool that does not hear one
         of them yet is still discovering the graph, not looking at a dead controller."""
-        timeout = self.limits.timeout("heartbeat")
-        return [
-            finger
-            for finger in self.fingers
-            if now - self._last_seen.get(("heartbeat", finger), -math.inf) <= timeout
-        ]
+        return [finger for finger in self.fingers if self._fresh("heartbeat", finger, now)]
+
+    def _fresh(self, stream: str, finger: str, now: float) -> bool:
+        """``stream`` of ``finger`` seen within its timeout of ``now``."""
+        seen = self._last_seen.get((stream, finger), -math.inf)
+        return now - seen <= self.limits.timeout(stream)
 
     # commands -----------------------------------------------------------------
     def request(self, command: str, now: float) -> tuple[bool, str]:
